@@ -1,0 +1,35 @@
+//! The case file: what structure to build, which effects to model, which solvers to run and
+//! which outputs to write. `load` parses and validates; every other module receives a
+//! [`Case`] whose numbers are already known to be finite and physical.
+
+mod schema;
+mod validate;
+
+pub use schema::*;
+pub use validate::CaseError;
+
+use std::path::Path;
+
+/// Read, parse and validate a case file.
+pub fn load(path: &Path) -> Result<Case, CaseError> {
+    let text = std::fs::read_to_string(path).map_err(|e| CaseError::Io {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    let mut case = parse(&text)?;
+    if case.output.dir.is_none() {
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "case".into());
+        case.output.dir = Some(Path::new("out").join(stem));
+    }
+    Ok(case)
+}
+
+/// Parse and validate case text (no output directory default is applied here).
+pub fn parse(text: &str) -> Result<Case, CaseError> {
+    let mut case: Case = toml::from_str(text).map_err(CaseError::from_toml)?;
+    validate::validate(&mut case)?;
+    Ok(case)
+}

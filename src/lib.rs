@@ -1,0 +1,9 @@
+//! tensolve: static equilibrium of large tensegrity grids whose cables can go slack.
+//!
+//! Data flow: [`case`] (TOML) → [`structure`] (nodes, links, supports) → [`solvers`] →
+//! [`results`] (checks and derived quantities) → [`output`] (CSV files).
+
+pub mod case;
+pub mod linalg;
+pub mod structure;
+pub mod solvers;

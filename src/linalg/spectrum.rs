@@ -1,0 +1,168 @@
+//! Smallest eigenvalues of a sparse symmetric positive semidefinite stiffness, by block inverse
+//! subspace iteration with a small shift and a Rayleigh–Ritz step (dense, nalgebra). Used to
+//! count the zero-stiffness modes of a mechanism and to report how far a tangent stiffness is
+//! from one (SPEC §2 "Existence", §3).
+
+use super::{dot, SparseCholesky, StiffnessPattern};
+use faer::Mat;
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// Eigenvalues below `ZERO_MODE_RELATIVE · mean diagonal` are zero-stiffness modes: far below any
+/// physical stiffness of a grid, far above round-off (≈ 1e-16 relative).
+pub const ZERO_MODE_RELATIVE: f64 = 1e-12;
+
+#[derive(Debug, Clone)]
+pub struct SmallestEigenvalues {
+    /// Ritz values, ascending, in the units of the matrix (N/m for a stiffness).
+    pub values: Vec<f64>,
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+/// Deterministic pseudo-random start block (no dependency on a RNG crate).
+fn start_block(n: usize, b: usize) -> Mat<f64> {
+    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+    Mat::from_fn(n, b, |_, _| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    })
+}
+
+/// Modified Gram–Schmidt, twice; returns how many columns survived (dependent ones dropped).
+fn orthonormalize(x: &mut Mat<f64>) -> usize {
+    let (n, b) = (x.nrows(), x.ncols());
+    let mut cols: Vec<Vec<f64>> = (0..b)
+        .map(|j| (0..n).map(|i| x[(i, j)]).collect())
+        .collect();
+    let mut kept: Vec<Vec<f64>> = Vec::with_capacity(b);
+    for mut c in cols.drain(..) {
+        let before = dot(&c, &c).sqrt();
+        for _ in 0..2 {
+            for q in &kept {
+                let r = dot(q, &c);
+                c.iter_mut().zip(q).for_each(|(ci, qi)| *ci -= r * qi);
+            }
+        }
+        let nrm = dot(&c, &c).sqrt();
+        if nrm > 1e-10 * before.max(f64::MIN_POSITIVE) {
+            c.iter_mut().for_each(|ci| *ci /= nrm);
+            kept.push(c);
+        }
+    }
+    *x = Mat::from_fn(n, kept.len(), |i, j| kept[j][i]);
+    kept.len()
+}
+
+/// How [`smallest_eigenvalues`] gets its factorization.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Factor {
+    /// `chol` already holds a factorization of A itself: use it.
+    Ready,
+    /// Factorize `A + σI` into `chol` for a small shift σ (A may be singular).
+    Shifted,
+}
+
+/// The `block` smallest eigenvalues of the symmetric matrix stored as the lower triangle
+/// `values` on `pattern`. `chol` must have been analysed on `pattern`.
+pub fn smallest_eigenvalues(
+    pattern: &StiffnessPattern,
+    values: &[f64],
+    chol: &mut SparseCholesky,
+    factor: Factor,
+    block: usize,
+    max_iterations: usize,
+    relative_tolerance: f64,
+) -> SmallestEigenvalues {
+    let n = pattern.n;
+    let b = block.min(n).max(1);
+    let scale = pattern.mean_diagonal(values).max(f64::MIN_POSITIVE);
+    // Shift: tiny against any physical stiffness, large against round-off in the pivots.
+    let mut shift = 1e-10 * scale;
+    let mut shifted = values.to_vec();
+    while factor == Factor::Shifted {
+        for &s in &pattern.diag_slot {
+            shifted[s] = values[s] + shift;
+        }
+        if chol.factorize(pattern, &shifted).is_ok() {
+            break;
+        }
+        shift *= 100.0;
+        if shift > scale {
+            // Not even A + scale·I factors: not positive semidefinite.
+            return SmallestEigenvalues {
+                values: vec![f64::NEG_INFINITY],
+                iterations: 0,
+                converged: false,
+            };
+        }
+    }
+    let mut x = start_block(n, b);
+    orthonormalize(&mut x);
+    let mut ax = vec![0.0; n];
+    let mut previous: Vec<f64> = vec![];
+    for it in 1..=max_iterations {
+        chol.solve_block_in_place(x.as_mut());
+        let m = orthonormalize(&mut x);
+        // Rayleigh–Ritz with A itself.
+        let x_cols: Vec<Vec<f64>> = (0..m)
+            .map(|j| (0..n).map(|i| x[(i, j)]).collect())
+            .collect();
+        let a_cols: Vec<Vec<f64>> = x_cols
+            .iter()
+            .map(|xj| {
+                pattern.sym_matvec(values, xj, &mut ax);
+                ax.clone()
+            })
+            .collect();
+        let h = DMatrix::from_fn(m, m, |i, j| {
+            0.5 * (dot(&x_cols[i], &a_cols[j]) + dot(&x_cols[j], &a_cols[i]))
+        });
+        let eig = SymmetricEigen::new(h);
+        let mut order: Vec<usize> = (0..m).collect();
+        order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+        let theta: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
+        let rotated = Mat::from_fn(n, m, |r, c| {
+            (0..m).map(|k| x[(r, k)] * eig.eigenvectors[(k, order[c])]).sum()
+        });
+        x = rotated;
+        let settled = previous.len() == theta.len()
+            && theta.iter().zip(&previous).all(|(t, p)| {
+                (t - p).abs() <= relative_tolerance * t.abs().max(ZERO_MODE_RELATIVE * scale)
+            });
+        previous = theta;
+        if settled {
+            return SmallestEigenvalues {
+                values: previous,
+                iterations: it,
+                converged: true,
+            };
+        }
+    }
+    SmallestEigenvalues {
+        values: previous,
+        iterations: max_iterations,
+        converged: false,
+    }
+}
+
+/// Number of zero-stiffness modes of the stiffness (eigenvalues below
+/// [`ZERO_MODE_RELATIVE`] × mean diagonal), found with blocks that grow until one Ritz value is
+/// clearly non-zero.
+pub fn zero_mode_count(
+    pattern: &StiffnessPattern,
+    values: &[f64],
+    chol: &mut SparseCholesky,
+) -> usize {
+    let threshold = ZERO_MODE_RELATIVE * pattern.mean_diagonal(values);
+    let mut block = 8;
+    loop {
+        let eig = smallest_eigenvalues(pattern, values, chol, Factor::Shifted, block, 30, 1e-3);
+        let zeros = eig.values.iter().filter(|&&v| v < threshold).count();
+        if zeros < eig.values.len() || block >= pattern.n {
+            return zeros;
+        }
+        block *= 2;
+    }
+}

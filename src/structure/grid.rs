@@ -1,0 +1,111 @@
+//! Module and grid generator (SPEC §2, paper §5.1). Nodes at the same position are one node;
+//! links are never merged (a lower edge shared by two modules carries two cables).
+
+use super::LinkKind;
+use crate::case::ModuleKind;
+
+/// Node numbering of an `nx × ny` grid: first the lower corners `(i, j)`, then the upper
+/// midpoints of edges along x (`(i + ½, j)`), then those of edges along y (`(i, j + ½)`).
+#[derive(Debug, Clone, Copy)]
+pub struct GridLayout {
+    pub nx: usize,
+    pub ny: usize,
+}
+
+impl GridLayout {
+    pub fn new(nx: usize, ny: usize) -> Self {
+        Self { nx, ny }
+    }
+
+    /// Lower node at corner `(i, j)`, `0 ≤ i ≤ nx`, `0 ≤ j ≤ ny`.
+    pub fn corner(&self, i: usize, j: usize) -> usize {
+        j * (self.nx + 1) + i
+    }
+
+    /// Upper node above the midpoint of the x-edge from `(i, j)` to `(i + 1, j)`.
+    pub fn x_mid(&self, i: usize, j: usize) -> usize {
+        (self.nx + 1) * (self.ny + 1) + j * self.nx + i
+    }
+
+    /// Upper node above the midpoint of the y-edge from `(i, j)` to `(i, j + 1)`.
+    pub fn y_mid(&self, i: usize, j: usize) -> usize {
+        (self.nx + 1) * (self.ny + 1) + self.nx * (self.ny + 1) + j * (self.nx + 1) + i
+    }
+
+    pub fn n_nodes(&self) -> usize {
+        (self.nx + 1) * (self.ny + 1) + self.nx * (self.ny + 1) + (self.nx + 1) * self.ny
+    }
+
+    pub fn module_index(&self, i: usize, j: usize) -> usize {
+        j * self.nx + i
+    }
+}
+
+/// The 8 nodes of module `(i, j)`: `[c0, c1, c2, c3, m0, m1, m2, m3]`, counter-clockwise
+/// (SPEC §2 table).
+pub fn module_nodes(layout: &GridLayout, i: usize, j: usize) -> [usize; 8] {
+    [
+        layout.corner(i, j),
+        layout.corner(i + 1, j),
+        layout.corner(i + 1, j + 1),
+        layout.corner(i, j + 1),
+        layout.x_mid(i, j),
+        layout.y_mid(i + 1, j),
+        layout.x_mid(i, j + 1),
+        layout.y_mid(i, j),
+    ]
+}
+
+/// Node positions and links `(a, b, kind, module)` of the whole grid.
+pub(super) fn generate(
+    layout: &GridLayout,
+    length: f64,
+    height: f64,
+    module: ModuleKind,
+) -> (Vec<[f64; 3]>, Vec<(usize, usize, LinkKind, usize)>) {
+    let (nx, ny) = (layout.nx, layout.ny);
+    let mut nodes = vec![[0.0; 3]; layout.n_nodes()];
+    for j in 0..=ny {
+        for i in 0..=nx {
+            nodes[layout.corner(i, j)] = [i as f64 * length, j as f64 * length, 0.0];
+        }
+    }
+    for j in 0..=ny {
+        for i in 0..nx {
+            nodes[layout.x_mid(i, j)] = [(i as f64 + 0.5) * length, j as f64 * length, height];
+        }
+    }
+    for j in 0..ny {
+        for i in 0..=nx {
+            nodes[layout.y_mid(i, j)] = [i as f64 * length, (j as f64 + 0.5) * length, height];
+        }
+    }
+    let per_module = if module == ModuleKind::Braced { 20 } else { 16 };
+    let mut links = Vec::with_capacity(nx * ny * per_module);
+    for j in 0..ny {
+        for i in 0..nx {
+            let m = layout.module_index(i, j);
+            let n = module_nodes(layout, i, j);
+            let (c, u) = (&n[..4], &n[4..]);
+            for k in 0..4 {
+                links.push((c[k], c[(k + 1) % 4], LinkKind::LowerCable, m));
+            }
+            for k in 0..4 {
+                links.push((u[k], u[(k + 1) % 4], LinkKind::UpperCable, m));
+            }
+            for k in 0..4 {
+                links.push((c[k], u[k], LinkKind::BracingCable, m));
+            }
+            for k in 0..4 {
+                links.push((c[k], u[(k + 1) % 4], LinkKind::Bar, m));
+            }
+            if module == ModuleKind::Braced {
+                links.push((c[0], c[2], LinkKind::DiagonalCable, m));
+                links.push((c[1], c[3], LinkKind::DiagonalCable, m));
+                links.push((u[0], u[2], LinkKind::DiagonalCable, m));
+                links.push((u[1], u[3], LinkKind::DiagonalCable, m));
+            }
+        }
+    }
+    (nodes, links)
+}
