@@ -3,7 +3,7 @@
 //! attached from outside through [`Observer`].
 
 pub mod newton;
-// pub mod pcg_lcp;
+pub mod pcg_lcp;
 mod taut;
 
 pub use taut::TautStiffness;
