@@ -7,3 +7,6 @@ pub mod case;
 pub mod linalg;
 pub mod structure;
 pub mod solvers;
+pub mod output;
+pub mod results;
+pub mod run;

@@ -1,0 +1,133 @@
+//! CSV tables: `summary.csv`, `tensions/{solver}_alpha{α}.csv`,
+//! `displacements/{solver}_alpha{α}.csv`.
+
+use super::write_atomic;
+use crate::solvers::Equilibrium;
+use crate::structure::Structure;
+use std::path::{Path, PathBuf};
+
+/// α as it appears in file names: Rust's `{}` for f64 (1 → `1`, 0.05 → `0.05`).
+pub fn alpha_label(alpha: f64) -> String {
+    format!("{alpha}")
+}
+
+/// One row of `summary.csv`.
+#[derive(Debug, Clone)]
+pub struct SummaryRow {
+    pub solver: String,
+    pub alpha: f64,
+    pub converged: bool,
+    pub iterations: usize,
+    pub slack_cables: usize,
+    pub cables: usize,
+    pub max_tension: f64,
+    pub max_deflection: f64,
+    pub residual: f64,
+    pub setup_seconds: f64,
+    pub solve_seconds: f64,
+}
+
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,setup_seconds,solve_seconds";
+
+fn csv_io(e: csv::Error) -> std::io::Error {
+    std::io::Error::other(e)
+}
+
+pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
+    write_atomic(path, |w| {
+        writeln!(w, "{SUMMARY_HEADER}")?;
+        for r in rows {
+            let fraction = if r.cables > 0 {
+                r.slack_cables as f64 / r.cables as f64
+            } else {
+                0.0
+            };
+            writeln!(
+                w,
+                "{},{},{},{},{},{},{},{},{},{:e},{},{}",
+                r.solver,
+                alpha_label(r.alpha),
+                r.converged,
+                r.iterations,
+                r.slack_cables,
+                r.cables,
+                fraction,
+                r.max_tension,
+                r.max_deflection,
+                r.residual,
+                r.setup_seconds,
+                r.solve_seconds
+            )?;
+        }
+        Ok(())
+    })
+}
+
+pub fn result_path(dir: &Path, kind: &str, solver: &str, alpha: f64) -> PathBuf {
+    dir.join(kind)
+        .join(format!("{solver}_alpha{}.csv", alpha_label(alpha)))
+}
+
+pub fn write_tensions(
+    dir: &Path,
+    solver: &str,
+    alpha: f64,
+    s: &Structure,
+    eq: &Equilibrium,
+) -> std::io::Result<PathBuf> {
+    let path = result_path(dir, "tensions", solver, alpha);
+    write_atomic(&path, |w| {
+        let mut out = csv::Writer::from_writer(w);
+        out.write_record(["cable", "kind", "node_a", "node_b", "tension"])
+            .map_err(csv_io)?;
+        for (cable, (l, t)) in s
+            .links
+            .iter()
+            .zip(&eq.tensions)
+            .filter(|(l, _)| l.kind.is_cable())
+            .enumerate()
+        {
+            out.write_record([
+                cable.to_string(),
+                l.kind.name().to_string(),
+                l.a.to_string(),
+                l.b.to_string(),
+                t.to_string(),
+            ])
+            .map_err(csv_io)?;
+        }
+        out.flush()
+    })?;
+    Ok(path)
+}
+
+pub fn write_displacements(
+    dir: &Path,
+    solver: &str,
+    alpha: f64,
+    s: &Structure,
+    eq: &Equilibrium,
+) -> std::io::Result<PathBuf> {
+    let path = result_path(dir, "displacements", solver, alpha);
+    let full = s.full_displacements(&eq.displacements);
+    write_atomic(&path, |w| {
+        let mut out = csv::Writer::from_writer(w);
+        out.write_record(["node", "x", "y", "z", "ux", "uy", "uz"])
+            .map_err(csv_io)?;
+        for (node, x) in s.nodes.iter().enumerate() {
+            let u = &full[3 * node..3 * node + 3];
+            out.write_record([
+                node.to_string(),
+                x[0].to_string(),
+                x[1].to_string(),
+                x[2].to_string(),
+                u[0].to_string(),
+                u[1].to_string(),
+                u[2].to_string(),
+            ])
+            .map_err(csv_io)?;
+        }
+        out.flush()
+    })?;
+    Ok(path)
+}

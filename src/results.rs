@@ -1,0 +1,83 @@
+//! Quantities derived from an equilibrium, computed independently of the solver that produced
+//! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
+
+use crate::linalg::norm;
+use crate::solvers::Equilibrium;
+use crate::structure::Structure;
+
+/// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs.
+pub fn equilibrium_residual(s: &Structure, eq: &Equilibrium, load: &[f64]) -> f64 {
+    let mut r = vec![0.0; s.n_free];
+    s.nodal_forces(&eq.tensions, &mut r);
+    let mut magnitude = vec![0.0; s.n_free];
+    for (t, ld) in eq.tensions.iter().zip(&s.link_dofs) {
+        for (d, c) in ld.iter() {
+            magnitude[d] += (c * t).abs();
+        }
+    }
+    r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
+    let scale = norm(load) + norm(&magnitude);
+    if scale > 0.0 {
+        norm(&r) / scale
+    } else {
+        norm(&r)
+    }
+}
+
+/// Relative constitutive residual of every link, from U and τ alone:
+/// bars and bilateral cables `τ − t0 − k e`; unilateral cables the violation of
+/// `0 ≤ τ ⊥ kλ ≥ 0` with `λ = −e + (τ − t0)/k`, i.e. `min(kλ, τ)`. Normalised by `‖t0‖`
+/// (or by `‖τ‖` when there is no prestress).
+pub fn constitutive_residual(s: &Structure, eq: &Equilibrium) -> f64 {
+    let mut r2 = 0.0;
+    let mut scale2 = 0.0;
+    for ((l, ld), &tau) in s.links.iter().zip(&s.link_dofs).zip(&eq.tensions) {
+        let e = ld.elongation(&eq.displacements);
+        let law = tau - l.prestress - l.stiffness * e;
+        let violation = if l.unilateral {
+            // kλ = k(−e) + τ − t0 = −law
+            (-law).min(tau)
+        } else {
+            law
+        };
+        r2 += violation * violation;
+        scale2 += l.prestress * l.prestress;
+    }
+    if scale2 == 0.0 {
+        scale2 = eq.tensions.iter().map(|t| t * t).sum();
+    }
+    if scale2 > 0.0 {
+        (r2 / scale2).sqrt()
+    } else {
+        r2.sqrt()
+    }
+}
+
+/// Largest nodal displacement magnitude, m.
+pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
+    let full = s.full_displacements(&eq.displacements);
+    full.chunks(3)
+        .map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// Largest cable tension, N (0 without cables).
+pub fn max_cable_tension(s: &Structure, eq: &Equilibrium) -> f64 {
+    s.links
+        .iter()
+        .zip(&eq.tensions)
+        .filter(|(l, _)| l.kind.is_cable())
+        .map(|(_, &t)| t)
+        .fold(0.0, f64::max)
+}
+
+/// Relative distance `‖a − b‖ / ‖b‖` of two displacement fields.
+pub fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    let nb = norm(b);
+    if nb > 0.0 {
+        norm(&d) / nb
+    } else {
+        norm(&d)
+    }
+}

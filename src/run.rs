@@ -1,0 +1,200 @@
+//! One case, end to end: build the structure, set the asked solvers up once, solve every α,
+//! write the asked files. Only what the case asks for is computed and written.
+
+use crate::case::{Case, CaseError, Method};
+use crate::output::{self, SummaryRow};
+use crate::results;
+use crate::solvers::newton::{Newton, NewtonSettings};
+use crate::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
+use crate::solvers::{Observer, SetupError, Silent, Solution, TautStiffness};
+use crate::structure::Structure;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use thiserror::Error;
+
+/// What the command line adds to a case.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Overrides `output.dir`.
+    pub out_dir: Option<PathBuf>,
+    /// Overrides `solver.methods`.
+    pub methods: Option<Vec<Method>>,
+}
+
+#[derive(Debug, Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Case(#[from] CaseError),
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    #[error(
+        "output directory `{dir}` is not writable ({reason}): set `output.dir` in the case or \
+         pass `--out DIR` with a directory you can write to"
+    )]
+    OutputDir { dir: String, reason: String },
+    #[error("could not write `{path}`: {reason}")]
+    Write { path: String, reason: String },
+    #[error("{count} solve(s) did not converge: {list}; their rows say converged = false")]
+    NotConverged { count: usize, list: String },
+}
+
+impl RunError {
+    /// 2 for bad input (the case, the structure it describes, the output directory); 1 when
+    /// the run could not produce what was asked.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. } => 2,
+            RunError::Write { .. } | RunError::NotConverged { .. } => 1,
+        }
+    }
+}
+
+/// A solver set up for the structure.
+enum Runner<'s> {
+    Newton(Newton<'s>),
+    PcgLcp(PcgLcp<'s>),
+}
+
+impl Runner<'_> {
+    fn solve(&mut self, load: &[f64], observer: &mut dyn Observer) -> Solution {
+        match self {
+            Runner::Newton(s) => s.solve(load, None, observer),
+            Runner::PcgLcp(s) => s.solve(load, observer),
+        }
+    }
+}
+
+/// The output directory: `--out`, else `output.dir`, else `out/case`.
+pub fn output_dir(case: &Case, options: &RunOptions) -> PathBuf {
+    options
+        .out_dir
+        .clone()
+        .or_else(|| case.output.dir.clone())
+        .unwrap_or_else(|| PathBuf::from("out/case"))
+}
+
+fn check_writable(dir: &Path) -> Result<(), RunError> {
+    let fail = |e: std::io::Error| RunError::OutputDir {
+        dir: dir.display().to_string(),
+        reason: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(fail)?;
+    let probe = dir.join(format!(".tensolve-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(fail)?;
+    std::fs::remove_file(&probe).map_err(fail)?;
+    Ok(())
+}
+
+fn write_error(path: &Path, e: std::io::Error) -> RunError {
+    RunError::Write {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    }
+}
+
+/// Run a validated case. `on_row` sees every summary row as soon as it is written.
+pub fn run(
+    case: &Case,
+    options: &RunOptions,
+    on_row: &mut dyn FnMut(&SummaryRow),
+) -> Result<Vec<SummaryRow>, RunError> {
+    let dir = output_dir(case, options);
+    let wants_files = case.output.summary || case.output.tensions || case.output.displacements;
+    if wants_files {
+        check_writable(&dir)?;
+    }
+    let methods = options
+        .methods
+        .clone()
+        .unwrap_or_else(|| case.solver.methods.clone());
+
+    let clock = Instant::now();
+    let structure = Structure::from_case(case);
+    let taut = TautStiffness::new(&structure)?;
+    let shared_setup = clock.elapsed().as_secs_f64();
+
+    let mut runners = Vec::with_capacity(methods.len());
+    for &method in &methods {
+        let clock = Instant::now();
+        let runner = match method {
+            Method::Newton => {
+                let mut settings = NewtonSettings::default();
+                if let Some(t) = case.solver.tolerance {
+                    settings.tolerance = t;
+                }
+                if let Some(m) = case.solver.max_iterations {
+                    settings.max_iterations = m;
+                }
+                Runner::Newton(Newton::new(&structure, &taut, settings)?)
+            }
+            Method::PcgLcp => {
+                let mut settings = PcgLcpSettings::default();
+                if let Some(t) = case.solver.tolerance {
+                    settings.tolerance = t;
+                }
+                if let Some(m) = case.solver.max_iterations {
+                    settings.max_iterations = m;
+                }
+                Runner::PcgLcp(PcgLcp::new(&structure, &taut, settings))
+            }
+        };
+        runners.push((method, runner, shared_setup + clock.elapsed().as_secs_f64()));
+    }
+
+    let summary_path = dir.join("summary.csv");
+    let mut rows = Vec::new();
+    let mut failures = Vec::new();
+    for &alpha in &case.load.alphas {
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        for (method, runner, setup_seconds) in runners.iter_mut() {
+            let solution = runner.solve(&load, &mut Silent);
+            let eq = &solution.equilibrium;
+            let row = SummaryRow {
+                solver: method.name().to_string(),
+                alpha,
+                converged: solution.info.status.converged(),
+                iterations: solution.info.iterations,
+                slack_cables: eq.slack_count(),
+                cables: structure.n_cables(),
+                max_tension: results::max_cable_tension(&structure, eq),
+                max_deflection: results::max_deflection(&structure, eq),
+                residual: solution.info.residual,
+                setup_seconds: *setup_seconds,
+                solve_seconds: solution.info.solve_seconds,
+            };
+            if !row.converged {
+                failures.push(format!(
+                    "{} at alpha = {} ({:?} after {} iterations, residual {:e})",
+                    row.solver,
+                    output::alpha_label(alpha),
+                    solution.info.status,
+                    row.iterations,
+                    row.residual
+                ));
+            }
+            if case.output.tensions {
+                output::write_tensions(&dir, method.name(), alpha, &structure, eq)
+                    .map_err(|e| write_error(&dir.join("tensions"), e))?;
+            }
+            if case.output.displacements {
+                output::write_displacements(&dir, method.name(), alpha, &structure, eq)
+                    .map_err(|e| write_error(&dir.join("displacements"), e))?;
+            }
+            rows.push(row);
+            // Rewritten whole after every solve: an interrupted sweep leaves a complete file.
+            if case.output.summary {
+                output::write_summary(&summary_path, &rows)
+                    .map_err(|e| write_error(&summary_path, e))?;
+            }
+            on_row(rows.last().expect("row just pushed"));
+        }
+    }
+    if failures.is_empty() {
+        Ok(rows)
+    } else {
+        Err(RunError::NotConverged {
+            count: failures.len(),
+            list: failures.join("; "),
+        })
+    }
+}
