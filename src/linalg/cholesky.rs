@@ -1,6 +1,7 @@
 //! Sparse Cholesky `A = L Lᵀ` with faer: the symbolic analysis (fill-reducing ordering,
-//! supernodes) is done once per pattern; numeric factorizations and solves reuse it and their
-//! workspaces, so an iteration allocates nothing.
+//! supernodes) is done once per pattern; numeric factorizations reuse it and their workspace.
+//! Solves take `&self` (a solve's small workspace is allocated per call) so that one factor can
+//! be shared.
 
 use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -23,7 +24,6 @@ pub struct SparseCholesky {
     symbolic: Arc<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     factor_scratch: MemBuffer,
-    solve_scratch: MemBuffer,
     par: Par,
     factorized: bool,
 }
@@ -55,13 +55,11 @@ impl SparseCholesky {
         let factor_scratch = MemBuffer::new(
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
         );
-        let solve_scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
         let l_values = vec![0.0; symbolic.len_val()];
         SparseCholesky {
             symbolic: Arc::new(symbolic),
             l_values,
             factor_scratch,
-            solve_scratch,
             par,
             factorized: false,
         }
@@ -77,7 +75,6 @@ impl SparseCholesky {
                 self.symbolic
                     .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
             ),
-            solve_scratch: MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, self.par)),
             par: self.par,
             factorized: false,
         }
@@ -121,16 +118,9 @@ impl SparseCholesky {
     }
 
     /// `x ← A⁻¹ x` with the last successful factorization.
-    pub fn solve_in_place(&mut self, x: &mut [f64]) {
-        assert!(self.factorized, "solve before a successful factorization");
+    pub fn solve_in_place(&self, x: &mut [f64]) {
         let n = x.len();
-        let rhs = MatMut::from_column_major_slice_mut(x, n, 1);
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            self.par,
-            MemStack::new(&mut self.solve_scratch),
-        );
+        self.solve_block_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
     }
 
     /// `X ← A⁻¹ X` for a column-major block of right-hand sides.

@@ -20,29 +20,51 @@ pub struct StiffnessPattern {
 
 impl StiffnessPattern {
     pub fn new(n: usize, links: &[LinkDofs]) -> StiffnessPattern {
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(links.len() * 21 + n);
-        for d in 0..n as u32 {
-            pairs.push((d, d));
-        }
+        // Bucket the rows of each column (counting sort), then sort and dedup each short column.
+        let mut count = vec![1usize; n]; // the diagonal
         for ld in links {
             for (p, _) in ld.iter() {
                 for (q, _) in ld.iter() {
-                    if p >= q {
-                        pairs.push((q as u32, p as u32)); // (column, row)
+                    if p > q {
+                        count[q] += 1;
                     }
                 }
             }
         }
-        pairs.sort_unstable();
-        pairs.dedup();
-        let mut col_ptr = vec![0usize; n + 1];
-        for &(c, _) in &pairs {
-            col_ptr[c as usize + 1] += 1;
-        }
+        let mut start = vec![0usize; n + 1];
         for c in 0..n {
-            col_ptr[c + 1] += col_ptr[c];
+            start[c + 1] = start[c] + count[c];
         }
-        let row_idx: Vec<usize> = pairs.iter().map(|&(_, r)| r as usize).collect();
+        let mut rows = vec![0usize; start[n]];
+        let mut fill = start[..n].to_vec();
+        for (c, f) in fill.iter_mut().enumerate() {
+            rows[*f] = c;
+            *f += 1;
+        }
+        for ld in links {
+            for (p, _) in ld.iter() {
+                for (q, _) in ld.iter() {
+                    if p > q {
+                        rows[fill[q]] = p;
+                        fill[q] += 1;
+                    }
+                }
+            }
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::with_capacity(rows.len());
+        for c in 0..n {
+            let column = &mut rows[start[c]..start[c + 1]];
+            column.sort_unstable();
+            let first = row_idx.len();
+            for &r in column.iter() {
+                if row_idx.len() == first || *row_idx.last().expect("non-empty") != r {
+                    row_idx.push(r);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
         let find = |r: usize, c: usize| -> usize {
             let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
             col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")

@@ -2,6 +2,7 @@
 //! happened in a [`SolveInfo`] and never prints. Observers (CSV writers, progress bars) are
 //! attached from outside through [`Observer`].
 
+pub mod latin;
 pub mod newton;
 pub mod pcg_lcp;
 mod taut;
@@ -71,13 +72,26 @@ pub enum SetupError {
          nodes (`supports.clamp`) or use a stiffer module (`grid.module = \"braced\"`)"
     )]
     Mechanism { zero_modes: usize },
+    #[error(
+        "substructure {index} has a singular operator (K_E or K*_E + QQᵀ): change \
+         `solver.subdomains` or `solver.dm`"
+    )]
+    SingularSubstructure { index: usize },
+    #[error(
+        "the macro problem is singular: an interface or a rigid mode is left undetermined; \
+         try `solver.weak_interfaces = \"macro\"` or another `solver.subdomains`"
+    )]
+    SingularMacroProblem,
 }
 
 /// One iteration as seen from outside the solver.
 #[derive(Debug, Clone, Copy)]
 pub struct IterationRecord {
     pub iteration: usize,
+    /// The solver's stopping measure (η for the LATIN solvers).
     pub residual: f64,
+    /// Energy error e against a reference solution, when one was given.
+    pub error: Option<f64>,
     pub slack_cables: usize,
     pub elapsed_seconds: f64,
 }

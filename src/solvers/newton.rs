@@ -11,7 +11,7 @@ use super::{
     energy_tensions, Equilibrium, IterationRecord, Observer, SetupError, Solution, SolveInfo,
     Status, TautStiffness,
 };
-use crate::linalg::{norm, SparseCholesky, StiffnessPattern};
+use crate::linalg::{norm, SparseCholesky};
 use crate::structure::Structure;
 use std::time::Instant;
 
@@ -40,8 +40,8 @@ const REGULARISATION: f64 = 1e-6;
 
 pub struct Newton<'s> {
     structure: &'s Structure,
+    taut: &'s TautStiffness,
     settings: NewtonSettings,
-    pattern: StiffnessPattern,
     chol: SparseCholesky,
     hessian: Vec<f64>,
     mean_stiffness: f64,
@@ -59,13 +59,13 @@ impl<'s> Newton<'s> {
     /// Set up on a structure whose taut stiffness is already known to be regular.
     pub fn new(
         structure: &'s Structure,
-        taut: &TautStiffness,
+        taut: &'s TautStiffness,
         settings: NewtonSettings,
     ) -> Result<Self, SetupError> {
         Ok(Newton {
             structure,
+            taut,
             settings,
-            pattern: taut.pattern.clone(),
             chol: taut.factor.share_symbolic(),
             hessian: vec![0.0; taut.values.len()],
             mean_stiffness: taut.pattern.mean_diagonal(&taut.values),
@@ -90,6 +90,43 @@ impl<'s> Newton<'s> {
         let scale = norm(load) + norm(&magnitude);
         let g = norm(&state.gradient);
         state.residual = if scale > 0.0 { g / scale } else { g };
+    }
+
+    /// `step ← H⁻¹ step` with H the Hessian on the taut set of `state` (SPEC §3) plus the
+    /// vanishing regularisation. With every link taut H is K, whose factor is reused.
+    fn newton_step(&mut self, state: &State, step: &mut [f64]) {
+        let s = self.structure;
+        let pattern = &self.taut.pattern;
+        let taut_links: Vec<bool> = s
+            .links
+            .iter()
+            .zip(&s.link_dofs)
+            .map(|(l, ld)| {
+                !l.unilateral || l.prestress + l.stiffness * ld.elongation(&state.u) >= 0.0
+            })
+            .collect();
+        if taut_links.iter().all(|&t| t) {
+            self.taut.factor.solve_in_place(step);
+            return;
+        }
+        pattern.assemble(
+            &s.link_dofs,
+            |i| if taut_links[i] { s.links[i].stiffness } else { 0.0 },
+            &mut self.hessian,
+        );
+        let mut mu = REGULARISATION * state.residual.min(1.0) * self.mean_stiffness;
+        let mut added = 0.0;
+        loop {
+            for &d in &pattern.diag_slot {
+                self.hessian[d] += mu - added;
+            }
+            added = mu;
+            if self.chol.factorize(pattern, &self.hessian).is_ok() {
+                break;
+            }
+            mu = (mu * 100.0).max(1e-12 * self.mean_stiffness);
+        }
+        self.chol.solve_in_place(step);
     }
 
     /// Solve for the load `load` (on the free dofs) from `start` (zero if `None`).
@@ -119,38 +156,10 @@ impl<'s> Newton<'s> {
                 break;
             }
             iterations += 1;
-            // Hessian on the taut set (SPEC §3), plus the vanishing regularisation.
-            let links = &s.links;
-            let u = &state.u;
-            self.pattern.assemble(
-                &s.link_dofs,
-                |i| {
-                    let l = &links[i];
-                    let taut = !l.unilateral
-                        || l.prestress + l.stiffness * s.link_dofs[i].elongation(u) >= 0.0;
-                    if taut {
-                        l.stiffness
-                    } else {
-                        0.0
-                    }
-                },
-                &mut self.hessian,
-            );
-            let mut mu = REGULARISATION * state.residual.min(1.0) * self.mean_stiffness;
-            loop {
-                let mut h = self.hessian.clone();
-                for &d in &self.pattern.diag_slot {
-                    h[d] += mu;
-                }
-                if self.chol.factorize(&self.pattern, &h).is_ok() {
-                    break;
-                }
-                mu = (mu * 100.0).max(1e-12 * self.mean_stiffness);
-            }
             step.iter_mut()
                 .zip(&state.gradient)
                 .for_each(|(d, g)| *d = -g);
-            self.chol.solve_in_place(&mut step);
+            self.newton_step(&state, &mut step);
             s.elongations(&step, &mut step_elongation);
             let Some(length) = exact_line_search(s, load, &state, &step, &step_elongation) else {
                 status = Status::Stalled;
@@ -165,6 +174,7 @@ impl<'s> Newton<'s> {
             observer.iteration(&IterationRecord {
                 iteration: iterations,
                 residual: state.residual,
+                error: None,
                 slack_cables: slack_flags(s, &state.tensions).iter().filter(|&&x| x).count(),
                 elapsed_seconds: clock.elapsed().as_secs_f64(),
             });

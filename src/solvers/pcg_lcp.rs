@@ -43,7 +43,8 @@ const REFRESH_EVERY: usize = 50;
 pub struct PcgLcp<'s> {
     structure: &'s Structure,
     settings: PcgLcpSettings,
-    factor: SparseCholesky,
+    /// Factor of K, shared with the other solvers.
+    factor: &'s SparseCholesky,
     /// Indices of the unilateral cables (the LCP's unknowns).
     cables: Vec<usize>,
     /// `k^{1/2}` of each of them.
@@ -53,7 +54,7 @@ pub struct PcgLcp<'s> {
 }
 
 impl<'s> PcgLcp<'s> {
-    pub fn new(structure: &'s Structure, taut: &TautStiffness, settings: PcgLcpSettings) -> Self {
+    pub fn new(structure: &'s Structure, taut: &'s TautStiffness, settings: PcgLcpSettings) -> Self {
         let cables: Vec<usize> = (0..structure.links.len())
             .filter(|&i| structure.links[i].unilateral)
             .collect();
@@ -64,7 +65,7 @@ impl<'s> PcgLcp<'s> {
         PcgLcp {
             structure,
             settings,
-            factor: taut.factor.clone(),
+            factor: &taut.factor,
             cables,
             sqrt_k,
             nodal: vec![0.0; structure.n_free],
@@ -215,6 +216,7 @@ impl<'s> PcgLcp<'s> {
             observer.iteration(&IterationRecord {
                 iteration: iterations,
                 residual,
+                error: None,
                 slack_cables: x.iter().filter(|&&xi| xi > 0.0).count(),
                 elapsed_seconds: clock.elapsed().as_secs_f64(),
             });

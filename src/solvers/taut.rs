@@ -37,7 +37,7 @@ impl TautStiffness {
                 // A positive factorization may still hide a zero mode behind round-off
                 // pivots: a few inverse iterations tell.
                 let eig =
-                    smallest_eigenvalues(&pattern, &values, &mut factor, Factor::Ready, 2, 4, 1e-2);
+                    smallest_eigenvalues(&pattern, &values, &mut factor, Factor::Ready, 1, 3, 1e-2);
                 eig.values[0] < ZERO_MODE_RELATIVE * pattern.mean_diagonal(&values)
             }
         };

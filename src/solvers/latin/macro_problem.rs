@@ -1,0 +1,114 @@
+//! The macro problem (SPEC §4), assembled and factorized once (sparse LU):
+//! `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
+//! `N = [c_Eᵀ Q_E]_E`. Unknowns: the macro forces of every interface, then the kernel amplitudes
+//! of every substructure.
+
+use super::substructure::Substructure;
+use super::Interface;
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::Lu;
+use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::DVector;
+use std::collections::HashMap;
+
+pub struct MacroProblem {
+    /// Number of macro force unknowns (Σ over interfaces of their macro dofs).
+    pub n_forces: usize,
+    /// First kernel amplitude of each substructure, after the forces.
+    pub kernel_offset: Vec<usize>,
+    pub n: usize,
+    lu: Option<Lu<usize, f64>>,
+}
+
+/// The macro matrix is singular (an interface or kernel mode is left undetermined).
+#[derive(Debug, Clone, Copy)]
+pub struct SingularMacroProblem;
+
+impl MacroProblem {
+    pub fn new(
+        subs: &[Substructure],
+        interfaces: &[Interface],
+    ) -> Result<MacroProblem, SingularMacroProblem> {
+        let n_forces: usize = interfaces.iter().map(|i| i.basis.ncols()).sum();
+        let mut kernel_offset = Vec::with_capacity(subs.len());
+        let mut n = n_forces;
+        for sub in subs {
+            kernel_offset.push(n);
+            n += sub.kernel.ncols();
+        }
+        let mut entries: HashMap<(usize, usize), f64> = HashMap::new();
+        let mut add = |r: usize, c: usize, v: f64| {
+            if v != 0.0 {
+                *entries.entry((r, c)).or_insert(0.0) += v;
+            }
+        };
+        for (e, sub) in subs.iter().enumerate() {
+            for s1 in &sub.sides {
+                let row0 = interfaces[s1.interface].macro_offset;
+                for s2 in &sub.sides {
+                    let col0 = interfaces[s2.interface].macro_offset;
+                    let sign = s1.sign() * s2.sign();
+                    for i in 0..s1.cols {
+                        for j in 0..s2.cols {
+                            let v = sub.flexibility[(s1.macro_offset + i, s2.macro_offset + j)];
+                            add(row0 + i, col0 + j, sign * v);
+                        }
+                    }
+                }
+                for i in 0..s1.cols {
+                    for k in 0..sub.kernel.ncols() {
+                        let v = s1.sign() * sub.kernel[(s1.macro_offset + i, k)];
+                        add(row0 + i, kernel_offset[e] + k, v);
+                        add(kernel_offset[e] + k, row0 + i, v);
+                    }
+                }
+            }
+        }
+        let lu = if n == 0 {
+            None
+        } else {
+            let mut triplets: Vec<Triplet<usize, usize, f64>> = entries
+                .into_iter()
+                .map(|((r, c), v)| Triplet::new(r, c, v))
+                .collect();
+            triplets.sort_by_key(|t| (t.col, t.row));
+            let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
+                .map_err(|_| SingularMacroProblem)?;
+            Some(matrix.sp_lu().map_err(|_| SingularMacroProblem)?)
+        };
+        Ok(MacroProblem {
+            n_forces,
+            kernel_offset,
+            n,
+            lu,
+        })
+    }
+
+    /// Right-hand side from every `g_E`, solve, and return `[f_Γ; a]`.
+    pub fn solve(
+        &self,
+        subs: &[Substructure],
+        interfaces: &[Interface],
+        g: &[DVector<f64>],
+    ) -> Vec<f64> {
+        let mut rhs = vec![0.0; self.n];
+        for (e, sub) in subs.iter().enumerate() {
+            let kg = &sub.k_plus * &g[e];
+            for side in &sub.sides {
+                let row0 = interfaces[side.interface].macro_offset;
+                for i in 0..side.cols {
+                    rhs[row0 + i] -= side.sign() * kg[side.macro_offset + i];
+                }
+            }
+            let qg = sub.kernel.tr_mul(&g[e]);
+            for k in 0..qg.len() {
+                rhs[self.kernel_offset[e] + k] -= qg[k];
+            }
+        }
+        if let Some(lu) = &self.lu {
+            let n = rhs.len();
+            lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, n, 1));
+        }
+        rhs
+    }
+}

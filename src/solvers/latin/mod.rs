@@ -1,0 +1,507 @@
+//! The LATIN solver (SPEC §4, paper §3–4): one implementation for `micro-macro` (an `sx × sy`
+//! partition with a homogenised macro problem) and `mono-latin` (a 1 × 1 partition: no
+//! interfaces, `K = Bᵀ l B`, the augmented Lagrangian method of the paper's §5.4).
+//!
+//! The solver alternates a local stage (constitutive laws, per link and per interface, exact)
+//! and a linear stage (equilibrium and compatibility per substructure, glued by exact macro
+//! continuity). Iteration 0 is the linear stage from ŝ = 0; iteration k ≥ 1 is a local stage
+//! on s_{k−1} followed by a linear stage. After each linear stage it reports the error e
+//! against a reference (when given) and the indicator η between s and the ŝ that fed it.
+//! It stops when η ≤ `tolerance`.
+
+mod kernel;
+mod local_stage;
+mod macro_basis;
+mod macro_problem;
+pub mod partition;
+mod substructure;
+
+pub use macro_basis::macro_basis;
+pub use partition::{Partition, WeakInterfaces};
+pub use substructure::Substructure;
+
+use super::{Equilibrium, IterationRecord, Observer, SetupError, Solution, SolveInfo, Status};
+use crate::structure::{Structure, CLAMPED};
+use local_stage::{interface_local_stage, link_local_stage};
+use macro_problem::MacroProblem;
+use nalgebra::{DMatrix, DVector};
+use partition::InterfaceTopology;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The search direction `l` on the links (SPEC §4 "Search directions").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SearchDirection {
+    /// `l = k` on every link (the paper's choice). The default.
+    Stiffness,
+    /// The same `l` (N/m) on every link.
+    Uniform(f64),
+}
+
+/// Settings with their defaults.
+#[derive(Debug, Clone, Copy)]
+pub struct LatinSettings {
+    /// Substructures along x and y. `[1, 1]` is the monodomain solver.
+    pub subdomains: [usize; 2],
+    /// Interface search direction d_m, N/m. Default 3.92e6 (paper §5.2).
+    pub dm: f64,
+    pub search: SearchDirection,
+    pub weak: WeakInterfaces,
+    /// Indicator η to reach. Default 1e-6.
+    pub tolerance: f64,
+    /// Default 1000.
+    pub max_iterations: usize,
+}
+
+impl Default for LatinSettings {
+    fn default() -> Self {
+        Self {
+            subdomains: [4, 4],
+            dm: 3.92e6,
+            search: SearchDirection::Stiffness,
+            weak: WeakInterfaces::Macro,
+            tolerance: 1e-6,
+            max_iterations: 1000,
+        }
+    }
+}
+
+/// An interface with its macro basis and where its macro forces sit in the macro problem.
+#[derive(Debug, Clone)]
+pub struct Interface {
+    pub topology: InterfaceTopology,
+    /// R: orthonormal columns, 3·nodes rows.
+    pub basis: DMatrix<f64>,
+    pub macro_offset: usize,
+}
+
+/// What `tensolve check` prints about a partition.
+#[derive(Debug, Clone)]
+pub struct PartitionReport {
+    pub substructures: usize,
+    pub interfaces: usize,
+    pub strong_interfaces: usize,
+    pub weak_interfaces: usize,
+    pub dropped_interfaces: usize,
+    pub macro_dofs: usize,
+    pub kernel_columns: usize,
+    /// Free dofs of the largest substructure.
+    pub max_substructure_dofs: usize,
+}
+
+/// One side of an interface as E holds it: s (U, F) and ŝ (Û, F̂), full nodal vectors, and the
+/// load the micro search direction puts on E, `F̂^m + d_m Û^m`.
+#[derive(Debug, Clone)]
+struct SideState {
+    u: Vec<f64>,
+    f: Vec<f64>,
+    u_hat: Vec<f64>,
+    f_hat: Vec<f64>,
+    hat_load: Vec<f64>,
+}
+
+/// Everything that changes along the iterations for one substructure. Per-link arrays follow
+/// `Substructure::links`.
+#[derive(Debug, Clone)]
+struct SubState {
+    e: Vec<f64>,
+    t: Vec<f64>,
+    e_hat: Vec<f64>,
+    t_hat: Vec<f64>,
+    slack_hat: Vec<bool>,
+    sides: Vec<SideState>,
+    u: Vec<f64>,
+}
+
+pub struct Latin<'s> {
+    structure: &'s Structure,
+    settings: LatinSettings,
+    /// Search direction l of every link.
+    search: Vec<f64>,
+    pub interfaces: Vec<Interface>,
+    pub substructures: Vec<Substructure>,
+    macro_problem: MacroProblem,
+    dropped_interfaces: usize,
+}
+
+impl<'s> Latin<'s> {
+    pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
+        let partition = Partition::new(structure, settings.subdomains, settings.weak);
+        let mut offset = 0;
+        let interfaces: Vec<Interface> = partition
+            .interfaces
+            .iter()
+            .map(|topology| {
+                let positions: Vec<[f64; 3]> =
+                    topology.nodes.iter().map(|&n| structure.nodes[n]).collect();
+                let basis = macro_basis(&positions, settings.weak);
+                let iface = Interface {
+                    topology: topology.clone(),
+                    macro_offset: offset,
+                    basis,
+                };
+                offset += iface.basis.ncols();
+                iface
+            })
+            .collect();
+        let search: Vec<f64> = structure
+            .links
+            .iter()
+            .map(|l| match settings.search {
+                SearchDirection::Stiffness => l.stiffness,
+                SearchDirection::Uniform(v) => v,
+            })
+            .collect();
+        let mut holders = vec![0u8; structure.n_nodes()];
+        for topo in &partition.substructures {
+            for &n in &topo.nodes {
+                holders[n] += 1;
+            }
+        }
+        let built: Vec<Result<Substructure, usize>> = partition
+            .substructures
+            .par_iter()
+            .enumerate()
+            .map_init(
+                || vec![CLAMPED; 3 * structure.n_nodes()],
+                |scratch, (e, topo)| {
+                    Substructure::new(
+                        e,
+                        topo,
+                        structure,
+                        &interfaces,
+                        &holders,
+                        &search,
+                        settings.dm,
+                        scratch,
+                    )
+                    .map_err(|_| e)
+                },
+            )
+            .collect();
+        let mut substructures = Vec::with_capacity(built.len());
+        for b in built {
+            substructures.push(b.map_err(|index| SetupError::SingularSubstructure { index })?);
+        }
+        let macro_problem = MacroProblem::new(&substructures, &interfaces)
+            .map_err(|_| SetupError::SingularMacroProblem)?;
+        Ok(Latin {
+            structure,
+            settings,
+            search,
+            interfaces,
+            substructures,
+            macro_problem,
+            dropped_interfaces: partition.dropped_interfaces,
+        })
+    }
+
+    pub fn report(&self) -> PartitionReport {
+        let weak = self
+            .interfaces
+            .iter()
+            .filter(|i| i.topology.is_weak())
+            .count();
+        PartitionReport {
+            substructures: self.substructures.len(),
+            interfaces: self.interfaces.len(),
+            strong_interfaces: self.interfaces.len() - weak,
+            weak_interfaces: weak,
+            dropped_interfaces: self.dropped_interfaces,
+            macro_dofs: self.macro_problem.n_forces,
+            kernel_columns: self.substructures.iter().map(|s| s.kernel.ncols()).sum(),
+            max_substructure_dofs: self
+                .substructures
+                .iter()
+                .map(|s| s.n_dofs())
+                .max()
+                .unwrap_or(0),
+        }
+    }
+
+    fn initial_state(&self) -> Vec<SubState> {
+        self.substructures
+            .iter()
+            .map(|sub| {
+                let m = sub.links.len();
+                SubState {
+                    e: vec![0.0; m],
+                    t: vec![0.0; m],
+                    e_hat: vec![0.0; m],
+                    t_hat: vec![0.0; m],
+                    slack_hat: vec![false; m],
+                    sides: sub
+                        .sides
+                        .iter()
+                        .map(|side| SideState {
+                            u: vec![0.0; side.rows],
+                            f: vec![0.0; side.rows],
+                            u_hat: vec![0.0; side.rows],
+                            f_hat: vec![0.0; side.rows],
+                            hat_load: vec![0.0; side.rows],
+                        })
+                        .collect(),
+                    u: vec![0.0; sub.n_dofs()],
+                }
+            })
+            .collect()
+    }
+
+    /// Linear stage (SPEC §4): given ŝ in `state`, find s.
+    fn linear_stage(&self, load: &[f64], state: &mut [SubState]) {
+        let s = self.structure;
+        let dm = self.settings.dm;
+        let search = &self.search;
+        // Per substructure: F̂d_E, y_E = K_E⁻¹ F̂d_E, g_E = d_m R_Eᵀ C_E y_E.
+        let condensed: Vec<(Vec<f64>, DVector<f64>)> = self
+            .substructures
+            .par_iter()
+            .zip(state.par_iter())
+            .map(|(sub, st)| {
+                let mut f: Vec<f64> = sub
+                    .dof_global
+                    .iter()
+                    .zip(&sub.load_share)
+                    .map(|(&d, &share)| load[d] * share)
+                    .collect();
+                for (j, &i) in sub.links.iter().enumerate() {
+                    let w = st.t_hat[j] - search[i] * st.e_hat[j] + s.links[i].prestress;
+                    sub.link_dofs[j].scatter(-w, &mut f);
+                }
+                for (side, ss) in sub.sides.iter().zip(&st.sides) {
+                    for (r, &v) in ss.hat_load.iter().enumerate() {
+                        f[sub.gamma_dofs[side.gamma_offset + r]] += v;
+                    }
+                }
+                sub.factor.solve_in_place(&mut f);
+                let g = sub.project(&f) * dm;
+                (f, g)
+            })
+            .collect();
+        let g: Vec<DVector<f64>> = condensed.iter().map(|(_, g)| g.clone()).collect();
+        let solution = self
+            .macro_problem
+            .solve(&self.substructures, &self.interfaces, &g);
+        let interfaces = &self.interfaces;
+        let kernel_offset = &self.macro_problem.kernel_offset;
+        self.substructures
+            .par_iter()
+            .zip(state.par_iter_mut())
+            .zip(condensed.into_par_iter())
+            .enumerate()
+            .for_each(|(e, ((sub, st), (y, g)))| {
+                // f_E = c_E f_Γ, a_E; u_E = L_E f_E + K⁺_E g_E + Q_E a_E.
+                let mut f_e = DVector::zeros(sub.n_macro);
+                for side in &sub.sides {
+                    let off = interfaces[side.interface].macro_offset;
+                    for i in 0..side.cols {
+                        f_e[side.macro_offset + i] = side.sign() * solution[off + i];
+                    }
+                }
+                let a_e = DVector::from_column_slice(
+                    &solution[kernel_offset[e]..kernel_offset[e] + sub.kernel.ncols()],
+                );
+                let u_e = &sub.flexibility * &f_e + &sub.k_plus * &g + &sub.kernel * &a_e;
+                // U_E = y_E + d_m Z_E (u_E + f_E/d_m).
+                let star = &u_e * dm + &f_e;
+                let zu = &sub.z * &star;
+                st.u.iter_mut()
+                    .zip(y.iter().zip(zu.iter()))
+                    .for_each(|(u, (yi, zi))| *u = yi + zi);
+                // e_E = B_E U_E, t_E = t̂_E + l(e_E − ê_E).
+                for (j, &i) in sub.links.iter().enumerate() {
+                    st.e[j] = sub.link_dofs[j].elongation(&st.u);
+                    st.t[j] = st.t_hat[j] + search[i] * (st.e[j] - st.e_hat[j]);
+                }
+                // Interfaces: U = C_E U_E, U^M = R u, F^M = R f, F^m = F̂^m + d_m Û^m − d_m(U − U^M).
+                for (side, ss) in sub.sides.iter().zip(st.sides.iter_mut()) {
+                    let u_block = u_e.rows(side.macro_offset, side.cols);
+                    let f_block = f_e.rows(side.macro_offset, side.cols);
+                    let u_macro = &side.basis * u_block;
+                    let f_macro = &side.basis * f_block;
+                    for r in 0..side.rows {
+                        let u = st.u[sub.gamma_dofs[side.gamma_offset + r]];
+                        ss.u[r] = u;
+                        ss.f[r] = f_macro[r] + ss.hat_load[r] - dm * (u - u_macro[r]);
+                    }
+                }
+            });
+    }
+
+    /// Local stage (SPEC §4): given s in `state`, find ŝ.
+    fn local_stage(&self, state: &mut [SubState]) {
+        let s = self.structure;
+        let search = &self.search;
+        self.substructures
+            .par_iter()
+            .zip(state.par_iter_mut())
+            .for_each(|(sub, st)| {
+                for (j, &i) in sub.links.iter().enumerate() {
+                    let (e_hat, t_hat, slack) =
+                        link_local_stage(&s.links[i], search[i], st.e[j], st.t[j]);
+                    st.e_hat[j] = e_hat;
+                    st.t_hat[j] = t_hat;
+                    st.slack_hat[j] = slack;
+                }
+            });
+        for iface in &self.interfaces {
+            let [a, b] = iface.topology.sides;
+            let side_index = |e: usize| {
+                self.substructures[e]
+                    .sides
+                    .iter()
+                    .position(|sd| std::ptr::eq(&self.interfaces[sd.interface], iface))
+                    .expect("interface listed by both sides")
+            };
+            let (ia, ib) = (side_index(a), side_index(b));
+            let (first, second) = if a < b {
+                let (lo, hi) = state.split_at_mut(b);
+                (&mut lo[a].sides[ia], &mut hi[0].sides[ib])
+            } else {
+                unreachable!("interfaces list their substructures in increasing order")
+            };
+            interface_local_stage(&iface.basis, self.settings.dm, first, second);
+        }
+    }
+
+    /// η between s and the ŝ that fed it (SPEC §4 "Indicator", paper §5.3).
+    fn indicator(&self, state: &[SubState]) -> f64 {
+        let dm = self.settings.dm;
+        let mut delta = 0.0;
+        let mut size = 0.0;
+        for (sub, st) in self.substructures.iter().zip(state) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                let l = self.search[i];
+                let d = (st.t[j] - st.t_hat[j]) + l * (st.e[j] - st.e_hat[j]);
+                delta += d * d / l;
+                let e_mid = 0.5 * (st.e[j] + st.e_hat[j]);
+                let t_mid = 0.5 * (st.t[j] + st.t_hat[j]);
+                size += l * e_mid * e_mid + t_mid * t_mid / l;
+            }
+            for ss in &st.sides {
+                for r in 0..ss.u.len() {
+                    let df = (ss.f[r] - ss.f_hat[r]) - dm * (ss.u[r] - ss.u_hat[r]);
+                    delta += df * df / dm;
+                    let u_mid = 0.5 * (ss.u[r] + ss.u_hat[r]);
+                    let f_mid = 0.5 * (ss.f[r] + ss.f_hat[r]);
+                    size += dm * u_mid * u_mid + f_mid * f_mid / dm;
+                }
+            }
+        }
+        if size > 0.0 {
+            (delta / size).sqrt()
+        } else {
+            delta.sqrt()
+        }
+    }
+
+    /// Energy error e against the reference elongations (SPEC §4 "Error").
+    fn error(&self, state: &[SubState], reference: &[f64], reference_energy: f64) -> f64 {
+        let mut num = 0.0;
+        for (sub, st) in self.substructures.iter().zip(state) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                let d = st.e[j] - reference[i];
+                num += d * self.search[i] * d;
+            }
+        }
+        if reference_energy > 0.0 {
+            (num / reference_energy).sqrt()
+        } else {
+            num.sqrt()
+        }
+    }
+
+    /// Solve for `load` (free dofs). With `reference` displacements (free dofs) the error e is
+    /// reported along the iterations.
+    pub fn solve(
+        &mut self,
+        load: &[f64],
+        reference: Option<&[f64]>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let clock = Instant::now();
+        let s = self.structure;
+        let reference_elongations: Option<(Vec<f64>, f64)> = reference.map(|u_ref| {
+            let mut e = vec![0.0; s.links.len()];
+            s.elongations(u_ref, &mut e);
+            let energy = e
+                .iter()
+                .zip(&self.search)
+                .map(|(ei, li)| ei * li * ei)
+                .sum();
+            (e, energy)
+        });
+        let mut state = self.initial_state();
+        let mut iteration = 0;
+        let mut status = Status::MaxIterations;
+        let mut eta;
+        loop {
+            if iteration > 0 {
+                self.local_stage(&mut state);
+            }
+            self.linear_stage(load, &mut state);
+            eta = self.indicator(&state);
+            let error = reference_elongations
+                .as_ref()
+                .map(|(e, energy)| self.error(&state, e, *energy));
+            let slack_cables = state
+                .iter()
+                .map(|st| st.slack_hat.iter().filter(|&&x| x).count())
+                .sum();
+            observer.iteration(&IterationRecord {
+                iteration,
+                residual: eta,
+                error,
+                slack_cables,
+                elapsed_seconds: clock.elapsed().as_secs_f64(),
+            });
+            if !eta.is_finite() {
+                status = Status::Stalled;
+                break;
+            }
+            if eta <= self.settings.tolerance {
+                status = Status::Converged;
+                break;
+            }
+            if iteration >= self.settings.max_iterations {
+                break;
+            }
+            iteration += 1;
+        }
+        // The answer: U of the last linear stage, tensions of its local stage (exact law).
+        self.local_stage(&mut state);
+        let mut u = vec![0.0; s.n_free];
+        let mut count = vec![0u32; s.n_free];
+        let mut tensions = vec![0.0; s.links.len()];
+        let mut slack = vec![false; s.links.len()];
+        for (sub, st) in self.substructures.iter().zip(&state) {
+            for (local, &global) in sub.dof_global.iter().enumerate() {
+                u[global] += st.u[local];
+                count[global] += 1;
+            }
+            for (j, &i) in sub.links.iter().enumerate() {
+                tensions[i] = st.t_hat[j] + s.links[i].prestress;
+                slack[i] = st.slack_hat[j];
+                if slack[i] {
+                    tensions[i] = 0.0;
+                }
+            }
+        }
+        u.iter_mut()
+            .zip(&count)
+            .for_each(|(ui, &c)| *ui /= c.max(1) as f64);
+        Solution {
+            equilibrium: Equilibrium {
+                displacements: u,
+                tensions,
+                slack,
+            },
+            info: SolveInfo {
+                status,
+                iterations: iteration,
+                residual: eta,
+                solve_seconds: clock.elapsed().as_secs_f64(),
+            },
+        }
+    }
+}

@@ -1,0 +1,247 @@
+//! One substructure E and its linear-stage operators (SPEC §4 "Linear stage"):
+//! `K_E = B_Eᵀ l B_E + d_m C_Eᵀ C_E` (sparse, factorized once), `Z_E = K_E⁻¹ C_Eᵀ R_E`,
+//! `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, its kernel Q_E, `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and the
+//! homogenised flexibility `L_E = K⁺_E − I/d_m`.
+
+use super::kernel::{substructure_kernel, InterfaceTrace};
+use super::partition::SubstructureTopology;
+use super::Interface;
+use crate::linalg::{SparseCholesky, StiffnessPattern};
+use crate::structure::{LinkDofs, Structure, CLAMPED};
+use faer::Par;
+use nalgebra::{DMatrix, DVector};
+
+/// E's view of one of its interfaces.
+#[derive(Debug, Clone)]
+pub struct Side {
+    pub interface: usize,
+    /// 0 if E is the interface's first substructure (macro forces counted +), 1 otherwise (−).
+    pub which: usize,
+    /// First row of this interface in E's stacked interface vector U_EΓ.
+    pub gamma_offset: usize,
+    /// First column of this interface in E's macro vector u_E.
+    pub macro_offset: usize,
+    pub rows: usize,
+    pub cols: usize,
+    /// The interface's macro basis R (rows × cols), a copy kept with E.
+    pub basis: DMatrix<f64>,
+}
+
+impl Side {
+    pub fn sign(&self) -> f64 {
+        if self.which == 0 {
+            1.0
+        } else {
+            -1.0
+        }
+    }
+}
+
+/// Why a substructure operator could not be built.
+#[derive(Debug, Clone, Copy)]
+pub struct SingularSubstructure;
+
+pub struct Substructure {
+    /// Global link indices, in the order of every per-link array of E.
+    pub links: Vec<usize>,
+    /// Local dof → global free dof.
+    pub dof_global: Vec<usize>,
+    /// Per local dof: the share of a nodal load E carries (1 / substructures holding the node).
+    pub load_share: Vec<f64>,
+    pub link_dofs: Vec<LinkDofs>,
+    pub sides: Vec<Side>,
+    /// Local dof of each row of U_EΓ (C_E as an index map).
+    pub gamma_dofs: Vec<usize>,
+    pub n_macro: usize,
+    pub factor: SparseCholesky,
+    pub z: DMatrix<f64>,
+    pub k_star: DMatrix<f64>,
+    pub k_plus: DMatrix<f64>,
+    pub flexibility: DMatrix<f64>,
+    pub kernel: DMatrix<f64>,
+}
+
+impl Substructure {
+    /// `local_dof` is a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        index: usize,
+        topology: &SubstructureTopology,
+        structure: &Structure,
+        interfaces: &[Interface],
+        holders: &[u8],
+        search: &[f64],
+        dm: f64,
+        local_dof: &mut [usize],
+    ) -> Result<Substructure, SingularSubstructure> {
+        let mut dof_global = Vec::with_capacity(3 * topology.nodes.len());
+        let mut load_share = Vec::with_capacity(3 * topology.nodes.len());
+        for &node in &topology.nodes {
+            for c in 0..3 {
+                local_dof[3 * node + c] = dof_global.len();
+                dof_global.push(structure.dof_of[3 * node + c]);
+                load_share.push(1.0 / holders[node] as f64);
+            }
+        }
+        let link_dofs: Vec<LinkDofs> = topology
+            .links
+            .iter()
+            .map(|&i| LinkDofs::new(&structure.links[i], local_dof))
+            .collect();
+        let mut sides = Vec::new();
+        let mut gamma_dofs = Vec::new();
+        let mut n_macro = 0;
+        for (k, iface) in interfaces.iter().enumerate() {
+            let Some(which) = iface.topology.sides.iter().position(|&e| e == index) else {
+                continue;
+            };
+            let rows = 3 * iface.topology.nodes.len();
+            let cols = iface.basis.ncols();
+            sides.push(Side {
+                interface: k,
+                which,
+                gamma_offset: gamma_dofs.len(),
+                macro_offset: n_macro,
+                rows,
+                cols,
+                basis: iface.basis.clone(),
+            });
+            for &node in &iface.topology.nodes {
+                for c in 0..3 {
+                    gamma_dofs.push(local_dof[3 * node + c]);
+                }
+            }
+            n_macro += cols;
+        }
+        for &node in &topology.nodes {
+            for c in 0..3 {
+                local_dof[3 * node + c] = CLAMPED;
+            }
+        }
+
+        // K_E = B_Eᵀ l B_E + d_m C_Eᵀ C_E.
+        let n = dof_global.len();
+        let pattern = StiffnessPattern::new(n, &link_dofs);
+        let mut values = vec![0.0; pattern.nnz()];
+        pattern.assemble(&link_dofs, |j| search[topology.links[j]], &mut values);
+        for &d in &gamma_dofs {
+            values[pattern.diag_slot[d]] += dm;
+        }
+        let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
+        if factor.factorize(&pattern, &values).is_err() {
+            return Err(SingularSubstructure);
+        }
+
+        // Z_E = K_E⁻¹ C_Eᵀ R_E, column by column of the block-diagonal R_E.
+        let mut z = DMatrix::<f64>::zeros(n, n_macro);
+        for side in &sides {
+            let basis = &side.basis;
+            for j in 0..side.cols {
+                let mut col = z.column_mut(side.macro_offset + j);
+                for r in 0..side.rows {
+                    col[gamma_dofs[side.gamma_offset + r]] += basis[(r, j)];
+                }
+            }
+        }
+        if n_macro > 0 {
+            factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(
+                z.as_mut_slice(),
+                n,
+                n_macro,
+            ));
+        }
+        let mut sub = Substructure {
+            links: topology.links.clone(),
+            dof_global,
+            load_share,
+            link_dofs,
+            sides,
+            gamma_dofs,
+            n_macro,
+            factor,
+            z: DMatrix::zeros(0, 0),
+            k_star: DMatrix::zeros(0, 0),
+            k_plus: DMatrix::zeros(0, 0),
+            flexibility: DMatrix::zeros(0, 0),
+            kernel: DMatrix::zeros(0, 0),
+        };
+        // K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
+        let mut k_star = DMatrix::<f64>::identity(n_macro, n_macro) * dm;
+        for j in 0..n_macro {
+            let rz = sub.project(z.column(j).as_slice());
+            for i in 0..n_macro {
+                k_star[(i, j)] -= dm * dm * rz[i];
+            }
+        }
+        let k_star = (&k_star + k_star.transpose()) * 0.5;
+        // Kernel from the rigid motions (SPEC §4), pseudo-inverse and flexibility.
+        let traces: Vec<InterfaceTrace<'_>> = sub
+            .sides
+            .iter()
+            .map(|s| InterfaceTrace {
+                positions: interfaces[s.interface]
+                    .topology
+                    .nodes
+                    .iter()
+                    .map(|&node| structure.nodes[node])
+                    .collect(),
+                basis: &s.basis,
+            })
+            .collect();
+        let all_positions: Vec<[f64; 3]> = topology
+            .nodes
+            .iter()
+            .chain(&topology.clamped_nodes)
+            .map(|&node| structure.nodes[node])
+            .collect();
+        let clamped_positions: Vec<[f64; 3]> = topology
+            .clamped_nodes
+            .iter()
+            .map(|&node| structure.nodes[node])
+            .collect();
+        let kernel = substructure_kernel(&all_positions, &clamped_positions, &traces);
+        let qqt = &kernel * kernel.transpose();
+        let k_plus = match (&k_star + &qqt).cholesky() {
+            Some(c) => c.inverse() - &qqt,
+            None => {
+                let ev = k_star.clone().symmetric_eigenvalues();
+                let mut ev: Vec<f64> = ev.iter().cloned().collect();
+                ev.sort_by(f64::total_cmp);
+                return Err(SingularSubstructure);
+            }
+        };
+        let flexibility = &k_plus - DMatrix::<f64>::identity(n_macro, n_macro) / dm;
+        sub.z = z;
+        sub.k_star = k_star;
+        sub.k_plus = k_plus;
+        sub.flexibility = flexibility;
+        sub.kernel = kernel;
+        Ok(sub)
+    }
+
+    pub fn n_dofs(&self) -> usize {
+        self.dof_global.len()
+    }
+
+    /// `R_Eᵀ C_E v` for a vector on E's dofs.
+    pub fn project(&self, v: &[f64]) -> DVector<f64> {
+        self.project_gamma(&self.gather(v))
+    }
+
+    /// `C_E v`: E's interface rows.
+    pub fn gather(&self, v: &[f64]) -> Vec<f64> {
+        self.gamma_dofs.iter().map(|&d| v[d]).collect()
+    }
+
+    /// `R_Eᵀ w` for w on E's interface rows.
+    pub fn project_gamma(&self, w: &[f64]) -> DVector<f64> {
+        let mut out = DVector::zeros(self.n_macro);
+        for side in &self.sides {
+            let block = side.basis.tr_mul(&DVector::from_column_slice(
+                &w[side.gamma_offset..side.gamma_offset + side.rows],
+            ));
+            out.rows_mut(side.macro_offset, side.cols).copy_from(&block);
+        }
+        out
+    }
+}
