@@ -35,8 +35,8 @@ pub fn constitutive_residual(s: &Structure, eq: &Equilibrium) -> f64 {
         let e = ld.elongation(&eq.displacements);
         let law = tau - l.prestress - l.stiffness * e;
         let violation = if l.unilateral {
-            // kλ = k(−e) + τ − t0 = −law
-            (-law).min(tau)
+            // kλ = k(−e + (τ − t0)/k) = τ − t0 − k e = law
+            law.min(tau)
         } else {
             law
         };

@@ -100,9 +100,6 @@ pub fn run(
 ) -> Result<Vec<SummaryRow>, RunError> {
     let dir = output_dir(case, options);
     let wants_files = case.output.summary || case.output.tensions || case.output.displacements;
-    if wants_files {
-        check_writable(&dir)?;
-    }
     let methods = options
         .methods
         .clone()
@@ -112,6 +109,10 @@ pub fn run(
     let structure = Structure::from_case(case);
     let taut = TautStiffness::new(&structure)?;
     let shared_setup = clock.elapsed().as_secs_f64();
+    // After the structure is known to be solvable: a refused case leaves no directory behind.
+    if wants_files {
+        check_writable(&dir)?;
+    }
 
     let mut runners = Vec::with_capacity(methods.len());
     for &method in &methods {

@@ -35,6 +35,15 @@ impl CaseError {
     }
 }
 
+/// A number as a user would write it: exponent form when very large or very small.
+pub(crate) fn number(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && (x.abs() < 1e-3 || x.abs() >= 1e6) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// A physical quantity: finite and strictly positive.
 fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> {
     if value.is_finite() && value > 0.0 {
@@ -42,7 +51,7 @@ fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> 
     } else {
         Err(CaseError::invalid(
             key,
-            value,
+            number(value),
             format!("give {what} as a finite number > 0"),
         ))
     }
@@ -54,7 +63,7 @@ fn finite(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> {
     } else {
         Err(CaseError::invalid(
             key,
-            value,
+            number(value),
             format!("give {what} as a finite number"),
         ))
     }
@@ -87,7 +96,7 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
     if !(p.is_finite() && p >= 0.0) {
         return Err(CaseError::invalid(
             "prestress.lower_cable",
-            p,
+            number(p),
             "give the lower cables' prestress in N as a finite number ≥ 0",
         ));
     }
@@ -108,7 +117,7 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
             return Err(CaseError::invalid(
                 "solver.tolerance",
-                tol,
+                number(tol),
                 "give a relative tolerance between 0 and 1 (exclusive), e.g. 1e-8",
             ));
         }
@@ -127,7 +136,7 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
 /// `{ from, to, steps }` with `steps ≥ 1` values spaced evenly, both ends included.
 fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
     const KEY: &str = "load.alpha";
-    let number = |v: &toml::Value| match v {
+    let as_number = |v: &toml::Value| match v {
         toml::Value::Float(f) => Some(*f),
         toml::Value::Integer(i) => Some(*i as f64),
         _ => None,
@@ -144,7 +153,7 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
             items
                 .iter()
                 .map(|v| {
-                    number(v).ok_or_else(|| {
+                    as_number(v).ok_or_else(|| {
                         CaseError::invalid(KEY, v, "every load factor must be a number")
                     })
                 })
@@ -160,7 +169,7 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
                     ));
                 }
             }
-            let get = |k: &str| t.get(k).and_then(number);
+            let get = |k: &str| t.get(k).and_then(as_number);
             let (Some(from), Some(to)) = (get("from"), get("to")) else {
                 return Err(CaseError::invalid(
                     KEY,

@@ -89,28 +89,45 @@ pub struct PartitionReport {
     pub max_substructure_dofs: usize,
 }
 
-/// One side of an interface as E holds it: s (U, F) and ŝ (Û, F̂), full nodal vectors, and the
-/// load the micro search direction puts on E, `F̂^m + d_m Û^m`.
+/// One side of an interface as E holds it: s (U, F) and ŝ (Û, F̂), full nodal vectors in the
+/// interface's node order, and the load the micro search direction puts on E,
+/// `F̂^m + d_m Û^m`. F is the force of the interface on E.
 #[derive(Debug, Clone)]
-struct SideState {
-    u: Vec<f64>,
-    f: Vec<f64>,
-    u_hat: Vec<f64>,
-    f_hat: Vec<f64>,
-    hat_load: Vec<f64>,
+pub struct SideState {
+    pub u: Vec<f64>,
+    pub f: Vec<f64>,
+    pub u_hat: Vec<f64>,
+    pub f_hat: Vec<f64>,
+    pub hat_load: Vec<f64>,
 }
 
 /// Everything that changes along the iterations for one substructure. Per-link arrays follow
-/// `Substructure::links`.
+/// `Substructure::links`; `sides` follows `Substructure::sides`; `u` is U_E on E's dofs.
 #[derive(Debug, Clone)]
-struct SubState {
-    e: Vec<f64>,
-    t: Vec<f64>,
-    e_hat: Vec<f64>,
-    t_hat: Vec<f64>,
-    slack_hat: Vec<bool>,
-    sides: Vec<SideState>,
-    u: Vec<f64>,
+pub struct SubState {
+    pub e: Vec<f64>,
+    pub t: Vec<f64>,
+    pub e_hat: Vec<f64>,
+    pub t_hat: Vec<f64>,
+    pub slack_hat: Vec<bool>,
+    pub sides: Vec<SideState>,
+    pub u: Vec<f64>,
+}
+
+/// The iterate of the LATIN state machine: after [`Latin::init`] or [`Latin::next_iter`] it
+/// holds s (the last linear stage) and the ŝ that fed it.
+#[derive(Debug, Clone)]
+pub struct LatinState {
+    pub subs: Vec<SubState>,
+    pub iteration: usize,
+    /// η between s and ŝ.
+    pub eta: f64,
+    /// e against the reference, when one was given.
+    pub error: Option<f64>,
+    /// Slack cables of ŝ.
+    pub slack_cables: usize,
+    load: Vec<f64>,
+    reference: Option<(Vec<f64>, f64)>,
 }
 
 pub struct Latin<'s> {
@@ -411,17 +428,11 @@ impl<'s> Latin<'s> {
         }
     }
 
-    /// Solve for `load` (free dofs). With `reference` displacements (free dofs) the error e is
-    /// reported along the iterations.
-    pub fn solve(
-        &mut self,
-        load: &[f64],
-        reference: Option<&[f64]>,
-        observer: &mut dyn Observer,
-    ) -> Solution {
-        let clock = Instant::now();
+    /// Iteration 0: the linear stage from ŝ = 0. With `reference` displacements (free dofs)
+    /// the error e is measured after every linear stage.
+    pub fn init(&self, load: &[f64], reference: Option<&[f64]>) -> LatinState {
         let s = self.structure;
-        let reference_elongations: Option<(Vec<f64>, f64)> = reference.map(|u_ref| {
+        let reference = reference.map(|u_ref| {
             let mut e = vec![0.0; s.links.len()];
             s.elongations(u_ref, &mut e);
             let energy = e
@@ -431,75 +442,109 @@ impl<'s> Latin<'s> {
                 .sum();
             (e, energy)
         });
-        let mut state = self.initial_state();
-        let mut iteration = 0;
-        let mut status = Status::MaxIterations;
-        let mut eta;
-        loop {
-            if iteration > 0 {
-                self.local_stage(&mut state);
-            }
-            self.linear_stage(load, &mut state);
-            eta = self.indicator(&state);
-            let error = reference_elongations
-                .as_ref()
-                .map(|(e, energy)| self.error(&state, e, *energy));
-            let slack_cables = state
-                .iter()
-                .map(|st| st.slack_hat.iter().filter(|&&x| x).count())
-                .sum();
-            observer.iteration(&IterationRecord {
-                iteration,
-                residual: eta,
-                error,
-                slack_cables,
-                elapsed_seconds: clock.elapsed().as_secs_f64(),
-            });
-            if !eta.is_finite() {
-                status = Status::Stalled;
-                break;
-            }
-            if eta <= self.settings.tolerance {
-                status = Status::Converged;
-                break;
-            }
-            if iteration >= self.settings.max_iterations {
-                break;
-            }
-            iteration += 1;
-        }
-        // The answer: U of the last linear stage, tensions of its local stage (exact law).
-        self.local_stage(&mut state);
+        let mut state = LatinState {
+            subs: self.initial_state(),
+            iteration: 0,
+            eta: f64::INFINITY,
+            error: None,
+            slack_cables: 0,
+            load: load.to_vec(),
+            reference,
+        };
+        self.linear_stage(&state.load, &mut state.subs);
+        self.measure(&mut state);
+        state
+    }
+
+    /// One iteration: local stage on s, then linear stage.
+    pub fn next_iter(&self, state: &mut LatinState) {
+        self.local_stage(&mut state.subs);
+        self.linear_stage(&state.load, &mut state.subs);
+        state.iteration += 1;
+        self.measure(state);
+    }
+
+    fn measure(&self, state: &mut LatinState) {
+        state.eta = self.indicator(&state.subs);
+        state.error = state
+            .reference
+            .as_ref()
+            .map(|(e, energy)| self.error(&state.subs, e, *energy));
+        state.slack_cables = state
+            .subs
+            .iter()
+            .map(|st| st.slack_hat.iter().filter(|&&x| x).count())
+            .sum();
+    }
+
+    /// The answer of a state: U of its linear stage, tensions of the local stage on it (which
+    /// satisfy the cable law exactly; slack cables carry exactly 0).
+    pub fn equilibrium(&self, state: &LatinState) -> Equilibrium {
+        let s = self.structure;
+        let mut subs = state.subs.clone();
+        self.local_stage(&mut subs);
         let mut u = vec![0.0; s.n_free];
         let mut count = vec![0u32; s.n_free];
         let mut tensions = vec![0.0; s.links.len()];
         let mut slack = vec![false; s.links.len()];
-        for (sub, st) in self.substructures.iter().zip(&state) {
+        for (sub, st) in self.substructures.iter().zip(&subs) {
             for (local, &global) in sub.dof_global.iter().enumerate() {
                 u[global] += st.u[local];
                 count[global] += 1;
             }
             for (j, &i) in sub.links.iter().enumerate() {
-                tensions[i] = st.t_hat[j] + s.links[i].prestress;
                 slack[i] = st.slack_hat[j];
-                if slack[i] {
-                    tensions[i] = 0.0;
-                }
+                tensions[i] = if slack[i] {
+                    0.0
+                } else {
+                    st.t_hat[j] + s.links[i].prestress
+                };
             }
         }
         u.iter_mut()
             .zip(&count)
             .for_each(|(ui, &c)| *ui /= c.max(1) as f64);
+        Equilibrium {
+            displacements: u,
+            tensions,
+            slack,
+        }
+    }
+
+    /// Iterate from [`Latin::init`] until η ≤ tolerance or `max_iterations`.
+    pub fn solve(
+        &self,
+        load: &[f64],
+        reference: Option<&[f64]>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let clock = Instant::now();
+        let mut state = self.init(load, reference);
+        let status = loop {
+            observer.iteration(&IterationRecord {
+                iteration: state.iteration,
+                residual: state.eta,
+                error: state.error,
+                slack_cables: state.slack_cables,
+                elapsed_seconds: clock.elapsed().as_secs_f64(),
+            });
+            if !state.eta.is_finite() {
+                break Status::Stalled;
+            }
+            if state.eta <= self.settings.tolerance {
+                break Status::Converged;
+            }
+            if state.iteration >= self.settings.max_iterations {
+                break Status::MaxIterations;
+            }
+            self.next_iter(&mut state);
+        };
         Solution {
-            equilibrium: Equilibrium {
-                displacements: u,
-                tensions,
-                slack,
-            },
+            equilibrium: self.equilibrium(&state),
             info: SolveInfo {
                 status,
-                iterations: iteration,
-                residual: eta,
+                iterations: state.iteration,
+                residual: state.eta,
                 solve_seconds: clock.elapsed().as_secs_f64(),
             },
         }
