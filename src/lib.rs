@@ -5,8 +5,8 @@
 
 pub mod case;
 pub mod linalg;
-pub mod structure;
-pub mod solvers;
 pub mod output;
 pub mod results;
 pub mod run;
+pub mod solvers;
+pub mod structure;

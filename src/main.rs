@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use tensolve::case::{self, Method};
 use tensolve::output::alpha_label;
 use tensolve::run::{run, RunError, RunOptions};
+use tensolve::solvers::latin::{Latin, LatinSettings, SearchDirection};
 use tensolve::solvers::TautStiffness;
 use tensolve::structure::Structure;
 
@@ -36,8 +37,8 @@ enum Command {
         /// Output directory; overrides `output.dir` (default `out/<case file stem>`).
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
-        /// Solver(s) to run instead of `solver.methods`: newton, pcg-lcp. Repeat or separate
-        /// with commas.
+        /// Solver(s) to run instead of `solver.methods`: newton, pcg-lcp, mono-latin,
+        /// micro-macro. Repeat or separate with commas.
         #[arg(long = "solver", value_name = "NAME", value_delimiter = ',', value_parser = parse_method)]
         solvers: Vec<Method>,
         /// Print nothing but errors.
@@ -97,7 +98,11 @@ fn run_command(
                 "{:>8} alpha = {:<6} {} in {} it, {} / {} slack, residual {:.1e}, {:.1} ms",
                 r.solver,
                 alpha_label(r.alpha),
-                if r.converged { "converged" } else { "NOT converged" },
+                if r.converged {
+                    "converged"
+                } else {
+                    "NOT converged"
+                },
                 r.iterations,
                 r.slack_cables,
                 r.cables,
@@ -107,7 +112,12 @@ fn run_command(
         }
     };
     let result = run(&case, &options, &mut print_row);
-    if !quiet && !matches!(result, Err(RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. })) {
+    if !quiet
+        && !matches!(
+            result,
+            Err(RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. })
+        )
+    {
         eprintln!("results in {}", dir.display());
     }
     result.map(|_| ())
@@ -119,32 +129,89 @@ fn check_command(path: PathBuf) -> Result<(), RunError> {
     let mut out = String::new();
     let n_nodes = s.n_nodes();
     let _ = writeln!(out, "case            {}", path.display());
-    let _ = writeln!(out, "grid            {} x {} modules ({:?})", s.layout.nx, s.layout.ny, case.grid.module);
+    let _ = writeln!(
+        out,
+        "grid            {} x {} modules ({:?})",
+        s.layout.nx, s.layout.ny, case.grid.module
+    );
     let _ = writeln!(out, "nodes           {n_nodes}");
     let _ = writeln!(out, "dofs            {}", 3 * n_nodes);
     let _ = writeln!(out, "free dofs       {}", s.n_free);
-    let _ = writeln!(out, "clamped nodes   {}", s.clamped.iter().filter(|&&c| c).count());
-    let _ = writeln!(out, 
+    let _ = writeln!(
+        out,
+        "clamped nodes   {}",
+        s.clamped.iter().filter(|&&c| c).count()
+    );
+    let _ = writeln!(
+        out,
         "cables          {} ({})",
         s.n_cables(),
-        if case.cables.unilateral { "unilateral" } else { "bilateral" }
+        if case.cables.unilateral {
+            "unilateral"
+        } else {
+            "bilateral"
+        }
     );
     let _ = writeln!(out, "bars            {}", s.n_bars());
-    let _ = writeln!(out, 
+    let _ = writeln!(
+        out,
         "max |B^T t0|    {:.3e} N ({:.1e} of the lower cable prestress)",
         s.prestress_imbalance(),
-        if s.prestress_scale > 0.0 { s.prestress_imbalance() / s.prestress_scale } else { 0.0 }
+        if s.prestress_scale > 0.0 {
+            s.prestress_imbalance() / s.prestress_scale
+        } else {
+            0.0
+        }
     );
     let alphas: Vec<String> = case.load.alphas.iter().map(|&a| alpha_label(a)).collect();
     let _ = writeln!(out, "load factors    {}", alphas.join(", "));
     let methods: Vec<&str> = case.solver.methods.iter().map(|m| m.name()).collect();
     let _ = writeln!(out, "solvers         {}", methods.join(", "));
-    let taut = TautStiffness::new(&s);
-    if taut.is_ok() {
-        let _ = writeln!(out, "stiffness       positive definite with every cable taut");
-    }
+    let result = check_solvers(&case, &s, &mut out);
     print_ignoring_closed_pipe(&out);
-    taut.map(|_| ()).map_err(RunError::from)
+    result
+}
+
+/// The taut stiffness, and the partition of every LATIN solver the case asks for.
+fn check_solvers(case: &case::Case, s: &Structure, out: &mut String) -> Result<(), RunError> {
+    TautStiffness::new(s)?;
+    let _ = writeln!(
+        out,
+        "stiffness       positive definite with every cable taut"
+    );
+    for &method in case.solver.methods.iter().filter(|m| m.is_latin()) {
+        let subdomains = if method == Method::MonoLatin {
+            [1, 1]
+        } else {
+            case.solver.subdomains
+        };
+        let settings = LatinSettings {
+            subdomains,
+            dm: case.solver.dm,
+            search: case.solver.search.unwrap_or(SearchDirection::Stiffness),
+            weak: case.solver.weak_interfaces,
+            ..LatinSettings::default()
+        };
+        let r = Latin::new(s, settings)?.report();
+        let _ = writeln!(out, "{}:", method.name());
+        let _ = writeln!(
+            out,
+            "  substructures {} ({} x {}), largest {} free dofs",
+            r.substructures, subdomains[0], subdomains[1], r.max_substructure_dofs
+        );
+        let _ = writeln!(
+            out,
+            "  interfaces    {} ({} strong, {} weak, {} dropped; weak = {:?})",
+            r.interfaces,
+            r.strong_interfaces,
+            r.weak_interfaces,
+            r.dropped_interfaces,
+            settings.weak
+        );
+        let _ = writeln!(out, "  macro dofs    {}", r.macro_dofs);
+        let _ = writeln!(out, "  kernel cols   {}", r.kernel_columns);
+    }
+    Ok(())
 }
 
 /// Print to stdout; a reader that closed the pipe early (`| head`) is not an error.

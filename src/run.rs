@@ -1,9 +1,10 @@
 //! One case, end to end: build the structure, set the asked solvers up once, solve every α,
 //! write the asked files. Only what the case asks for is computed and written.
 
-use crate::case::{Case, CaseError, Method};
-use crate::output::{self, SummaryRow};
+use crate::case::{Case, CaseError, Method, Reference};
+use crate::output::{self, HistoryWriter, SummaryRow};
 use crate::results;
+use crate::solvers::latin::{Latin, LatinSettings, SearchDirection};
 use crate::solvers::newton::{Newton, NewtonSettings};
 use crate::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use crate::solvers::{Observer, SetupError, Silent, Solution, TautStiffness};
@@ -53,15 +54,74 @@ impl RunError {
 enum Runner<'s> {
     Newton(Newton<'s>),
     PcgLcp(PcgLcp<'s>),
+    Latin(Latin<'s>),
 }
 
-impl Runner<'_> {
-    fn solve(&mut self, load: &[f64], observer: &mut dyn Observer) -> Solution {
+impl<'s> Runner<'s> {
+    /// Set `method` up with the case's settings (`tuned`) or with the solver's own defaults.
+    fn new(
+        method: Method,
+        case: &Case,
+        structure: &'s Structure,
+        taut: &'s TautStiffness,
+        tuned: bool,
+    ) -> Result<Runner<'s>, SetupError> {
+        let tolerance = case.solver.tolerance.filter(|_| tuned);
+        let max_iterations = case.solver.max_iterations.filter(|_| tuned);
+        Ok(match method {
+            Method::Newton => {
+                let mut settings = NewtonSettings::default();
+                settings.tolerance = tolerance.unwrap_or(settings.tolerance);
+                settings.max_iterations = max_iterations.unwrap_or(settings.max_iterations);
+                Runner::Newton(Newton::new(structure, taut, settings)?)
+            }
+            Method::PcgLcp => {
+                let mut settings = PcgLcpSettings::default();
+                settings.tolerance = tolerance.unwrap_or(settings.tolerance);
+                settings.max_iterations = max_iterations.unwrap_or(settings.max_iterations);
+                Runner::PcgLcp(PcgLcp::new(structure, taut, settings))
+            }
+            Method::MonoLatin | Method::MicroMacro => {
+                let mut settings = LatinSettings {
+                    subdomains: if method == Method::MonoLatin {
+                        [1, 1]
+                    } else {
+                        case.solver.subdomains
+                    },
+                    dm: case.solver.dm,
+                    search: case.solver.search.unwrap_or(SearchDirection::Stiffness),
+                    weak: case.solver.weak_interfaces,
+                    ..LatinSettings::default()
+                };
+                settings.tolerance = tolerance.unwrap_or(settings.tolerance);
+                settings.max_iterations = max_iterations.unwrap_or(settings.max_iterations);
+                Runner::Latin(Latin::new(structure, settings)?)
+            }
+        })
+    }
+
+    fn solve(
+        &mut self,
+        load: &[f64],
+        reference: Option<&[f64]>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
         match self {
             Runner::Newton(s) => s.solve(load, None, observer),
             Runner::PcgLcp(s) => s.solve(load, observer),
+            Runner::Latin(s) => s.solve(load, reference, observer),
         }
     }
+}
+
+/// Where the reference of the LATIN error comes from.
+enum ReferenceSource<'s> {
+    /// No LATIN solver asked, or `solver.reference = "none"`.
+    Unneeded,
+    /// A runner of the case with default settings: its own solution serves.
+    Shared(usize),
+    /// A runner of its own, with the solver's default (tight) settings.
+    Own(Box<Runner<'s>>),
 }
 
 /// The output directory: `--out`, else `output.dir`, else `out/case`.
@@ -99,11 +159,14 @@ pub fn run(
     on_row: &mut dyn FnMut(&SummaryRow),
 ) -> Result<Vec<SummaryRow>, RunError> {
     let dir = output_dir(case, options);
-    let wants_files = case.output.summary || case.output.tensions || case.output.displacements;
     let methods = options
         .methods
         .clone()
         .unwrap_or_else(|| case.solver.methods.clone());
+    let wants_files = case.output.summary
+        || case.output.tensions
+        || case.output.displacements
+        || (case.output.history && methods.iter().any(|m| m.is_latin()));
 
     let clock = Instant::now();
     let structure = Structure::from_case(case);
@@ -114,41 +177,55 @@ pub fn run(
         check_writable(&dir)?;
     }
 
+    let tuned = case.solver.tolerance.is_some() || case.solver.max_iterations.is_some();
     let mut runners = Vec::with_capacity(methods.len());
     for &method in &methods {
         let clock = Instant::now();
-        let runner = match method {
-            Method::Newton => {
-                let mut settings = NewtonSettings::default();
-                if let Some(t) = case.solver.tolerance {
-                    settings.tolerance = t;
-                }
-                if let Some(m) = case.solver.max_iterations {
-                    settings.max_iterations = m;
-                }
-                Runner::Newton(Newton::new(&structure, &taut, settings)?)
-            }
-            Method::PcgLcp => {
-                let mut settings = PcgLcpSettings::default();
-                if let Some(t) = case.solver.tolerance {
-                    settings.tolerance = t;
-                }
-                if let Some(m) = case.solver.max_iterations {
-                    settings.max_iterations = m;
-                }
-                Runner::PcgLcp(PcgLcp::new(&structure, &taut, settings))
-            }
-        };
+        let runner = Runner::new(method, case, &structure, &taut, true)?;
         runners.push((method, runner, shared_setup + clock.elapsed().as_secs_f64()));
     }
+    let reference_method = match case.solver.reference {
+        Reference::Newton => Some(Method::Newton),
+        Reference::PcgLcp => Some(Method::PcgLcp),
+        Reference::None => None,
+    }
+    .filter(|_| methods.iter().any(|m| m.is_latin()));
+    let mut reference_source = match reference_method {
+        None => ReferenceSource::Unneeded,
+        Some(m) => match runners.iter().position(|(rm, _, _)| *rm == m && !tuned) {
+            Some(i) => ReferenceSource::Shared(i),
+            None => ReferenceSource::Own(Box::new(Runner::new(m, case, &structure, &taut, false)?)),
+        },
+    };
 
     let summary_path = dir.join("summary.csv");
     let mut rows = Vec::new();
     let mut failures = Vec::new();
     for &alpha in &case.load.alphas {
         let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
-        for (method, runner, setup_seconds) in runners.iter_mut() {
-            let solution = runner.solve(&load, &mut Silent);
+        let reference: Option<Solution> = match &mut reference_source {
+            ReferenceSource::Unneeded => None,
+            ReferenceSource::Shared(i) => Some(runners[*i].1.solve(&load, None, &mut Silent)),
+            ReferenceSource::Own(runner) => Some(runner.solve(&load, None, &mut Silent)),
+        };
+        let reference_u = reference
+            .as_ref()
+            .map(|r| r.equilibrium.displacements.as_slice());
+        for (index, (method, runner, setup_seconds)) in runners.iter_mut().enumerate() {
+            let solution = match (&reference_source, &reference) {
+                (ReferenceSource::Shared(i), Some(r)) if *i == index => r.clone(),
+                _ if method.is_latin() && case.output.history => {
+                    let mut history =
+                        HistoryWriter::create(&dir, method.name(), alpha, structure.n_cables())
+                            .map_err(|e| write_error(&dir.join("history"), e))?;
+                    let solution = runner.solve(&load, reference_u, &mut history);
+                    history
+                        .finish()
+                        .map_err(|e| write_error(&dir.join("history"), e))?;
+                    solution
+                }
+                _ => runner.solve(&load, reference_u, &mut Silent),
+            };
             let eq = &solution.equilibrium;
             let row = SummaryRow {
                 solver: method.name().to_string(),
@@ -165,11 +242,12 @@ pub fn run(
             };
             if !row.converged {
                 failures.push(format!(
-                    "{} at alpha = {} ({:?} after {} iterations, residual {:e})",
+                    "{} at alpha = {}: not converged after {} iterations ({:?}), {} = {:e}",
                     row.solver,
                     output::alpha_label(alpha),
-                    solution.info.status,
                     row.iterations,
+                    solution.info.status,
+                    if method.is_latin() { "eta" } else { "residual" },
                     row.residual
                 ));
             }

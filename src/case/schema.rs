@@ -196,22 +196,49 @@ pub enum Method {
     Newton,
     /// The paper's reference: cable LCP by projected conjugate gradient.
     PcgLcp,
+    /// Monodomain LATIN (augmented Lagrangian): the LATIN solver on a 1 × 1 partition.
+    MonoLatin,
+    /// Micro-macro LATIN domain decomposition on `solver.subdomains`.
+    MicroMacro,
 }
 
 impl Method {
-    pub const ALL: [Method; 2] = [Method::Newton, Method::PcgLcp];
+    pub const ALL: [Method; 4] = [
+        Method::Newton,
+        Method::PcgLcp,
+        Method::MonoLatin,
+        Method::MicroMacro,
+    ];
 
     /// The name used in case files, on the command line and in output file names.
     pub fn name(self) -> &'static str {
         match self {
             Method::Newton => "newton",
             Method::PcgLcp => "pcg-lcp",
+            Method::MonoLatin => "mono-latin",
+            Method::MicroMacro => "micro-macro",
         }
+    }
+
+    /// A LATIN solver (iterates reported with e and η).
+    pub fn is_latin(self) -> bool {
+        matches!(self, Method::MonoLatin | Method::MicroMacro)
     }
 
     pub fn from_name(name: &str) -> Option<Method> {
         Self::ALL.into_iter().find(|m| m.name() == name)
     }
+}
+
+/// The solution the LATIN error e is measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reference {
+    #[default]
+    Newton,
+    PcgLcp,
+    /// No reference is computed; e is left empty.
+    None,
 }
 
 /// `[solver]`.
@@ -223,13 +250,31 @@ pub struct SolverKeys {
     pub methods: Vec<Method>,
     /// Stopping tolerance of every solver asked for; absent: each solver's own default
     /// (newton: 1e-10 on the relative equilibrium residual; pcg-lcp: 1e-10 on the relative
-    /// complementarity residual).
+    /// complementarity residual; LATIN: 1e-6 on η).
     #[serde(default)]
     pub tolerance: Option<f64>,
     /// Iteration cap of every solver asked for; absent: each solver's own default
-    /// (newton: 100; pcg-lcp: 50 000).
+    /// (newton: 100; pcg-lcp: 50 000; LATIN: 1000).
     #[serde(default)]
     pub max_iterations: Option<usize>,
+    /// Substructures `[sx, sy]` of micro-macro, `1 ≤ sx ≤ nx`, `1 ≤ sy ≤ ny`. Default [4, 4].
+    #[serde(default = "default_subdomains")]
+    pub subdomains: [usize; 2],
+    /// Interface search direction d_m, N/m. Default 3.92e6.
+    #[serde(default = "default_dm")]
+    pub dm: f64,
+    /// Link search direction: "stiffness" (l = k per link) or a number in N/m.
+    #[serde(default = "default_l")]
+    pub l: toml::Value,
+    /// The search direction `l` stands for, filled in by validation.
+    #[serde(skip)]
+    pub search: Option<crate::solvers::latin::SearchDirection>,
+    /// Interfaces of ≤ 3 nodes: "macro" (default), "micro" (paper's literal text) or "drop".
+    #[serde(default)]
+    pub weak_interfaces: crate::solvers::latin::WeakInterfaces,
+    /// What LATIN's error e is measured against. Default "newton".
+    #[serde(default)]
+    pub reference: Reference,
 }
 
 impl Default for SolverKeys {
@@ -238,8 +283,24 @@ impl Default for SolverKeys {
             methods: default_methods(),
             tolerance: None,
             max_iterations: None,
+            subdomains: default_subdomains(),
+            dm: default_dm(),
+            l: default_l(),
+            search: None,
+            weak_interfaces: Default::default(),
+            reference: Default::default(),
         }
     }
+}
+
+fn default_subdomains() -> [usize; 2] {
+    [4, 4]
+}
+fn default_dm() -> f64 {
+    3.92e6
+}
+fn default_l() -> toml::Value {
+    toml::Value::String("stiffness".into())
 }
 
 fn default_methods() -> Vec<Method> {
@@ -262,6 +323,9 @@ pub struct Output {
     /// `displacements/{solver}_alpha{α}.csv`. Default true.
     #[serde(default = "default_true")]
     pub displacements: bool,
+    /// `history/{solver}_alpha{α}.csv` of the LATIN solvers (e, η per iteration). Default true.
+    #[serde(default = "default_true")]
+    pub history: bool,
 }
 
 impl Default for Output {
@@ -271,6 +335,7 @@ impl Default for Output {
             summary: true,
             tensions: true,
             displacements: true,
+            history: true,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! non-empty. Each error names the key, the value and the fix.
 
 use super::schema::Case;
+use crate::solvers::latin::SearchDirection;
 use thiserror::Error;
 
 /// Why a case cannot be used. Displayed messages are meant for the user as they are.
@@ -88,10 +89,26 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
     }
     positive("grid.length", case.grid.length, "the module side L in m")?;
     positive("grid.height", case.grid.height, "the module height H in m")?;
-    positive("cables.young", case.cables.young, "the cables' Young's modulus in Pa")?;
-    positive("cables.section", case.cables.section, "the cables' cross-section in m²")?;
-    positive("bars.young", case.bars.young, "the bars' Young's modulus in Pa")?;
-    positive("bars.section", case.bars.section, "the bars' cross-section in m²")?;
+    positive(
+        "cables.young",
+        case.cables.young,
+        "the cables' Young's modulus in Pa",
+    )?;
+    positive(
+        "cables.section",
+        case.cables.section,
+        "the cables' cross-section in m²",
+    )?;
+    positive(
+        "bars.young",
+        case.bars.young,
+        "the bars' Young's modulus in Pa",
+    )?;
+    positive(
+        "bars.section",
+        case.bars.section,
+        "the bars' cross-section in m²",
+    )?;
     let p = case.prestress.lower_cable;
     if !(p.is_finite() && p >= 0.0) {
         return Err(CaseError::invalid(
@@ -122,6 +139,37 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
             ));
         }
     }
+    let [sx, sy] = case.solver.subdomains;
+    if sx == 0 || sy == 0 || sx > nx || sy > ny {
+        return Err(CaseError::invalid(
+            "solver.subdomains",
+            format!("[{sx}, {sy}]"),
+            format!("give 1 ≤ sx ≤ {nx} and 1 ≤ sy ≤ {ny} (at most one substructure per module)"),
+        ));
+    }
+    positive(
+        "solver.dm",
+        case.solver.dm,
+        "the interface search direction d_m in N/m",
+    )?;
+    case.solver.search = Some(match &case.solver.l {
+        toml::Value::String(s) if s == "stiffness" => SearchDirection::Stiffness,
+        toml::Value::Float(v) => {
+            positive("solver.l", *v, "the link search direction l in N/m")?;
+            SearchDirection::Uniform(*v)
+        }
+        toml::Value::Integer(v) => {
+            positive("solver.l", *v as f64, "the link search direction l in N/m")?;
+            SearchDirection::Uniform(*v as f64)
+        }
+        other => {
+            return Err(CaseError::invalid(
+                "solver.l",
+                other,
+                "give \"stiffness\" (l = k on every link) or a number of N/m",
+            ))
+        }
+    });
     if case.solver.max_iterations == Some(0) {
         return Err(CaseError::invalid(
             "solver.max_iterations",

@@ -6,9 +6,7 @@
 use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LltRef, SymbolicCholesky,
-};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
@@ -52,9 +50,8 @@ impl SparseCholesky {
             Default::default(),
         )
         .expect("symbolic Cholesky of a valid pattern");
-        let factor_scratch = MemBuffer::new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        );
+        let factor_scratch =
+            MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
         let l_values = vec![0.0; symbolic.len_val()];
         SparseCholesky {
             symbolic: Arc::new(symbolic),
@@ -126,8 +123,10 @@ impl SparseCholesky {
     /// `X ← A⁻¹ X` for a column-major block of right-hand sides.
     pub fn solve_block_in_place(&self, x: MatMut<'_, f64>) {
         assert!(self.factorized, "solve before a successful factorization");
-        let mut scratch =
-            MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(x.ncols(), self.par));
+        let mut scratch = MemBuffer::new(
+            self.symbolic
+                .solve_in_place_scratch::<f64>(x.ncols(), self.par),
+        );
         LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
             Conj::No,
             x,

@@ -8,7 +8,9 @@ mod spectrum;
 
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
 pub use pattern::StiffnessPattern;
-pub use spectrum::{smallest_eigenvalues, zero_mode_count, Factor, SmallestEigenvalues, ZERO_MODE_RELATIVE};
+pub use spectrum::{
+    smallest_eigenvalues, zero_mode_count, Factor, SmallestEigenvalues, ZERO_MODE_RELATIVE,
+};
 
 /// Euclidean norm.
 pub fn norm(v: &[f64]) -> f64 {

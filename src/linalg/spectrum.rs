@@ -124,7 +124,9 @@ pub fn smallest_eigenvalues(
         order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
         let theta: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
         let rotated = Mat::from_fn(n, m, |r, c| {
-            (0..m).map(|k| x[(r, k)] * eig.eigenvectors[(k, order[c])]).sum()
+            (0..m)
+                .map(|k| x[(r, k)] * eig.eigenvectors[(k, order[c])])
+                .sum()
         });
         x = rotated;
         let settled = previous.len() == theta.len()

@@ -2,7 +2,12 @@
 //! that exists under its final name is complete.
 
 mod atomic;
+mod history;
 mod tables;
 
 pub use atomic::write_atomic;
-pub use tables::{alpha_label, write_displacements, write_summary, write_tensions, SummaryRow};
+pub use history::{HistoryWriter, HISTORY_HEADER};
+pub use tables::{
+    alpha_label, result_path, write_displacements, write_summary, write_tensions, SummaryRow,
+    SUMMARY_HEADER,
+};

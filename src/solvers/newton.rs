@@ -111,7 +111,13 @@ impl<'s> Newton<'s> {
         }
         pattern.assemble(
             &s.link_dofs,
-            |i| if taut_links[i] { s.links[i].stiffness } else { 0.0 },
+            |i| {
+                if taut_links[i] {
+                    s.links[i].stiffness
+                } else {
+                    0.0
+                }
+            },
             &mut self.hessian,
         );
         let mut mu = REGULARISATION * state.residual.min(1.0) * self.mean_stiffness;
@@ -175,7 +181,10 @@ impl<'s> Newton<'s> {
                 iteration: iterations,
                 residual: state.residual,
                 error: None,
-                slack_cables: slack_flags(s, &state.tensions).iter().filter(|&&x| x).count(),
+                slack_cables: slack_flags(s, &state.tensions)
+                    .iter()
+                    .filter(|&&x| x)
+                    .count(),
                 elapsed_seconds: clock.elapsed().as_secs_f64(),
             });
         }

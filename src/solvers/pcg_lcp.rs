@@ -8,9 +8,7 @@
 //! Stopping measure (`residual`): `‖min(k λ, τ)‖ / ‖t0_c‖` — SPEC's complementarity residual
 //! with the slack gap λ expressed as the force k λ so that both arguments are in N.
 
-use super::{
-    IterationRecord, Observer, Solution, SolveInfo, Equilibrium, Status, TautStiffness,
-};
+use super::{Equilibrium, IterationRecord, Observer, Solution, SolveInfo, Status, TautStiffness};
 use crate::linalg::{dot, norm, SparseCholesky};
 use crate::structure::Structure;
 use std::time::Instant;
@@ -54,7 +52,11 @@ pub struct PcgLcp<'s> {
 }
 
 impl<'s> PcgLcp<'s> {
-    pub fn new(structure: &'s Structure, taut: &'s TautStiffness, settings: PcgLcpSettings) -> Self {
+    pub fn new(
+        structure: &'s Structure,
+        taut: &'s TautStiffness,
+        settings: PcgLcpSettings,
+    ) -> Self {
         let cables: Vec<usize> = (0..structure.links.len())
             .filter(|&i| structure.links[i].unilateral)
             .collect();
@@ -102,9 +104,7 @@ impl<'s> PcgLcp<'s> {
             .cables
             .iter()
             .zip(&self.sqrt_k)
-            .map(|(&i, &sk)| {
-                sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk
-            })
+            .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
             .collect();
         let prestress_norm = norm(
             &self
@@ -161,7 +161,13 @@ impl<'s> PcgLcp<'s> {
             let reduced: f64 = x
                 .iter()
                 .zip(&phi)
-                .map(|(&xi, &fi)| if xi > 0.0 { fi * (xi / EXPANSION_STEP).min(fi) } else { 0.0 })
+                .map(|(&xi, &fi)| {
+                    if xi > 0.0 {
+                        fi * (xi / EXPANSION_STEP).min(fi)
+                    } else {
+                        0.0
+                    }
+                })
                 .sum();
             if dot(&beta, &beta) <= PROPORTIONING * PROPORTIONING * reduced {
                 self.apply_w(&p.clone(), &mut wp);

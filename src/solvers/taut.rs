@@ -2,7 +2,9 @@
 //! once per structure and shared by the solvers; building it is where a mechanism is refused.
 
 use super::SetupError;
-use crate::linalg::{smallest_eigenvalues, Factor, zero_mode_count, SparseCholesky, StiffnessPattern};
+use crate::linalg::{
+    smallest_eigenvalues, zero_mode_count, Factor, SparseCholesky, StiffnessPattern,
+};
 use crate::structure::Structure;
 use faer::Par;
 

@@ -85,8 +85,12 @@ pub struct Structure {
 impl Structure {
     pub fn from_case(case: &Case) -> Structure {
         let layout = GridLayout::new(case.grid.modules[0], case.grid.modules[1]);
-        let (nodes, raw_links) =
-            grid::generate(&layout, case.grid.length, case.grid.height, case.grid.module);
+        let (nodes, raw_links) = grid::generate(
+            &layout,
+            case.grid.length,
+            case.grid.height,
+            case.grid.module,
+        );
         let p = case.prestress.lower_cable;
         let links: Vec<Link> = raw_links
             .into_iter()
@@ -133,10 +137,7 @@ impl Structure {
                 }
             }
         }
-        let link_dofs = links
-            .iter()
-            .map(|l| LinkDofs::new(l, &dof_of))
-            .collect();
+        let link_dofs = links.iter().map(|l| LinkDofs::new(l, &dof_of)).collect();
         let mut unit_load = vec![0.0; n_free];
         for node in 0..nodes.len() {
             for k in 0..3 {

@@ -51,11 +51,12 @@ pub fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64>
     let axis = |k: usize| -> Vector3<f64> { eig.eigenvectors.column(order[k]).into_owned() };
     let (n1, n2, n3) = (axis(0), axis(1), axis(2));
     let field = |f: &dyn Fn(&Vector3<f64>) -> Vector3<f64>| -> Vec<f64> {
-        x.iter().flat_map(|p| {
-            let v = f(&(p - g));
-            [v[0], v[1], v[2]]
-        })
-        .collect()
+        x.iter()
+            .flat_map(|p| {
+                let v = f(&(p - g));
+                [v[0], v[1], v[2]]
+            })
+            .collect()
     };
     let fields = vec![
         // Translations along n1, n2, n3.

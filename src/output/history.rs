@@ -1,0 +1,87 @@
+//! `history/{solver}_alpha{α}.csv`: one row per LATIN iteration, written as the iterations go
+//! to a `.partial` file that is renamed to its final name only when the solve ends (a file
+//! under the final name is complete).
+
+use super::tables::result_path;
+use crate::solvers::{IterationRecord, Observer};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+pub const HISTORY_HEADER: &str = "iteration,error_e,indicator_eta,slack_fraction,elapsed_seconds";
+
+pub struct HistoryWriter {
+    path: PathBuf,
+    partial: PathBuf,
+    out: Option<BufWriter<File>>,
+    cables: usize,
+    error: Option<std::io::Error>,
+}
+
+impl HistoryWriter {
+    pub fn create(dir: &Path, solver: &str, alpha: f64, cables: usize) -> std::io::Result<Self> {
+        let path = result_path(dir, "history", solver, alpha);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let partial = path.with_file_name(format!(".{name}.partial"));
+        let mut out = BufWriter::new(File::create(&partial)?);
+        writeln!(out, "{HISTORY_HEADER}")?;
+        Ok(HistoryWriter {
+            path,
+            partial,
+            out: Some(out),
+            cables,
+            error: None,
+        })
+    }
+
+    /// Flush, sync and rename to the final name.
+    pub fn finish(mut self) -> std::io::Result<PathBuf> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        let out = self.out.take().expect("open until finish");
+        let file = out.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        std::fs::rename(&self.partial, &self.path)?;
+        Ok(self.path.clone())
+    }
+}
+
+impl Observer for HistoryWriter {
+    fn iteration(&mut self, r: &IterationRecord) {
+        if self.error.is_some() {
+            return;
+        }
+        let Some(out) = self.out.as_mut() else { return };
+        let fraction = if self.cables > 0 {
+            r.slack_cables as f64 / self.cables as f64
+        } else {
+            0.0
+        };
+        let error = r.error.map(|e| format!("{e:e}")).unwrap_or_default();
+        let result = writeln!(
+            out,
+            "{},{},{:e},{},{}",
+            r.iteration, error, r.residual, fraction, r.elapsed_seconds
+        )
+        .and_then(|_| out.flush());
+        if let Err(e) = result {
+            self.error = Some(e);
+        }
+    }
+}
+
+impl Drop for HistoryWriter {
+    fn drop(&mut self) {
+        // Not finished: leave no partial file behind.
+        if self.out.is_some() {
+            let _ = std::fs::remove_file(&self.partial);
+        }
+    }
+}
