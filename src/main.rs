@@ -183,7 +183,7 @@ fn check_solvers(case: &case::Case, s: &Structure, out: &mut String) -> Result<(
         let subdomains = if method == Method::MonoLatin {
             [1, 1]
         } else {
-            case.solver.subdomains
+            case.solver.partition()
         };
         let settings = LatinSettings {
             subdomains,

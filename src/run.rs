@@ -86,7 +86,7 @@ impl<'s> Runner<'s> {
                     subdomains: if method == Method::MonoLatin {
                         [1, 1]
                     } else {
-                        case.solver.subdomains
+                        case.solver.partition()
                     },
                     dm: case.solver.dm,
                     search: case.solver.search.unwrap_or(SearchDirection::Stiffness),

@@ -257,9 +257,10 @@ pub struct SolverKeys {
     /// (newton: 100; pcg-lcp: 50 000; LATIN: 1000).
     #[serde(default)]
     pub max_iterations: Option<usize>,
-    /// Substructures `[sx, sy]` of micro-macro, `1 ≤ sx ≤ nx`, `1 ≤ sy ≤ ny`. Default [4, 4].
-    #[serde(default = "default_subdomains")]
-    pub subdomains: [usize; 2],
+    /// Substructures `[sx, sy]` of micro-macro, `1 ≤ sx ≤ nx`, `1 ≤ sy ≤ ny`. Default
+    /// `[min(4, nx), min(4, ny)]` (the paper's 4 × 4 on its grid); validation fills it in.
+    #[serde(default)]
+    pub subdomains: Option<[usize; 2]>,
     /// Interface search direction d_m, N/m. Default 3.92e6.
     #[serde(default = "default_dm")]
     pub dm: f64,
@@ -277,13 +278,20 @@ pub struct SolverKeys {
     pub reference: Reference,
 }
 
+impl SolverKeys {
+    /// The micro-macro partition (filled in by validation when the case leaves it out).
+    pub fn partition(&self) -> [usize; 2] {
+        self.subdomains.unwrap_or([4, 4])
+    }
+}
+
 impl Default for SolverKeys {
     fn default() -> Self {
         Self {
             methods: default_methods(),
             tolerance: None,
             max_iterations: None,
-            subdomains: default_subdomains(),
+            subdomains: None,
             dm: default_dm(),
             l: default_l(),
             search: None,
@@ -293,9 +301,6 @@ impl Default for SolverKeys {
     }
 }
 
-fn default_subdomains() -> [usize; 2] {
-    [4, 4]
-}
 fn default_dm() -> f64 {
     3.92e6
 }

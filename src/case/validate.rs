@@ -36,6 +36,9 @@ impl CaseError {
     }
 }
 
+/// Substructures per axis when `solver.subdomains` is left out (the paper's 4 × 4).
+const DEFAULT_SUBDOMAINS: usize = 4;
+
 /// A number as a user would write it: exponent form when very large or very small.
 pub(crate) fn number(x: f64) -> String {
     if x != 0.0 && x.is_finite() && (x.abs() < 1e-3 || x.abs() >= 1e6) {
@@ -139,7 +142,10 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
             ));
         }
     }
-    let [sx, sy] = case.solver.subdomains;
+    let [sx, sy] = *case
+        .solver
+        .subdomains
+        .get_or_insert([DEFAULT_SUBDOMAINS.min(nx), DEFAULT_SUBDOMAINS.min(ny)]);
     if sx == 0 || sy == 0 || sx > nx || sy > ny {
         return Err(CaseError::invalid(
             "solver.subdomains",

@@ -1,0 +1,372 @@
+//! The `tensolve` binary: exit codes and messages for bad input, the golden summary of the paper
+//! case, the per-solve files, `check`, and the output switches.
+//!
+//! `TENSOLVE_BLESS=1 cargo test --test cli` rewrites `tests/golden/paper_summary.csv` from the
+//! current binary (after the physical checks of the new summary pass).
+
+mod common;
+
+use common::{manifest_path, temp_path};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tensolve(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args(args)
+        .output()
+        .expect("run tensolve")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A temporary file or directory, removed when dropped.
+struct Temp(PathBuf);
+
+impl Temp {
+    fn dir(tag: &str) -> Temp {
+        Temp(temp_path(tag))
+    }
+    fn file(tag: &str, text: &str) -> Temp {
+        let path = temp_path(&format!("{tag}.toml"));
+        std::fs::write(&path, text).unwrap();
+        Temp(path)
+    }
+    fn arg(&self) -> &str {
+        self.0.to_str().expect("utf-8 temp path")
+    }
+}
+
+impl Drop for Temp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+const VALID: &str = "[grid]\nmodules = [2, 2]\n[load]\nalpha = [1.0]\n";
+
+fn with(extra: &str) -> String {
+    format!("{VALID}{extra}\n")
+}
+
+fn load_with(load: &str) -> String {
+    format!("[grid]\nmodules = [2, 2]\n[load]\n{load}\n")
+}
+
+#[test]
+fn invalid_cases_exit_2_and_name_the_key() {
+    let cases: Vec<(&str, String, &[&str])> = vec![
+        ("malformed", "[grid\nmodules = [2, 2]\n".into(), &["line 1"]),
+        (
+            "unknown-section",
+            with("[foo]\nx = 1"),
+            &["unknown field `foo`"],
+        ),
+        (
+            "unknown-grid-key",
+            "[grid]\nmodules = [2, 2]\ncolour = 1\n[load]\nalpha = [1.0]\n".into(),
+            &["unknown field `colour`", "line 3"],
+        ),
+        (
+            "wrong-type",
+            "[grid]\nmodules = \"16\"\n[load]\nalpha = [1.0]\n".into(),
+            &["modules", "invalid type", "\"16\""],
+        ),
+        (
+            "zero-modules",
+            "[grid]\nmodules = [0, 4]\n[load]\nalpha = [1.0]\n".into(),
+            &["grid.modules", "[0, 4]"],
+        ),
+        (
+            "negative-young",
+            with("[cables]\nyoung = -2.0"),
+            &["cables.young", "-2"],
+        ),
+        (
+            "zero-section",
+            with("[bars]\nsection = 0.0"),
+            &["bars.section", "= 0"],
+        ),
+        (
+            "nan-young",
+            with("[cables]\nyoung = nan"),
+            &["cables.young", "NaN"],
+        ),
+        (
+            "inf-load",
+            load_with("nodal = [0.0, inf, -40.0]\nalpha = [1.0]"),
+            &["load.nodal[1]", "inf"],
+        ),
+        (
+            "empty-alpha",
+            load_with("alpha = []"),
+            &["load.alpha", "[]"],
+        ),
+        (
+            "zero-steps",
+            load_with("alpha = { from = 0.0, to = 1.0, steps = 0 }"),
+            &["load.alpha", "steps = 0"],
+        ),
+        (
+            "negative-tolerance",
+            with("[solver]\ntolerance = -0.5"),
+            &["solver.tolerance", "-0.5"],
+        ),
+        (
+            "zero-iterations",
+            with("[solver]\nmax_iterations = 0"),
+            &["solver.max_iterations", "= 0"],
+        ),
+        (
+            "no-methods",
+            with("[solver]\nmethods = []"),
+            &["solver.methods", "[]"],
+        ),
+        (
+            "unknown-method",
+            with("[solver]\nmethods = [\"gauss\"]"),
+            &["gauss", "newton"],
+        ),
+        (
+            "missing-load",
+            "[grid]\nmodules = [2, 2]\n".into(),
+            &["missing field `load`"],
+        ),
+        (
+            "missing-grid",
+            "[load]\nalpha = [1.0]\n".into(),
+            &["missing field `grid`"],
+        ),
+        (
+            "mechanism",
+            with("[supports]\nclamp = \"none\""),
+            &["mechanism", "zero-stiffness mode"],
+        ),
+    ];
+    let out = Temp::dir("invalid-out");
+    let mut failures = Vec::new();
+    for (name, text, fragments) in &cases {
+        let file = Temp::file(name, text);
+        let o = tensolve(&["run", file.arg(), "--out", out.arg(), "--quiet"]);
+        let err = stderr(&o);
+        if o.status.code() != Some(2) {
+            failures.push(format!("{name}: exit {:?}, stderr: {err}", o.status.code()));
+        }
+        for f in fragments.iter() {
+            if !err.contains(f) {
+                failures.push(format!("{name}: stderr lacks `{f}`: {err}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn missing_case_file_exits_2() {
+    let missing = temp_path("does-not-exist.toml");
+    let path = missing.to_str().unwrap();
+    for command in ["run", "check"] {
+        let o = tensolve(&[command, path]);
+        assert_eq!(o.status.code(), Some(2), "{command}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("cannot read case file") && err.contains(path),
+            "{command}: {err}"
+        );
+    }
+}
+
+#[test]
+fn unknown_solver_option_exits_2() {
+    let file = Temp::file("valid", VALID);
+    let out = Temp::dir("bogus-out");
+    let o = tensolve(&["run", file.arg(), "--solver", "bogus", "--out", out.arg()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("bogus"), "{}", stderr(&o));
+    assert!(!out.0.join("summary.csv").exists());
+}
+
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|rec| rec.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+fn column(header: &[String], name: &str) -> usize {
+    header
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name}"))
+}
+
+fn run_paper(out: &Temp) {
+    let case = manifest_path("cases/paper.toml");
+    let o = tensolve(&["run", case.to_str().unwrap(), "--out", out.arg(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+fn number(s: &str) -> f64 {
+    s.parse().unwrap_or_else(|_| panic!("not a number: {s}"))
+}
+
+/// What the paper case must give whatever the golden file says (SPEC §2).
+fn assert_plausible_summary(header: &[String], rows: &[Vec<String>]) {
+    let expected_slack = [(0.05, 0), (0.25, 2), (0.5, 36), (0.75, 272), (1.0, 408)];
+    assert_eq!(rows.len(), 10);
+    for (i, row) in rows.iter().enumerate() {
+        let (alpha, slack) = expected_slack[i / 2];
+        assert_eq!(
+            row[column(header, "solver")],
+            ["newton", "pcg-lcp"][i % 2],
+            "row {i}"
+        );
+        assert_eq!(number(&row[column(header, "alpha")]), alpha, "row {i}");
+        assert_eq!(row[column(header, "converged")], "true", "row {i}");
+        assert_eq!(
+            row[column(header, "slack_cables")],
+            slack.to_string(),
+            "row {i}"
+        );
+        assert_eq!(row[column(header, "cables")], "3072", "row {i}");
+        assert!(number(&row[column(header, "residual")]) <= 1e-10, "row {i}");
+    }
+}
+
+fn relative_close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * a.abs().max(b.abs())
+}
+
+#[test]
+fn paper_summary_matches_golden() {
+    let out = Temp::dir("paper-golden");
+    run_paper(&out);
+    let (header, rows) = read_csv(&out.0.join("summary.csv"));
+    assert_plausible_summary(&header, &rows);
+    let golden_path = manifest_path("tests/golden/paper_summary.csv");
+    if std::env::var_os("TENSOLVE_BLESS").is_some() {
+        std::fs::copy(out.0.join("summary.csv"), &golden_path).unwrap();
+    }
+    let (golden_header, golden) = read_csv(&golden_path);
+    assert_eq!(header, golden_header);
+    assert_eq!(rows.len(), golden.len());
+    let exact = [
+        "solver",
+        "alpha",
+        "converged",
+        "slack_cables",
+        "cables",
+        "slack_fraction",
+        "iterations",
+    ];
+    for (i, (row, want)) in rows.iter().zip(&golden).enumerate() {
+        for name in exact {
+            let c = column(&header, name);
+            assert_eq!(row[c], want[c], "row {i}, {name}");
+        }
+        for name in ["max_tension", "max_deflection"] {
+            let c = column(&header, name);
+            let (got, expected) = (number(&row[c]), number(&want[c]));
+            assert!(
+                relative_close(got, expected, 1e-9),
+                "row {i}, {name}: {got} vs {expected}"
+            );
+        }
+        let c = column(&header, "residual");
+        assert!(
+            number(&want[c]) <= 1e-10 && number(&row[c]) <= 1e-10,
+            "row {i}, residual"
+        );
+    }
+}
+
+/// Every field that reads as a number must be finite (Rust parses `NaN`, `inf`, `-inf`).
+fn assert_all_finite(path: &Path) {
+    let (_, rows) = read_csv(path);
+    for (i, row) in rows.iter().enumerate() {
+        for field in row {
+            if let Ok(x) = field.parse::<f64>() {
+                assert!(x.is_finite(), "{}: row {i} has {field}", path.display());
+            }
+        }
+    }
+}
+
+#[test]
+fn per_solve_files_exist_and_parse() {
+    let out = Temp::dir("paper-files");
+    run_paper(&out);
+
+    let (header, rows) = read_csv(&out.0.join("tensions/newton_alpha1.csv"));
+    assert_eq!(header, ["cable", "kind", "node_a", "node_b", "tension"]);
+    assert_eq!(rows.len(), 3072);
+    let tension = column(&header, "tension");
+    assert_eq!(
+        rows.iter().filter(|r| number(&r[tension]) == 0.0).count(),
+        408
+    );
+    assert!(
+        rows.iter().all(|r| number(&r[tension]) >= 0.0),
+        "negative cable tension"
+    );
+
+    let (header, rows) = read_csv(&out.0.join("displacements/pcg-lcp_alpha0.05.csv"));
+    assert_eq!(header, ["node", "x", "y", "z", "ux", "uy", "uz"]);
+    assert_eq!(rows.len(), 833);
+
+    let mut files = 0;
+    for sub in ["tensions", "displacements"] {
+        for solver in ["newton", "pcg-lcp"] {
+            for alpha in ["0.05", "0.25", "0.5", "0.75", "1"] {
+                assert_all_finite(&out.0.join(format!("{sub}/{solver}_alpha{alpha}.csv")));
+                files += 1;
+            }
+        }
+    }
+    assert_all_finite(&out.0.join("summary.csv"));
+    assert_eq!(files, 20);
+}
+
+#[test]
+fn check_prints_the_model() {
+    let case = manifest_path("cases/paper.toml");
+    let o = tensolve(&["check", case.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for (label, value) in [
+        ("nodes", "833"),
+        ("dofs", "2499"),
+        ("free dofs", "2397"),
+        ("cables", "3072"),
+        ("bars", "1024"),
+    ] {
+        let found = text.lines().any(|line| {
+            line.trim_start().starts_with(label) && line.split_whitespace().any(|w| w == value)
+        });
+        assert!(found, "no line `{label} ... {value}` in:\n{text}");
+    }
+}
+
+#[test]
+fn output_switches_limit_the_files() {
+    let file = Temp::file(
+        "switches",
+        &format!("{VALID}[output]\ntensions = false\ndisplacements = false\n"),
+    );
+    let out = Temp::dir("switches-out");
+    let o = tensolve(&["run", file.arg(), "--out", out.arg(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut names: Vec<String> = std::fs::read_dir(&out.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["summary.csv"]);
+    let (_, rows) = read_csv(&out.0.join("summary.csv"));
+    assert_eq!(rows.len(), 2, "one row per solver");
+}

@@ -1,0 +1,93 @@
+//! Helpers shared by the integration tests: cases built in code, solving with both reference
+//! solvers, and an independent check of the cable law.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use tensolve::case::{self, Case};
+use tensolve::solvers::newton::{Newton, NewtonSettings};
+use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
+use tensolve::solvers::{Silent, Solution, TautStiffness};
+use tensolve::structure::Structure;
+
+/// Lower cable prestress p of the paper case, N.
+pub const P: f64 = 2000.0;
+
+pub fn manifest_path(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// Text of `cases/paper.toml`.
+pub fn paper_text() -> String {
+    std::fs::read_to_string(manifest_path("cases/paper.toml")).expect("cases/paper.toml")
+}
+
+/// The paper case with some keys replaced: `("grid", "module", "braced".into())`.
+pub fn paper_with(overrides: &[(&str, &str, toml::Value)]) -> Case {
+    let mut table: toml::Table = paper_text().parse().expect("paper.toml is TOML");
+    for (section, key, value) in overrides {
+        table
+            .entry(section.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .expect("a section is a table")
+            .insert(key.to_string(), value.clone());
+    }
+    case::parse(&toml::to_string(&table).unwrap()).expect("valid case")
+}
+
+pub fn paper_structure(overrides: &[(&str, &str, toml::Value)]) -> Structure {
+    Structure::from_case(&paper_with(overrides))
+}
+
+/// The load `alpha · unit_load` on the free dofs.
+pub fn load(s: &Structure, alpha: f64) -> Vec<f64> {
+    s.unit_load.iter().map(|f| alpha * f).collect()
+}
+
+/// Solve with newton (from U = 0) and pcg-lcp, default settings; both must converge.
+pub fn solve_both(s: &Structure, alpha: f64) -> (Solution, Solution) {
+    let taut = TautStiffness::new(s).expect("taut stiffness is regular");
+    let f = load(s, alpha);
+    let newton = Newton::new(s, &taut, NewtonSettings::default())
+        .expect("newton set-up")
+        .solve(&f, None, &mut Silent);
+    let pcg = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+    assert!(
+        newton.info.status.converged(),
+        "newton at alpha {alpha}: {:?}",
+        newton.info
+    );
+    assert!(
+        pcg.info.status.converged(),
+        "pcg-lcp at alpha {alpha}: {:?}",
+        pcg.info
+    );
+    (newton, pcg)
+}
+
+/// Independent check of the cable law, written from SPEC §1 alone: the largest violation, in N
+/// relative to p, of `τ = t0 + k e` (bars, bilateral cables, taut cables) or of
+/// `0 ≤ τ ⊥ λ ≥ 0` with the slack gap `kλ = τ − t0 − k e` (unilateral cables).
+pub fn max_law_violation(s: &Structure, sol: &Solution) -> f64 {
+    let eq = &sol.equilibrium;
+    let mut worst: f64 = 0.0;
+    for ((l, ld), &tau) in s.links.iter().zip(&s.link_dofs).zip(&eq.tensions) {
+        let k_lambda = tau - l.prestress - l.stiffness * ld.elongation(&eq.displacements);
+        let v = if l.unilateral {
+            // min(a, b) = 0 ⇔ a ≥ 0, b ≥ 0, a·b = 0.
+            k_lambda.min(tau).abs()
+        } else {
+            k_lambda.abs()
+        };
+        worst = worst.max(v);
+    }
+    worst / s.prestress_scale
+}
+
+/// A path under the temp dir that no other test (or test process) uses.
+pub fn temp_path(tag: &str) -> PathBuf {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    std::env::temp_dir().join(format!("tensolve-test-{}-{n}-{tag}", std::process::id()))
+}
