@@ -3,11 +3,15 @@
 //! stiffness (mechanism detection).
 
 mod cholesky;
+mod dense;
 mod pattern;
+mod spd_solver;
 mod spectrum;
 
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
+pub use dense::{gemv, gemv_transposed};
 pub use pattern::StiffnessPattern;
+pub use spd_solver::SpdSolver;
 pub use spectrum::{
     smallest_eigenvalues, zero_mode_count, Factor, SmallestEigenvalues, ZERO_MODE_RELATIVE,
 };

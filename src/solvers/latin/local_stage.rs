@@ -2,8 +2,9 @@
 //! direction, independently per link and per interface.
 
 use super::SideState;
+use crate::linalg::{gemv, gemv_transposed};
 use crate::structure::Link;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// `(ê, t̂, slack)` of one link from its `(e, t)` (additional tension t), search direction l.
 pub fn link_local_stage(link: &Link, l: f64, e: f64, t: f64) -> (f64, f64, bool) {
@@ -34,9 +35,13 @@ pub(super) fn interface_local_stage(
     a: &mut SideState,
     b: &mut SideState,
 ) {
-    let project = |v: &[f64]| -> DVector<f64> {
-        let v = DVector::from_column_slice(v);
-        basis * basis.tr_mul(&v)
+    // R Rᵀ v, the macro part of an interface field.
+    let mut coefficients = vec![0.0; basis.ncols()];
+    let mut project = |v: &[f64]| -> Vec<f64> {
+        let mut out = vec![0.0; v.len()];
+        gemv_transposed(&mut coefficients, basis, v, false);
+        gemv(&mut out, basis, &coefficients, false);
+        out
     };
     let (ua_macro, fa_macro) = (project(&a.u), project(&a.f));
     let (ub_macro, fb_macro) = (project(&b.u), project(&b.f));

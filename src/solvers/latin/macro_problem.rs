@@ -5,10 +5,10 @@
 
 use super::substructure::Substructure;
 use super::Interface;
+use crate::linalg::{gemv, gemv_transposed};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
-use nalgebra::DVector;
 use std::collections::HashMap;
 
 pub struct MacroProblem {
@@ -89,21 +89,25 @@ impl MacroProblem {
         &self,
         subs: &[Substructure],
         interfaces: &[Interface],
-        g: &[DVector<f64>],
+        g: &[Vec<f64>],
     ) -> Vec<f64> {
         let mut rhs = vec![0.0; self.n];
         for (e, sub) in subs.iter().enumerate() {
-            let kg = &sub.k_plus * &g[e];
+            let mut kg = vec![0.0; sub.n_macro];
+            gemv(&mut kg, &sub.k_plus, &g[e], false);
             for side in &sub.sides {
                 let row0 = interfaces[side.interface].macro_offset;
                 for i in 0..side.cols {
                     rhs[row0 + i] -= side.sign() * kg[side.macro_offset + i];
                 }
             }
-            let qg = sub.kernel.tr_mul(&g[e]);
-            for k in 0..qg.len() {
-                rhs[self.kernel_offset[e] + k] -= qg[k];
-            }
+            let kernel_rows = self.kernel_offset[e]..self.kernel_offset[e] + sub.kernel.ncols();
+            let mut qg = vec![0.0; sub.kernel.ncols()];
+            gemv_transposed(&mut qg, &sub.kernel, &g[e], false);
+            rhs[kernel_rows]
+                .iter_mut()
+                .zip(&qg)
+                .for_each(|(r, q)| *r -= q);
         }
         if let Some(lu) = &self.lu {
             let n = rhs.len();

@@ -21,10 +21,11 @@ pub use partition::{Partition, WeakInterfaces};
 pub use substructure::Substructure;
 
 use super::{Equilibrium, IterationRecord, Observer, SetupError, Solution, SolveInfo, Status};
+use crate::linalg::gemv;
 use crate::structure::{Structure, CLAMPED};
 use local_stage::{interface_local_stage, link_local_stage};
 use macro_problem::MacroProblem;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use partition::InterfaceTopology;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -270,7 +271,7 @@ impl<'s> Latin<'s> {
         let dm = self.settings.dm;
         let search = &self.search;
         // Per substructure: F̂d_E, y_E = K_E⁻¹ F̂d_E, g_E = d_m R_Eᵀ C_E y_E.
-        let condensed: Vec<(Vec<f64>, DVector<f64>)> = self
+        let condensed: Vec<(Vec<f64>, Vec<f64>)> = self
             .substructures
             .par_iter()
             .zip(state.par_iter())
@@ -291,11 +292,12 @@ impl<'s> Latin<'s> {
                     }
                 }
                 sub.factor.solve_in_place(&mut f);
-                let g = sub.project(&f) * dm;
+                let mut g = sub.project(&f);
+                g.iter_mut().for_each(|x| *x *= dm);
                 (f, g)
             })
             .collect();
-        let g: Vec<DVector<f64>> = condensed.iter().map(|(_, g)| g.clone()).collect();
+        let (y, g): (Vec<Vec<f64>>, Vec<Vec<f64>>) = condensed.into_iter().unzip();
         let solution = self
             .macro_problem
             .solve(&self.substructures, &self.interfaces, &g);
@@ -304,27 +306,26 @@ impl<'s> Latin<'s> {
         self.substructures
             .par_iter()
             .zip(state.par_iter_mut())
-            .zip(condensed.into_par_iter())
+            .zip(y.into_par_iter().zip(g.into_par_iter()))
             .enumerate()
             .for_each(|(e, ((sub, st), (y, g)))| {
                 // f_E = c_E f_Γ, a_E; u_E = L_E f_E + K⁺_E g_E + Q_E a_E.
-                let mut f_e = DVector::zeros(sub.n_macro);
+                let mut f_e = vec![0.0; sub.n_macro];
                 for side in &sub.sides {
                     let off = interfaces[side.interface].macro_offset;
                     for i in 0..side.cols {
                         f_e[side.macro_offset + i] = side.sign() * solution[off + i];
                     }
                 }
-                let a_e = DVector::from_column_slice(
-                    &solution[kernel_offset[e]..kernel_offset[e] + sub.kernel.ncols()],
-                );
-                let u_e = &sub.flexibility * &f_e + &sub.k_plus * &g + &sub.kernel * &a_e;
+                let a_e = &solution[kernel_offset[e]..kernel_offset[e] + sub.kernel.ncols()];
+                let mut u_e = vec![0.0; sub.n_macro];
+                gemv(&mut u_e, &sub.flexibility, &f_e, false);
+                gemv(&mut u_e, &sub.k_plus, &g, true);
+                gemv(&mut u_e, &sub.kernel, a_e, true);
                 // U_E = y_E + d_m Z_E (u_E + f_E/d_m).
-                let star = &u_e * dm + &f_e;
-                let zu = &sub.z * &star;
-                st.u.iter_mut()
-                    .zip(y.iter().zip(zu.iter()))
-                    .for_each(|(u, (yi, zi))| *u = yi + zi);
+                let star: Vec<f64> = u_e.iter().zip(&f_e).map(|(u, f)| dm * u + f).collect();
+                st.u.copy_from_slice(&y);
+                gemv(&mut st.u, &sub.z, &star, true);
                 // e_E = B_E U_E, t_E = t̂_E + l(e_E − ê_E).
                 for (j, &i) in sub.links.iter().enumerate() {
                     st.e[j] = sub.link_dofs[j].elongation(&st.u);
@@ -332,10 +333,11 @@ impl<'s> Latin<'s> {
                 }
                 // Interfaces: U = C_E U_E, U^M = R u, F^M = R f, F^m = F̂^m + d_m Û^m − d_m(U − U^M).
                 for (side, ss) in sub.sides.iter().zip(st.sides.iter_mut()) {
-                    let u_block = u_e.rows(side.macro_offset, side.cols);
-                    let f_block = f_e.rows(side.macro_offset, side.cols);
-                    let u_macro = &side.basis * u_block;
-                    let f_macro = &side.basis * f_block;
+                    let block = side.macro_offset..side.macro_offset + side.cols;
+                    let mut u_macro = vec![0.0; side.rows];
+                    let mut f_macro = vec![0.0; side.rows];
+                    gemv(&mut u_macro, &side.basis, &u_e[block.clone()], false);
+                    gemv(&mut f_macro, &side.basis, &f_e[block], false);
                     for r in 0..side.rows {
                         let u = st.u[sub.gamma_dofs[side.gamma_offset + r]];
                         ss.u[r] = u;

@@ -6,10 +6,9 @@
 use super::kernel::{substructure_kernel, InterfaceTrace};
 use super::partition::SubstructureTopology;
 use super::Interface;
-use crate::linalg::{SparseCholesky, StiffnessPattern};
+use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
 use crate::structure::{LinkDofs, Structure, CLAMPED};
-use faer::Par;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// E's view of one of its interfaces.
 #[derive(Debug, Clone)]
@@ -53,7 +52,8 @@ pub struct Substructure {
     /// Local dof of each row of U_EΓ (C_E as an index map).
     pub gamma_dofs: Vec<usize>,
     pub n_macro: usize,
-    pub factor: SparseCholesky,
+    /// Solves with K_E.
+    pub factor: SpdSolver,
     pub z: DMatrix<f64>,
     pub k_star: DMatrix<f64>,
     pub k_plus: DMatrix<f64>,
@@ -127,10 +127,7 @@ impl Substructure {
         for &d in &gamma_dofs {
             values[pattern.diag_slot[d]] += dm;
         }
-        let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
-        if factor.factorize(&pattern, &values).is_err() {
-            return Err(SingularSubstructure);
-        }
+        let factor = SpdSolver::new(&pattern, &values).map_err(|_| SingularSubstructure)?;
 
         // Z_E = K_E⁻¹ C_Eᵀ R_E, column by column of the block-diagonal R_E.
         let mut z = DMatrix::<f64>::zeros(n, n_macro);
@@ -143,13 +140,7 @@ impl Substructure {
                 }
             }
         }
-        if n_macro > 0 {
-            factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(
-                z.as_mut_slice(),
-                n,
-                n_macro,
-            ));
-        }
+        factor.solve_columns(&mut z);
         let mut sub = Substructure {
             links: topology.links.clone(),
             dof_global,
@@ -224,7 +215,7 @@ impl Substructure {
     }
 
     /// `R_Eᵀ C_E v` for a vector on E's dofs.
-    pub fn project(&self, v: &[f64]) -> DVector<f64> {
+    pub fn project(&self, v: &[f64]) -> Vec<f64> {
         self.project_gamma(&self.gather(v))
     }
 
@@ -234,13 +225,15 @@ impl Substructure {
     }
 
     /// `R_Eᵀ w` for w on E's interface rows.
-    pub fn project_gamma(&self, w: &[f64]) -> DVector<f64> {
-        let mut out = DVector::zeros(self.n_macro);
+    pub fn project_gamma(&self, w: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.n_macro];
         for side in &self.sides {
-            let block = side.basis.tr_mul(&DVector::from_column_slice(
+            gemv_transposed(
+                &mut out[side.macro_offset..side.macro_offset + side.cols],
+                &side.basis,
                 &w[side.gamma_offset..side.gamma_offset + side.rows],
-            ));
-            out.rows_mut(side.macro_offset, side.cols).copy_from(&block);
+                false,
+            );
         }
         out
     }

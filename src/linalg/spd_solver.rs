@@ -1,0 +1,71 @@
+//! Solves with a symmetric positive definite matrix stored as a lower-triangular pattern:
+//! a dense inverse when the matrix is small (a solve is then one matrix–vector product, far
+//! cheaper than a sparse triangular solve at this size), a sparse Cholesky factor otherwise.
+
+use super::{NotPositiveDefinite, SparseCholesky, StiffnessPattern};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::{Mat, Par, Side};
+use nalgebra::DMatrix;
+
+pub enum SpdSolver {
+    /// `A⁻¹`, dense.
+    Dense(DMatrix<f64>),
+    Sparse(SparseCholesky),
+}
+
+impl SpdSolver {
+    /// Matrices of at most this order are inverted densely (8 MB at most).
+    pub const DENSE_MAX: usize = 1000;
+
+    pub fn new(pattern: &StiffnessPattern, values: &[f64]) -> Result<Self, NotPositiveDefinite> {
+        let n = pattern.n;
+        if n > Self::DENSE_MAX {
+            let mut factor = SparseCholesky::analyse(pattern, Par::Seq);
+            factor.factorize(pattern, values)?;
+            return Ok(SpdSolver::Sparse(factor));
+        }
+        let mut a = Mat::<f64>::zeros(n, n);
+        for c in 0..n {
+            for s in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
+                let r = pattern.row_idx[s];
+                a[(r, c)] = values[s];
+                a[(c, r)] = values[s];
+            }
+        }
+        let llt = a
+            .llt(Side::Lower)
+            .map_err(|_| NotPositiveDefinite { pivot: 0 })?;
+        let inverse = llt.inverse();
+        Ok(SpdSolver::Dense(DMatrix::from_fn(n, n, |i, j| {
+            inverse[(i, j)]
+        })))
+    }
+
+    /// `x ← A⁻¹ x`.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        match self {
+            SpdSolver::Dense(inverse) => {
+                let rhs = x.to_vec();
+                super::gemv(x, inverse, &rhs, false);
+            }
+            SpdSolver::Sparse(factor) => factor.solve_in_place(x),
+        }
+    }
+
+    /// `Z ← A⁻¹ Z`, column by column of a column-major block.
+    pub fn solve_columns(&self, z: &mut DMatrix<f64>) {
+        match self {
+            SpdSolver::Dense(inverse) => *z = inverse * &*z,
+            SpdSolver::Sparse(factor) => {
+                let (n, m) = z.shape();
+                if m > 0 {
+                    factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(
+                        z.as_mut_slice(),
+                        n,
+                        m,
+                    ));
+                }
+            }
+        }
+    }
+}
