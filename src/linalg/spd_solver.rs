@@ -55,7 +55,20 @@ impl SpdSolver {
     /// `Z ← A⁻¹ Z`, column by column of a column-major block.
     pub fn solve_columns(&self, z: &mut DMatrix<f64>) {
         match self {
-            SpdSolver::Dense(inverse) => *z = inverse * &*z,
+            SpdSolver::Dense(inverse) => {
+                let (n, m) = z.shape();
+                let rhs = z.clone();
+                if m > 0 {
+                    faer::linalg::matmul::matmul(
+                        faer::MatMut::from_column_major_slice_mut(z.as_mut_slice(), n, m),
+                        faer::Accum::Replace,
+                        faer::MatRef::from_column_major_slice(inverse.as_slice(), n, n),
+                        faer::MatRef::from_column_major_slice(rhs.as_slice(), n, m),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
+            }
             SpdSolver::Sparse(factor) => {
                 let (n, m) = z.shape();
                 if m > 0 {

@@ -22,6 +22,20 @@ pub fn paper_text() -> String {
     std::fs::read_to_string(manifest_path("cases/paper.toml")).expect("cases/paper.toml")
 }
 
+/// Text of the paper case with some keys replaced: `("grid", "module", "braced".into())`.
+pub fn paper_text_with(overrides: &[(&str, &str, toml::Value)]) -> String {
+    let mut table: toml::Table = paper_text().parse().expect("paper.toml is TOML");
+    for (section, key, value) in overrides {
+        table
+            .entry(section.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .expect("a section is a table")
+            .insert(key.to_string(), value.clone());
+    }
+    toml::to_string(&table).unwrap()
+}
+
 /// The paper case with some keys replaced: `("grid", "module", "braced".into())`.
 pub fn paper_with(overrides: &[(&str, &str, toml::Value)]) -> Case {
     let mut table: toml::Table = paper_text().parse().expect("paper.toml is TOML");

@@ -9,7 +9,6 @@ use crate::linalg::{gemv, gemv_transposed};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
-use std::collections::HashMap;
 
 pub struct MacroProblem {
     /// Number of macro force unknowns (Σ over interfaces of their macro dofs).
@@ -36,10 +35,11 @@ impl MacroProblem {
             kernel_offset.push(n);
             n += sub.kernel.ncols();
         }
-        let mut entries: HashMap<(usize, usize), f64> = HashMap::new();
+        // Duplicates are summed by faer when the matrix is built.
+        let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
         let mut add = |r: usize, c: usize, v: f64| {
             if v != 0.0 {
-                *entries.entry((r, c)).or_insert(0.0) += v;
+                triplets.push(Triplet::new(r, c, v));
             }
         };
         for (e, sub) in subs.iter().enumerate() {
@@ -67,14 +67,25 @@ impl MacroProblem {
         let lu = if n == 0 {
             None
         } else {
-            let mut triplets: Vec<Triplet<usize, usize, f64>> = entries
-                .into_iter()
-                .map(|((r, c), v)| Triplet::new(r, c, v))
-                .collect();
-            triplets.sort_by_key(|t| (t.col, t.row));
             let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
                 .map_err(|_| SingularMacroProblem)?;
-            Some(matrix.sp_lu().map_err(|_| SingularMacroProblem)?)
+            let lu = matrix.sp_lu().map_err(|_| SingularMacroProblem)?;
+            // LU does not report a singular matrix reliably: solve M x = M x0 for a known x0.
+            let x0: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
+            let mut x = vec![0.0; n];
+            for t in &triplets {
+                x[t.row] += t.val * x0[t.col];
+            }
+            lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, 1));
+            let error = x
+                .iter()
+                .zip(&x0)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if !(error <= 1e-6) {
+                return Err(SingularMacroProblem);
+            }
+            Some(lu)
         };
         Ok(MacroProblem {
             n_forces,

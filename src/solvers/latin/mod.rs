@@ -76,6 +76,50 @@ pub struct Interface {
     pub macro_offset: usize,
 }
 
+/// Exact (all-macro) continuity constraints node by node, kept independent.
+///
+/// A node held by several substructures (a crosspoint) lies in one interface per pair of them.
+/// All-macro weak interfaces impose exact continuity of the node on each pair; around a
+/// crosspoint of four one-module substructures that is six constraints of which three are
+/// independent, and the macro problem would be singular. A union–find per node keeps a node in
+/// an interface only when the interface joins two substructures not yet tied at that node;
+/// otherwise its continuity already holds exactly through the others and the node leaves that
+/// interface.
+#[derive(Default)]
+struct ExactContinuity {
+    /// Per node: (substructure, component) of the substructures tied at it so far.
+    components: std::collections::HashMap<usize, Vec<(usize, usize)>>,
+}
+
+impl ExactContinuity {
+    fn keep_independent(&mut self, topology: &mut InterfaceTopology) {
+        let [a, b] = topology.sides;
+        let components = &mut self.components;
+        topology.nodes.retain(|&node| {
+            let comps = components.entry(node).or_default();
+            let mut find = |e: usize| -> usize {
+                match comps.iter().find(|(sub, _)| *sub == e) {
+                    Some(&(_, c)) => c,
+                    None => {
+                        comps.push((e, e));
+                        e
+                    }
+                }
+            };
+            let (ca, cb) = (find(a), find(b));
+            if ca == cb {
+                return false;
+            }
+            for entry in comps.iter_mut() {
+                if entry.1 == cb {
+                    entry.1 = ca;
+                }
+            }
+            true
+        });
+    }
+}
+
 /// What `tensolve check` prints about a partition.
 #[derive(Debug, Clone)]
 pub struct PartitionReport {
@@ -84,6 +128,9 @@ pub struct PartitionReport {
     pub strong_interfaces: usize,
     pub weak_interfaces: usize,
     pub dropped_interfaces: usize,
+    /// Nodes left out of all-macro weak interfaces because their continuity already holds
+    /// exactly through other interfaces.
+    pub redundant_nodes: usize,
     pub macro_dofs: usize,
     pub kernel_columns: usize,
     /// Free dofs of the largest substructure.
@@ -140,21 +187,40 @@ pub struct Latin<'s> {
     pub substructures: Vec<Substructure>,
     macro_problem: MacroProblem,
     dropped_interfaces: usize,
+    redundant_nodes: usize,
 }
 
 impl<'s> Latin<'s> {
     pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let mut offset = 0;
+        let mut exact = ExactContinuity::default();
+        let mut redundant_nodes = 0;
+        let mut dropped_interfaces = partition.dropped_interfaces;
         let interfaces: Vec<Interface> = partition
             .interfaces
             .iter()
+            .filter_map(|topology| {
+                let mut topology = topology.clone();
+                if topology.is_weak() && settings.weak != WeakInterfaces::Micro {
+                    let before = topology.nodes.len();
+                    exact.keep_independent(&mut topology);
+                    redundant_nodes += before - topology.nodes.len();
+                    if topology.nodes.is_empty() {
+                        dropped_interfaces += 1;
+                        return None;
+                    }
+                }
+                Some(topology)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
             .map(|topology| {
                 let positions: Vec<[f64; 3]> =
                     topology.nodes.iter().map(|&n| structure.nodes[n]).collect();
                 let basis = macro_basis(&positions, settings.weak);
                 let iface = Interface {
-                    topology: topology.clone(),
+                    topology,
                     macro_offset: offset,
                     basis,
                 };
@@ -210,7 +276,8 @@ impl<'s> Latin<'s> {
             interfaces,
             substructures,
             macro_problem,
-            dropped_interfaces: partition.dropped_interfaces,
+            dropped_interfaces,
+            redundant_nodes,
         })
     }
 
@@ -226,6 +293,7 @@ impl<'s> Latin<'s> {
             strong_interfaces: self.interfaces.len() - weak,
             weak_interfaces: weak,
             dropped_interfaces: self.dropped_interfaces,
+            redundant_nodes: self.redundant_nodes,
             macro_dofs: self.macro_problem.n_forces,
             kernel_columns: self.substructures.iter().map(|s| s.kernel.ncols()).sum(),
             max_substructure_dofs: self
