@@ -8,9 +8,15 @@ use crate::structure::Structure;
 /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs.
 pub fn equilibrium_residual(s: &Structure, eq: &Equilibrium, load: &[f64]) -> f64 {
     let mut r = vec![0.0; s.n_free];
-    s.nodal_forces(&eq.tensions, &mut r);
+    relative_unbalance(s, &eq.tensions, load, &mut r)
+}
+
+/// `r ← Bᵀτ − F` (the energy's gradient) and its relative size
+/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`: the unbalance against the forces meeting at the nodes.
+pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) -> f64 {
+    s.nodal_forces(tensions, r);
     let mut magnitude = vec![0.0; s.n_free];
-    for (t, ld) in eq.tensions.iter().zip(&s.link_dofs) {
+    for (t, ld) in tensions.iter().zip(&s.link_dofs) {
         for (d, c) in ld.iter() {
             magnitude[d] += (c * t).abs();
         }
@@ -18,9 +24,9 @@ pub fn equilibrium_residual(s: &Structure, eq: &Equilibrium, load: &[f64]) -> f6
     r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
     let scale = norm(load) + norm(&magnitude);
     if scale > 0.0 {
-        norm(&r) / scale
+        norm(r) / scale
     } else {
-        norm(&r)
+        norm(r)
     }
 }
 

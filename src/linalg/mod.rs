@@ -13,7 +13,8 @@ pub use dense::{gemv, gemv_transposed};
 pub use pattern::StiffnessPattern;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
-    smallest_eigenvalues, zero_mode_count, Factor, SmallestEigenvalues, ZERO_MODE_RELATIVE,
+    smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, Factor, SmallestEigenvalues,
+    ZERO_MODE_RELATIVE,
 };
 
 /// Euclidean norm.

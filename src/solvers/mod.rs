@@ -9,7 +9,6 @@ mod taut;
 
 pub use taut::TautStiffness;
 
-use crate::structure::Structure;
 use thiserror::Error;
 
 /// How a solve ended.
@@ -106,17 +105,4 @@ pub struct Silent;
 
 impl Observer for Silent {
     fn iteration(&mut self, _: &IterationRecord) {}
-}
-
-/// Total tensions of every link for displacements `u` when every unilateral cable follows the
-/// energy's law: τ = t0 + k e, clipped at 0 for unilateral cables (SPEC §1).
-pub fn energy_tensions(structure: &Structure, u: &[f64], tensions: &mut [f64]) {
-    for ((t, link), ld) in tensions
-        .iter_mut()
-        .zip(&structure.links)
-        .zip(&structure.link_dofs)
-    {
-        let tau = link.prestress + link.stiffness * ld.elongation(u);
-        *t = if link.unilateral { tau.max(0.0) } else { tau };
-    }
 }
