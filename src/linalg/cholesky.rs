@@ -6,8 +6,11 @@
 use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::perm::PermRef;
+use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -38,6 +41,57 @@ impl std::fmt::Debug for SparseCholesky {
     }
 }
 
+/// Fill-reducing ordering: AMD on the node graph (dofs taken three by three, as every pattern
+/// here numbers a node's three components consecutively), expanded to the dofs. Nine times
+/// fewer entries than AMD on the dofs, with the same fill on these grids; any permutation is
+/// correct, so a pattern that is not node-major only loses fill quality.
+fn node_ordering(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
+    let n = p.n;
+    if n % 3 != 0 || n == 0 {
+        return ((0..n).collect(), (0..n).collect());
+    }
+    let nodes = n / 3;
+    // A link couples all three components of its two nodes, so the first component of each
+    // node carries the whole node graph.
+    let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); nodes];
+    for c in (0..n).step_by(3) {
+        for &r in &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]] {
+            if r % 3 == 0 && r != c {
+                adjacency[r / 3].push(c / 3);
+                adjacency[c / 3].push(r / 3);
+            }
+        }
+    }
+    let mut col_ptr = Vec::with_capacity(nodes + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0);
+    for list in &mut adjacency {
+        list.sort_unstable();
+        list.dedup();
+        row_idx.extend_from_slice(list);
+        col_ptr.push(row_idx.len());
+    }
+    let graph = SymbolicSparseColMatRef::new_checked(nodes, nodes, &col_ptr, None, &row_idx);
+    let (mut perm, mut perm_inv) = (vec![0usize; nodes], vec![0usize; nodes]);
+    let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(nodes, row_idx.len()));
+    let ordered = amd::order(
+        &mut perm,
+        &mut perm_inv,
+        graph,
+        Default::default(),
+        MemStack::new(&mut scratch),
+    );
+    if ordered.is_err() {
+        return ((0..n).collect(), (0..n).collect());
+    }
+    let expand = |p: &[usize]| -> Vec<usize> {
+        p.iter()
+            .flat_map(|&k| [3 * k, 3 * k + 1, 3 * k + 2])
+            .collect()
+    };
+    (expand(&perm), expand(&perm_inv))
+}
+
 fn symbolic_ref(p: &StiffnessPattern) -> SymbolicSparseColMatRef<'_, usize> {
     SymbolicSparseColMatRef::new_checked(p.n, p.n, &p.col_ptr, None, &p.row_idx)
 }
@@ -53,13 +107,12 @@ impl SparseCholesky {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let symbolic = factorize_symbolic_cholesky(
-            symbolic_ref(pattern),
-            Side::Lower,
-            Default::default(),
-            params,
-        )
-        .expect("symbolic Cholesky of a valid pattern");
+        let (forward, inverse) = node_ordering(pattern);
+        let ordering =
+            SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, pattern.n));
+        let symbolic =
+            factorize_symbolic_cholesky(symbolic_ref(pattern), Side::Lower, ordering, params)
+                .expect("symbolic Cholesky of a valid pattern");
         let factor_scratch =
             MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
         let l_values = vec![0.0; symbolic.len_val()];
