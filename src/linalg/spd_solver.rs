@@ -14,12 +14,19 @@ pub enum SpdSolver {
 }
 
 impl SpdSolver {
-    /// Matrices of at most this order are inverted densely (8 MB at most).
+    /// Matrices of at most this order may be inverted densely (8 MB at most).
     pub const DENSE_MAX: usize = 1000;
 
-    pub fn new(pattern: &StiffnessPattern, values: &[f64]) -> Result<Self, NotPositiveDefinite> {
+    /// `dense`: invert densely (only honoured up to [`SpdSolver::DENSE_MAX`]). A dense inverse
+    /// is read whole at every solve, so it pays while the inverses of all the matrices solved
+    /// together stay in cache; the caller knows how many there are.
+    pub fn new(
+        pattern: &StiffnessPattern,
+        values: &[f64],
+        dense: bool,
+    ) -> Result<Self, NotPositiveDefinite> {
         let n = pattern.n;
-        if n > Self::DENSE_MAX {
+        if !dense || n > Self::DENSE_MAX {
             let mut factor = SparseCholesky::analyse(pattern, Par::Seq);
             factor.factorize(pattern, values)?;
             return Ok(SpdSolver::Sparse(factor));

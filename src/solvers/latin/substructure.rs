@@ -63,7 +63,7 @@ pub struct Substructure {
 }
 
 impl Substructure {
-    /// `local_dof` is a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
+    /// `dense`: keep K_E⁻¹ dense (see [`SpdSolver::new`]). `local_dof` is a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         index: usize,
@@ -73,6 +73,7 @@ impl Substructure {
         holders: &[u8],
         search: &[f64],
         dm: f64,
+        dense: bool,
         local_dof: &mut [usize],
     ) -> Result<Substructure, SingularSubstructure> {
         let mut dof_global = Vec::with_capacity(3 * topology.nodes.len());
@@ -128,7 +129,7 @@ impl Substructure {
         for &d in &gamma_dofs {
             values[pattern.diag_slot[d]] += dm;
         }
-        let factor = SpdSolver::new(&pattern, &values).map_err(|_| SingularSubstructure)?;
+        let factor = SpdSolver::new(&pattern, &values, dense).map_err(|_| SingularSubstructure)?;
 
         // Z_E = K_E⁻¹ C_Eᵀ R_E, column by column of the block-diagonal R_E.
         let mut z = DMatrix::<f64>::zeros(n, n_macro);
