@@ -6,58 +6,34 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 use nalgebra::DMatrix;
 
-fn view(a: &DMatrix<f64>) -> MatRef<'_, f64> {
-    MatRef::from_column_major_slice(a.as_slice(), a.nrows(), a.ncols())
-}
-
 /// `y ← A x` (or `y += A x` with `accumulate`).
 pub fn gemv(y: &mut [f64], a: &DMatrix<f64>, x: &[f64], accumulate: bool) {
-    debug_assert_eq!((y.len(), x.len()), a.shape());
-    let (n, k) = a.shape();
-    if n == 0 {
-        return;
-    }
-    if k == 0 {
-        if !accumulate {
-            y.iter_mut().for_each(|v| *v = 0.0);
-        }
-        return;
-    }
-    matmul(
-        MatMut::from_column_major_slice_mut(y, n, 1),
-        if accumulate {
-            Accum::Add
-        } else {
-            Accum::Replace
-        },
-        view(a),
-        MatRef::from_column_major_slice(x, k, 1),
-        1.0,
-        Par::Seq,
-    );
+    product(y, a, false, x, accumulate);
 }
 
 /// `y ← Aᵀ x` (or `y += Aᵀ x` with `accumulate`).
 pub fn gemv_transposed(y: &mut [f64], a: &DMatrix<f64>, x: &[f64], accumulate: bool) {
-    let (k, n) = a.shape();
-    debug_assert_eq!((y.len(), x.len()), (n, k));
-    if n == 0 {
+    product(y, a, true, x, accumulate);
+}
+
+fn product(y: &mut [f64], a: &DMatrix<f64>, transposed: bool, x: &[f64], accumulate: bool) {
+    let view = MatRef::from_column_major_slice(a.as_slice(), a.nrows(), a.ncols());
+    let op = if transposed { view.transpose() } else { view };
+    debug_assert_eq!((y.len(), x.len()), (op.nrows(), op.ncols()));
+    if y.is_empty() {
         return;
     }
-    if k == 0 {
+    if x.is_empty() {
         if !accumulate {
             y.iter_mut().for_each(|v| *v = 0.0);
         }
         return;
     }
+    let (n, k) = (y.len(), x.len());
     matmul(
         MatMut::from_column_major_slice_mut(y, n, 1),
-        if accumulate {
-            Accum::Add
-        } else {
-            Accum::Replace
-        },
-        view(a).transpose(),
+        if accumulate { Accum::Add } else { Accum::Replace },
+        op,
         MatRef::from_column_major_slice(x, k, 1),
         1.0,
         Par::Seq,
