@@ -32,7 +32,11 @@ fn product(y: &mut [f64], a: &DMatrix<f64>, transposed: bool, x: &[f64], accumul
     let (n, k) = (y.len(), x.len());
     matmul(
         MatMut::from_column_major_slice_mut(y, n, 1),
-        if accumulate { Accum::Add } else { Accum::Replace },
+        if accumulate {
+            Accum::Add
+        } else {
+            Accum::Replace
+        },
         op,
         MatRef::from_column_major_slice(x, k, 1),
         1.0,

@@ -38,16 +38,7 @@ pub fn paper_text_with(overrides: &[(&str, &str, toml::Value)]) -> String {
 
 /// The paper case with some keys replaced: `("grid", "module", "braced".into())`.
 pub fn paper_with(overrides: &[(&str, &str, toml::Value)]) -> Case {
-    let mut table: toml::Table = paper_text().parse().expect("paper.toml is TOML");
-    for (section, key, value) in overrides {
-        table
-            .entry(section.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
-            .as_table_mut()
-            .expect("a section is a table")
-            .insert(key.to_string(), value.clone());
-    }
-    case::parse(&toml::to_string(&table).unwrap()).expect("valid case")
+    case::parse(&paper_text_with(overrides)).expect("valid case")
 }
 
 pub fn paper_structure(overrides: &[(&str, &str, toml::Value)]) -> Structure {

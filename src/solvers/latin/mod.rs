@@ -174,6 +174,8 @@ pub struct LatinState {
     pub error: Option<f64>,
     /// Slack cables of ŝ.
     pub slack_cables: usize,
+    /// Δη is at round-off level against the prestress: nothing is left to iterate on.
+    pub at_roundoff: bool,
     load: Vec<f64>,
     reference: Option<(Vec<f64>, f64)>,
 }
@@ -188,6 +190,8 @@ pub struct Latin<'s> {
     macro_problem: MacroProblem,
     dropped_interfaces: usize,
     redundant_nodes: usize,
+    /// `(½ Σ t0² / l)^{1/2}`: the prestress in the units of Δη.
+    prestress_scale: f64,
     /// Substructures per parallel task: all of them (one task, no threads) when the work of
     /// an iteration is too small to pay for the scheduling.
     chunk: usize,
@@ -196,6 +200,10 @@ pub struct Latin<'s> {
 /// Below this many free dofs in all, an iteration runs on one thread: on the paper's case
 /// (2397 dofs, 16 substructures) two threads were slower than one (547 µs against 423 µs).
 const PARALLEL_MIN_DOFS: usize = 20_000;
+
+/// Δη below this fraction of the prestress scale is round-off (a load-induced Δη on the
+/// paper's case is 1e-4 of it at η = 1e-4).
+const ROUNDOFF: f64 = 1e-12;
 
 /// Memory all dense substructure inverses together may take (see [`SpdSolver::new`]).
 const DENSE_BUDGET_BYTES: usize = 16 << 20;
@@ -286,6 +294,14 @@ impl<'s> Latin<'s> {
         for b in built {
             substructures.push(b.map_err(|index| SetupError::SingularSubstructure { index })?);
         }
+        let prestress_scale = (0.5
+            * structure
+                .links
+                .iter()
+                .zip(&search)
+                .map(|(l, k)| l.prestress * l.prestress / k)
+                .sum::<f64>())
+        .sqrt();
         let macro_problem = MacroProblem::new(&substructures, &interfaces)
             .map_err(|_| SetupError::SingularMacroProblem)?;
         Ok(Latin {
@@ -297,6 +313,7 @@ impl<'s> Latin<'s> {
             macro_problem,
             dropped_interfaces,
             redundant_nodes,
+            prestress_scale,
             chunk: if structure.n_free < PARALLEL_MIN_DOFS {
                 usize::MAX
             } else {
@@ -478,8 +495,8 @@ impl<'s> Latin<'s> {
         }
     }
 
-    /// η between s and the ŝ that fed it (SPEC §4 "Indicator", paper §5.3).
-    fn indicator(&self, state: &[SubState]) -> f64 {
+    /// `(Δη, η̃)`: η = Δη/η̃ between s and the ŝ that fed it (SPEC §4 "Indicator", §5.3).
+    fn indicator(&self, state: &[SubState]) -> (f64, f64) {
         let dm = self.settings.dm;
         let mut delta = 0.0;
         let mut size = 0.0;
@@ -502,11 +519,7 @@ impl<'s> Latin<'s> {
                 }
             }
         }
-        if size > 0.0 {
-            (delta / size).sqrt()
-        } else {
-            delta.sqrt()
-        }
+        ((0.5 * delta).sqrt(), (0.5 * size).sqrt())
     }
 
     /// Energy error e against the reference elongations (SPEC §4 "Error").
@@ -545,6 +558,7 @@ impl<'s> Latin<'s> {
             eta: f64::INFINITY,
             error: None,
             slack_cables: 0,
+            at_roundoff: false,
             load: load.to_vec(),
             reference,
         };
@@ -562,7 +576,11 @@ impl<'s> Latin<'s> {
     }
 
     fn measure(&self, state: &mut LatinState) {
-        state.eta = self.indicator(&state.subs);
+        let (distance, size) = self.indicator(&state.subs);
+        state.eta = if size > 0.0 { distance / size } else { 0.0 };
+        // η is scale-free: when s and ŝ are both round-off (no load: the exact answer is
+        // zero), it is a ratio of noise. Δη at round-off against the prestress is convergence.
+        state.at_roundoff = distance <= ROUNDOFF * self.prestress_scale;
         state.error = state
             .reference
             .as_ref()
@@ -628,7 +646,7 @@ impl<'s> Latin<'s> {
             if !state.eta.is_finite() {
                 break Status::Stalled;
             }
-            if state.eta <= self.settings.tolerance {
+            if state.eta <= self.settings.tolerance || state.at_roundoff {
                 break Status::Converged;
             }
             if state.iteration >= self.settings.max_iterations {
