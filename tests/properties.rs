@@ -1,0 +1,135 @@
+//! Property tests (issue 5): random grids up to 5 × 5 with random supports, loads up to the
+//! paper's magnitude and random partitions — mechanisms are refused (and truly are), the
+//! rest is solved by all four solvers, which agree and satisfy the laws; and the case loader
+//! never panics, whatever it is fed.
+
+use proptest::prelude::*;
+use tensolve::case::{self, Clamp};
+use tensolve::results::{constitutive_residual, equilibrium_residual, relative_difference};
+use tensolve::solvers::latin::{Latin, LatinSettings};
+use tensolve::solvers::newton::{Newton, NewtonSettings};
+use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
+use tensolve::solvers::{SetupError, Silent, TautStiffness};
+use tensolve::structure::Structure;
+
+const CLAMPS: [&str; 5] = [
+    "lower-x-edges",
+    "lower-y-edges",
+    "lower-all-edges",
+    "lower-corners",
+    "none",
+];
+
+fn case_text(nx: usize, ny: usize, clamp: &str, nodal: [f64; 3], module: &str) -> String {
+    format!(
+        "[grid]\nmodules = [{nx}, {ny}]\nmodule = \"{module}\"\n[supports]\nclamp = \"{clamp}\"\n\
+         [load]\nnodal = [{}, {}, {}]\nalpha = [1.0]\n",
+        nodal[0], nodal[1], nodal[2]
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn all_solvers_agree_or_the_case_is_refused(
+        nx in 1usize..=5,
+        ny in 1usize..=5,
+        clamp in 0usize..5,
+        braced in any::<bool>(),
+        fx in -40.0f64..40.0,
+        fy in -40.0f64..40.0,
+        fz in -40.0f64..40.0,
+        sx_seed in 0usize..5,
+        sy_seed in 0usize..5,
+    ) {
+        let module = if braced { "braced" } else { "standard" };
+        let case = case::parse(&case_text(nx, ny, CLAMPS[clamp], [fx, fy, fz], module)).unwrap();
+        let s = Structure::from_case(&case);
+        let taut = match TautStiffness::new(&s) {
+            Err(SetupError::Mechanism { zero_modes }) => {
+                // Refused: it must really be a mechanism (unclamped, or clamped too little).
+                prop_assert!(zero_modes >= 1);
+                prop_assert!(case.supports.clamp != Clamp::LowerAllEdges || nx * ny == 0);
+                return Ok(());
+            }
+            Err(other) => panic!("unexpected set-up error {other}"),
+            Ok(t) => t,
+        };
+        let f = s.unit_load.clone();
+        let newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap().solve(&f, None, &mut Silent);
+        let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+        let subdomains = [1 + sx_seed % nx, 1 + sy_seed % ny];
+        let latin = |subdomains| {
+            // η has a floor near 1e-10 on some small partitions (3e-10 on 4 x 3 in 2 x 2): ask 1e-8.
+            let settings = LatinSettings { subdomains, tolerance: 1e-8, max_iterations: 20_000, ..LatinSettings::default() };
+            Latin::new(&s, settings).unwrap().solve(&f, None, &mut Silent)
+        };
+        let solutions = [newton, pcg, latin([1, 1]), latin(subdomains)];
+        let reference = solutions[0].equilibrium.displacements.clone();
+        for (k, sol) in solutions.iter().enumerate() {
+            prop_assert!(sol.info.status.converged(), "solver {k}: {:?}", sol.info);
+            let eq = &sol.equilibrium;
+            prop_assert!(eq.displacements.iter().chain(&eq.tensions).all(|x| x.is_finite()));
+            prop_assert!(constitutive_residual(&s, eq) < 1e-8, "solver {k}: law");
+            let (balance, agreement) = if k < 2 { (1e-9, 1e-8) } else { (1e-6, 1e-6) };
+            prop_assert!(equilibrium_residual(&s, eq, &f) < balance, "solver {k}: equilibrium");
+            let d = relative_difference(&eq.displacements, &reference);
+            prop_assert!(d < agreement || reference.iter().all(|&u| u == 0.0), "solver {k}: |dU|/|U| = {d:e}");
+        }
+    }
+}
+
+/// A valid case to mutate.
+const VALID: &str = "[grid]\nmodules = [4, 3]\nlength = 1.0\nheight = 0.5\n[cables]\nyoung = 1e11\n\
+[load]\nnodal = [0.0, 0.0, -40.0]\nalpha = { from = 0.0, to = 1.0, steps = 5 }\n\
+[solver]\nmethods = [\"newton\", \"micro-macro\"]\nsubdomains = [2, 3]\ndm = 3.92e6\nl = \"stiffness\"\n";
+
+const TOKENS: [&str; 14] = [
+    "nan",
+    "inf",
+    "-1",
+    "0",
+    "1e999",
+    "\"x\"",
+    "[]",
+    "{}",
+    "[0, 0]",
+    "-0.0",
+    "1e-320",
+    "true",
+    "\n[grid]\n",
+    "=",
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+        let _ = case::parse(&String::from_utf8_lossy(&bytes));
+    }
+
+    #[test]
+    fn mutated_valid_cases_never_panic_and_stay_valid_when_accepted(
+        cut in 0usize..VALID.len(),
+        len in 0usize..12,
+        token in 0usize..TOKENS.len(),
+    ) {
+        let mut text = VALID.to_string();
+        let end = (cut + len).min(text.len());
+        if text.is_char_boundary(cut) && text.is_char_boundary(end) {
+            text.replace_range(cut..end, TOKENS[token]);
+        }
+        if let Ok(case) = case::parse(&text) {
+            // Whatever got through validation is usable.
+            prop_assert!(case.grid.modules.iter().all(|&m| m >= 1));
+            prop_assert!(case.grid.length > 0.0 && case.grid.length.is_finite());
+            prop_assert!(case.cables.young > 0.0 && case.cables.young.is_finite());
+            prop_assert!(!case.load.alphas.is_empty() && case.load.alphas.iter().all(|a| a.is_finite()));
+            prop_assert!(case.load.nodal.iter().all(|f| f.is_finite()));
+            let [sx, sy] = case.solver.partition();
+            prop_assert!(sx >= 1 && sx <= case.grid.modules[0] && sy >= 1 && sy <= case.grid.modules[1]);
+        }
+    }
+}
