@@ -144,6 +144,31 @@ fn invalid_cases_exit_2_and_name_the_key() {
             with("[supports]\nclamp = \"none\""),
             &["mechanism", "zero-stiffness mode"],
         ),
+        (
+            "partition-larger-than-grid",
+            with("[solver]\nsubdomains = [3, 1]"),
+            &["solver.subdomains", "[3, 1]", "sx ≤ 2"],
+        ),
+        (
+            "zero-dm",
+            with("[solver]\ndm = 0.0"),
+            &["solver.dm", "= 0", "> 0"],
+        ),
+        (
+            "negative-dm",
+            with("[solver]\ndm = -3.92e6"),
+            &["solver.dm", "-3.92e6"],
+        ),
+        (
+            "bad-search-direction",
+            with("[solver]\nl = \"stiff\""),
+            &["solver.l", "stiffness"],
+        ),
+        (
+            "unknown-weak-interfaces",
+            with("[solver]\nweak_interfaces = \"glue\""),
+            &["glue", "macro"],
+        ),
     ];
     let out = Temp::dir("invalid-out");
     let mut failures = Vec::new();
@@ -161,6 +186,18 @@ fn invalid_cases_exit_2_and_name_the_key() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn unwritable_output_directory_exits_2() {
+    // A path below a regular file can never be a directory.
+    let blocker = Temp::file("blocker", "not a directory");
+    let case = Temp::file("unwritable", VALID);
+    let out = format!("{}/out", blocker.arg());
+    let o = tensolve(&["run", case.arg(), "--out", &out, "--quiet"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&out) && err.contains("--out"), "{err}");
 }
 
 #[test]
