@@ -1,8 +1,8 @@
 //! Quantities derived from an equilibrium, computed independently of the solver that produced
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
-use crate::linalg::norm;
-use crate::solvers::Equilibrium;
+use crate::linalg::{norm, smallest_eigenvalues, Factor, ZERO_MODE_RELATIVE};
+use crate::solvers::{Equilibrium, TautStiffness};
 use crate::structure::Structure;
 
 /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs.
@@ -85,5 +85,31 @@ pub fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
         norm(&d) / nb
     } else {
         norm(&d)
+    }
+}
+
+/// Smallest eigenvalue (N/m) of the tangent stiffness at an equilibrium: `Bᵀ k B` over the
+/// members that carry load there (bars, bilateral cables, taut unilateral cables). How far the
+/// structure is from a mechanism (SPEC §2–3); 0 when the taut members form one.
+pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> f64 {
+    let pattern = &taut.pattern;
+    let mut values = vec![0.0; pattern.nnz()];
+    pattern.assemble(
+        &s.link_dofs,
+        |i| {
+            if eq.slack[i] {
+                0.0
+            } else {
+                s.links[i].stiffness
+            }
+        },
+        &mut values,
+    );
+    let mut factor = taut.factor.share_symbolic();
+    let eig = smallest_eigenvalues(pattern, &values, &mut factor, Factor::Shifted, 4, 60, 1e-10);
+    let zero = ZERO_MODE_RELATIVE * pattern.mean_diagonal(&values);
+    match eig.values.first() {
+        Some(&v) if v > zero => v,
+        _ => 0.0,
     }
 }

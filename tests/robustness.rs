@@ -235,3 +235,21 @@ fn degenerate_but_valid_cases_solve_and_agree() {
         assert_agree(&s, 1.0, &solutions, 1e-6);
     }
 }
+
+#[test]
+fn smallest_tangent_eigenvalues_match_spec() {
+    // SPEC §2: K ≈ 463 N/m; with the 408 slack cables of α = 1 removed ≈ 164 N/m; α = 3
+    // (846 slack) ≈ 143 N/m.
+    let s = Structure::from_case(&paper_with(&[]));
+    let taut = TautStiffness::new(&s).unwrap();
+    let mut newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
+    for (alpha, expected) in [(0.05, 463.0), (1.0, 164.0), (3.0, 143.0)] {
+        let sol = newton.solve(&load(&s, alpha), None, &mut Silent);
+        let lambda = tensolve::results::smallest_tangent_eigenvalue(&s, &sol.equilibrium, &taut);
+        println!("alpha {alpha}: smallest tangent eigenvalue {lambda:.2} N/m");
+        assert!(
+            (lambda - expected).abs() < 0.01 * expected,
+            "alpha {alpha}: {lambda}"
+        );
+    }
+}
