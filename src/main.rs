@@ -3,13 +3,16 @@
 //! what was asked).
 
 use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use tensolve::bench::{self, BenchError, Progress};
 use tensolve::case::{self, Method};
-use tensolve::output::alpha_label;
+use tensolve::output::{alpha_label, SummaryRow};
 use tensolve::run::{run, RunError, RunOptions};
-use tensolve::solvers::latin::{Latin, LatinSettings, SearchDirection};
+use tensolve::solvers::latin::Latin;
 use tensolve::solvers::TautStiffness;
 use tensolve::structure::Structure;
 
@@ -51,6 +54,23 @@ enum Command {
         /// The case file (TOML).
         case: PathBuf,
     },
+    /// Time every solver of a case at every α against a newton reference: the energy error e
+    /// of every iterate against wall time (set-up included).
+    ///
+    /// Writes `bench.csv` (solver, alpha, iteration, seconds, error_e) and `bench.svg` (e
+    /// against wall time, log-log) and prints, per solver and α, the wall time to reach
+    /// e <= 1e-2, 1e-4, 1e-6 and 1e-8. Exit status as for `run`: 2 on bad input, 1 when a
+    /// solver or the reference did not converge or a file could not be written.
+    Bench {
+        /// The case file (TOML).
+        case: PathBuf,
+        /// Output directory (default `out/<case file stem>-bench`).
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// No progress on stderr (the table still goes to stdout).
+        #[arg(long)]
+        quiet: bool,
+    },
 }
 
 fn parse_method(name: &str) -> Result<Method, String> {
@@ -58,6 +78,30 @@ fn parse_method(name: &str) -> Result<Method, String> {
         let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
         format!("unknown solver `{name}`; use one of: {}", names.join(", "))
     })
+}
+
+/// A command's error message and the exit status it maps to.
+struct Failure {
+    message: String,
+    exit_code: i32,
+}
+
+impl From<RunError> for Failure {
+    fn from(e: RunError) -> Self {
+        Failure {
+            message: e.to_string(),
+            exit_code: e.exit_code(),
+        }
+    }
+}
+
+impl From<BenchError> for Failure {
+    fn from(e: BenchError) -> Self {
+        Failure {
+            message: e.to_string(),
+            exit_code: e.exit_code(),
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -68,16 +112,91 @@ fn main() -> ExitCode {
             out,
             solvers,
             quiet,
-        } => run_command(case, out, solvers, quiet),
-        Command::Check { case } => check_command(case),
+        } => run_command(case, out, solvers, quiet).map_err(Failure::from),
+        Command::Check { case } => check_command(case).map_err(Failure::from),
+        Command::Bench { case, out, quiet } => {
+            bench_command(&case, out, quiet).map_err(Failure::from)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(e.exit_code() as u8)
+            eprintln!("error: {}", e.message);
+            ExitCode::from(e.exit_code as u8)
         }
     }
+}
+
+/// Progress on stderr: a bar on a terminal (lines printed above it), plain lines when stderr
+/// is not a terminal, nothing with `--quiet`.
+enum Reporter {
+    Quiet,
+    Lines,
+    Bar(ProgressBar),
+}
+
+impl Reporter {
+    fn new(quiet: bool, ticks: usize) -> Reporter {
+        if quiet {
+            Reporter::Quiet
+        } else if std::io::stderr().is_terminal() {
+            let bar = ProgressBar::new(ticks as u64);
+            bar.set_style(
+                ProgressStyle::with_template("{bar:30.cyan/blue} {pos}/{len} [{elapsed}] {msg}")
+                    .expect("valid template"),
+            );
+            // Redrawn on a timer too: a long solve sends nothing for seconds.
+            bar.enable_steady_tick(std::time::Duration::from_millis(200));
+            Reporter::Bar(bar)
+        } else {
+            Reporter::Lines
+        }
+    }
+
+    fn line(&self, text: &str) {
+        match self {
+            Reporter::Quiet => {}
+            Reporter::Lines => eprintln!("{text}"),
+            Reporter::Bar(bar) => bar.println(text),
+        }
+    }
+
+    /// What is running now (shown on the bar only).
+    fn status(&self, text: String) {
+        if let Reporter::Bar(bar) = self {
+            bar.set_message(text);
+        }
+    }
+
+    fn tick(&self) {
+        if let Reporter::Bar(bar) = self {
+            bar.inc(1);
+        }
+    }
+
+    fn finish(&self) {
+        if let Reporter::Bar(bar) = self {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+fn format_row(r: &SummaryRow) -> String {
+    format!(
+        "{:>11} alpha = {:<6} {} in {} it, {} / {} slack, residual {:.1e}, {:.1} ms",
+        r.solver,
+        alpha_label(r.alpha),
+        if r.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        },
+        r.iterations,
+        r.slack_cables,
+        r.cables,
+        r.residual,
+        1e3 * r.solve_seconds
+    )
 }
 
 fn run_command(
@@ -92,35 +211,86 @@ fn run_command(
         methods: (!solvers.is_empty()).then_some(solvers),
     };
     let dir = tensolve::run::output_dir(&case, &options);
-    let mut print_row = |r: &tensolve::output::SummaryRow| {
-        if !quiet {
-            eprintln!(
-                "{:>8} alpha = {:<6} {} in {} it, {} / {} slack, residual {:.1e}, {:.1} ms",
-                r.solver,
-                alpha_label(r.alpha),
-                if r.converged {
-                    "converged"
-                } else {
-                    "NOT converged"
-                },
-                r.iterations,
-                r.slack_cables,
-                r.cables,
-                r.residual,
-                1e3 * r.solve_seconds
-            );
-        }
-    };
-    let result = run(&case, &options, &mut print_row);
-    if !quiet
-        && !matches!(
-            result,
-            Err(RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. })
-        )
-    {
-        eprintln!("results in {}", dir.display());
+    let solves = options
+        .methods
+        .as_ref()
+        .unwrap_or(&case.solver.methods)
+        .len()
+        * case.load.alphas.len();
+    let reporter = Reporter::new(quiet, solves);
+    let result = run(&case, &options, &mut |r| {
+        reporter.line(&format_row(r));
+        reporter.tick();
+    });
+    reporter.finish();
+    if !matches!(
+        result,
+        Err(RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. })
+    ) {
+        reporter.line(&format!("results in {}", dir.display()));
     }
     result.map(|_| ())
+}
+
+fn bench_command(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), BenchError> {
+    let case = case::load(path)?;
+    let dir = out.unwrap_or_else(|| bench::default_dir(path));
+    let prepared = bench::prepare(&case)?;
+    bench::ensure_writable(&dir)?;
+    let reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
+    let measured = bench::measure(&case, &prepared, &mut |p| report_bench(&reporter, p));
+    reporter.finish();
+    let measured = measured?;
+    let title = bench_title(path, &case.load.alphas);
+    bench::write_files(&dir, &measured, &title)?;
+    print_ignoring_closed_pipe(&measured.table.to_string());
+    reporter.line(&format!("results in {}", dir.display()));
+    measured.check_converged()
+}
+
+/// `paper-bench: e against wall time, α = 1`.
+fn bench_title(path: &Path, alphas: &[f64]) -> String {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let alphas: Vec<String> = alphas.iter().map(|&a| alpha_label(a)).collect();
+    format!("{stem}: e against wall time, α = {}", alphas.join(", "))
+}
+
+fn report_bench(reporter: &Reporter, progress: Progress) {
+    match progress {
+        Progress::Reference { alpha } => reporter.status(format!(
+            "reference (newton) at alpha = {}",
+            alpha_label(alpha)
+        )),
+        Progress::Solve { method, alpha } => reporter.status(format!(
+            "{} at alpha = {}",
+            method.name(),
+            alpha_label(alpha)
+        )),
+        Progress::Rerun {
+            method,
+            alpha,
+            cap,
+            of,
+        } => reporter.status(format!(
+            "{} at alpha = {}: capped re-run {cap} / {of}",
+            method.name(),
+            alpha_label(alpha)
+        )),
+        Progress::Done(series) => {
+            let last = series.samples.last();
+            reporter.line(&format!(
+                "{:>11} alpha = {:<6} {:?} after {} it, e = {:.1e}, {:.1} ms (set-up {:.1} ms)",
+                series.method.name(),
+                alpha_label(series.alpha),
+                series.status,
+                last.map_or(0, |s| s.iteration),
+                last.map_or(f64::NAN, |s| s.error),
+                1e3 * last.map_or(0.0, |s| s.seconds),
+                1e3 * series.setup_seconds
+            ));
+            reporter.tick();
+        }
+    }
 }
 
 fn check_command(path: PathBuf) -> Result<(), RunError> {
@@ -180,18 +350,8 @@ fn check_solvers(case: &case::Case, s: &Structure, out: &mut String) -> Result<(
         "stiffness       positive definite with every cable taut"
     );
     for &method in case.solver.methods.iter().filter(|m| m.is_latin()) {
-        let subdomains = if method == Method::MonoLatin {
-            [1, 1]
-        } else {
-            case.solver.partition()
-        };
-        let settings = LatinSettings {
-            subdomains,
-            dm: case.solver.dm,
-            search: case.solver.search.unwrap_or(SearchDirection::Stiffness),
-            weak: case.solver.weak_interfaces,
-            ..LatinSettings::default()
-        };
+        let settings = tensolve::configure::latin_settings(case, method);
+        let subdomains = settings.subdomains;
         let r = Latin::new(s, settings)?.report();
         let _ = writeln!(out, "{}:", method.name());
         let _ = writeln!(

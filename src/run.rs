@@ -2,12 +2,10 @@
 //! write the asked files. Only what the case asks for is computed and written.
 
 use crate::case::{Case, CaseError, Method, Reference};
-use crate::output::{self, HistoryWriter, SummaryRow};
+use crate::configure::{ConfiguredSolver, Limits};
+use crate::output::{self, FigureData, HistoryWriter, Recorder, SummaryRow, Tee};
 use crate::results;
-use crate::solvers::latin::{Latin, LatinSettings, SearchDirection};
-use crate::solvers::newton::{Newton, NewtonSettings};
-use crate::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use crate::solvers::{Observer, SetupError, Silent, Solution, TautStiffness};
+use crate::solvers::{Equilibrium, Observer, SetupError, Silent, Solution, TautStiffness};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -50,70 +48,6 @@ impl RunError {
     }
 }
 
-/// A solver set up for the structure.
-enum Runner<'s> {
-    Newton(Newton<'s>),
-    PcgLcp(PcgLcp<'s>),
-    Latin(Latin<'s>),
-}
-
-impl<'s> Runner<'s> {
-    /// Set `method` up with the case's settings (`tuned`) or with the solver's own defaults.
-    fn new(
-        method: Method,
-        case: &Case,
-        structure: &'s Structure,
-        taut: &'s TautStiffness,
-        tuned: bool,
-    ) -> Result<Runner<'s>, SetupError> {
-        let tolerance = case.solver.tolerance.filter(|_| tuned);
-        let max_iterations = case.solver.max_iterations.filter(|_| tuned);
-        Ok(match method {
-            Method::Newton => {
-                let mut settings = NewtonSettings::default();
-                settings.tolerance = tolerance.unwrap_or(settings.tolerance);
-                settings.max_iterations = max_iterations.unwrap_or(settings.max_iterations);
-                Runner::Newton(Newton::new(structure, taut, settings)?)
-            }
-            Method::PcgLcp => {
-                let mut settings = PcgLcpSettings::default();
-                settings.tolerance = tolerance.unwrap_or(settings.tolerance);
-                settings.max_iterations = max_iterations.unwrap_or(settings.max_iterations);
-                Runner::PcgLcp(PcgLcp::new(structure, taut, settings))
-            }
-            Method::MonoLatin | Method::MicroMacro => {
-                let mut settings = LatinSettings {
-                    subdomains: if method == Method::MonoLatin {
-                        [1, 1]
-                    } else {
-                        case.solver.partition()
-                    },
-                    dm: case.solver.dm,
-                    search: case.solver.search.unwrap_or(SearchDirection::Stiffness),
-                    weak: case.solver.weak_interfaces,
-                    ..LatinSettings::default()
-                };
-                settings.tolerance = tolerance.unwrap_or(settings.tolerance);
-                settings.max_iterations = max_iterations.unwrap_or(settings.max_iterations);
-                Runner::Latin(Latin::new(structure, settings)?)
-            }
-        })
-    }
-
-    fn solve(
-        &mut self,
-        load: &[f64],
-        reference: Option<&[f64]>,
-        observer: &mut dyn Observer,
-    ) -> Solution {
-        match self {
-            Runner::Newton(s) => s.solve(load, None, observer),
-            Runner::PcgLcp(s) => s.solve(load, observer),
-            Runner::Latin(s) => s.solve(load, reference, observer),
-        }
-    }
-}
-
 /// Where the reference of the LATIN error comes from.
 enum ReferenceSource<'s> {
     /// No LATIN solver asked, or `solver.reference = "none"`.
@@ -121,7 +55,7 @@ enum ReferenceSource<'s> {
     /// A runner of the case with default settings: its own solution serves.
     Shared(usize),
     /// A runner of its own, with the solver's default (tight) settings.
-    Own(Box<Runner<'s>>),
+    Own(Box<ConfiguredSolver<'s>>),
 }
 
 /// The output directory: `--out`, else `output.dir`, else `out/case`.
@@ -134,15 +68,10 @@ pub fn output_dir(case: &Case, options: &RunOptions) -> PathBuf {
 }
 
 fn check_writable(dir: &Path) -> Result<(), RunError> {
-    let fail = |e: std::io::Error| RunError::OutputDir {
+    output::ensure_writable(dir).map_err(|e| RunError::OutputDir {
         dir: dir.display().to_string(),
         reason: e.to_string(),
-    };
-    std::fs::create_dir_all(dir).map_err(fail)?;
-    let probe = dir.join(format!(".tensolve-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"").map_err(fail)?;
-    std::fs::remove_file(&probe).map_err(fail)?;
-    Ok(())
+    })
 }
 
 fn write_error(path: &Path, e: std::io::Error) -> RunError {
@@ -150,6 +79,30 @@ fn write_error(path: &Path, e: std::io::Error) -> RunError {
         path: path.display().to_string(),
         reason: e.to_string(),
     }
+}
+
+/// The files of one solve the case asks for: tensions, displacements, VTU.
+fn write_solve_files(
+    case: &Case,
+    dir: &Path,
+    solver: &str,
+    alpha: f64,
+    structure: &Structure,
+    eq: &Equilibrium,
+) -> Result<(), RunError> {
+    if case.output.tensions {
+        output::write_tensions(dir, solver, alpha, structure, eq)
+            .map_err(|e| write_error(&dir.join("tensions"), e))?;
+    }
+    if case.output.displacements {
+        output::write_displacements(dir, solver, alpha, structure, eq)
+            .map_err(|e| write_error(&dir.join("displacements"), e))?;
+    }
+    if case.output.vtk {
+        output::write_vtu(dir, solver, alpha, structure, eq)
+            .map_err(|e| write_error(&output::vtu_path(dir, solver, alpha), e))?;
+    }
+    Ok(())
 }
 
 /// Run a validated case. `on_row` sees every summary row as soon as it is written.
@@ -166,7 +119,9 @@ pub fn run(
     let wants_files = case.output.summary
         || case.output.tensions
         || case.output.displacements
-        || (case.output.history && methods.iter().any(|m| m.is_latin()));
+        || (case.output.history && methods.iter().any(|m| m.is_latin()))
+        || case.output.plots
+        || case.output.vtk;
 
     let clock = Instant::now();
     let structure = Structure::from_case(case);
@@ -180,11 +135,11 @@ pub fn run(
         check_writable(&dir)?;
     }
 
-    let tuned = case.solver.tolerance.is_some() || case.solver.max_iterations.is_some();
+    let limits = Limits::of_case(case);
     let mut runners = Vec::with_capacity(methods.len());
     for &method in &methods {
         let clock = Instant::now();
-        let runner = Runner::new(method, case, &structure, &taut, true)?;
+        let runner = ConfiguredSolver::new(method, case, &structure, &taut, limits)?;
         let shared = if method.is_latin() {
             structure_seconds
         } else {
@@ -200,12 +155,26 @@ pub fn run(
     .filter(|_| methods.iter().any(|m| m.is_latin()));
     let mut reference_source = match reference_method {
         None => ReferenceSource::Unneeded,
-        Some(m) => match runners.iter().position(|(rm, _, _)| *rm == m && !tuned) {
+        Some(m) => match runners
+            .iter()
+            .position(|(rm, _, _)| *rm == m && limits.is_default())
+        {
             Some(i) => ReferenceSource::Shared(i),
-            None => ReferenceSource::Own(Box::new(Runner::new(m, case, &structure, &taut, false)?)),
+            None => ReferenceSource::Own(Box::new(ConfiguredSolver::new(
+                m,
+                case,
+                &structure,
+                &taut,
+                Limits::default(),
+            )?)),
         },
     };
 
+    // Only when figures are asked: what they are drawn from, gathered along the sweep.
+    let mut figures = methods
+        .first()
+        .filter(|_| case.output.plots)
+        .map(|first| FigureData::new(first.name()));
     let summary_path = dir.join("summary.csv");
     let mut rows = Vec::new();
     let mut failures = Vec::new();
@@ -220,20 +189,31 @@ pub fn run(
             .as_ref()
             .map(|r| r.equilibrium.displacements.as_slice());
         for (index, (method, runner, setup_seconds)) in runners.iter_mut().enumerate() {
+            // The LATIN iterations go to the history file and, for the figures, to a recorder:
+            // one solve feeds both.
+            let mut history = if method.is_latin() && case.output.history {
+                let writer =
+                    HistoryWriter::create(&dir, method.name(), alpha, structure.n_cables())
+                        .map_err(|e| write_error(&dir.join("history"), e))?;
+                Some(writer)
+            } else {
+                None
+            };
+            let mut recorder = (method.is_latin() && figures.is_some()).then(Recorder::default);
             let solution = match (&reference_source, &reference) {
                 (ReferenceSource::Shared(i), Some(r)) if *i == index => r.clone(),
-                _ if method.is_latin() && case.output.history => {
-                    let mut history =
-                        HistoryWriter::create(&dir, method.name(), alpha, structure.n_cables())
-                            .map_err(|e| write_error(&dir.join("history"), e))?;
-                    let solution = runner.solve(&load, reference_u, &mut history);
-                    history
-                        .finish()
-                        .map_err(|e| write_error(&dir.join("history"), e))?;
-                    solution
+                _ => {
+                    let mut observers = Tee::new()
+                        .with(history.as_mut().map(|h| h as &mut dyn Observer))
+                        .with(recorder.as_mut().map(|r| r as &mut dyn Observer));
+                    runner.solve(&load, reference_u, &mut observers)
                 }
-                _ => runner.solve(&load, reference_u, &mut Silent),
             };
+            if let Some(history) = history {
+                history
+                    .finish()
+                    .map_err(|e| write_error(&dir.join("history"), e))?;
+            }
             let eq = &solution.equilibrium;
             let row = SummaryRow {
                 solver: method.name().to_string(),
@@ -259,13 +239,12 @@ pub fn run(
                     row.residual
                 ));
             }
-            if case.output.tensions {
-                output::write_tensions(&dir, method.name(), alpha, &structure, eq)
-                    .map_err(|e| write_error(&dir.join("tensions"), e))?;
-            }
-            if case.output.displacements {
-                output::write_displacements(&dir, method.name(), alpha, &structure, eq)
-                    .map_err(|e| write_error(&dir.join("displacements"), e))?;
+            write_solve_files(case, &dir, method.name(), alpha, &structure, eq)?;
+            if let Some(figures) = figures.as_mut() {
+                figures.add_solve(method.name(), alpha, &structure, eq);
+                if let Some(recorder) = recorder {
+                    figures.add_history(method.name(), alpha, recorder.records);
+                }
             }
             rows.push(row);
             // Rewritten whole after every solve: an interrupted sweep leaves a complete file.
@@ -275,6 +254,11 @@ pub fn run(
             }
             on_row(rows.last().expect("row just pushed"));
         }
+    }
+    if let Some(figures) = &figures {
+        figures
+            .write(&dir, &structure)
+            .map_err(|e| write_error(&dir.join("plots"), e))?;
     }
     if failures.is_empty() {
         Ok(rows)

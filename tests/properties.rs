@@ -4,7 +4,7 @@
 //! never panics, whatever it is fed.
 
 use proptest::prelude::*;
-use tensolve::case::{self, Clamp};
+use tensolve::case;
 use tensolve::results::{constitutive_residual, equilibrium_residual, relative_difference};
 use tensolve::solvers::latin::{Latin, LatinSettings};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
@@ -28,6 +28,22 @@ fn case_text(nx: usize, ny: usize, clamp: &str, nodal: [f64; 3], module: &str) -
     )
 }
 
+/// Zero eigenvalues of K (every cable taut), from a dense eigen-decomposition.
+fn dense_zero_modes(s: &Structure) -> usize {
+    let n = s.n_free;
+    let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
+    for (l, ld) in s.links.iter().zip(&s.link_dofs) {
+        for (p, cp) in ld.iter() {
+            for (q, cq) in ld.iter() {
+                k[(p, q)] += l.stiffness * cp * cq;
+            }
+        }
+    }
+    let scale = (0..n).map(|i| k[(i, i)]).sum::<f64>() / n as f64;
+    let eig = k.symmetric_eigenvalues();
+    eig.iter().filter(|&&v| v < 1e-12 * scale).count()
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
@@ -48,9 +64,8 @@ proptest! {
         let s = Structure::from_case(&case);
         let taut = match TautStiffness::new(&s) {
             Err(SetupError::Mechanism { zero_modes }) => {
-                // Refused: it must really be a mechanism (unclamped, or clamped too little).
-                prop_assert!(zero_modes >= 1);
-                prop_assert!(case.supports.clamp != Clamp::LowerAllEdges || nx * ny == 0);
+                // Refused: K must really have that many zero modes (dense check, independent).
+                prop_assert_eq!(zero_modes, dense_zero_modes(&s));
                 return Ok(());
             }
             Err(other) => panic!("unexpected set-up error {other}"),
@@ -71,8 +86,14 @@ proptest! {
             prop_assert!(sol.info.status.converged(), "solver {k}: {:?}", sol.info);
             let eq = &sol.equilibrium;
             prop_assert!(eq.displacements.iter().chain(&eq.tensions).all(|x| x.is_finite()));
-            prop_assert!(constitutive_residual(&s, eq) < 1e-8, "solver {k}: law");
-            let (balance, agreement) = if k < 2 { (1e-9, 1e-8) } else { (1e-6, 1e-6) };
+            // A LATIN answer pairs U of its last linear stage with τ̂ of the local stage on it:
+            // both laws hold to the η level only.
+            let (balance, law, agreement) = if k < 2 {
+                (1e-9, 1e-8, 1e-8)
+            } else {
+                (1e-6, 1e-6, 1e-6)
+            };
+            prop_assert!(constitutive_residual(&s, eq) < law, "solver {k}: law");
             prop_assert!(equilibrium_residual(&s, eq, &f) < balance, "solver {k}: equilibrium");
             let d = relative_difference(&eq.displacements, &reference);
             prop_assert!(d < agreement || reference.iter().all(|&u| u == 0.0), "solver {k}: |dU|/|U| = {d:e}");

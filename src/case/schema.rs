@@ -331,6 +331,12 @@ pub struct Output {
     /// `history/{solver}_alpha{α}.csv` of the LATIN solvers (e, η per iteration). Default true.
     #[serde(default = "default_true")]
     pub history: bool,
+    /// SVG figures under `plots/` (the paper's Figures 6–11). Default false.
+    #[serde(default)]
+    pub plots: bool,
+    /// `vtk/{solver}_alpha{α}.vtu`, VTK XML unstructured grids for ParaView. Default false.
+    #[serde(default)]
+    pub vtk: bool,
 }
 
 impl Default for Output {
@@ -341,6 +347,8 @@ impl Default for Output {
             tensions: true,
             displacements: true,
             history: true,
+            plots: false,
+            vtk: false,
         }
     }
 }

@@ -244,8 +244,11 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
             if steps == 1 {
                 vec![from]
             } else {
+                // Rounded to 12 significant digits: 0.1 stays 0.1 (not 0.09999999999999999) in
+                // file names and tables.
                 (0..steps)
                     .map(|i| from + (to - from) * i as f64 / (steps - 1) as f64)
+                    .map(|a| format!("{a:.11e}").parse().unwrap_or(a))
                     .collect()
             }
         }

@@ -31,3 +31,11 @@ pub fn write_atomic(
     }
     result
 }
+
+/// Create `dir` and make sure a file can be written in it (a probe file, removed).
+pub fn ensure_writable(dir: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let probe = dir.join(format!(".tensolve-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"")?;
+    std::fs::remove_file(&probe)
+}

@@ -1,0 +1,153 @@
+//! The LATIN convergence figures: `error_{solver}.svg` and `eta_{solver}.svg` (paper Figures 9
+//! and 10: e and η per iteration, one series per α) and `error_all.svg` (Figure 11: e of every
+//! LATIN solver at the largest α). A figure without any point (e with `reference = "none"`)
+//! is not drawn.
+
+use super::chart::{LineChart, Scale, Series};
+use super::palette::{ordered_colour, solver_colour};
+use super::{alpha_text, History};
+use crate::solvers::IterationRecord;
+use std::io;
+
+#[derive(Debug, Clone, Copy)]
+enum Measure {
+    /// Energy error e against the reference.
+    Error,
+    /// LATIN indicator η.
+    Eta,
+}
+
+impl Measure {
+    fn value(self, r: &IterationRecord) -> Option<f64> {
+        match self {
+            Measure::Error => r.error,
+            Measure::Eta => Some(r.residual),
+        }
+    }
+
+    fn file_stem(self) -> &'static str {
+        match self {
+            Measure::Error => "error",
+            Measure::Eta => "eta",
+        }
+    }
+
+    fn axis_label(self) -> &'static str {
+        match self {
+            Measure::Error => "energy error e (–)",
+            Measure::Eta => "error indicator η (–)",
+        }
+    }
+
+    fn what(self) -> &'static str {
+        match self {
+            Measure::Error => "Energy error e",
+            Measure::Eta => "Error indicator η",
+        }
+    }
+}
+
+/// (file name, SVG) of every convergence figure the histories give.
+pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
+    let mut solvers: Vec<&str> = Vec::new();
+    for h in histories {
+        if !solvers.contains(&h.solver.as_str()) {
+            solvers.push(&h.solver);
+        }
+    }
+    let mut figures = Vec::new();
+    for &solver in &solvers {
+        let mut own: Vec<&History> = histories.iter().filter(|h| h.solver == solver).collect();
+        own.sort_by(|a, b| a.alpha.total_cmp(&b.alpha));
+        for measure in [Measure::Error, Measure::Eta] {
+            if let Some(chart) = per_alpha_chart(solver, measure, &own) {
+                let name = format!("{}_{solver}.svg", measure.file_stem());
+                figures.push((name, chart.to_svg()?));
+            }
+        }
+    }
+    let at_largest: Vec<&History> = solvers
+        .iter()
+        .filter_map(|&solver| {
+            histories
+                .iter()
+                .filter(|h| h.solver == solver)
+                .max_by(|a, b| a.alpha.total_cmp(&b.alpha))
+        })
+        .collect();
+    if let Some(chart) = solvers_chart(&at_largest) {
+        figures.push(("error_all.svg".into(), chart.to_svg()?));
+    }
+    Ok(figures)
+}
+
+fn points(h: &History, measure: Measure) -> Vec<(f64, f64)> {
+    h.records
+        .iter()
+        .filter_map(|r| measure.value(r).map(|v| (r.iteration as f64, v)))
+        .collect()
+}
+
+/// One series per α of one solver; None when no record has the measure.
+fn per_alpha_chart(solver: &str, measure: Measure, histories: &[&History]) -> Option<LineChart> {
+    let n = histories.len();
+    let series: Vec<Series> = histories
+        .iter()
+        .enumerate()
+        .map(|(i, h)| Series {
+            label: format!("α = {}", alpha_text(h.alpha)),
+            colour: ordered_colour(i, n),
+            points: points(h, measure),
+        })
+        .collect();
+    convergence_chart(
+        format!("{} per iteration ({solver})", measure.what()),
+        measure,
+        "load factor",
+        series,
+    )
+}
+
+/// e of every solver's history; None when no record has e.
+fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
+    let alphas: Vec<String> = histories.iter().map(|h| alpha_text(h.alpha)).collect();
+    let mut distinct = alphas.clone();
+    distinct.dedup();
+    let series: Vec<Series> = histories
+        .iter()
+        .map(|h| Series {
+            label: if distinct.len() == 1 {
+                h.solver.clone()
+            } else {
+                format!("{} (α = {})", h.solver, alpha_text(h.alpha))
+            },
+            colour: solver_colour(&h.solver),
+            points: points(h, Measure::Error),
+        })
+        .collect();
+    let title = match distinct.as_slice() {
+        [alpha] => format!("Energy error e per iteration at α = {alpha}"),
+        _ => "Energy error e per iteration at the largest α".to_string(),
+    };
+    convergence_chart(title, Measure::Error, "solver", series)
+}
+
+fn convergence_chart(
+    title: String,
+    measure: Measure,
+    legend_title: &str,
+    series: Vec<Series>,
+) -> Option<LineChart> {
+    if series.iter().all(|s| s.points.is_empty()) {
+        return None;
+    }
+    Some(LineChart {
+        title,
+        x_label: "iteration (–)".into(),
+        y_label: measure.axis_label().into(),
+        y_scale: Scale::Log,
+        legend_title: legend_title.into(),
+        markers: false,
+        series,
+    })
+}

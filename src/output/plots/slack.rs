@@ -1,0 +1,30 @@
+//! `slack_fraction.svg` (paper Figure 7): the fraction of slack cables against α, one series
+//! per solver.
+
+use super::chart::{LineChart, Scale, Series};
+use super::palette::solver_colour;
+
+/// `per_solver`: (solver, [(α, slack fraction)]).
+pub fn chart(per_solver: &[(&str, &[(f64, f64)])]) -> LineChart {
+    let series = per_solver
+        .iter()
+        .map(|(solver, points)| {
+            let mut points = points.to_vec();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Series {
+                label: solver.to_string(),
+                colour: solver_colour(solver),
+                points,
+            }
+        })
+        .collect();
+    LineChart {
+        title: "Fraction of slack cables against the load factor".into(),
+        x_label: "load factor α (–)".into(),
+        y_label: "slack cables / cables (–)".into(),
+        y_scale: Scale::Linear,
+        legend_title: "solver".into(),
+        markers: true,
+        series,
+    }
+}
