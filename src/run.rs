@@ -121,7 +121,8 @@ pub fn run(
         || case.output.displacements
         || (case.output.history && methods.iter().any(|m| m.is_latin()))
         || case.output.plots
-        || case.output.vtk;
+        || case.output.vtk
+        || case.output.stability;
 
     let clock = Instant::now();
     let structure = Structure::from_case(case);
@@ -176,7 +177,9 @@ pub fn run(
         .filter(|_| case.output.plots)
         .map(|first| FigureData::new(first.name()));
     let summary_path = dir.join("summary.csv");
+    let stability_path = dir.join("stability.csv");
     let mut rows = Vec::new();
+    let mut stability_rows = Vec::new();
     let mut failures = Vec::new();
     for &alpha in &case.load.alphas {
         let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
@@ -245,6 +248,20 @@ pub fn run(
                 if let Some(recorder) = recorder {
                     figures.add_history(method.name(), alpha, recorder.records);
                 }
+            }
+            if case.output.stability {
+                stability_rows.push(output::StabilityRow {
+                    solver: row.solver.clone(),
+                    alpha,
+                    slack_cables: row.slack_cables,
+                    min_tangent_eigenvalue: results::smallest_tangent_eigenvalue(
+                        &structure,
+                        &solution.equilibrium,
+                        &taut,
+                    ),
+                });
+                output::write_stability(&stability_path, &stability_rows)
+                    .map_err(|e| write_error(&stability_path, e))?;
             }
             rows.push(row);
             // Rewritten whole after every solve: an interrupted sweep leaves a complete file.

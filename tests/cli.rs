@@ -407,3 +407,29 @@ fn output_switches_limit_the_files() {
     let (_, rows) = read_csv(&out.0.join("summary.csv"));
     assert_eq!(rows.len(), 2, "one row per solver");
 }
+
+#[test]
+fn stability_csv_reports_the_smallest_tangent_eigenvalue() {
+    let case = Temp::file(
+        "stability",
+        "[grid]\nmodules = [16, 16]\n[load]\nalpha = [1.0]\n[solver]\nmethods = [\"newton\"]\n\
+         [output]\nstability = true\ntensions = false\ndisplacements = false\n",
+    );
+    let out = Temp::dir("stability-out");
+    let o = tensolve(&["run", case.arg(), "--out", out.arg(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text =
+        std::fs::read_to_string(std::path::Path::new(out.arg()).join("stability.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("solver,alpha,slack_cables,min_tangent_eigenvalue")
+    );
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&row[..3], ["newton", "1", "408"]);
+    let lambda: f64 = row[3].parse().unwrap();
+    assert!(
+        (lambda - 164.0).abs() < 2.0,
+        "SPEC: ≈ 164 N/m, got {lambda}"
+    );
+}

@@ -337,6 +337,10 @@ pub struct Output {
     /// `vtk/{solver}_alpha{α}.vtu`, VTK XML unstructured grids for ParaView. Default false.
     #[serde(default)]
     pub vtk: bool,
+    /// `stability.csv`: the smallest eigenvalue of the tangent stiffness at every solution
+    /// (one more factorization per row). Default false.
+    #[serde(default)]
+    pub stability: bool,
 }
 
 impl Default for Output {
@@ -349,6 +353,7 @@ impl Default for Output {
             history: true,
             plots: false,
             vtk: false,
+            stability: false,
         }
     }
 }

@@ -13,7 +13,7 @@ pub use history::{HistoryWriter, HISTORY_HEADER};
 pub use observers::{Recorder, Tee};
 pub use plots::FigureData;
 pub use tables::{
-    alpha_label, result_path, write_displacements, write_summary, write_tensions, SummaryRow,
-    SUMMARY_HEADER,
+    alpha_label, result_path, write_displacements, write_stability, write_summary, write_tensions,
+    StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
 };
 pub use vtk::{kind_code, vtu_path, write_vtu, VTK_LINE};

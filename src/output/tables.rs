@@ -131,3 +131,32 @@ pub fn write_displacements(
     })?;
     Ok(path)
 }
+
+/// One row of `stability.csv`.
+#[derive(Debug, Clone)]
+pub struct StabilityRow {
+    pub solver: String,
+    pub alpha: f64,
+    pub slack_cables: usize,
+    /// Smallest eigenvalue of the taut members' stiffness, N/m (0: a mechanism).
+    pub min_tangent_eigenvalue: f64,
+}
+
+pub const STABILITY_HEADER: &str = "solver,alpha,slack_cables,min_tangent_eigenvalue";
+
+pub fn write_stability(path: &Path, rows: &[StabilityRow]) -> std::io::Result<()> {
+    write_atomic(path, |w| {
+        writeln!(w, "{STABILITY_HEADER}")?;
+        for r in rows {
+            writeln!(
+                w,
+                "{},{},{},{}",
+                r.solver,
+                alpha_label(r.alpha),
+                r.slack_cables,
+                r.min_tangent_eigenvalue
+            )?;
+        }
+        Ok(())
+    })
+}
