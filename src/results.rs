@@ -2,8 +2,19 @@
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
 use crate::linalg::{norm, smallest_eigenvalues, Factor, ZERO_MODE_RELATIVE};
-use crate::solvers::{Equilibrium, TautStiffness};
+use crate::solvers::{Equilibrium, Solution, TautStiffness};
 use crate::structure::Structure;
+
+/// Every number of a solution is finite (displacements, tensions, stopping measure).
+pub fn is_finite(solution: &Solution) -> bool {
+    let eq = &solution.equilibrium;
+    solution.info.residual.is_finite()
+        && eq
+            .displacements
+            .iter()
+            .chain(&eq.tensions)
+            .all(|x| x.is_finite())
+}
 
 /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs.
 pub fn equilibrium_residual(s: &Structure, eq: &Equilibrium, load: &[f64]) -> f64 {

@@ -217,6 +217,17 @@ pub fn run(
                     .finish()
                     .map_err(|e| write_error(&dir.join("history"), e))?;
             }
+            if !results::is_finite(&solution) {
+                // Never a NaN or inf in a file: the solve is reported, its files not written.
+                failures.push(format!(
+                    "{} at alpha = {}: produced non-finite values after {} iterations ({:?}); no files written for it",
+                    method.name(),
+                    output::alpha_label(alpha),
+                    solution.info.iterations,
+                    solution.info.status
+                ));
+                continue;
+            }
             let eq = &solution.equilibrium;
             let row = SummaryRow {
                 solver: method.name().to_string(),

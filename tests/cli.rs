@@ -145,6 +145,16 @@ fn invalid_cases_exit_2_and_name_the_key() {
             &["mechanism", "zero-stiffness mode"],
         ),
         (
+            "overflowing-young",
+            with("[cables]\nyoung = 1e300"),
+            &["cables.young", "1e300", "≤ 1e15"],
+        ),
+        (
+            "huge-alpha",
+            load_with("alpha = [1e300]"),
+            &["load.alpha", "1e300", "≤ 1e6"],
+        ),
+        (
             "partition-larger-than-grid",
             with("[solver]\nsubdomains = [3, 1]"),
             &["solver.subdomains", "[3, 1]", "sx ≤ 2"],

@@ -154,3 +154,51 @@ proptest! {
         }
     }
 }
+
+/// Every regular file under `dir`, recursively.
+fn files_under(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                out.extend(files_under(&path));
+            } else {
+                out.push(path);
+            }
+        }
+    }
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn extreme_accepted_inputs_never_panic_nor_write_non_finite_numbers(
+        cable_young in prop::sample::select(vec![1e-12, 1.0, 1e11, 1e15]),
+        bar_section in prop::sample::select(vec![1e-15, 2.8e-4, 1e15]),
+        prestress in prop::sample::select(vec![0.0, 2000.0, 1e15]),
+        fz in prop::sample::select(vec![-1e15, -40.0, 0.0, 1e15]),
+        alpha in prop::sample::select(vec![-1e6, 0.0, 1.0, 1e6]),
+        methods in prop::sample::select(vec!["\"newton\"", "\"pcg-lcp\"", "\"mono-latin\", \"micro-macro\""]),
+    ) {
+        static RUN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = RUN.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("tensolve-extreme-{}-{n}", std::process::id()));
+        let text = format!(
+            "[grid]\nmodules = [2, 2]\n[cables]\nyoung = {cable_young:e}\n[bars]\nsection = {bar_section:e}\n\
+             [prestress]\nlower_cable = {prestress:e}\n[load]\nnodal = [0.0, 0.0, {fz:e}]\nalpha = [{alpha:e}]\n\
+             [solver]\nmethods = [{methods}]\nsubdomains = [2, 2]\nmax_iterations = 300\n\
+             [output]\ndir = \"{}\"\nvtk = true\n",
+            dir.display()
+        );
+        let case = case::parse(&text).expect("accepted by validation");
+        let _ = tensolve::run::run(&case, &Default::default(), &mut |_| {});
+        for file in files_under(&dir) {
+            let content = std::fs::read_to_string(&file).unwrap_or_default().to_lowercase();
+            prop_assert!(!content.contains("nan") && !content.contains("inf"), "{}", file.display());
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

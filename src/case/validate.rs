@@ -48,30 +48,38 @@ pub(crate) fn number(x: f64) -> String {
     }
 }
 
-/// A physical quantity: finite and strictly positive.
+/// Largest magnitude accepted for any physical number: far beyond any structure, far enough
+/// from f64's range (1e308) that stiffnesses, loads and their products cannot overflow.
+const PHYSICAL_MAX: f64 = 1e15;
+
+/// A physical quantity: finite, strictly positive, at most [`PHYSICAL_MAX`].
 fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> {
-    if value.is_finite() && value > 0.0 {
+    if value.is_finite() && value > 0.0 && value <= PHYSICAL_MAX {
         Ok(())
     } else {
         Err(CaseError::invalid(
             key,
             number(value),
-            format!("give {what} as a finite number > 0"),
+            format!("give {what} as a number > 0 and ≤ {PHYSICAL_MAX:e}"),
         ))
     }
 }
 
-fn finite(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> {
-    if value.is_finite() {
+/// A finite number of magnitude at most `max`.
+fn bounded(key: &'static str, value: f64, max: f64, what: &str) -> Result<(), CaseError> {
+    if value.is_finite() && value.abs() <= max {
         Ok(())
     } else {
         Err(CaseError::invalid(
             key,
             number(value),
-            format!("give {what} as a finite number"),
+            format!("give {what} as a finite number of magnitude ≤ {max:e}"),
         ))
     }
 }
+
+/// Largest load factor accepted.
+const ALPHA_MAX: f64 = 1e6;
 
 pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
     let [nx, ny] = case.grid.modules;
@@ -113,16 +121,16 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
         "the bars' cross-section in m²",
     )?;
     let p = case.prestress.lower_cable;
-    if !(p.is_finite() && p >= 0.0) {
+    if !(p.is_finite() && (0.0..=PHYSICAL_MAX).contains(&p)) {
         return Err(CaseError::invalid(
             "prestress.lower_cable",
             number(p),
-            "give the lower cables' prestress in N as a finite number ≥ 0",
+            format!("give the lower cables' prestress in N as a number ≥ 0 and ≤ {PHYSICAL_MAX:e}"),
         ));
     }
     for (c, &f) in case.load.nodal.iter().enumerate() {
         let key = ["load.nodal[0]", "load.nodal[1]", "load.nodal[2]"][c];
-        finite(key, f, "each nodal force component in N")?;
+        bounded(key, f, PHYSICAL_MAX, "each nodal force component in N")?;
     }
     case.load.alphas = alpha_values(&case.load.alpha)?;
 
@@ -261,7 +269,7 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
         }
     };
     for &a in &alphas {
-        finite(KEY, a, "every load factor")?;
+        bounded(KEY, a, ALPHA_MAX, "every load factor")?;
     }
     Ok(alphas)
 }

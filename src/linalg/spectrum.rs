@@ -105,6 +105,14 @@ pub fn smallest_eigenvalues(
     for it in 1..=max_iterations {
         chol.solve_block_in_place(x.as_mut());
         let m = orthonormalize(&mut x);
+        if m == 0 {
+            // Every direction vanished or blew up: no spectrum to report.
+            return SmallestEigenvalues {
+                values: previous,
+                iterations: it,
+                converged: false,
+            };
+        }
         // Rayleigh–Ritz with A itself.
         let x_cols: Vec<Vec<f64>> = (0..m)
             .map(|j| (0..n).map(|i| x[(i, j)]).collect())
