@@ -4,48 +4,16 @@
 
 mod common;
 
-use common::{manifest_path, temp_path};
+use common::{manifest_path, stderr, temp_path, tensolve, Temp};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+
 use tensolve::bench::{Sample, Series, Table, CSV_HEADER};
 use tensolve::case::{self, Method};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{IterationRecord, Observer, Silent, Solution, Status, TautStiffness};
 use tensolve::structure::Structure;
-
-fn tensolve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(args)
-        .output()
-        .expect("run tensolve")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A temporary file or directory, removed when dropped.
-struct Temp(PathBuf);
-
-impl Temp {
-    fn file(tag: &str, text: &str) -> Temp {
-        let path = temp_path(&format!("{tag}.toml"));
-        std::fs::write(&path, text).unwrap();
-        Temp(path)
-    }
-    fn arg(&self) -> &str {
-        self.0.to_str().expect("utf-8 temp path")
-    }
-}
-
-impl Drop for Temp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
 
 /// 4 x 4 modules loaded 20 times harder than the paper's nodes, so that 28 of the 192 cables
 /// go slack at α = 1 (at the paper's 40 N none does and newton needs one step): newton takes

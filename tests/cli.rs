@@ -6,44 +6,8 @@
 
 mod common;
 
-use common::{manifest_path, temp_path};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn tensolve(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(args)
-        .output()
-        .expect("run tensolve")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A temporary file or directory, removed when dropped.
-struct Temp(PathBuf);
-
-impl Temp {
-    fn dir(tag: &str) -> Temp {
-        Temp(temp_path(tag))
-    }
-    fn file(tag: &str, text: &str) -> Temp {
-        let path = temp_path(&format!("{tag}.toml"));
-        std::fs::write(&path, text).unwrap();
-        Temp(path)
-    }
-    fn arg(&self) -> &str {
-        self.0.to_str().expect("utf-8 temp path")
-    }
-}
-
-impl Drop for Temp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
+use common::{manifest_path, stderr, temp_path, tensolve, Temp};
+use std::path::Path;
 
 const VALID: &str = "[grid]\nmodules = [2, 2]\n[load]\nalpha = [1.0]\n";
 

@@ -29,7 +29,12 @@ fn data_lines(path: &Path, header: &str, columns: usize) -> usize {
     assert_eq!(lines.next(), Some(header), "{}", path.display());
     let mut n = 0;
     for line in lines {
-        assert_eq!(line.split(',').count(), columns, "{}: `{line}`", path.display());
+        assert_eq!(
+            line.split(',').count(),
+            columns,
+            "{}: `{line}`",
+            path.display()
+        );
         n += 1;
     }
     n
@@ -41,7 +46,10 @@ fn assert_complete(dir: &Path) -> usize {
         assert_eq!(row.len(), 12, "a whole summary row: {row:?}");
         let (solver, alpha) = (&row[0], &row[1]);
         let tensions = dir.join(format!("tensions/{solver}_alpha{alpha}.csv"));
-        assert_eq!(data_lines(&tensions, "cable,kind,node_a,node_b,tension", 5), 3072);
+        assert_eq!(
+            data_lines(&tensions, "cable,kind,node_a,node_b,tension", 5),
+            3072
+        );
         let displacements = dir.join(format!("displacements/{solver}_alpha{alpha}.csv"));
         assert_eq!(data_lines(&displacements, "node,x,y,z,ux,uy,uz", 7), 833);
     }
@@ -59,7 +67,13 @@ fn interrupted_sweep_keeps_finished_results_whole() {
     .unwrap();
     let bin = env!("CARGO_BIN_EXE_tensolve");
     let mut child = Command::new(bin)
-        .args(["run", case.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--quiet"])
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--quiet",
+        ])
         .spawn()
         .unwrap();
     let start = Instant::now();
@@ -86,7 +100,13 @@ fn interrupted_sweep_keeps_finished_results_whole() {
     )
     .unwrap();
     let rerun = Command::new(bin)
-        .args(["run", case.to_str().unwrap(), "--out", dir.to_str().unwrap(), "--quiet"])
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--quiet",
+        ])
         .status()
         .unwrap();
     assert!(rerun.success());

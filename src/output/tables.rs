@@ -68,6 +68,21 @@ pub fn result_path(dir: &Path, kind: &str, solver: &str, alpha: f64) -> PathBuf 
         .join(format!("{solver}_alpha{}.csv", alpha_label(alpha)))
 }
 
+/// A CSV file of `header` and `rows`, written atomically.
+fn write_rows<R, const N: usize>(path: &Path, header: [&str; N], rows: R) -> std::io::Result<()>
+where
+    R: Iterator<Item = [String; N]>,
+{
+    write_atomic(path, |w| {
+        let mut out = csv::Writer::from_writer(w);
+        out.write_record(header).map_err(csv_io)?;
+        for row in rows {
+            out.write_record(row).map_err(csv_io)?;
+        }
+        out.flush()
+    })
+}
+
 pub fn write_tensions(
     dir: &Path,
     solver: &str,
@@ -76,28 +91,26 @@ pub fn write_tensions(
     eq: &Equilibrium,
 ) -> std::io::Result<PathBuf> {
     let path = result_path(dir, "tensions", solver, alpha);
-    write_atomic(&path, |w| {
-        let mut out = csv::Writer::from_writer(w);
-        out.write_record(["cable", "kind", "node_a", "node_b", "tension"])
-            .map_err(csv_io)?;
-        for (cable, (l, t)) in s
-            .links
-            .iter()
-            .zip(&eq.tensions)
-            .filter(|(l, _)| l.kind.is_cable())
-            .enumerate()
-        {
-            out.write_record([
-                cable.to_string(),
-                l.kind.name().to_string(),
-                l.a.to_string(),
-                l.b.to_string(),
-                t.to_string(),
-            ])
-            .map_err(csv_io)?;
-        }
-        out.flush()
-    })?;
+    let cables = s
+        .links
+        .iter()
+        .zip(&eq.tensions)
+        .filter(|(l, _)| l.kind.is_cable())
+        .enumerate();
+    let rows = cables.map(|(cable, (l, t))| {
+        [
+            cable.to_string(),
+            l.kind.name().to_string(),
+            l.a.to_string(),
+            l.b.to_string(),
+            t.to_string(),
+        ]
+    });
+    write_rows(
+        &path,
+        ["cable", "kind", "node_a", "node_b", "tension"],
+        rows,
+    )?;
     Ok(path)
 }
 
@@ -110,25 +123,19 @@ pub fn write_displacements(
 ) -> std::io::Result<PathBuf> {
     let path = result_path(dir, "displacements", solver, alpha);
     let full = s.full_displacements(&eq.displacements);
-    write_atomic(&path, |w| {
-        let mut out = csv::Writer::from_writer(w);
-        out.write_record(["node", "x", "y", "z", "ux", "uy", "uz"])
-            .map_err(csv_io)?;
-        for (node, x) in s.nodes.iter().enumerate() {
-            let u = &full[3 * node..3 * node + 3];
-            out.write_record([
-                node.to_string(),
-                x[0].to_string(),
-                x[1].to_string(),
-                x[2].to_string(),
-                u[0].to_string(),
-                u[1].to_string(),
-                u[2].to_string(),
-            ])
-            .map_err(csv_io)?;
-        }
-        out.flush()
-    })?;
+    let rows = s.nodes.iter().enumerate().map(|(node, x)| {
+        let u = &full[3 * node..3 * node + 3];
+        [
+            node.to_string(),
+            x[0].to_string(),
+            x[1].to_string(),
+            x[2].to_string(),
+            u[0].to_string(),
+            u[1].to_string(),
+            u[2].to_string(),
+        ]
+    });
+    write_rows(&path, ["node", "x", "y", "z", "ux", "uy", "uz"], rows)?;
     Ok(path)
 }
 

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use tensolve::case::{self, Case};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
@@ -95,4 +96,40 @@ pub fn temp_path(tag: &str) -> PathBuf {
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     std::env::temp_dir().join(format!("tensolve-test-{}-{n}-{tag}", std::process::id()))
+}
+
+/// Run the `tensolve` binary.
+pub fn tensolve(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args(args)
+        .output()
+        .expect("run tensolve")
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A temporary file or directory, removed when dropped.
+pub struct Temp(pub PathBuf);
+
+impl Temp {
+    pub fn dir(tag: &str) -> Temp {
+        Temp(temp_path(tag))
+    }
+    pub fn file(tag: &str, text: &str) -> Temp {
+        let path = temp_path(&format!("{tag}.toml"));
+        std::fs::write(&path, text).unwrap();
+        Temp(path)
+    }
+    pub fn arg(&self) -> &str {
+        self.0.to_str().expect("utf-8 temp path")
+    }
+}
+
+impl Drop for Temp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+        let _ = std::fs::remove_file(&self.0);
+    }
 }
