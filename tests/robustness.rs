@@ -253,3 +253,18 @@ fn smallest_tangent_eigenvalues_match_spec() {
         );
     }
 }
+
+#[test]
+fn bilateral_cables_run_no_complementarity_iterations() {
+    // Only what the case calls for: with every cable bilateral the problem is linear.
+    let s = Structure::from_case(&grid_case(
+        [4, 4],
+        "lower-x-edges",
+        "[cables]\nunilateral = false\n",
+    ));
+    let [newton, pcg, mono, _] = solve_all(&s, 1.0, [2, 2], 1e-10);
+    assert_eq!(newton.info.iterations, 1, "one linear solve");
+    assert_eq!(pcg.info.iterations, 0, "no LCP unknowns");
+    assert_eq!(mono.info.iterations, 1, "one linear stage after the first");
+    assert!(s.links.iter().all(|l| !l.unilateral));
+}
