@@ -12,6 +12,19 @@ use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{SetupError, Silent, TautStiffness};
 use tensolve::structure::Structure;
 
+/// `cases` cases from a fixed seed, so that CI runs the same cases every time; set
+/// `PROPTEST_RNG_SEED` to explore others.
+fn config(cases: u32) -> ProptestConfig {
+    let mut config = ProptestConfig {
+        cases,
+        ..ProptestConfig::default()
+    };
+    if std::env::var_os("PROPTEST_RNG_SEED").is_none() {
+        config.rng_seed = proptest::test_runner::RngSeed::Fixed(20_261_121);
+    }
+    config
+}
+
 const CLAMPS: [&str; 5] = [
     "lower-x-edges",
     "lower-y-edges",
@@ -45,7 +58,7 @@ fn dense_zero_modes(s: &Structure) -> usize {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(config(24))]
 
     #[test]
     fn all_solvers_agree_or_the_case_is_refused(
@@ -91,8 +104,10 @@ proptest! {
             prop_assert!(eq.displacements.iter().chain(&eq.tensions).all(|x| x.is_finite()));
             // A LATIN answer pairs U of its last linear stage with τ̂ of the local stage on it:
             // both laws hold to the η level only.
+            // pcg-lcp and newton stop at 1e-10 on different measures: on random loads their
+            // displacements agree to ~1e-8 (1e-11 on the paper case), so 1e-7 here.
             let (balance, law, agreement) = if k < 2 {
-                (1e-9, 1e-8, 1e-8)
+                (1e-9, 1e-8, 1e-7)
             } else {
                 (1e-6, 1e-6, 1e-6)
             };
@@ -127,7 +142,7 @@ const TOKENS: [&str; 14] = [
 ];
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+    #![proptest_config(config(512))]
 
     #[test]
     fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
@@ -175,7 +190,7 @@ fn files_under(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(config(24))]
 
     #[test]
     fn extreme_accepted_inputs_never_panic_nor_write_non_finite_numbers(
