@@ -79,23 +79,25 @@ pub fn smallest_eigenvalues(
     let b = block.min(n).max(1);
     let scale = pattern.mean_diagonal(values).max(f64::MIN_POSITIVE);
     // Shift: tiny against any physical stiffness, large against round-off in the pivots.
-    let mut shift = 1e-10 * scale;
-    let mut shifted = values.to_vec();
-    while factor == Factor::Shifted {
-        for &s in &pattern.diag_slot {
-            shifted[s] = values[s] + shift;
-        }
-        if chol.factorize(pattern, &shifted).is_ok() {
-            break;
-        }
-        shift *= 100.0;
-        if shift > scale {
-            // Not even A + scale·I factors: not positive semidefinite.
-            return SmallestEigenvalues {
-                values: vec![f64::NEG_INFINITY],
-                iterations: 0,
-                converged: false,
-            };
+    if factor == Factor::Shifted {
+        let mut shift = 1e-10 * scale;
+        let mut shifted = values.to_vec();
+        loop {
+            for &s in &pattern.diag_slot {
+                shifted[s] = values[s] + shift;
+            }
+            if chol.factorize(pattern, &shifted).is_ok() {
+                break;
+            }
+            shift *= 100.0;
+            if shift > scale {
+                // Not even A + scale·I factors: not positive semidefinite.
+                return SmallestEigenvalues {
+                    values: vec![f64::NEG_INFINITY],
+                    iterations: 0,
+                    converged: false,
+                };
+            }
         }
     }
     let mut x = start_block(n, b);

@@ -56,13 +56,16 @@ pub fn module_nodes(layout: &GridLayout, i: usize, j: usize) -> [usize; 8] {
     ]
 }
 
-/// Node positions and links `(a, b, kind, module)` of the whole grid.
+/// A link as generated: `(a, b, kind, module)`.
+pub(super) type RawLink = (usize, usize, LinkKind, usize);
+
+/// Node positions and links of the whole grid.
 pub(super) fn generate(
     layout: &GridLayout,
     length: f64,
     height: f64,
     module: ModuleKind,
-) -> (Vec<[f64; 3]>, Vec<(usize, usize, LinkKind, usize)>) {
+) -> (Vec<[f64; 3]>, Vec<RawLink>) {
     let (nx, ny) = (layout.nx, layout.ny);
     let mut nodes = vec![[0.0; 3]; layout.n_nodes()];
     for j in 0..=ny {

@@ -82,7 +82,7 @@ impl MacroProblem {
                 .zip(&x0)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            if !(error <= 1e-6) {
+            if error.is_nan() || error > 1e-6 {
                 return Err(SingularMacroProblem);
             }
             Some(lu)
