@@ -1,7 +1,7 @@
 //! Quantities derived from an equilibrium, computed independently of the solver that produced
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
-use crate::linalg::{norm, smallest_eigenvalues, Factor, ZERO_MODE_RELATIVE};
+use crate::linalg::{norm, smallest_eigenvalues, ZERO_MODE_RELATIVE};
 use crate::solvers::{Equilibrium, Solution, TautStiffness};
 use crate::structure::Structure;
 
@@ -117,7 +117,7 @@ pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautS
         &mut values,
     );
     let mut factor = taut.factor.share_symbolic();
-    let eig = smallest_eigenvalues(pattern, &values, &mut factor, Factor::Shifted, 4, 60, 1e-10);
+    let eig = smallest_eigenvalues(pattern, &values, &mut factor, 4, 60, 1e-10);
     let zero = ZERO_MODE_RELATIVE * pattern.mean_diagonal(&values);
     match eig.values.first() {
         Some(&v) if v > zero => v,

@@ -140,15 +140,6 @@ impl SparseCholesky {
         }
     }
 
-    pub fn n(&self) -> usize {
-        self.symbolic.nrows()
-    }
-
-    /// Entries of the factor L (a measure of fill and memory).
-    pub fn factor_entries(&self) -> usize {
-        self.l_values.len()
-    }
-
     /// Numeric factorization of `values` on the analysed pattern.
     pub fn factorize(
         &mut self,

@@ -13,7 +13,7 @@ pub use dense::{gemv, gemv_transposed};
 pub use pattern::StiffnessPattern;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
-    smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, Factor, SmallestEigenvalues,
+    smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, SmallestEigenvalues,
     ZERO_MODE_RELATIVE,
 };
 

@@ -55,22 +55,13 @@ fn orthonormalize(x: &mut Mat<f64>) -> usize {
     kept.len()
 }
 
-/// How [`smallest_eigenvalues`] gets its factorization.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Factor {
-    /// `chol` already holds a factorization of A itself: use it.
-    Ready,
-    /// Factorize `A + σI` into `chol` for a small shift σ (A may be singular).
-    Shifted,
-}
-
 /// The `block` smallest eigenvalues of the symmetric matrix stored as the lower triangle
-/// `values` on `pattern`. `chol` must have been analysed on `pattern`.
+/// `values` on `pattern` (A may be singular). `chol` must have been analysed on `pattern`; it
+/// is left holding a factorization of `A + σI` for a small shift σ.
 pub fn smallest_eigenvalues(
     pattern: &StiffnessPattern,
     values: &[f64],
     chol: &mut SparseCholesky,
-    factor: Factor,
     block: usize,
     max_iterations: usize,
     relative_tolerance: f64,
@@ -79,25 +70,23 @@ pub fn smallest_eigenvalues(
     let b = block.min(n).max(1);
     let scale = pattern.mean_diagonal(values).max(f64::MIN_POSITIVE);
     // Shift: tiny against any physical stiffness, large against round-off in the pivots.
-    if factor == Factor::Shifted {
-        let mut shift = 1e-10 * scale;
-        let mut shifted = values.to_vec();
-        loop {
-            for &s in &pattern.diag_slot {
-                shifted[s] = values[s] + shift;
-            }
-            if chol.factorize(pattern, &shifted).is_ok() {
-                break;
-            }
-            shift *= 100.0;
-            if shift > scale {
-                // Not even A + scale·I factors: not positive semidefinite.
-                return SmallestEigenvalues {
-                    values: vec![f64::NEG_INFINITY],
-                    iterations: 0,
-                    converged: false,
-                };
-            }
+    let mut shift = 1e-10 * scale;
+    let mut shifted = values.to_vec();
+    loop {
+        for &s in &pattern.diag_slot {
+            shifted[s] = values[s] + shift;
+        }
+        if chol.factorize(pattern, &shifted).is_ok() {
+            break;
+        }
+        shift *= 100.0;
+        if shift > scale {
+            // Not even A + scale·I factors: not positive semidefinite.
+            return SmallestEigenvalues {
+                values: vec![f64::NEG_INFINITY],
+                iterations: 0,
+                converged: false,
+            };
         }
     }
     let mut x = start_block(n, b);
@@ -195,7 +184,7 @@ pub fn zero_mode_count(
     let threshold = ZERO_MODE_RELATIVE * pattern.mean_diagonal(values);
     let mut block = 8;
     loop {
-        let eig = smallest_eigenvalues(pattern, values, chol, Factor::Shifted, block, 30, 1e-3);
+        let eig = smallest_eigenvalues(pattern, values, chol, block, 30, 1e-3);
         let zeros = eig.values.iter().filter(|&&v| v < threshold).count();
         if zeros < eig.values.len() || block >= pattern.n {
             return zeros;
