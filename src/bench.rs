@@ -23,9 +23,9 @@
 //! iterations for n iterations, which is cheap for the iteration counts these solvers need.
 
 use crate::case::{Case, CaseError, Method};
-use crate::configure::{ConfiguredSolver, Limits};
+use crate::configure::{ConfiguredSolver, Limits, Prepared};
 use crate::output::{alpha_label, write_atomic};
-use crate::solvers::{IterationRecord, Observer, SetupError, Silent, Status, TautStiffness};
+use crate::solvers::{IterationRecord, Observer, SetupError, Silent, Status};
 use crate::structure::Structure;
 use std::fmt;
 use std::io::Write;
@@ -245,40 +245,6 @@ pub enum Progress<'a> {
     },
     /// A solver at α is measured.
     Done(&'a Series),
-}
-
-/// The structure and its taut stiffness (the mechanism check), built once and timed.
-pub struct Prepared {
-    pub structure: Structure,
-    pub taut: TautStiffness,
-    pub structure_seconds: f64,
-    pub taut_seconds: f64,
-}
-
-impl Prepared {
-    /// Set-up time a solver shares with the others: the structure, and for newton and pcg-lcp
-    /// the factorization of the taut stiffness they solve with (the LATIN solvers never use it).
-    fn shared_setup_seconds(&self, method: Method) -> f64 {
-        if method.is_latin() {
-            self.structure_seconds
-        } else {
-            self.structure_seconds + self.taut_seconds
-        }
-    }
-}
-
-/// Build the structure and refuse a mechanism.
-pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
-    let clock = Instant::now();
-    let structure = Structure::from_case(case);
-    let structure_seconds = clock.elapsed().as_secs_f64();
-    let taut = TautStiffness::new(&structure)?;
-    Ok(Prepared {
-        structure,
-        taut,
-        structure_seconds,
-        taut_seconds: clock.elapsed().as_secs_f64() - structure_seconds,
-    })
 }
 
 /// The reference answer at one α and what e needs of it.

@@ -1,5 +1,6 @@
-//! From a case to solvers: the one place where `[solver]` keys become each solver's settings,
-//! and a solver of any method set up for a structure, behind one `solve`.
+//! From a case to solvers: the structure and its mechanism check built once and timed, the one
+//! place where `[solver]` keys become each solver's settings, and a solver of any method set up
+//! for a structure, behind one `solve`.
 
 use crate::case::{Case, Method};
 use crate::solvers::latin::{Latin, LatinSettings, SearchDirection};
@@ -7,6 +8,41 @@ use crate::solvers::newton::{Newton, NewtonSettings};
 use crate::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use crate::solvers::{Observer, SetupError, Solution, TautStiffness};
 use crate::structure::Structure;
+use std::time::Instant;
+
+/// The structure and its taut stiffness (the mechanism check), built once and timed.
+pub struct Prepared {
+    pub structure: Structure,
+    pub taut: TautStiffness,
+    pub structure_seconds: f64,
+    pub taut_seconds: f64,
+}
+
+impl Prepared {
+    /// Set-up time a solver shares with the others: the structure, and for newton and pcg-lcp
+    /// the factorization of the taut stiffness they solve with (the LATIN solvers never use it).
+    pub fn shared_setup_seconds(&self, method: Method) -> f64 {
+        if method.is_latin() {
+            self.structure_seconds
+        } else {
+            self.structure_seconds + self.taut_seconds
+        }
+    }
+}
+
+/// Build the structure and refuse a mechanism.
+pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
+    let clock = Instant::now();
+    let structure = Structure::from_case(case);
+    let structure_seconds = clock.elapsed().as_secs_f64();
+    let taut = TautStiffness::new(&structure)?;
+    Ok(Prepared {
+        structure,
+        taut,
+        structure_seconds,
+        taut_seconds: clock.elapsed().as_secs_f64() - structure_seconds,
+    })
+}
 
 /// Stopping settings; `None` keeps the solver's own default.
 #[derive(Debug, Clone, Copy, Default)]

@@ -235,7 +235,7 @@ fn run_command(
 fn bench_command(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), BenchError> {
     let case = case::load(path)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
-    let prepared = bench::prepare(&case)?;
+    let prepared = tensolve::configure::prepare(&case)?;
     bench::ensure_writable(&dir)?;
     let reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
     let measured = bench::measure(&case, &prepared, &mut |p| report_bench(&reporter, p));

@@ -2,10 +2,10 @@
 //! write the asked files. Only what the case asks for is computed and written.
 
 use crate::case::{Case, CaseError, Method, Reference};
-use crate::configure::{ConfiguredSolver, Limits};
+use crate::configure::{prepare, ConfiguredSolver, Limits};
 use crate::output::{self, FigureData, HistoryWriter, Recorder, SummaryRow, Tee};
 use crate::results;
-use crate::solvers::{Equilibrium, Observer, SetupError, Silent, Solution, TautStiffness};
+use crate::solvers::{Equilibrium, Observer, SetupError, Silent, Solution};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -124,13 +124,10 @@ pub fn run(
         || case.output.vtk
         || case.output.stability;
 
-    let clock = Instant::now();
-    let structure = Structure::from_case(case);
-    let structure_seconds = clock.elapsed().as_secs_f64();
     // The mechanism check of every run: K with every cable taut, factorized. newton and
     // pcg-lcp solve with it, so it is part of their set-up; the LATIN solvers never use it.
-    let taut = TautStiffness::new(&structure)?;
-    let taut_seconds = clock.elapsed().as_secs_f64() - structure_seconds;
+    let prepared = prepare(case)?;
+    let (structure, taut) = (&prepared.structure, &prepared.taut);
     // After the structure is known to be solvable: a refused case leaves no directory behind.
     if wants_files {
         check_writable(&dir)?;
@@ -140,13 +137,9 @@ pub fn run(
     let mut runners = Vec::with_capacity(methods.len());
     for &method in &methods {
         let clock = Instant::now();
-        let runner = ConfiguredSolver::new(method, case, &structure, &taut, limits)?;
-        let shared = if method.is_latin() {
-            structure_seconds
-        } else {
-            structure_seconds + taut_seconds
-        };
-        runners.push((method, runner, shared + clock.elapsed().as_secs_f64()));
+        let runner = ConfiguredSolver::new(method, case, structure, taut, limits)?;
+        let setup_seconds = prepared.shared_setup_seconds(method) + clock.elapsed().as_secs_f64();
+        runners.push((method, runner, setup_seconds));
     }
     let reference_method = match case.solver.reference {
         Reference::Newton => Some(Method::Newton),
@@ -164,8 +157,8 @@ pub fn run(
             None => ReferenceSource::Own(Box::new(ConfiguredSolver::new(
                 m,
                 case,
-                &structure,
-                &taut,
+                structure,
+                taut,
                 Limits::default(),
             )?)),
         },
@@ -236,8 +229,8 @@ pub fn run(
                 iterations: solution.info.iterations,
                 slack_cables: eq.slack_count(),
                 cables: structure.n_cables(),
-                max_tension: results::max_cable_tension(&structure, eq),
-                max_deflection: results::max_deflection(&structure, eq),
+                max_tension: results::max_cable_tension(structure, eq),
+                max_deflection: results::max_deflection(structure, eq),
                 residual: solution.info.residual,
                 setup_seconds: *setup_seconds,
                 solve_seconds: solution.info.solve_seconds,
@@ -253,9 +246,9 @@ pub fn run(
                     row.residual
                 ));
             }
-            write_solve_files(case, &dir, method.name(), alpha, &structure, eq)?;
+            write_solve_files(case, &dir, method.name(), alpha, structure, eq)?;
             if let Some(figures) = figures.as_mut() {
-                figures.add_solve(method.name(), alpha, &structure, eq);
+                figures.add_solve(method.name(), alpha, structure, eq);
                 if let Some(recorder) = recorder {
                     figures.add_history(method.name(), alpha, recorder.records);
                 }
@@ -266,9 +259,9 @@ pub fn run(
                     alpha,
                     slack_cables: row.slack_cables,
                     min_tangent_eigenvalue: results::smallest_tangent_eigenvalue(
-                        &structure,
+                        structure,
                         &solution.equilibrium,
-                        &taut,
+                        taut,
                     ),
                 });
                 output::write_stability(&stability_path, &stability_rows)
@@ -285,7 +278,7 @@ pub fn run(
     }
     if let Some(figures) = &figures {
         figures
-            .write(&dir, &structure)
+            .write(&dir, structure)
             .map_err(|e| write_error(&dir.join("plots"), e))?;
     }
     if failures.is_empty() {
