@@ -188,6 +188,8 @@ pub struct Latin<'s> {
     pub interfaces: Vec<Interface>,
     pub substructures: Vec<Substructure>,
     macro_problem: MacroProblem,
+    /// Per interface: its index in the `sides` of its first and of its second substructure.
+    side_slots: Vec<[usize; 2]>,
     dropped_interfaces: usize,
     redundant_nodes: usize,
     /// `(½ Σ t0² / l)^{1/2}`: the prestress in the units of Δη.
@@ -294,6 +296,12 @@ impl<'s> Latin<'s> {
         for b in built {
             substructures.push(b.map_err(|index| SetupError::SingularSubstructure { index })?);
         }
+        let mut side_slots = vec![[0usize; 2]; interfaces.len()];
+        for sub in &substructures {
+            for (slot, side) in sub.sides.iter().enumerate() {
+                side_slots[side.interface][side.which] = slot;
+            }
+        }
         let prestress_scale = (0.5
             * structure
                 .links
@@ -311,6 +319,7 @@ impl<'s> Latin<'s> {
             interfaces,
             substructures,
             macro_problem,
+            side_slots,
             dropped_interfaces,
             redundant_nodes,
             prestress_scale,
@@ -475,23 +484,16 @@ impl<'s> Latin<'s> {
                     st.slack_hat[j] = slack;
                 }
             });
-        for iface in &self.interfaces {
+        for (iface, &[ia, ib]) in self.interfaces.iter().zip(&self.side_slots) {
+            // Interfaces list their substructures in increasing order: a < b.
             let [a, b] = iface.topology.sides;
-            let side_index = |e: usize| {
-                self.substructures[e]
-                    .sides
-                    .iter()
-                    .position(|sd| std::ptr::eq(&self.interfaces[sd.interface], iface))
-                    .expect("interface listed by both sides")
-            };
-            let (ia, ib) = (side_index(a), side_index(b));
-            let (first, second) = if a < b {
-                let (lo, hi) = state.split_at_mut(b);
-                (&mut lo[a].sides[ia], &mut hi[0].sides[ib])
-            } else {
-                unreachable!("interfaces list their substructures in increasing order")
-            };
-            interface_local_stage(&iface.basis, self.settings.dm, first, second);
+            let (lo, hi) = state.split_at_mut(b);
+            interface_local_stage(
+                &iface.basis,
+                self.settings.dm,
+                &mut lo[a].sides[ia],
+                &mut hi[0].sides[ib],
+            );
         }
     }
 
