@@ -56,6 +56,18 @@ fn assert_complete(dir: &Path) -> usize {
     rows.len()
 }
 
+/// `tensolve run CASE --out DIR --quiet`, not started.
+fn run_into(case: &Path, dir: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_tensolve"));
+    command
+        .arg("run")
+        .arg(case)
+        .arg("--out")
+        .arg(dir)
+        .arg("--quiet");
+    command
+}
+
 #[test]
 fn interrupted_sweep_keeps_finished_results_whole() {
     let dir = temp_path("interrupt");
@@ -65,17 +77,7 @@ fn interrupted_sweep_keeps_finished_results_whole() {
         "[grid]\nmodules = [16, 16]\n[load]\nalpha = { from = 0.02, to = 2.0, steps = 100 }\n",
     )
     .unwrap();
-    let bin = env!("CARGO_BIN_EXE_tensolve");
-    let mut child = Command::new(bin)
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-            "--quiet",
-        ])
-        .spawn()
-        .unwrap();
+    let mut child = run_into(&case, &dir).spawn().unwrap();
     let start = Instant::now();
     while summary_rows(&dir).len() < 4 && start.elapsed() < Duration::from_secs(60) {
         std::thread::sleep(Duration::from_millis(5));
@@ -99,16 +101,7 @@ fn interrupted_sweep_keeps_finished_results_whole() {
         "[grid]\nmodules = [16, 16]\n[load]\nalpha = [0.02, 0.5]\n",
     )
     .unwrap();
-    let rerun = Command::new(bin)
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-            "--quiet",
-        ])
-        .status()
-        .unwrap();
+    let rerun = run_into(&case, &dir).status().unwrap();
     assert!(rerun.success());
     assert_eq!(assert_complete(&dir), 4);
     let slack: Vec<String> = summary_rows(&dir).iter().map(|r| r[4].clone()).collect();

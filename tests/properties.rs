@@ -3,6 +3,8 @@
 //! rest is solved by all four solvers, which agree and satisfy the laws; and the case loader
 //! never panics, whatever it is fed.
 
+mod common;
+
 use proptest::prelude::*;
 use tensolve::case;
 use tensolve::results::{constitutive_residual, equilibrium_residual, relative_difference};
@@ -44,14 +46,7 @@ fn case_text(nx: usize, ny: usize, clamp: &str, nodal: [f64; 3], module: &str) -
 /// Zero eigenvalues of K (every cable taut), from a dense eigen-decomposition.
 fn dense_zero_modes(s: &Structure) -> usize {
     let n = s.n_free;
-    let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
-    for (l, ld) in s.links.iter().zip(&s.link_dofs) {
-        for (p, cp) in ld.iter() {
-            for (q, cq) in ld.iter() {
-                k[(p, q)] += l.stiffness * cp * cq;
-            }
-        }
-    }
+    let k = common::dense_stiffness(s);
     let scale = (0..n).map(|i| k[(i, i)]).sum::<f64>() / n as f64;
     let eig = k.symmetric_eigenvalues();
     eig.iter().filter(|&&v| v < 1e-12 * scale).count()

@@ -160,14 +160,7 @@ fn zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
 fn dense_zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
     let s = Structure::from_case(&case::parse(&case_text(modules, module, clamp)).unwrap());
     let n = s.n_free;
-    let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
-    for (l, ld) in s.links.iter().zip(&s.link_dofs) {
-        for (p, cp) in ld.iter() {
-            for (q, cq) in ld.iter() {
-                k[(p, q)] += l.stiffness * cp * cq;
-            }
-        }
-    }
+    let k = common::dense_stiffness(&s);
     let mut ev: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
     ev.sort_by(f64::total_cmp);
     let max = ev[n - 1];

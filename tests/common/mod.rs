@@ -133,3 +133,17 @@ impl Drop for Temp {
         let _ = std::fs::remove_file(&self.0);
     }
 }
+
+/// K = Bᵀ k B (every cable taut) on the free dofs, dense: for independent checks on small grids.
+pub fn dense_stiffness(s: &Structure) -> nalgebra::DMatrix<f64> {
+    let n = s.n_free;
+    let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
+    for (l, ld) in s.links.iter().zip(&s.link_dofs) {
+        for (p, cp) in ld.iter() {
+            for (q, cq) in ld.iter() {
+                k[(p, q)] += l.stiffness * cp * cq;
+            }
+        }
+    }
+    k
+}
