@@ -10,8 +10,7 @@ use std::path::Path;
 use std::time::Duration;
 use tensolve::solvers::latin::{Latin, LatinSettings};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
-use tensolve::solvers::{Silent, TautStiffness};
-use tensolve::structure::Structure;
+use tensolve::solvers::{AnySolver, Reference, Silent, Solver, TautStiffness};
 
 fn settings(subdomains: [usize; 2]) -> LatinSettings {
     LatinSettings {
@@ -26,14 +25,17 @@ fn latin(c: &mut Criterion) {
         "/cases/paper.toml"
     )))
     .expect("case loads");
-    let structure = Structure::from_case(&case);
+    let structure = case.structure();
     let load: Vec<f64> = structure.unit_load.clone();
     let taut = TautStiffness::new(&structure).expect("regular");
-    let reference = Newton::new(&structure, &taut, NewtonSettings::default())
-        .expect("newton")
-        .solve(&load, None, &mut Silent)
-        .equilibrium
-        .displacements;
+    let reference = Reference::new(
+        &structure,
+        &Newton::new(&structure, &taut, NewtonSettings::default())
+            .expect("newton")
+            .solve(&load, None, &mut Silent)
+            .equilibrium
+            .displacements,
+    );
     let one_thread = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -43,8 +45,8 @@ fn latin(c: &mut Criterion) {
     group.warm_up_time(Duration::from_secs(1));
     group.measurement_time(Duration::from_secs(4));
     for (name, subdomains) in [("mono-latin", [1, 1]), ("micro-macro", [4, 4])] {
-        let solver = Latin::new(&structure, settings(subdomains)).expect("set-up");
-        let state = solver.init(&load, Some(&reference));
+        let mut solver = Latin::new(&structure, settings(subdomains)).expect("set-up");
+        let state = solver.init(&load);
         group.bench_function(format!("{name}/setup"), |b| {
             b.iter(|| Latin::new(&structure, settings(subdomains)).expect("set-up"))
         });
@@ -67,9 +69,9 @@ fn latin(c: &mut Criterion) {
         });
         group.bench_function(format!("{name}/to-e-1e-3"), |b| {
             b.iter(|| {
-                let solver = Latin::new(&structure, settings(subdomains)).expect("set-up");
-                let mut state = solver.init(&load, Some(&reference));
-                while state.error.expect("reference given") >= 1e-3 {
+                let mut solver = Latin::new(&structure, settings(subdomains)).expect("set-up");
+                let mut state = solver.init(&load);
+                while reference.error(&solver.elongations(&state)) >= 1e-3 {
                     solver.next_iter(&mut state);
                 }
                 state.iteration

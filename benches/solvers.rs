@@ -11,13 +11,11 @@ use std::path::Path;
 use std::time::Duration;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{Silent, Solution, TautStiffness};
+use tensolve::solvers::{AnySolver, Silent, TautStiffness};
 use tensolve::structure::Structure;
 
-/// Sets a solver up on a structure and its taut stiffness (both borrowed), and returns it as
-/// "solve for this load".
-type Build =
-    for<'a> fn(&'a Structure, &'a TautStiffness) -> Box<dyn FnMut(&[f64]) -> Solution + 'a>;
+/// Sets a solver up on a structure and its taut stiffness (both borrowed).
+type Build = for<'a> fn(&'a Structure, &'a TautStiffness) -> Box<dyn AnySolver + 'a>;
 
 /// `<name>/setup+solve` (TautStiffness::new + the solver's set-up + solve, from the structure
 /// already built) and `<name>/solve` (set-up done once, outside the timing). The solve is
@@ -30,8 +28,8 @@ fn bench_solver(
     build: Build,
 ) {
     let taut = taut_stiffness(structure);
-    let mut solve = build(structure, &taut);
-    let info = solve(load).info;
+    let mut solver = build(structure, &taut);
+    let info = solver.solve(load, None, &mut Silent).info;
     assert!(
         info.status.converged(),
         "{name}: {:?} after {} iterations (residual {:e})",
@@ -40,9 +38,11 @@ fn bench_solver(
         info.residual
     );
     group.bench_function(format!("{name}/setup+solve"), |b| {
-        b.iter(|| build(structure, &taut_stiffness(structure))(load))
+        b.iter(|| build(structure, &taut_stiffness(structure)).solve(load, None, &mut Silent))
     });
-    group.bench_function(format!("{name}/solve"), |b| b.iter(|| solve(load)));
+    group.bench_function(format!("{name}/solve"), |b| {
+        b.iter(|| solver.solve(load, None, &mut Silent))
+    });
 }
 
 fn taut_stiffness(structure: &Structure) -> TautStiffness {
@@ -59,24 +59,22 @@ fn bench_case(
 ) {
     let mut case = tensolve::case::load(Path::new(path)).expect("case loads");
     case.load.alphas = vec![alpha];
-    let structure = Structure::from_case(&case);
+    let structure = case.structure();
     let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
     let mut group = c.benchmark_group(id);
     configure(&mut group);
     group.bench_function("shared-setup", |b| {
         b.iter(|| {
-            let structure = Structure::from_case(&case);
+            let structure = case.structure();
             let taut = taut_stiffness(&structure);
             (structure, taut)
         })
     });
     bench_solver(&mut group, "newton", &structure, &load, |s, t| {
-        let mut newton = Newton::new(s, t, NewtonSettings::default()).expect("newton set-up");
-        Box::new(move |load| newton.solve(load, None, &mut Silent))
+        Box::new(Newton::new(s, t, NewtonSettings::default()).expect("newton set-up"))
     });
     bench_solver(&mut group, "pcg-lcp", &structure, &load, |s, t| {
-        let mut pcg = PcgLcp::new(s, t, PcgLcpSettings::default());
-        Box::new(move |load| pcg.solve(load, &mut Silent))
+        Box::new(PcgLcp::new(s, t, PcgLcpSettings::default()))
     });
     group.finish();
 }

@@ -1,15 +1,25 @@
 //! tensolve: static equilibrium of large tensegrity grids whose cables can go slack.
 //!
-//! Data flow: [`case`] (TOML) → [`structure`] (nodes, links, supports) → [`solvers`] →
-//! [`results`] (checks and derived quantities) → [`output`] (CSV files); [`run`] drives a case,
-//! [`bench`] times the solvers of a case against a reference.
+//! Data flows one way, and each module only uses those before it:
+//!
+//! ```text
+//! linalg → structure → solvers → results → output
+//!                 ↘       ↓                  ↓
+//!                   case ───────────────→  app (sweep, bench, check)
+//! ```
+//!
+//! [`linalg`] is sparse linear algebra knowing nothing of the domain; [`structure`] builds
+//! nodes, links and supports from a plain [`structure::GridSpec`]; [`solvers`] holds the four
+//! solvers behind one [`solvers::Solver`] trait and one [`solvers::drive`]r; [`results`]
+//! checks and derives quantities from an answer; [`output`] writes files through one sink per
+//! file family; [`case`] turns a TOML file into those specs and settings; [`app`] runs a case.
 
-pub mod bench;
+#![warn(missing_docs)]
+
+pub mod app;
 pub mod case;
-pub mod configure;
 pub mod linalg;
 pub mod output;
 pub mod results;
-pub mod run;
 pub mod solvers;
 pub mod structure;

@@ -4,17 +4,15 @@
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use tensolve::bench::{self, BenchError, Progress};
-use tensolve::case::{self, Method};
+use tensolve::app::bench::{self, BenchError, Progress};
+use tensolve::app::check::check;
+use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
+use tensolve::case;
 use tensolve::output::{alpha_label, SummaryRow};
-use tensolve::run::{run, RunError, RunOptions};
-use tensolve::solvers::latin::Latin;
-use tensolve::solvers::TautStiffness;
-use tensolve::structure::Structure;
+use tensolve::solvers::Method;
 
 /// Static equilibrium of tensegrity grids whose cables can go slack.
 ///
@@ -210,7 +208,7 @@ fn run_command(
         out_dir: out,
         methods: (!solvers.is_empty()).then_some(solvers),
     };
-    let dir = tensolve::run::output_dir(&case, &options);
+    let dir = output_dir(&case, &options);
     let solves = options
         .methods
         .as_ref()
@@ -235,7 +233,7 @@ fn run_command(
 fn bench_command(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), BenchError> {
     let case = case::load(path)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
-    let prepared = tensolve::configure::prepare(&case)?;
+    let prepared = tensolve::app::setup::prepare(&case)?;
     bench::ensure_writable(&dir)?;
     let reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
     let measured = bench::measure(&case, &prepared, &mut |p| report_bench(&reporter, p));
@@ -266,16 +264,6 @@ fn report_bench(reporter: &Reporter, progress: Progress) {
             method.name(),
             alpha_label(alpha)
         )),
-        Progress::Rerun {
-            method,
-            alpha,
-            cap,
-            of,
-        } => reporter.status(format!(
-            "{} at alpha = {}: capped re-run {cap} / {of}",
-            method.name(),
-            alpha_label(alpha)
-        )),
         Progress::Done(series) => {
             let last = series.samples.last();
             reporter.line(&format!(
@@ -295,83 +283,12 @@ fn report_bench(reporter: &Reporter, progress: Progress) {
 
 fn check_command(path: PathBuf) -> Result<(), RunError> {
     let case = case::load(&path)?;
-    let s = Structure::from_case(&case);
-    let mut out = String::new();
-    let n_nodes = s.n_nodes();
-    let _ = writeln!(out, "case            {}", path.display());
-    let _ = writeln!(
-        out,
-        "grid            {} x {} modules ({:?})",
-        s.layout.nx, s.layout.ny, case.grid.module
-    );
-    let _ = writeln!(out, "nodes           {n_nodes}");
-    let _ = writeln!(out, "dofs            {}", 3 * n_nodes);
-    let _ = writeln!(out, "free dofs       {}", s.n_free);
-    let _ = writeln!(
-        out,
-        "clamped nodes   {}",
-        s.clamped.iter().filter(|&&c| c).count()
-    );
-    let _ = writeln!(
-        out,
-        "cables          {} ({})",
-        s.n_cables(),
-        if case.cables.unilateral {
-            "unilateral"
-        } else {
-            "bilateral"
-        }
-    );
-    let _ = writeln!(out, "bars            {}", s.n_bars());
-    let _ = writeln!(
-        out,
-        "max |B^T t0|    {:.3e} N ({:.1e} of the lower cable prestress)",
-        s.prestress_imbalance(),
-        if s.prestress_scale > 0.0 {
-            s.prestress_imbalance() / s.prestress_scale
-        } else {
-            0.0
-        }
-    );
-    let alphas: Vec<String> = case.load.alphas.iter().map(|&a| alpha_label(a)).collect();
-    let _ = writeln!(out, "load factors    {}", alphas.join(", "));
-    let methods: Vec<&str> = case.solver.methods.iter().map(|m| m.name()).collect();
-    let _ = writeln!(out, "solvers         {}", methods.join(", "));
-    let result = check_solvers(&case, &s, &mut out);
-    print_ignoring_closed_pipe(&out);
-    result
-}
-
-/// The taut stiffness, and the partition of every LATIN solver the case asks for.
-fn check_solvers(case: &case::Case, s: &Structure, out: &mut String) -> Result<(), RunError> {
-    TautStiffness::new(s)?;
-    let _ = writeln!(
-        out,
-        "stiffness       positive definite with every cable taut"
-    );
-    for &method in case.solver.methods.iter().filter(|m| m.is_latin()) {
-        let settings = tensolve::configure::latin_settings(case, method);
-        let subdomains = settings.subdomains;
-        let r = Latin::new(s, settings)?.report();
-        let _ = writeln!(out, "{}:", method.name());
-        let _ = writeln!(
-            out,
-            "  substructures {} ({} x {}), largest {} free dofs",
-            r.substructures, subdomains[0], subdomains[1], r.max_substructure_dofs
-        );
-        let _ = writeln!(
-            out,
-            "  interfaces    {} ({} strong, {} weak, {} dropped; weak = {:?})",
-            r.interfaces,
-            r.strong_interfaces,
-            r.weak_interfaces,
-            r.dropped_interfaces,
-            settings.weak
-        );
-        let _ = writeln!(out, "  macro dofs    {}", r.macro_dofs);
-        let _ = writeln!(out, "  kernel cols   {}", r.kernel_columns);
+    let report = check(&case, path);
+    print_ignoring_closed_pipe(&report.to_string());
+    match report.error {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Print to stdout; a reader that closed the pipe early (`| head`) is not an error.

@@ -2,7 +2,7 @@
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
 use crate::linalg::{norm, smallest_eigenvalues, ZERO_MODE_RELATIVE};
-use crate::solvers::{Equilibrium, Solution, TautStiffness};
+use crate::solvers::{relative_unbalance, Equilibrium, Solution, TautStiffness};
 use crate::structure::Structure;
 
 /// Every number of a solution is finite (displacements, tensions, stopping measure).
@@ -20,25 +20,6 @@ pub fn is_finite(solution: &Solution) -> bool {
 pub fn equilibrium_residual(s: &Structure, eq: &Equilibrium, load: &[f64]) -> f64 {
     let mut r = vec![0.0; s.n_free];
     relative_unbalance(s, &eq.tensions, load, &mut r)
-}
-
-/// `r ← Bᵀτ − F` (the energy's gradient) and its relative size
-/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`: the unbalance against the forces meeting at the nodes.
-pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) -> f64 {
-    s.nodal_forces(tensions, r);
-    let mut magnitude = vec![0.0; s.n_free];
-    for (t, ld) in tensions.iter().zip(&s.link_dofs) {
-        for (d, c) in ld.iter() {
-            magnitude[d] += (c * t).abs();
-        }
-    }
-    r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
-    let scale = norm(load) + norm(&magnitude);
-    if scale > 0.0 {
-        norm(r) / scale
-    } else {
-        norm(r)
-    }
 }
 
 /// Relative constitutive residual of every link, from U and τ alone:

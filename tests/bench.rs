@@ -8,12 +8,14 @@ use common::{manifest_path, stderr, temp_path, tensolve, Temp};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use tensolve::bench::{Sample, Series, Table, CSV_HEADER};
-use tensolve::case::{self, Method};
+use tensolve::app::bench::{Sample, Series, Table, CSV_HEADER};
+use tensolve::case;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{IterationRecord, Observer, Silent, Solution, Status, TautStiffness};
-use tensolve::structure::Structure;
+use tensolve::solvers::Method;
+use tensolve::solvers::{
+    AnySolver, IterationRecord, Observer, Silent, Solution, Status, TautStiffness,
+};
 
 /// 4 x 4 modules loaded 20 times harder than the paper's nodes, so that 28 of the 192 cables
 /// go slack at α = 1 (at the paper's 40 N none does and newton needs one step): newton takes
@@ -32,7 +34,10 @@ subdomains = [2, 2]
 const SOLVERS: [&str; 4] = ["newton", "pcg-lcp", "mono-latin", "micro-macro"];
 
 fn is_latin(solver: &str) -> bool {
-    Method::from_name(solver).expect("a solver name").is_latin()
+    matches!(
+        Method::from_name(solver).expect("a solver name"),
+        Method::MonoLatin | Method::MicroMacro
+    )
 }
 
 /// bench.csv rows per solver, as (iteration, seconds, error_e), after checking the header.
@@ -173,7 +178,7 @@ type CappedSolve<'a> = dyn Fn(usize, &mut dyn Observer) -> Solution + 'a;
 #[test]
 fn capped_solves_reproduce_the_iterates() {
     let case = case::parse(SMALL).unwrap();
-    let s = Structure::from_case(&case);
+    let s = case.structure();
     let taut = TautStiffness::new(&s).unwrap();
     let load: Vec<f64> = s.unit_load.clone();
     let newton = |max_iterations: usize, observer: &mut dyn Observer| {
@@ -190,7 +195,7 @@ fn capped_solves_reproduce_the_iterates() {
             max_iterations,
             ..PcgLcpSettings::default()
         };
-        PcgLcp::new(&s, &taut, settings).solve(&load, observer)
+        PcgLcp::new(&s, &taut, settings).solve(&load, None, observer)
     };
     let solvers: [(&str, &CappedSolve); 2] = [("newton", &newton), ("pcg-lcp", &pcg)];
     for (name, solve) in solvers {
@@ -295,7 +300,7 @@ fn check_passes_on_every_new_case() {
     let linear = case::load(&manifest_path("cases/paper-linear.toml")).unwrap();
     let linear_braced = case::load(&manifest_path("cases/paper-linear-braced.toml")).unwrap();
     for c in [&linear, &linear_braced] {
-        assert!(!c.cables.unilateral);
+        assert!(!c.grid.cables.unilateral);
         assert_eq!(c.load.alphas, [1.0]);
         assert_eq!(c.solver.methods, [Method::MonoLatin, Method::MicroMacro]);
     }

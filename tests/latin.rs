@@ -16,7 +16,7 @@ use tensolve::solvers::latin::{
     macro_basis, Latin, LatinSettings, LatinState, Partition, WeakInterfaces,
 };
 use tensolve::solvers::newton::Newton;
-use tensolve::solvers::{Silent, Solution, TautStiffness};
+use tensolve::solvers::{AnySolver, Reference, Silent, Solution, Solver, TautStiffness};
 use tensolve::structure::Structure;
 
 /// Interface search direction of the paper, N/m (the `LatinSettings` default).
@@ -47,16 +47,17 @@ fn norm(v: &[f64]) -> f64 {
 /// e after every linear stage from iteration 0 to `iterations` (init, then next_iter).
 fn error_history(
     s: &Structure,
-    latin: &Latin<'_>,
+    latin: &mut Latin<'_>,
     alpha: f64,
     reference: &Solution,
     iterations: usize,
 ) -> Vec<f64> {
-    let mut state = latin.init(&load(s, alpha), Some(&reference.equilibrium.displacements));
-    let mut history = vec![state.error.expect("a reference was given")];
+    let reference = Reference::new(s, &reference.equilibrium.displacements);
+    let mut state = latin.init(&load(s, alpha));
+    let mut history = vec![reference.error(&latin.elongations(&state))];
     while state.iteration < iterations {
         latin.next_iter(&mut state);
-        history.push(state.error.expect("a reference was given"));
+        history.push(reference.error(&latin.elongations(&state)));
     }
     history
 }
@@ -73,8 +74,8 @@ fn first_below(history: &[f64], threshold: f64) -> Option<usize> {
 fn micro_macro_rate_on_paper_case() {
     let s = paper_structure(&[]);
     let reference = newton(&s, 1.0);
-    let latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
-    let h = error_history(&s, &latin, 1.0, &reference, 80);
+    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let h = error_history(&s, &mut latin, 1.0, &reference, 80);
     let (at_2, at_3) = (first_below(&h, 1e-2), first_below(&h, 1e-3));
     println!(
         "micro-macro 4x4, alpha 1: e < 1e-2 at {at_2:?}, e < 1e-3 at {at_3:?}, e(80) = {:.3e}",
@@ -89,10 +90,10 @@ fn micro_macro_rate_on_paper_case() {
 fn mono_latin_rate_on_paper_case() {
     let s = paper_structure(&[]);
     let reference = newton(&s, 1.0);
-    let latin = Latin::new(&s, settings([1, 1], WeakInterfaces::Macro)).unwrap();
+    let mut latin = Latin::new(&s, settings([1, 1], WeakInterfaces::Macro)).unwrap();
     assert!(latin.interfaces.is_empty());
     assert_eq!(latin.substructures.len(), 1);
-    let h = error_history(&s, &latin, 1.0, &reference, 15);
+    let h = error_history(&s, &mut latin, 1.0, &reference, 15);
     let at_2 = first_below(&h, 1e-2);
     println!(
         "mono-latin, alpha 1: e < 1e-2 at {at_2:?}, e(15) = {:.3e}",
@@ -107,8 +108,8 @@ fn micro_macro_rate_at_small_load() {
     let s = paper_structure(&[]);
     let reference = newton(&s, 0.05);
     assert_eq!(reference.equilibrium.slack_count(), 0);
-    let latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
-    let h = error_history(&s, &latin, 0.05, &reference, 40);
+    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let h = error_history(&s, &mut latin, 0.05, &reference, 40);
     let at_4 = first_below(&h, 1e-4);
     println!(
         "micro-macro 4x4, alpha 0.05: e < 1e-2 at {:?}, 1e-3 at {:?}, 1e-4 at {at_4:?}",
@@ -335,8 +336,8 @@ fn partition_report_and_kernels_of_paper_case() {
 fn micro_weak_interfaces_stall() {
     let s = paper_structure(&[]);
     let reference = newton(&s, 1.0);
-    let latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Micro)).unwrap();
-    let h = error_history(&s, &latin, 1.0, &reference, 100);
+    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Micro)).unwrap();
+    let h = error_history(&s, &mut latin, 1.0, &reference, 100);
     println!("weak = micro, alpha 1: e(100) = {:.3e}", h[100]);
     // Measured: 0.806 (SPEC: ≈ 0.8).
     assert!(h[100] > 0.1, "e after 100 iterations = {:e}", h[100]);
@@ -348,7 +349,7 @@ fn micro_weak_interfaces_stall() {
 fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, budget: usize) {
     let s = paper_structure(&[]);
     let reference = newton(&s, alpha);
-    let latin = Latin::new(
+    let mut latin = Latin::new(
         &s,
         LatinSettings {
             tolerance,
@@ -366,7 +367,7 @@ fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, bud
     }
     let sol = latin.solve(
         &load(&s, alpha),
-        Some(&reference.equilibrium.displacements),
+        Some(&Reference::new(&s, &reference.equilibrium.displacements)),
         &mut Trace(&mut trace),
     );
     let d = relative_difference(
@@ -429,7 +430,7 @@ fn mono_latin_ends_on_newton_at_tight_tolerance() {
 fn mono_latin_solves_linear_case_in_one_iteration() {
     let s = paper_structure(&[("cables", "unilateral", false.into())]);
     let reference = newton(&s, 1.0);
-    let latin = Latin::new(&s, settings([1, 1], WeakInterfaces::Macro)).unwrap();
+    let mut latin = Latin::new(&s, settings([1, 1], WeakInterfaces::Macro)).unwrap();
     let sol = latin.solve(&load(&s, 1.0), None, &mut Silent);
     let d = relative_difference(
         &sol.equilibrium.displacements,
@@ -572,8 +573,8 @@ fn check_linear_stage(
 fn linear_stage_invariants() {
     let s = paper_structure(&[]);
     let alpha = 1.0;
-    let latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
-    let mut state = latin.init(&load(&s, alpha), None);
+    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(&s, alpha));
     for stop in [0, 5, 40] {
         while state.iteration < stop {
             latin.next_iter(&mut state);
@@ -607,8 +608,8 @@ fn linear_stage_invariants() {
 #[test]
 fn linear_stage_invariants_uneven_partition() {
     let s = paper_structure(&[]);
-    let latin = Latin::new(&s, settings([3, 5], WeakInterfaces::Macro)).unwrap();
-    let mut state = latin.init(&load(&s, 0.5), None);
+    let mut latin = Latin::new(&s, settings([3, 5], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(&s, 0.5));
     for _ in 0..5 {
         latin.next_iter(&mut state);
     }
@@ -634,8 +635,8 @@ fn linear_stage_invariants_uneven_partition() {
 #[test]
 fn local_stage_law() {
     let s = paper_structure(&[]);
-    let latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
-    let mut state = latin.init(&load(&s, 1.0), None);
+    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(&s, 1.0));
     let (mut slack, mut taut, mut bars) = (0, 0, 0);
     let mut worst_product: f64 = 0.0;
     for _ in 0..5 {
@@ -722,7 +723,7 @@ fn local_stage_law() {
     );
     assert!(slack > 0 && taut > 0 && bars > 0);
     // The equilibrium handed out is the local stage on the last s: slack ⇔ τ = 0 exactly.
-    let eq = latin.equilibrium(&state);
+    let eq = latin.iterate(&state);
     for (i, link) in s.links.iter().enumerate() {
         assert_eq!(
             eq.slack[i],

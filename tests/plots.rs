@@ -6,8 +6,8 @@ mod common;
 
 use common::temp_path;
 use std::path::{Path, PathBuf};
+use tensolve::app::sweep::{run, RunOptions};
 use tensolve::output::plots::SERIES_STROKE_WIDTH;
-use tensolve::run::{run, RunOptions};
 
 const SOLVERS: [&str; 3] = ["newton", "mono-latin", "micro-macro"];
 const ALPHAS: [&str; 3] = ["1", "10", "30"];

@@ -11,7 +11,7 @@ use tensolve::results::{constitutive_residual, equilibrium_residual, relative_di
 use tensolve::solvers::latin::{Latin, LatinSettings};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{SetupError, Silent, TautStiffness};
+use tensolve::solvers::{AnySolver, SetupError, Silent, TautStiffness};
 use tensolve::structure::Structure;
 
 /// `cases` cases from a fixed seed, so that CI runs the same cases every time; set
@@ -69,7 +69,7 @@ proptest! {
     ) {
         let module = if braced { "braced" } else { "standard" };
         let case = case::parse(&case_text(nx, ny, CLAMPS[clamp], [fx, fy, fz], module)).unwrap();
-        let s = Structure::from_case(&case);
+        let s = case.structure();
         let taut = match TautStiffness::new(&s) {
             Err(SetupError::Mechanism { zero_modes }) => {
                 // Refused: K must really have that many zero modes (dense check, independent).
@@ -81,7 +81,7 @@ proptest! {
         };
         let f = s.unit_load.clone();
         let newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap().solve(&f, None, &mut Silent);
-        let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+        let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
         let subdomains = [1 + sx_seed % nx, 1 + sy_seed % ny];
         let latin = |subdomains| {
             // η has a floor near 1e-10 on some small partitions (3e-10 on 4 x 3 in 2 x 2): ask 1e-8.
@@ -159,10 +159,10 @@ proptest! {
             // Whatever got through validation is usable.
             prop_assert!(case.grid.modules.iter().all(|&m| m >= 1));
             prop_assert!(case.grid.length > 0.0 && case.grid.length.is_finite());
-            prop_assert!(case.cables.young > 0.0 && case.cables.young.is_finite());
+            prop_assert!(case.grid.cables.material.young > 0.0 && case.grid.cables.material.young.is_finite());
             prop_assert!(!case.load.alphas.is_empty() && case.load.alphas.iter().all(|a| a.is_finite()));
-            prop_assert!(case.load.nodal.iter().all(|f| f.is_finite()));
-            let [sx, sy] = case.solver.partition();
+            prop_assert!(case.load.pattern.nodal.iter().all(|f| f.is_finite()));
+            let [sx, sy] = case.solver.latin.subdomains;
             prop_assert!(sx >= 1 && sx <= case.grid.modules[0] && sy >= 1 && sy <= case.grid.modules[1]);
         }
     }
@@ -207,7 +207,7 @@ proptest! {
             dir.display()
         );
         let case = case::parse(&text).expect("accepted by validation");
-        let _ = tensolve::run::run(&case, &Default::default(), &mut |_| {});
+        let _ = tensolve::app::sweep::run(&case, &Default::default(), &mut |_| {});
         for file in files_under(&dir) {
             let content = std::fs::read_to_string(&file).unwrap_or_default().to_lowercase();
             prop_assert!(!content.contains("nan") && !content.contains("inf"), "{}", file.display());

@@ -10,7 +10,7 @@ use tensolve::results::{constitutive_residual, equilibrium_residual, relative_di
 use tensolve::solvers::latin::{Latin, LatinSettings};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{SetupError, Silent, Solution, TautStiffness};
+use tensolve::solvers::{AnySolver, SetupError, Silent, Solution, TautStiffness};
 use tensolve::structure::Structure;
 
 /// A grid case; `extra` holds further sections (or `module = ...` lines for `[grid]`, which
@@ -44,7 +44,7 @@ fn solve_all(
     let newton = Newton::new(s, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+    let pcg = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     let latin = |subdomains| {
         let settings = LatinSettings {
             subdomains,
@@ -89,13 +89,13 @@ fn assert_agree(s: &Structure, alpha: f64, solutions: &[Solution; 4], latin_agre
 
 #[test]
 fn paper_case_far_beyond_its_load() {
-    let s = Structure::from_case(&paper_with(&[]));
+    let s = (paper_with(&[])).structure();
     let taut = TautStiffness::new(&s).unwrap();
     let f = load(&s, 3.0);
     let newton = Newton::new(&s, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     for sol in [&newton, &pcg] {
         assert!(sol.info.status.converged() && all_finite(sol));
         assert_eq!(sol.equilibrium.slack_count(), 846); // SPEC §2
@@ -126,13 +126,13 @@ fn paper_case_far_beyond_its_load() {
 #[test]
 fn grid_32_with_x_edges_at_alpha_0_3() {
     // A general truss code's one-step Newton fails here (SPEC §2); ours must not.
-    let s = Structure::from_case(&grid_case([32, 32], "lower-x-edges", ""));
+    let s = (grid_case([32, 32], "lower-x-edges", "")).structure();
     let taut = TautStiffness::new(&s).unwrap();
     let f = load(&s, 0.3);
     let newton = Newton::new(&s, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     assert!(newton.info.status.converged() && newton.info.residual <= 1e-10);
     assert!(pcg.info.status.converged());
     assert_eq!(newton.equilibrium.slack, pcg.equilibrium.slack);
@@ -146,7 +146,7 @@ fn grid_32_with_x_edges_at_alpha_0_3() {
 }
 
 fn zero_modes(case: &Case) -> Option<usize> {
-    match TautStiffness::new(&Structure::from_case(case)) {
+    match TautStiffness::new(&case.structure()) {
         Ok(_) => None,
         Err(SetupError::Mechanism { zero_modes }) => Some(zero_modes),
         Err(other) => panic!("unexpected {other}"),
@@ -164,14 +164,14 @@ fn mechanisms_are_refused_with_their_mode_count() {
     // The same strip clamped along its long edges is fine, and solves.
     let strip = grid_case([1, 8], "lower-x-edges", "");
     assert_eq!(zero_modes(&strip), None);
-    let s = Structure::from_case(&strip);
+    let s = strip.structure();
     let solutions = solve_all(&s, 1.0, [1, 4], 1e-10);
     assert_agree(&s, 1.0, &solutions, 1e-6);
 }
 
 #[test]
 fn zero_load_leaves_everything_in_place() {
-    let s = Structure::from_case(&grid_case([4, 4], "lower-x-edges", ""));
+    let s = (grid_case([4, 4], "lower-x-edges", "")).structure();
     for sol in solve_all(&s, 0.0, [2, 2], 1e-10) {
         assert!(sol.info.status.converged());
         assert!(sol
@@ -223,7 +223,7 @@ fn degenerate_but_valid_cases_solve_and_agree() {
         ),
     ];
     for (name, case, subdomains) in cases {
-        let s = Structure::from_case(&case);
+        let s = case.structure();
         let solutions = solve_all(&s, 1.0, subdomains, 1e-10);
         println!(
             "{name}: slack {} newton it {} latin it {} / {}",
@@ -240,7 +240,7 @@ fn degenerate_but_valid_cases_solve_and_agree() {
 fn smallest_tangent_eigenvalues_match_spec() {
     // SPEC §2: K ≈ 463 N/m; with the 408 slack cables of α = 1 removed ≈ 164 N/m; α = 3
     // (846 slack) ≈ 143 N/m.
-    let s = Structure::from_case(&paper_with(&[]));
+    let s = (paper_with(&[])).structure();
     let taut = TautStiffness::new(&s).unwrap();
     let mut newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
     for (alpha, expected) in [(0.05, 463.0), (1.0, 164.0), (3.0, 143.0)] {
@@ -257,11 +257,7 @@ fn smallest_tangent_eigenvalues_match_spec() {
 #[test]
 fn bilateral_cables_run_no_complementarity_iterations() {
     // Only what the case calls for: with every cable bilateral the problem is linear.
-    let s = Structure::from_case(&grid_case(
-        [4, 4],
-        "lower-x-edges",
-        "[cables]\nunilateral = false\n",
-    ));
+    let s = (grid_case([4, 4], "lower-x-edges", "[cables]\nunilateral = false\n")).structure();
     let [newton, pcg, mono, _] = solve_all(&s, 1.0, [2, 2], 1e-10);
     assert_eq!(newton.info.iterations, 1, "one linear solve");
     assert_eq!(pcg.info.iterations, 0, "no LCP unknowns");

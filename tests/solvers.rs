@@ -148,7 +148,7 @@ fn case_text(modules: [usize; 2], module: &str, clamp: &str) -> String {
 /// The zero-stiffness modes `TautStiffness::new` reports; panics if it accepts the structure.
 fn zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
     let text = case_text(modules, module, clamp);
-    let s = Structure::from_case(&case::parse(&text).expect("valid case"));
+    let s = (case::parse(&text).expect("valid case")).structure();
     match TautStiffness::new(&s) {
         Err(SetupError::Mechanism { zero_modes }) => zero_modes,
         Err(other) => panic!("not refused as a mechanism: {other}"),
@@ -158,7 +158,7 @@ fn zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
 
 /// Nullity of K = Bᵀ k B by a dense eigen-decomposition (small grids only), with a clear gap.
 fn dense_zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
-    let s = Structure::from_case(&case::parse(&case_text(modules, module, clamp)).unwrap());
+    let s = (case::parse(&case_text(modules, module, clamp)).unwrap()).structure();
     let n = s.n_free;
     let k = common::dense_stiffness(&s);
     let mut ev: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
@@ -187,7 +187,7 @@ fn mechanism_count_matches_dense_eigenvalues() {
         let what = format!("{modules:?} {module} clamp = {clamp}");
         if dense == 0 {
             let text = case_text(modules, module, clamp);
-            let s = Structure::from_case(&case::parse(&text).unwrap());
+            let s = (case::parse(&text).unwrap()).structure();
             assert!(TautStiffness::new(&s).is_ok(), "{what}: regular K refused");
         } else {
             assert_eq!(zero_modes(modules, module, clamp), dense, "{what}");

@@ -6,11 +6,11 @@ mod common;
 
 use common::temp_path;
 use std::path::{Path, PathBuf};
+use tensolve::app::sweep::{run, RunOptions};
 use tensolve::case::Case;
 use tensolve::output::{kind_code, write_vtu, VTK_LINE};
-use tensolve::run::{run, RunOptions};
 use tensolve::solvers::Equilibrium;
-use tensolve::structure::{LinkKind, Structure};
+use tensolve::structure::LinkKind;
 
 const CASE: &str = "[grid]\nmodules = [4, 4]\n[load]\nalpha = [1.0, 30.0]\n\
                     [solver]\nmethods = [\"newton\", \"mono-latin\", \"micro-macro\"]\n\
@@ -67,7 +67,7 @@ fn relative_close(a: f64, b: f64) -> bool {
 #[test]
 fn vtu_files_hold_the_structure_and_the_solved_tensions() {
     let case = case();
-    let structure = Structure::from_case(&case);
+    let structure = case.structure();
     let out = TempDir(temp_path("vtk"));
     let options = RunOptions {
         out_dir: Some(out.0.clone()),
@@ -144,7 +144,7 @@ fn vtu_files_hold_the_structure_and_the_solved_tensions() {
 
 #[test]
 fn a_non_finite_value_is_an_error_and_leaves_no_file() {
-    let structure = Structure::from_case(&case());
+    let structure = (case()).structure();
     let mut tensions: Vec<f64> = structure.links.iter().map(|l| l.prestress).collect();
     tensions[7] = f64::NAN;
     let eq = Equilibrium {

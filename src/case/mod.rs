@@ -1,16 +1,20 @@
 //! The case file: what structure to build, which effects to model, which solvers to run and
-//! which outputs to write. `load` parses and validates; every other module receives a
-//! [`Case`] whose numbers are already known to be finite and physical.
+//! which outputs to write. The file is parsed into raw serde structs ([`raw`]) and converted
+//! into a fully typed [`Case`] ([`convert`]) whose numbers are known to be finite and physical;
+//! every other module receives that.
 
-mod schema;
-mod validate;
+mod convert;
+mod error;
+mod raw;
+mod typed;
 
-pub use schema::*;
-pub use validate::CaseError;
+pub use error::CaseError;
+pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
 
 use std::path::Path;
 
-/// Read, parse and validate a case file.
+/// Read, parse and validate a case file; the output directory defaults to
+/// `out/<case file stem>`.
 pub fn load(path: &Path) -> Result<Case, CaseError> {
     let text = std::fs::read_to_string(path).map_err(|e| CaseError::Io {
         path: path.display().to_string(),
@@ -29,7 +33,6 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
 
 /// Parse and validate case text (no output directory default is applied here).
 pub fn parse(text: &str) -> Result<Case, CaseError> {
-    let mut case: Case = toml::from_str(text).map_err(CaseError::from_toml)?;
-    validate::validate(&mut case)?;
-    Ok(case)
+    let raw: raw::RawCase = toml::from_str(text).map_err(CaseError::from_toml)?;
+    convert::convert(raw)
 }

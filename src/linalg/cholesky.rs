@@ -21,9 +21,13 @@ use std::sync::Arc;
 #[derive(Debug, Clone, Copy, thiserror::Error)]
 #[error("matrix is not positive definite (non-positive pivot at elimination step {pivot})")]
 pub struct NotPositiveDefinite {
+    /// Elimination step of the failing pivot as faer reports it, in the factor's fill-reducing
+    /// order (the dense path of [`SpdSolver`](crate::linalg::SpdSolver) always reports 0).
     pub pivot: usize,
 }
 
+/// Sparse Cholesky factor `A = L Lᵀ` of a matrix on a [`StiffnessPattern`]: one symbolic
+/// analysis, reused by every numeric [`SparseCholesky::factorize`].
 pub struct SparseCholesky {
     symbolic: Arc<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,

@@ -1,16 +1,19 @@
-//! Sparse linear algebra on top of faer: the stiffness pattern of a set of links, a Cholesky
+//! Sparse linear algebra on top of faer, free of any structural notion: short sparse rows, the
+//! pattern of `Σ w_i rowᵢᵀ rowᵢ`, a Cholesky
 //! factorization whose symbolic part is computed once, and the smallest eigenvalues of a
 //! stiffness (mechanism detection).
 
 mod cholesky;
 mod dense;
 mod pattern;
+mod sparse_row;
 mod spd_solver;
 mod spectrum;
 
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
 pub use pattern::StiffnessPattern;
+pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
     smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, SmallestEigenvalues,
@@ -22,6 +25,7 @@ pub fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
+/// Dot product `Σ a_k b_k` (over the shorter slice if the lengths differ).
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -1,28 +1,35 @@
-//! The lower-triangular CSC pattern of `Σ_links w_i Bᵢᵀ Bᵢ` (plus every diagonal entry), with
-//! the value slot of each link's entries precomputed so that a numeric assembly with new link
-//! weights is one pass over the links. The pattern never changes when a cable goes slack: its
-//! weight becomes zero, so one symbolic factorization serves every active set.
+//! The lower-triangular CSC pattern of `Σ_i w_i rowᵢᵀ rowᵢ` (plus every diagonal entry) for a
+//! list of [`SparseRow`]s, with the value slot of each row's entries precomputed so that a
+//! numeric assembly with new weights is one pass over the rows. The pattern never changes with
+//! the weights: a zero weight leaves its slots in place, so one symbolic factorization serves
+//! every set of weights (for a stiffness, every set of taut members).
 
-use crate::structure::LinkDofs;
+use super::SparseRow;
 
+/// Lower-triangular CSC sparsity pattern of `Σ_i w_i rowᵢᵀ rowᵢ`, with every diagonal entry,
+/// and the value slots each row adds into.
 #[derive(Debug, Clone)]
 pub struct StiffnessPattern {
+    /// Order of the matrix (number of dofs).
     pub n: usize,
+    /// Column `c`'s entries are slots `col_ptr[c]..col_ptr[c + 1]` (length `n + 1`).
     pub col_ptr: Vec<usize>,
+    /// Row index of each slot, increasing within a column, all `≥` the column.
     pub row_idx: Vec<usize>,
     /// Slot of each diagonal entry.
     pub diag_slot: Vec<usize>,
-    /// Per link `i`, `slots[offsets[i]..offsets[i+1]]`: the slots of its pairs `(p, q)` with
+    /// Per row `i`, `slots[offsets[i]..offsets[i+1]]`: the slots of its pairs `(p, q)` with
     /// `dof_p ≥ dof_q`, in the order of [`StiffnessPattern::assemble`]'s double loop.
     slots: Vec<u32>,
     offsets: Vec<usize>,
 }
 
 impl StiffnessPattern {
-    pub fn new(n: usize, links: &[LinkDofs]) -> StiffnessPattern {
+    /// The pattern of `n` dofs for `sparse_rows`, whatever their weights (zero ones included).
+    pub fn new(n: usize, sparse_rows: &[SparseRow]) -> StiffnessPattern {
         // Bucket the rows of each column (counting sort), then sort and dedup each short column.
         let mut count = vec![1usize; n]; // the diagonal
-        for ld in links {
+        for ld in sparse_rows {
             for (p, _) in ld.iter() {
                 for (q, _) in ld.iter() {
                     if p > q {
@@ -41,7 +48,7 @@ impl StiffnessPattern {
             rows[*f] = c;
             *f += 1;
         }
-        for ld in links {
+        for ld in sparse_rows {
             for (p, _) in ld.iter() {
                 for (q, _) in ld.iter() {
                     if p > q {
@@ -70,10 +77,10 @@ impl StiffnessPattern {
             col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")
         };
         let diag_slot = (0..n).map(|d| find(d, d)).collect();
-        let mut slots = Vec::with_capacity(links.len() * 21);
-        let mut offsets = Vec::with_capacity(links.len() + 1);
+        let mut slots = Vec::with_capacity(sparse_rows.len() * 21);
+        let mut offsets = Vec::with_capacity(sparse_rows.len() + 1);
         offsets.push(0);
-        for ld in links {
+        for ld in sparse_rows {
             for (p, _) in ld.iter() {
                 for (q, _) in ld.iter() {
                     if p >= q {
@@ -93,15 +100,16 @@ impl StiffnessPattern {
         }
     }
 
+    /// Number of stored entries (lower triangle with the diagonal).
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }
 
-    /// `values = Σ_i weight_i Bᵢᵀ Bᵢ` (lower triangle). `links` must be the slice the pattern
+    /// `values = Σ_i weight_i Bᵢᵀ Bᵢ` (lower triangle). `rows` must be the slice the pattern
     /// was built from.
-    pub fn assemble(&self, links: &[LinkDofs], weight: impl Fn(usize) -> f64, values: &mut [f64]) {
+    pub fn assemble(&self, rows: &[SparseRow], weight: impl Fn(usize) -> f64, values: &mut [f64]) {
         values.iter_mut().for_each(|v| *v = 0.0);
-        for (i, ld) in links.iter().enumerate() {
+        for (i, ld) in rows.iter().enumerate() {
             let w = weight(i);
             if w == 0.0 {
                 continue;
@@ -118,16 +126,20 @@ impl StiffnessPattern {
         }
     }
 
+    /// Every stored entry as `(row, column, slot)`, column by column.
+    pub fn entries(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        (0..self.n).flat_map(move |c| {
+            (self.col_ptr[c]..self.col_ptr[c + 1]).map(move |s| (self.row_idx[s], c, s))
+        })
+    }
+
     /// `y = A x` for a symmetric A stored as this lower triangle.
     pub fn sym_matvec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
-        for c in 0..self.n {
-            for s in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let r = self.row_idx[s];
-                y[r] += values[s] * x[c];
-                if r != c {
-                    y[c] += values[s] * x[r];
-                }
+        for (r, c, s) in self.entries() {
+            y[r] += values[s] * x[c];
+            if r != c {
+                y[c] += values[s] * x[r];
             }
         }
     }
@@ -138,5 +150,154 @@ impl StiffnessPattern {
             return 0.0;
         }
         self.diag_slot.iter().map(|&s| values[s]).sum::<f64>() / self.n as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeSet;
+
+    const N: usize = 9;
+
+    /// Rows of 2 to 6 pairs over 9 dofs, indices unsorted, a clamped (`None`) component, and
+    /// pairs shared between rows ((3, 0), (7, 6), (8, 2), (5, 4), …).
+    fn row_pairs() -> Vec<Vec<(Option<usize>, f64)>> {
+        vec![
+            vec![(Some(0), 1.0), (Some(3), -2.0)],
+            vec![
+                (Some(0), 0.5),
+                (Some(1), -1.5),
+                (Some(2), 2.0),
+                (Some(6), -0.7),
+                (Some(7), 0.3),
+                (Some(8), 1.1),
+            ],
+            vec![
+                (Some(3), 0.8),
+                (None, 4.0),
+                (Some(4), -0.6),
+                (Some(5), 1.2),
+                (Some(0), -0.4),
+            ],
+            vec![(Some(7), -1.0), (Some(6), 1.0), (Some(3), 0.25)],
+            vec![(Some(5), 2.5), (Some(4), -0.9), (Some(8), 0.4)],
+            vec![(Some(8), -1.0), (Some(2), 1.0)],
+        ]
+    }
+
+    /// `Σ_i w_i rowᵢᵀ rowᵢ`, dense and full, straight from the pairs.
+    fn dense(pairs: &[Vec<(Option<usize>, f64)>], weights: &[f64]) -> Vec<Vec<f64>> {
+        let mut k = vec![vec![0.0; N]; N];
+        for (row, &w) in pairs.iter().zip(weights) {
+            let used: Vec<(usize, f64)> = row.iter().filter_map(|&(d, c)| Some((d?, c))).collect();
+            for &(a, ca) in &used {
+                for &(b, cb) in &used {
+                    k[a][b] += w * ca * cb;
+                }
+            }
+        }
+        k
+    }
+
+    /// Slot of `(r, c)`, `r ≥ c`, if the pattern stores it.
+    fn slot(p: &StiffnessPattern, r: usize, c: usize) -> Option<usize> {
+        (p.col_ptr[c]..p.col_ptr[c + 1]).find(|&s| p.row_idx[s] == r)
+    }
+
+    fn check_values(p: &StiffnessPattern, values: &[f64], k: &[Vec<f64>]) {
+        let scale = k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0);
+        for (r, c, s) in p.entries() {
+            let expected = k[r][c];
+            assert!(
+                (values[s] - expected).abs() <= 1e-12 * expected.abs().max(scale),
+                "entry ({r}, {c}) at slot {s}: {} assembled, {expected} dense",
+                values[s]
+            );
+        }
+        // Every nonzero of the dense lower triangle is stored.
+        for (r, row) in k.iter().enumerate() {
+            for (c, &value) in row.iter().enumerate().take(r + 1) {
+                if value != 0.0 {
+                    assert!(slot(p, r, c).is_some(), "nonzero ({r}, {c}) not in pattern");
+                }
+            }
+        }
+        // `y = A x` against the dense product.
+        let x: Vec<f64> = (0..N)
+            .map(|i| 1.0 + 0.37 * i as f64 - 0.05 * (i * i) as f64)
+            .collect();
+        let mut y = vec![f64::NAN; N];
+        p.sym_matvec(values, &x, &mut y);
+        for i in 0..N {
+            let expected: f64 = (0..N).map(|j| k[i][j] * x[j]).sum();
+            assert!(
+                (y[i] - expected).abs() <= 1e-12 * scale * x.iter().map(|v| v.abs()).sum::<f64>(),
+                "(A x)[{i}]: {} sym_matvec, {expected} dense",
+                y[i]
+            );
+        }
+        let trace: f64 = (0..N).map(|i| k[i][i]).sum();
+        assert!((p.mean_diagonal(values) - trace / N as f64).abs() <= 1e-12 * scale);
+    }
+
+    #[test]
+    fn assembly_matches_dense_sum_of_row_products() {
+        let pairs = row_pairs();
+        let rows: Vec<SparseRow> = pairs.iter().map(|r| SparseRow::new(r.clone())).collect();
+        let p = StiffnessPattern::new(N, &rows);
+
+        // CSC shape: lower triangle, rows increasing within a column, diagonal first.
+        assert_eq!(p.n, N);
+        assert_eq!(p.col_ptr.len(), N + 1);
+        assert_eq!(p.col_ptr[0], 0);
+        assert_eq!(p.col_ptr[N], p.nnz());
+        assert_eq!(p.row_idx.len(), p.nnz());
+        assert_eq!(p.diag_slot.len(), N);
+        for c in 0..N {
+            let column = &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]];
+            assert!(
+                column.windows(2).all(|w| w[0] < w[1]),
+                "column {c}: {column:?}"
+            );
+            assert!(column.iter().all(|&r| r >= c), "column {c}: {column:?}");
+            let d = p.diag_slot[c];
+            assert!((p.col_ptr[c]..p.col_ptr[c + 1]).contains(&d));
+            assert_eq!(p.row_idx[d], c, "diagonal slot of dof {c}");
+        }
+
+        // The pattern is exactly the structural lower triangle of the rows plus the diagonal,
+        // whatever the weights.
+        let mut structural: BTreeSet<(usize, usize)> = (0..N).map(|d| (d, d)).collect();
+        for row in &pairs {
+            for &(a, _) in row {
+                for &(b, _) in row {
+                    if let (Some(a), Some(b)) = (a, b) {
+                        structural.insert((a.max(b), a.min(b)));
+                    }
+                }
+            }
+        }
+        let stored: BTreeSet<(usize, usize)> = (0..N)
+            .flat_map(|c| (p.col_ptr[c]..p.col_ptr[c + 1]).map(move |s| (s, c)))
+            .map(|(s, c)| (p.row_idx[s], c))
+            .collect();
+        assert_eq!(stored, structural);
+        assert_eq!(p.nnz(), structural.len());
+
+        // Positive and zero weights; the zero-weight row's own pairs (8, 4), (8, 5) keep their
+        // slots, holding zero.
+        let weights = [1.7, 0.9, 2.3, 4.0, 0.0, 3.0];
+        let mut values = vec![f64::NAN; p.nnz()];
+        p.assemble(&rows, |i| weights[i], &mut values);
+        check_values(&p, &values, &dense(&pairs, &weights));
+        assert_eq!(values[slot(&p, 8, 4).expect("slot of (8, 4)")], 0.0);
+        assert_eq!(values[slot(&p, 8, 5).expect("slot of (8, 5)")], 0.0);
+
+        // New weights on the same pattern and buffer.
+        let weights = [0.0, 2.5, 0.4, 1.0, 6.0, 0.0];
+        p.assemble(&rows, |i| weights[i], &mut values);
+        check_values(&p, &values, &dense(&pairs, &weights));
     }
 }

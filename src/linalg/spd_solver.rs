@@ -7,9 +7,11 @@ use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, Par, Side};
 use nalgebra::DMatrix;
 
+/// A solver for `A x = b` with A symmetric positive definite, dense or sparse by size.
 pub enum SpdSolver {
     /// `A⁻¹`, dense.
     Dense(DMatrix<f64>),
+    /// Sparse Cholesky factor of A.
     Sparse(SparseCholesky),
 }
 
@@ -32,12 +34,9 @@ impl SpdSolver {
             return Ok(SpdSolver::Sparse(factor));
         }
         let mut a = Mat::<f64>::zeros(n, n);
-        for c in 0..n {
-            for s in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
-                let r = pattern.row_idx[s];
-                a[(r, c)] = values[s];
-                a[(c, r)] = values[s];
-            }
+        for (r, c, s) in pattern.entries() {
+            a[(r, c)] = values[s];
+            a[(c, r)] = values[s];
         }
         let llt = a
             .llt(Side::Lower)

@@ -11,11 +11,15 @@ use nalgebra::{DMatrix, SymmetricEigen};
 /// physical stiffness of a grid, far above round-off (≈ 1e-16 relative).
 pub const ZERO_MODE_RELATIVE: f64 = 1e-12;
 
+/// Ritz approximations of a matrix's smallest eigenvalues, from [`smallest_eigenvalues`].
 #[derive(Debug, Clone)]
 pub struct SmallestEigenvalues {
     /// Ritz values, ascending, in the units of the matrix (N/m for a stiffness).
     pub values: Vec<f64>,
+    /// Subspace iterations done.
     pub iterations: usize,
+    /// Two successive sets of Ritz values agreed within the relative tolerance (false also
+    /// when the iteration broke down or the matrix is not positive semidefinite).
     pub converged: bool,
 }
 

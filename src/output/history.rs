@@ -8,8 +8,12 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// Header line of a history CSV file: per iteration, energy error e (empty without a
+/// reference), stopping measure η, fraction of cables slack, solver time (s).
 pub const HISTORY_HEADER: &str = "iteration,error_e,indicator_eta,slack_fraction,elapsed_seconds";
 
+/// An [`Observer`] writing one solve's iteration history CSV, renamed into place by
+/// [`HistoryWriter::finish`] (dropped unfinished, it removes its partial file).
 pub struct HistoryWriter {
     path: PathBuf,
     partial: PathBuf,
@@ -19,6 +23,8 @@ pub struct HistoryWriter {
 }
 
 impl HistoryWriter {
+    /// Open the `.partial` file of `solver` at `alpha` under `dir/history` and write the header;
+    /// `cables` is the denominator of the slack fraction.
     pub fn create(dir: &Path, solver: &str, alpha: f64, cables: usize) -> std::io::Result<Self> {
         let path = result_path(dir, "history", solver, alpha);
         if let Some(parent) = path.parent() {

@@ -2,7 +2,8 @@
 //! `displacements/{solver}_alpha{α}.csv`.
 
 use super::write_atomic;
-use crate::solvers::Equilibrium;
+use crate::results;
+use crate::solvers::{Equilibrium, Solution};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
@@ -11,28 +12,67 @@ pub fn alpha_label(alpha: f64) -> String {
     format!("{alpha}")
 }
 
-/// One row of `summary.csv`.
+/// One row of `summary.csv` (the README describes each column).
 #[derive(Debug, Clone)]
 pub struct SummaryRow {
+    /// Solver name.
     pub solver: String,
+    /// Load factor.
     pub alpha: f64,
+    /// The solver's stopping criterion was met.
     pub converged: bool,
+    /// Iterations done.
     pub iterations: usize,
+    /// Unilateral cables that are slack.
     pub slack_cables: usize,
+    /// Number of cables.
     pub cables: usize,
+    /// Largest cable tension τ, N.
     pub max_tension: f64,
+    /// Largest nodal displacement magnitude, m.
     pub max_deflection: f64,
+    /// The solver's stopping measure at the end.
     pub residual: f64,
+    /// Set-up of the solver for this structure, s.
     pub setup_seconds: f64,
+    /// This solve, s.
     pub solve_seconds: f64,
 }
 
+impl SummaryRow {
+    /// The row of `solution`, by `solver` at `alpha` on `s`, set up in `setup_seconds`.
+    pub fn new(
+        solver: &str,
+        alpha: f64,
+        s: &Structure,
+        solution: &Solution,
+        setup_seconds: f64,
+    ) -> SummaryRow {
+        let eq = &solution.equilibrium;
+        SummaryRow {
+            solver: solver.to_string(),
+            alpha,
+            converged: solution.info.status.converged(),
+            iterations: solution.info.iterations,
+            slack_cables: eq.slack_count(),
+            cables: s.n_cables(),
+            max_tension: results::max_cable_tension(s, eq),
+            max_deflection: results::max_deflection(s, eq),
+            residual: solution.info.residual,
+            setup_seconds,
+            solve_seconds: solution.info.solve_seconds,
+        }
+    }
+}
+
+/// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
 pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,setup_seconds,solve_seconds";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
 }
 
+/// Write `summary.csv` at `path` atomically, one line per row.
 pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
     write_atomic(path, |w| {
         writeln!(w, "{SUMMARY_HEADER}")?;
@@ -63,6 +103,7 @@ pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
     })
 }
 
+/// Path `dir/{kind}/{solver}_alpha{α}.csv` of a per-solve CSV file.
 pub fn result_path(dir: &Path, kind: &str, solver: &str, alpha: f64) -> PathBuf {
     dir.join(kind)
         .join(format!("{solver}_alpha{}.csv", alpha_label(alpha)))
@@ -83,6 +124,8 @@ where
     })
 }
 
+/// Write `dir/tensions/{solver}_alpha{α}.csv`: per cable, its kind, end nodes and tension
+/// τ (N); returns its path.
 pub fn write_tensions(
     dir: &Path,
     solver: &str,
@@ -114,6 +157,8 @@ pub fn write_tensions(
     Ok(path)
 }
 
+/// Write `dir/displacements/{solver}_alpha{α}.csv`: per node, its initial position and
+/// displacement (m, zero on clamped nodes); returns its path.
 pub fn write_displacements(
     dir: &Path,
     solver: &str,
@@ -142,15 +187,20 @@ pub fn write_displacements(
 /// One row of `stability.csv`.
 #[derive(Debug, Clone)]
 pub struct StabilityRow {
+    /// Solver name.
     pub solver: String,
+    /// Load factor.
     pub alpha: f64,
+    /// Slack cables of the solution.
     pub slack_cables: usize,
     /// Smallest eigenvalue of the taut members' stiffness, N/m (0: a mechanism).
     pub min_tangent_eigenvalue: f64,
 }
 
+/// Header line of `stability.csv`, one column per [`StabilityRow`] field.
 pub const STABILITY_HEADER: &str = "solver,alpha,slack_cables,min_tangent_eigenvalue";
 
+/// Write `stability.csv` at `path` atomically, one line per row.
 pub fn write_stability(path: &Path, rows: &[StabilityRow]) -> std::io::Result<()> {
     write_atomic(path, |w| {
         writeln!(w, "{STABILITY_HEADER}")?;

@@ -29,6 +29,7 @@ pub fn kind_code(kind: LinkKind) -> i32 {
     }
 }
 
+/// Path `dir/vtk/{solver}_alpha{α}.vtu` of a solve's VTU file.
 pub fn vtu_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
     dir.join("vtk")
         .join(format!("{solver}_alpha{}.vtu", alpha_label(alpha)))

@@ -5,20 +5,20 @@
 //! The variables are scaled, `x = k^{1/2} λ`, so that the scaled W has spectrum in [0, 1]
 //! (a Jacobi preconditioning that also fixes the step length of the expansion steps).
 //!
-//! Stopping measure (`residual`): `‖min(k λ, τ)‖ / ‖t0_c‖` — SPEC's complementarity residual
-//! with the slack gap λ expressed as the force k λ so that both arguments are in N.
+//! Stopping measure: [`Measure::ComplementarityResidual`], `‖min(k λ, τ)‖ / ‖t0_c‖` — SPEC's
+//! complementarity residual with the slack gap λ expressed as the force k λ so that both
+//! arguments are in N.
 
-use super::{Equilibrium, IterationRecord, Observer, Solution, SolveInfo, Status, TautStiffness};
+use super::{Equilibrium, Measure, Progress, Solver, Status, TautStiffness};
 use crate::linalg::{dot, norm, SparseCholesky};
 use crate::structure::Structure;
-use std::time::Instant;
 
-/// Settings with their defaults.
-#[derive(Debug, Clone, Copy)]
+/// Settings, each default written once, at its field.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PcgLcpSettings {
     /// Relative complementarity residual to reach. Default 1e-10.
     pub tolerance: f64,
-    /// Default 50 000.
+    /// Iteration cap. Default 50 000.
     pub max_iterations: usize,
 }
 
@@ -38,6 +38,7 @@ const PROPORTIONING: f64 = 1.0;
 /// The gradient is recomputed from scratch this often, to stop round-off drift.
 const REFRESH_EVERY: usize = 50;
 
+/// The pcg-lcp solver, set up for one structure.
 pub struct PcgLcp<'s> {
     structure: &'s Structure,
     settings: PcgLcpSettings,
@@ -47,11 +48,33 @@ pub struct PcgLcp<'s> {
     cables: Vec<usize>,
     /// `k^{1/2}` of each of them.
     sqrt_k: Vec<f64>,
+    /// `‖t0_c‖`, the scale of the complementarity residual.
+    prestress_norm: f64,
     /// Scratch on the free dofs.
     nodal: Vec<f64>,
 }
 
+/// The MPRGP iterate: the scaled slack gaps x = k^{1/2} λ and what goes with them.
+pub struct PcgLcpState {
+    load: Vec<f64>,
+    /// `q̃ = k^{-1/2}(k_c B_c K⁻¹ F + t0_c)`.
+    q: Vec<f64>,
+    x: Vec<f64>,
+    /// Scaled gradient `g = W̃ x + q̃`.
+    g: Vec<f64>,
+    /// Search direction.
+    p: Vec<f64>,
+    /// Scratch `W̃ p`.
+    wp: Vec<f64>,
+    since_refresh: usize,
+    residual: f64,
+    iteration: usize,
+    /// `pᵀ W̃ p ≤ 0`: no further progress is possible.
+    stalled: bool,
+}
+
 impl<'s> PcgLcp<'s> {
+    /// Set up on a structure whose taut stiffness is already factorized.
     pub fn new(
         structure: &'s Structure,
         taut: &'s TautStiffness,
@@ -64,12 +87,17 @@ impl<'s> PcgLcp<'s> {
             .iter()
             .map(|&i| structure.links[i].stiffness.sqrt())
             .collect();
+        let prestress: Vec<f64> = cables
+            .iter()
+            .map(|&i| structure.links[i].prestress)
+            .collect();
         PcgLcp {
             structure,
             settings,
             factor: &taut.factor,
             cables,
             sqrt_k,
+            prestress_norm: norm(&prestress),
             nodal: vec![0.0; structure.n_free],
         }
     }
@@ -87,14 +115,70 @@ impl<'s> PcgLcp<'s> {
         }
     }
 
-    /// Scaled gradient `g = W̃ x + q̃`.
-    fn gradient(&mut self, x: &[f64], q: &[f64], g: &mut [f64]) {
-        self.apply_w(x, g);
-        g.iter_mut().zip(q).for_each(|(gi, qi)| *gi += qi);
+    /// Scaled gradient `g = W̃ x + q̃`, from scratch.
+    fn refresh_gradient(&mut self, state: &mut PcgLcpState) {
+        let mut g = std::mem::take(&mut state.g);
+        self.apply_w(&state.x, &mut g);
+        g.iter_mut().zip(&state.q).for_each(|(gi, qi)| *gi += qi);
+        state.g = g;
+        state.since_refresh = 0;
     }
 
-    pub fn solve(&mut self, load: &[f64], observer: &mut dyn Observer) -> Solution {
-        let clock = Instant::now();
+    /// `‖min(k λ, τ)‖ / ‖t0_c‖`, with `k λ = k^{1/2} x` and `τ = k^{1/2} g`.
+    fn residual_of(&self, x: &[f64], g: &[f64]) -> f64 {
+        let r: f64 = x
+            .iter()
+            .zip(g)
+            .zip(&self.sqrt_k)
+            .map(|((xi, gi), sk)| (sk * xi.min(*gi)).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if self.prestress_norm > 0.0 {
+            r / self.prestress_norm
+        } else {
+            r
+        }
+    }
+
+    /// The residual of `state`; when it meets the tolerance, confirmed on an exact gradient
+    /// (the updated one drifts by round-off), the search direction restarting if it does not.
+    fn measure_state(&mut self, state: &mut PcgLcpState) {
+        state.residual = self.residual_of(&state.x, &state.g);
+        if state.residual <= self.settings.tolerance {
+            self.refresh_gradient(state);
+            state.residual = self.residual_of(&state.x, &state.g);
+            if state.residual > self.settings.tolerance {
+                state.p = free_part(&state.x, &state.g);
+            }
+        }
+    }
+
+    /// `U = K⁻¹(F − B_cᵀ k_c λ)`, `k_c λ = k^{1/2} x`.
+    fn displacements(&self, state: &PcgLcpState) -> Vec<f64> {
+        let s = self.structure;
+        let mut u = state.load.clone();
+        for (j, &i) in self.cables.iter().enumerate() {
+            s.link_dofs[i].scatter(-self.sqrt_k[j] * state.x[j], &mut u);
+        }
+        self.factor.solve_in_place(&mut u);
+        u
+    }
+}
+
+impl Solver for PcgLcp<'_> {
+    type State = PcgLcpState;
+    const INIT_IS_ITERATE: bool = false;
+
+    fn measure(&self) -> Measure {
+        Measure::ComplementarityResidual
+    }
+
+    fn max_iterations(&self) -> usize {
+        self.settings.max_iterations
+    }
+
+    /// λ = 0: every cable taut.
+    fn init(&mut self, load: &[f64]) -> PcgLcpState {
         let s = self.structure;
         let m = self.cables.len();
         // U_F = K⁻¹ F; q̃ = k^{-1/2}(k_c B_c U_F + t0_c) = k^{1/2} B_c U_F + k^{-1/2} t0_c.
@@ -106,60 +190,36 @@ impl<'s> PcgLcp<'s> {
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
             .collect();
-        let prestress_norm = norm(
-            &self
-                .cables
-                .iter()
-                .map(|&i| s.links[i].prestress)
-                .collect::<Vec<_>>(),
-        );
-        let residual_of = |x: &[f64], g: &[f64], sqrt_k: &[f64]| -> f64 {
-            let r: f64 = x
-                .iter()
-                .zip(g)
-                .zip(sqrt_k)
-                .map(|((xi, gi), sk)| (sk * xi.min(*gi)).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if prestress_norm > 0.0 {
-                r / prestress_norm
-            } else {
-                r
-            }
+        let x = vec![0.0; m];
+        let g = q.clone();
+        let p = free_part(&x, &g);
+        let mut state = PcgLcpState {
+            load: load.to_vec(),
+            q,
+            x,
+            g,
+            p,
+            wp: vec![0.0; m],
+            since_refresh: 0,
+            residual: f64::INFINITY,
+            iteration: 0,
+            stalled: false,
         };
+        self.measure_state(&mut state);
+        state
+    }
 
-        let mut x = vec![0.0; m];
-        let mut g = q.clone();
-        let mut p = free_part(&x, &g);
-        let mut wp = vec![0.0; m];
-        let mut iterations = 0;
-        let mut since_refresh = 0;
-        let mut residual = residual_of(&x, &g, &self.sqrt_k);
-        let mut status = Status::MaxIterations;
-        loop {
-            if residual <= self.settings.tolerance {
-                // Confirm on an exact gradient before stopping.
-                self.gradient(&x, &q, &mut g);
-                since_refresh = 0;
-                residual = residual_of(&x, &g, &self.sqrt_k);
-                if residual <= self.settings.tolerance {
-                    status = Status::Converged;
-                    break;
-                }
-                p = free_part(&x, &g);
-            }
-            if iterations >= self.settings.max_iterations {
-                break;
-            }
-            iterations += 1;
-            let phi = free_part(&x, &g);
-            let beta: Vec<f64> = x
-                .iter()
-                .zip(&g)
+    /// One MPRGP step: conjugate gradient on the free face, expansion, or proportioning.
+    fn next_iter(&mut self, st: &mut PcgLcpState) {
+        st.iteration += 1;
+        let phi = free_part(&st.x, &st.g);
+        let beta: Vec<f64> =
+            st.x.iter()
+                .zip(&st.g)
                 .map(|(&xi, &gi)| if xi == 0.0 { gi.min(0.0) } else { 0.0 })
                 .collect();
-            let reduced: f64 = x
-                .iter()
+        let reduced: f64 =
+            st.x.iter()
                 .zip(&phi)
                 .map(|(&xi, &fi)| {
                     if xi > 0.0 {
@@ -169,71 +229,85 @@ impl<'s> PcgLcp<'s> {
                     }
                 })
                 .sum();
-            if dot(&beta, &beta) <= PROPORTIONING * PROPORTIONING * reduced {
-                self.apply_w(&p.clone(), &mut wp);
-                let pwp = dot(&p, &wp);
-                if pwp <= 0.0 {
-                    status = Status::Stalled;
-                    break;
-                }
-                let cg_step = dot(&g, &p) / pwp;
-                let feasible_step = x
-                    .iter()
-                    .zip(&p)
+        let mut wp = std::mem::take(&mut st.wp);
+        if dot(&beta, &beta) <= PROPORTIONING * PROPORTIONING * reduced {
+            self.apply_w(&st.p, &mut wp);
+            let pwp = dot(&st.p, &wp);
+            if pwp <= 0.0 {
+                st.wp = wp;
+                st.stalled = true;
+                return;
+            }
+            let cg_step = dot(&st.g, &st.p) / pwp;
+            let feasible_step =
+                st.x.iter()
+                    .zip(&st.p)
                     .filter(|(_, &pi)| pi > 0.0)
                     .map(|(&xi, &pi)| xi / pi)
                     .fold(f64::INFINITY, f64::min);
-                if cg_step <= feasible_step {
-                    // Conjugate gradient step on the current face.
-                    axpy(-cg_step, &p, &mut x);
-                    axpy(-cg_step, &wp, &mut g);
-                    let phi = free_part(&x, &g);
-                    let gamma = dot(&phi, &wp) / pwp;
-                    p.iter_mut()
-                        .zip(&phi)
-                        .for_each(|(pi, fi)| *pi = fi - gamma * *pi);
-                } else {
-                    // Expansion: to the boundary, then a projected gradient step.
-                    axpy(-feasible_step, &p, &mut x);
-                    axpy(-feasible_step, &wp, &mut g);
-                    let phi = free_part(&x, &g);
-                    x.iter_mut()
-                        .zip(&phi)
-                        .for_each(|(xi, fi)| *xi = (*xi - EXPANSION_STEP * fi).max(0.0));
-                    self.gradient(&x, &q, &mut g);
-                    since_refresh = 0;
-                    p = free_part(&x, &g);
-                }
+            if cg_step <= feasible_step {
+                // Conjugate gradient step on the current face.
+                axpy(-cg_step, &st.p, &mut st.x);
+                axpy(-cg_step, &wp, &mut st.g);
+                let phi = free_part(&st.x, &st.g);
+                let gamma = dot(&phi, &wp) / pwp;
+                st.p.iter_mut()
+                    .zip(&phi)
+                    .for_each(|(pi, fi)| *pi = fi - gamma * *pi);
             } else {
-                // Proportioning: release bound variables whose gradient pulls them free.
-                self.apply_w(&beta, &mut wp);
-                let step = dot(&g, &beta) / dot(&beta, &wp);
-                axpy(-step, &beta, &mut x);
-                axpy(-step, &wp, &mut g);
-                p = free_part(&x, &g);
+                // Expansion: to the boundary, then a projected gradient step.
+                axpy(-feasible_step, &st.p, &mut st.x);
+                axpy(-feasible_step, &wp, &mut st.g);
+                let phi = free_part(&st.x, &st.g);
+                st.x.iter_mut()
+                    .zip(&phi)
+                    .for_each(|(xi, fi)| *xi = (*xi - EXPANSION_STEP * fi).max(0.0));
+                self.refresh_gradient(st);
+                st.p = free_part(&st.x, &st.g);
             }
-            since_refresh += 1;
-            if since_refresh >= REFRESH_EVERY {
-                self.gradient(&x, &q, &mut g);
-                since_refresh = 0;
-                p = free_part(&x, &g);
-            }
-            residual = residual_of(&x, &g, &self.sqrt_k);
-            observer.iteration(&IterationRecord {
-                iteration: iterations,
-                residual,
-                error: None,
-                slack_cables: x.iter().filter(|&&xi| xi > 0.0).count(),
-                elapsed_seconds: clock.elapsed().as_secs_f64(),
-            });
+        } else {
+            // Proportioning: release bound variables whose gradient pulls them free.
+            self.apply_w(&beta, &mut wp);
+            let step = dot(&st.g, &beta) / dot(&beta, &wp);
+            axpy(-step, &beta, &mut st.x);
+            axpy(-step, &wp, &mut st.g);
+            st.p = free_part(&st.x, &st.g);
         }
+        st.wp = wp;
+        st.since_refresh += 1;
+        if st.since_refresh >= REFRESH_EVERY {
+            self.refresh_gradient(st);
+            st.p = free_part(&st.x, &st.g);
+        }
+        self.measure_state(st);
+    }
 
-        // U = K⁻¹(F − B_cᵀ k_c λ), k_c λ = k^{1/2} x.
-        let mut u = load.to_vec();
-        for (j, &i) in self.cables.iter().enumerate() {
-            s.link_dofs[i].scatter(-self.sqrt_k[j] * x[j], &mut u);
+    fn progress(&self, state: &PcgLcpState) -> Progress {
+        let stop = if state.residual <= self.settings.tolerance {
+            Some(Status::Converged)
+        } else if state.stalled {
+            Some(Status::Stalled)
+        } else {
+            None
+        };
+        Progress {
+            iteration: state.iteration,
+            residual: state.residual,
+            slack_cables: state.x.iter().filter(|&&xi| xi > 0.0).count(),
+            stop,
         }
-        self.factor.solve_in_place(&mut u);
+    }
+
+    fn elongations(&self, state: &PcgLcpState) -> Vec<f64> {
+        let mut e = vec![0.0; self.structure.links.len()];
+        self.structure
+            .elongations(&self.displacements(state), &mut e);
+        e
+    }
+
+    fn iterate(&self, state: &PcgLcpState) -> Equilibrium {
+        let s = self.structure;
+        let u = self.displacements(state);
         let mut slack = vec![false; s.links.len()];
         let mut tensions: Vec<f64> = s
             .links
@@ -242,24 +316,16 @@ impl<'s> PcgLcp<'s> {
             .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(&u))
             .collect();
         for (j, &i) in self.cables.iter().enumerate() {
-            if x[j] > 0.0 {
+            if state.x[j] > 0.0 {
                 // τ = t0 + k(e + λ) = 0 up to the tolerance: a slack cable carries nothing.
                 slack[i] = true;
                 tensions[i] = 0.0;
             }
         }
-        Solution {
-            equilibrium: Equilibrium {
-                displacements: u,
-                tensions,
-                slack,
-            },
-            info: SolveInfo {
-                status,
-                iterations,
-                residual,
-                solve_seconds: clock.elapsed().as_secs_f64(),
-            },
+        Equilibrium {
+            displacements: u,
+            tensions,
+            slack,
         }
     }
 }

@@ -9,8 +9,11 @@ use crate::linalg::{
 use crate::structure::Structure;
 use faer::Par;
 
+/// `K = Bᵀ k B` with every cable taut, its pattern (shared by every stiffness of the structure)
+/// and its factor.
 #[derive(Debug, Clone)]
 pub struct TautStiffness {
+    /// The pattern of K, which is also that of every tangent stiffness.
     pub pattern: StiffnessPattern,
     /// Lower triangle of K on `pattern`.
     pub values: Vec<f64>,

@@ -1,18 +1,20 @@
 //! Module and grid generator (SPEC §2, paper §5.1). Nodes at the same position are one node;
 //! links are never merged (a lower edge shared by two modules carries two cables).
 
-use super::LinkKind;
-use crate::case::ModuleKind;
+use super::{LinkKind, ModuleKind};
 
 /// Node numbering of an `nx × ny` grid: first the lower corners `(i, j)`, then the upper
 /// midpoints of edges along x (`(i + ½, j)`), then those of edges along y (`(i, j + ½)`).
 #[derive(Debug, Clone, Copy)]
 pub struct GridLayout {
+    /// Modules along x.
     pub nx: usize,
+    /// Modules along y.
     pub ny: usize,
 }
 
 impl GridLayout {
+    /// The layout of `nx × ny` modules.
     pub fn new(nx: usize, ny: usize) -> Self {
         Self { nx, ny }
     }
@@ -32,17 +34,19 @@ impl GridLayout {
         (self.nx + 1) * (self.ny + 1) + self.nx * (self.ny + 1) + j * (self.nx + 1) + i
     }
 
+    /// Number of nodes: lower corners plus upper x- and y-edge midpoints.
     pub fn n_nodes(&self) -> usize {
         (self.nx + 1) * (self.ny + 1) + self.nx * (self.ny + 1) + (self.nx + 1) * self.ny
     }
 
+    /// Index of module `(i, j)`, row by row along x (`0 ≤ i < nx`, `0 ≤ j < ny`).
     pub fn module_index(&self, i: usize, j: usize) -> usize {
         j * self.nx + i
     }
 }
 
 /// The 8 nodes of module `(i, j)`: `[c0, c1, c2, c3, m0, m1, m2, m3]`, counter-clockwise
-/// (SPEC §2 table).
+/// (SPEC §2).
 pub fn module_nodes(layout: &GridLayout, i: usize, j: usize) -> [usize; 8] {
     [
         layout.corner(i, j),

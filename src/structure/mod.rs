@@ -4,14 +4,18 @@
 //! Invariants: `dof_of[3·node + c]` is the free-dof index of that displacement component or
 //! [`CLAMPED`]; free dofs are numbered node by node; `Bᵀ t0 = 0` to round-off.
 
-mod compatibility;
 mod grid;
+mod spec;
 mod supports;
 
-pub use compatibility::LinkDofs;
 pub use grid::{module_nodes, GridLayout};
+pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 
-use crate::case::Case;
+use crate::linalg::SparseRow;
+
+/// A row of the compatibility operator B (SPEC §1): `e_i = n·(U_b − U_a)` on the link's free
+/// dofs. B is never formed as a matrix.
+pub type LinkDofs = SparseRow;
 
 /// Marks a clamped displacement component in [`Structure::dof_of`].
 pub const CLAMPED: usize = usize::MAX;
@@ -19,15 +23,20 @@ pub const CLAMPED: usize = usize::MAX;
 /// What a link is. Cables are unilateral unless the case says otherwise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinkKind {
+    /// Cable along an edge of a module's lower square (between lower corners).
     LowerCable,
+    /// Cable between the upper nodes of a module (edge midpoints at height H).
     UpperCable,
+    /// Cable from a lower corner up to an upper node.
     BracingCable,
     /// The braced module's unprestressed diagonals.
     DiagonalCable,
+    /// Bar from a lower corner to an upper node: bilateral, compressed by the prestress.
     Bar,
 }
 
 impl LinkKind {
+    /// Every kind but [`LinkKind::Bar`].
     pub fn is_cable(self) -> bool {
         self != LinkKind::Bar
     }
@@ -47,13 +56,17 @@ impl LinkKind {
 /// A bar or a cable from node `a` to node `b`.
 #[derive(Debug, Clone)]
 pub struct Link {
+    /// Start node.
     pub a: usize,
+    /// End node.
     pub b: usize,
+    /// Bar or which family of cable.
     pub kind: LinkKind,
     /// The module the link belongs to (links are never merged across modules).
     pub module: usize,
     /// Unit vector from a to b.
     pub direction: [f64; 3],
+    /// Initial length ℓ, m.
     pub length: f64,
     /// Axial stiffness k = E·S/ℓ, N/m.
     pub stiffness: f64,
@@ -63,16 +76,32 @@ pub struct Link {
     pub unilateral: bool,
 }
 
+impl Link {
+    /// Row i of B on the free dofs numbered by `dof_of` (`3·node + c` → free dof or
+    /// [`CLAMPED`]): `e = n·(U_b − U_a)`, clamped components left out.
+    pub fn compatibility_row(&self, dof_of: &[usize]) -> LinkDofs {
+        let free = |d: usize| (d != CLAMPED).then_some(d);
+        let ends = [(self.a, -1.0), (self.b, 1.0)];
+        SparseRow::new(ends.into_iter().flat_map(|(node, sign)| {
+            (0..3).map(move |k| (free(dof_of[3 * node + k]), sign * self.direction[k]))
+        }))
+    }
+}
+
 /// The assembled discrete structure.
 #[derive(Debug, Clone)]
 pub struct Structure {
+    /// Node numbering of the grid.
     pub layout: GridLayout,
+    /// Initial node positions, m.
     pub nodes: Vec<[f64; 3]>,
+    /// Bars and cables; tensions and elongations are indexed like this.
     pub links: Vec<Link>,
     /// Per node: clamped (all three components zero).
     pub clamped: Vec<bool>,
     /// Per global dof `3·node + c`: free-dof index, or [`CLAMPED`].
     pub dof_of: Vec<usize>,
+    /// Number of free dofs (the unknowns' size).
     pub n_free: usize,
     /// Per link: its free dofs and signs, for applying B and Bᵀ.
     pub link_dofs: Vec<LinkDofs>,
@@ -83,15 +112,11 @@ pub struct Structure {
 }
 
 impl Structure {
-    pub fn from_case(case: &Case) -> Structure {
-        let layout = GridLayout::new(case.grid.modules[0], case.grid.modules[1]);
-        let (nodes, raw_links) = grid::generate(
-            &layout,
-            case.grid.length,
-            case.grid.height,
-            case.grid.module,
-        );
-        let p = case.prestress.lower_cable;
+    /// The grid `spec` under the load pattern `load` (at α = 1).
+    pub fn grid(spec: &GridSpec, load: &LoadPattern) -> Structure {
+        let layout = GridLayout::new(spec.modules[0], spec.modules[1]);
+        let (nodes, raw_links) = grid::generate(&layout, spec.length, spec.height, spec.module);
+        let p = spec.prestress;
         let links: Vec<Link> = raw_links
             .into_iter()
             .map(|(a, b, kind, module)| {
@@ -99,14 +124,14 @@ impl Structure {
                 let d = [xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]];
                 let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 let direction = [d[0] / length, d[1] / length, d[2] / length];
-                let (young, section) = if kind.is_cable() {
-                    (case.cables.young, case.cables.section)
+                let material = if kind.is_cable() {
+                    spec.cables.material
                 } else {
-                    (case.bars.young, case.bars.section)
+                    spec.bars
                 };
                 // SPEC §2: force densities p/L (lower cables), 2p/L (the others), bars in
                 // compression; the diagonals of the braced module carry none.
-                let l = case.grid.length;
+                let l = spec.length;
                 let density = match kind {
                     LinkKind::LowerCable => p / l,
                     LinkKind::UpperCable | LinkKind::BracingCable => 2.0 * p / l,
@@ -120,13 +145,13 @@ impl Structure {
                     module,
                     direction,
                     length,
-                    stiffness: young * section / length,
+                    stiffness: material.young * material.section / length,
                     prestress: density * length,
-                    unilateral: kind.is_cable() && case.cables.unilateral,
+                    unilateral: kind.is_cable() && spec.cables.unilateral,
                 }
             })
             .collect();
-        let clamped = supports::clamped_nodes(&layout, &nodes, case.supports.clamp);
+        let clamped = supports::clamped_nodes(&layout, &nodes, spec.clamp);
         let mut dof_of = vec![CLAMPED; 3 * nodes.len()];
         let mut n_free = 0;
         for (node, &c) in clamped.iter().enumerate() {
@@ -137,13 +162,13 @@ impl Structure {
                 }
             }
         }
-        let link_dofs = links.iter().map(|l| LinkDofs::new(l, &dof_of)).collect();
+        let link_dofs = links.iter().map(|l| l.compatibility_row(&dof_of)).collect();
         let mut unit_load = vec![0.0; n_free];
         for node in 0..nodes.len() {
             for k in 0..3 {
                 let d = dof_of[3 * node + k];
                 if d != CLAMPED {
-                    unit_load[d] = case.load.nodal[k];
+                    unit_load[d] = load.nodal[k];
                 }
             }
         }
@@ -160,14 +185,17 @@ impl Structure {
         }
     }
 
+    /// Number of nodes, clamped ones included.
     pub fn n_nodes(&self) -> usize {
         self.nodes.len()
     }
 
+    /// Number of cables (every link but the bars).
     pub fn n_cables(&self) -> usize {
         self.links.iter().filter(|l| l.kind.is_cable()).count()
     }
 
+    /// Number of bars.
     pub fn n_bars(&self) -> usize {
         self.links.len() - self.n_cables()
     }

@@ -1,7 +1,6 @@
 //! Supports: which nodes are clamped (U = 0 on all three components).
 
-use super::GridLayout;
-use crate::case::Clamp;
+use super::{Clamp, GridLayout};
 
 pub(super) fn clamped_nodes(layout: &GridLayout, nodes: &[[f64; 3]], clamp: Clamp) -> Vec<bool> {
     let mut clamped = vec![false; nodes.len()];

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use tensolve::case::{self, Case};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{Silent, Solution, TautStiffness};
+use tensolve::solvers::{AnySolver, Silent, Solution, TautStiffness};
 use tensolve::structure::Structure;
 
 /// Lower cable prestress p of the paper case, N.
@@ -43,7 +43,7 @@ pub fn paper_with(overrides: &[(&str, &str, toml::Value)]) -> Case {
 }
 
 pub fn paper_structure(overrides: &[(&str, &str, toml::Value)]) -> Structure {
-    Structure::from_case(&paper_with(overrides))
+    (paper_with(overrides)).structure()
 }
 
 /// The load `alpha · unit_load` on the free dofs.
@@ -58,7 +58,7 @@ pub fn solve_both(s: &Structure, alpha: f64) -> (Solution, Solution) {
     let newton = Newton::new(s, &taut, NewtonSettings::default())
         .expect("newton set-up")
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(&f, &mut Silent);
+    let pcg = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     assert!(
         newton.info.status.converged(),
         "newton at alpha {alpha}: {:?}",

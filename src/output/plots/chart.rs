@@ -1,61 +1,132 @@
-//! The line chart every curve figure is: series of (x, y) points on a linear x axis and a
-//! linear or logarithmic y axis, axis labels with units, a legend beside the plot.
+//! The line chart every curve figure is: series of (x, y) points on a linear or logarithmic x
+//! axis and a linear or logarithmic y axis, axis labels with units, a legend beside the plot.
 
-use super::legend::{draw_line_legend, LegendEntry};
+use super::legend::{draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::marker::Marker;
-use super::{log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
+use super::palette::solver_colour;
+use super::{alpha_text, log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::io;
 use std::ops::Range;
 
-const SIZE: (u32, u32) = (960, 600);
+/// Width of the plot (axes, labels and title), px.
+const PLOT_WIDTH: u32 = 770;
+/// Height of the whole figure, px.
+const HEIGHT: u32 = 600;
+/// Width of the legend column beside the plot when every label fits in it, px.
 const LEGEND_WIDTH: u32 = 190;
+/// Where a legend label starts in the legend column: the line sample's left margin (8), the
+/// sample (28) and the gap after it (8), as `draw_line_legend` lays them out.
+const LEGEND_LABEL_LEFT: u32 = 44;
+/// Room kept right of the widest legend label, px.
+const LEGEND_RIGHT_MARGIN: u32 = 12;
 /// A series is drawn with at most this many points (the plot is ~700 px wide).
 const MAX_POINTS: usize = 1400;
 
+/// How an axis maps its values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scale {
+    /// Linear, over the span of the values (from 0 on the y axis when they are positive).
     Linear,
-    /// Logarithmic: points with y ≤ 0 are left out.
+    /// Logarithmic over whole decades, labelled 10ⁿ: points with a value ≤ 0 on this axis are
+    /// left out.
     Log,
 }
 
+/// One curve of a [`LineChart`].
+#[derive(Debug, Clone)]
 pub struct Series {
+    /// What the legend calls it.
     pub label: String,
+    /// Its line (and markers, and legend sample).
     pub colour: RGBColor,
+    /// Its points in drawing order; non-finite ones are left out.
     pub points: Vec<(f64, f64)>,
 }
 
+impl Series {
+    /// One solver's curve in the solver's colour (the same in every figure), labelled with
+    /// the solver's name, followed by ` (α = a)` when `alpha` is given (figures with several
+    /// load factors).
+    pub fn of_solver(solver: &str, alpha: Option<f64>, points: Vec<(f64, f64)>) -> Series {
+        let label = match alpha {
+            Some(alpha) => format!("{solver} (α = {})", alpha_text(alpha)),
+            None => solver.to_string(),
+        };
+        Series {
+            label,
+            colour: solver_colour(solver),
+            points,
+        }
+    }
+}
+
+/// A line chart: its series as lines over a linear or log x axis and a linear or log y axis,
+/// with a legend in a column right of the plot (widened when a label would not fit).
+#[derive(Debug, Clone)]
 pub struct LineChart {
+    /// Caption above the plot.
     pub title: String,
+    /// Description of the x axis, with its unit.
     pub x_label: String,
+    /// Description of the y axis, with its unit.
     pub y_label: String,
+    /// Scale of the x axis.
+    pub x_scale: Scale,
+    /// Scale of the y axis.
     pub y_scale: Scale,
     /// Heading of the legend (what the series differ by).
     pub legend_title: String,
     /// Mark every point, with a different marker per series (sparse data, series that may
     /// coincide).
     pub markers: bool,
+    /// The curves, drawn in this order and listed so in the legend.
     pub series: Vec<Series>,
 }
 
 impl LineChart {
-    /// The chart as an SVG document. Non-finite points (and y ≤ 0 on a log axis) are left out.
+    /// The chart as an SVG document. Non-finite points, and points with a value ≤ 0 on a log
+    /// axis, are left out.
     pub fn to_svg(&self) -> io::Result<String> {
         let series: Vec<Series> = self.series.iter().map(|s| self.drawable(s)).collect();
+        let legend_width = legend_width(&self.legend_title, &self.series);
         let mut svg = String::new();
         {
-            let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+            let size = (PLOT_WIDTH + legend_width, HEIGHT);
+            let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
             root.fill(&WHITE).map_err(plot_error)?;
-            let (plot, legend) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
-            let x = x_range(&series, self.markers);
+            let (plot, legend) = root.split_horizontally(PLOT_WIDTH);
+            let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
             let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
-            match self.y_scale {
-                Scale::Linear => self.draw(&plot, &series, x, linear_range(ys), tick_label),
-                Scale::Log => {
-                    self.draw(&plot, &series, x, log_range(ys).log_scale(), log_tick_label)
+            let (x, x_factor) = match self.x_scale {
+                Scale::Linear => (x_range(&series, self.markers), 1.0),
+                Scale::Log => log_axis(log_x_range(xs, self.markers)),
+            };
+            let (y, y_factor) = match self.y_scale {
+                Scale::Linear => (linear_range(ys), 1.0),
+                Scale::Log => log_axis(log_range(ys)),
+            };
+            let series = scaled(series, x_factor, y_factor);
+            let tick = |scale: Scale, factor: f64| {
+                move |v: f64| match scale {
+                    Scale::Linear => tick_label(v),
+                    Scale::Log => log_tick_label(v / factor),
+                }
+            };
+            let (x_tick, y_tick) = (tick(self.x_scale, x_factor), tick(self.y_scale, y_factor));
+            match (self.x_scale, self.y_scale) {
+                (Scale::Linear, Scale::Linear) => self.draw(&plot, &series, x, &x_tick, y, &y_tick),
+                (Scale::Linear, Scale::Log) => {
+                    self.draw(&plot, &series, x, &x_tick, y.log_scale(), &y_tick)
+                }
+                (Scale::Log, Scale::Linear) => {
+                    self.draw(&plot, &series, x.log_scale(), &x_tick, y, &y_tick)
+                }
+                (Scale::Log, Scale::Log) => {
+                    let (x, y) = (x.log_scale(), y.log_scale());
+                    self.draw(&plot, &series, x, &x_tick, y, &y_tick)
                 }
             }
             .map_err(plot_error)?;
@@ -76,9 +147,8 @@ impl LineChart {
     }
 
     fn drawable(&self, s: &Series) -> Series {
-        let keep = |&(x, y): &(f64, f64)| {
-            x.is_finite() && y.is_finite() && (self.y_scale == Scale::Linear || y > 0.0)
-        };
+        let on_axis = |v: f64, scale: Scale| v.is_finite() && (scale == Scale::Linear || v > 0.0);
+        let keep = |&(x, y): &(f64, f64)| on_axis(x, self.x_scale) && on_axis(y, self.y_scale);
         let points: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
         Series {
             label: s.label.clone(),
@@ -87,16 +157,19 @@ impl LineChart {
         }
     }
 
-    fn draw<DB, Y>(
+    fn draw<DB, X, Y>(
         &self,
         area: &DrawingArea<DB, Shift>,
         series: &[Series],
-        x: Range<f64>,
+        x: X,
+        x_tick: &dyn Fn(f64) -> String,
         y: Y,
-        y_tick: fn(f64) -> String,
+        y_tick: &dyn Fn(f64) -> String,
     ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
     where
         DB: DrawingBackend,
+        X: AsRangedCoord<Value = f64>,
+        X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
         Y: AsRangedCoord<Value = f64>,
         Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
@@ -112,7 +185,7 @@ impl LineChart {
             .y_desc(&self.y_label)
             .x_labels(10)
             .y_labels(10)
-            .x_label_formatter(&|v| tick_label(*v))
+            .x_label_formatter(&|v| x_tick(*v))
             .y_label_formatter(&|v| y_tick(*v))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
@@ -130,6 +203,37 @@ impl LineChart {
     }
 }
 
+/// Width of the legend column: [`LEGEND_WIDTH`], or more when its title or a label (by an
+/// estimate of its width in the legend's font) would run past it.
+fn legend_width(title: &str, series: &[Series]) -> u32 {
+    let widest = series
+        .iter()
+        .map(|s| LEGEND_LABEL_LEFT + text_width(&s.label, TEXT_SIZE))
+        .chain([8 + text_width(title, TEXT_SIZE)])
+        .max()
+        .unwrap_or(0);
+    LEGEND_WIDTH.max(widest + LEGEND_RIGHT_MARGIN)
+}
+
+/// Estimated width in px of `text` in a sans-serif font of `size` px (DejaVu Sans' advances,
+/// which are on the wide side of the common sans-serif fonts).
+fn text_width(text: &str, size: u32) -> u32 {
+    let em: f64 = text
+        .chars()
+        .map(|c| match c {
+            'i' | 'j' | 'l' | '\'' | '|' => 0.28,
+            ' ' | '.' | ',' | ':' | ';' | '!' | 'f' | 't' | 'I' => 0.34,
+            'r' | '-' | '(' | ')' | '[' | ']' => 0.40,
+            'm' => 0.98,
+            'w' | '=' | '+' | '<' | '>' | '≤' => 0.84,
+            'M' | 'W' => 1.0,
+            c if c.is_ascii_uppercase() => 0.72,
+            _ => 0.63,
+        })
+        .sum();
+    (em * size as f64).ceil() as u32
+}
+
 /// The span of the x values (0..1 without any), 2 % wider on each side with markers so that
 /// the end markers are whole.
 fn x_range(series: &[Series], markers: bool) -> Range<f64> {
@@ -140,6 +244,58 @@ fn x_range(series: &[Series], markers: bool) -> Range<f64> {
         (Some(lo), _) => lo - 0.5..lo + 0.5,
         _ => 0.0..1.0,
     }
+}
+
+/// Whole decades around the positive x values ([`log_range`]); with markers, widened by 2 %
+/// of the span (in decades) at an end where a point lies on the edge, so that its marker is
+/// whole.
+fn log_x_range(values: impl Iterator<Item = f64>, markers: bool) -> Range<f64> {
+    let values: Vec<f64> = values.filter(|&x| x > 0.0).collect();
+    let range = log_range(values.iter().copied());
+    if !markers {
+        return range;
+    }
+    let (lo, hi) = (range.start.log10(), range.end.log10());
+    let pad = 0.02 * (hi - lo);
+    let near = |edge: f64| values.iter().any(|x| (x.log10() - edge).abs() < pad);
+    let lo = if near(lo) { lo - pad } else { lo };
+    let hi = if near(hi) { hi + pad } else { hi };
+    10f64.powf(lo)..10f64.powf(hi)
+}
+
+/// Below this, a log axis is drawn in scaled units (see [`log_axis`]).
+const LOG_AXIS_SMALLEST: f64 = 1e-12;
+
+/// A log axis over `range` and the factor its values are drawn multiplied by: 1, or when the
+/// range reaches below [`LOG_AXIS_SMALLEST`] the power of ten that brings its lower end into
+/// [1, 10). Plotters takes log-axis values below `f64::EPSILON` for the axis' zero and draws
+/// no tick or grid line there (e = 0 drawn at 10⁻¹⁶ would sit on an unlabelled edge); the
+/// tick labels divide the factor out again.
+fn log_axis(range: Range<f64>) -> (Range<f64>, f64) {
+    if range.start >= LOG_AXIS_SMALLEST {
+        return (range, 1.0);
+    }
+    let factor = 10f64.powi(-(range.start.log10().floor() as i32));
+    (range.start * factor..range.end * factor, factor)
+}
+
+/// `series` with every x multiplied by `x_factor` and every y by `y_factor` (as is when both
+/// are 1).
+fn scaled(series: Vec<Series>, x_factor: f64, y_factor: f64) -> Vec<Series> {
+    if x_factor == 1.0 && y_factor == 1.0 {
+        return series;
+    }
+    series
+        .into_iter()
+        .map(|s| Series {
+            points: s
+                .points
+                .iter()
+                .map(|&(x, y)| (x * x_factor, y * y_factor))
+                .collect(),
+            ..s
+        })
+        .collect()
 }
 
 /// From 0 (or below the smallest value when negative) to 5 % above the largest value.
@@ -229,5 +385,131 @@ mod tests {
         let r = linear_range([0.0, 100.0].into_iter());
         assert_eq!(r.start, 0.0);
         assert!(r.end > 100.0);
+    }
+
+    /// The `points` attribute of every series polyline (stroke width
+    /// [`SERIES_STROKE_WIDTH`]), as pixel pairs.
+    fn series_polylines(svg: &str) -> Vec<Vec<(i32, i32)>> {
+        let width = format!("stroke-width=\"{SERIES_STROKE_WIDTH}\"");
+        svg.split("<polyline")
+            .skip(1)
+            .map(|tail| &tail[..tail.find("/>").expect("a closed polyline")])
+            .filter(|element| element.contains(&width))
+            .map(|element| {
+                let start = element.find("points=\"").expect("points") + "points=\"".len();
+                let list = &element[start..];
+                let list = &list[..list.find('"').expect("closing quote")];
+                list.split_whitespace()
+                    .map(|pair| {
+                        let (x, y) = pair.split_once(',').expect("x,y");
+                        (x.parse().expect("x"), y.parse().expect("y"))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn log_log_chart_leaves_out_points_off_the_axes() {
+        let chart = LineChart {
+            title: "log–log".into(),
+            x_label: "time (s)".into(),
+            y_label: "error (–)".into(),
+            x_scale: Scale::Log,
+            y_scale: Scale::Log,
+            legend_title: "solver".into(),
+            markers: true,
+            series: vec![
+                Series {
+                    label: "a".into(),
+                    colour: RGBColor(31, 119, 180),
+                    points: vec![(0.0, 0.5), (1e-2, 1e-1), (1e-1, 1e-3), (2.0, 1e-5)],
+                },
+                Series {
+                    label: "b".into(),
+                    colour: RGBColor(255, 127, 14),
+                    points: vec![(-1.0, 1.0), (2e-2, 1e-2), (3e-1, 0.0), (0.5, 1e-4)],
+                },
+            ],
+        };
+        let svg = chart.to_svg().expect("an SVG");
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        let lines = series_polylines(&svg);
+        assert_eq!(lines.len(), chart.series.len());
+        // x ≤ 0 (and y ≤ 0) left out: 3 of a's 4 points, 2 of b's 4.
+        assert_eq!(lines[0].len(), 3);
+        assert_eq!(lines[1].len(), 2);
+        // Increasing x, decreasing y, all inside the plot.
+        for line in &lines {
+            assert!(line.windows(2).all(|w| w[0].0 < w[1].0 && w[0].1 < w[1].1));
+            assert!(line.iter().all(|&(x, _)| 85 < x && x < PLOT_WIDTH as i32));
+        }
+        // Decade ticks on both axes: 10⁻² to 10¹ in x, 10⁻⁵ to 10⁻¹ in y (the points left
+        // out, with y up to 1, do not widen the y range to 10⁰).
+        let texts = texts(&svg);
+        let count = |tick: &str| texts.iter().filter(|&&t| t == tick).count();
+        let y_only = ["10⁻⁵", "10⁻⁴", "10⁻³"];
+        let both = ["10⁻²", "10⁻¹"];
+        for (ticks, axes) in [(&y_only[..], 1), (&both[..], 2)] {
+            for &tick in ticks {
+                assert_eq!(count(tick), axes, "{tick}: {texts:?}");
+            }
+        }
+        assert_eq!(count("10⁰"), 1, "{texts:?}");
+        assert_eq!(count("10¹"), 1, "{texts:?}");
+    }
+
+    #[test]
+    fn log_axis_labels_decades_below_machine_epsilon() {
+        let chart = LineChart {
+            title: String::new(),
+            x_label: "time (s)".into(),
+            y_label: "error (–)".into(),
+            x_scale: Scale::Log,
+            y_scale: Scale::Log,
+            legend_title: "solver".into(),
+            markers: false,
+            series: vec![Series::of_solver(
+                "newton",
+                Some(0.05),
+                vec![(1e-3, 1.0), (2e-3, 1e-9), (3e-3, 1e-16)],
+            )],
+        };
+        let svg = chart.to_svg().expect("an SVG");
+        let texts = texts(&svg);
+        for tick in ["10⁻¹⁶", "10⁻⁸", "10⁰", "10⁻³", "newton (α = 0.05)"] {
+            assert!(texts.contains(&tick), "{tick}: {texts:?}");
+        }
+        assert_eq!(series_polylines(&svg)[0].len(), 3);
+    }
+
+    /// The content of every `<text>` element, trimmed.
+    fn texts(svg: &str) -> Vec<&str> {
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|tail| {
+                let body = &tail[tail.find('>')? + 1..];
+                Some(body[..body.find("</text>")?].trim())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn legend_widens_for_long_labels_only() {
+        let series = |label: &str| Series {
+            label: label.into(),
+            colour: RGBColor(0, 0, 0),
+            points: vec![],
+        };
+        assert_eq!(
+            legend_width("solver", &[series("micro-macro")]),
+            LEGEND_WIDTH
+        );
+        assert_eq!(
+            legend_width("load factor", &[series("α = 0.05")]),
+            LEGEND_WIDTH
+        );
+        let long = "newton, e = 0 on the lower edge";
+        assert!(legend_width("solver", &[series(long)]) > LEGEND_WIDTH + 80);
     }
 }

@@ -145,6 +145,7 @@ fn convergence_chart(
         title,
         x_label: "iteration (–)".into(),
         y_label: measure.axis_label().into(),
+        x_scale: Scale::Linear,
         y_scale: Scale::Log,
         legend_title: legend_title.into(),
         markers: false,

@@ -36,8 +36,11 @@ pub const SERIES_STROKE_WIDTH: u32 = 2;
 /// The iteration records of one LATIN solve.
 #[derive(Debug, Clone)]
 pub struct History {
+    /// Solver name.
     pub solver: String,
+    /// Load factor α of the solve.
     pub alpha: f64,
+    /// One record per iteration, in order.
     pub records: Vec<IterationRecord>,
 }
 
@@ -62,6 +65,7 @@ pub struct FigureData {
 }
 
 impl FigureData {
+    /// No data yet; `first_solver`'s solves are the ones Figures 6 and 8 show.
     pub fn new(first_solver: &str) -> Self {
         FigureData {
             first_solver: first_solver.to_string(),
@@ -95,6 +99,7 @@ impl FigureData {
         }
     }
 
+    /// Keep the iteration records of one LATIN solve (Figures 9–11).
     pub fn add_history(&mut self, solver: &str, alpha: f64, records: Vec<IterationRecord>) {
         self.histories.push(History {
             solver: solver.to_string(),

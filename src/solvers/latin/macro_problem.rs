@@ -10,11 +10,14 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
 
+/// The macro problem `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
+/// LU-factorised once.
 pub struct MacroProblem {
     /// Number of macro force unknowns (Σ over interfaces of their macro dofs).
     pub n_forces: usize,
     /// First kernel amplitude of each substructure, after the forces.
     pub kernel_offset: Vec<usize>,
+    /// Size of the macro system: `n_forces` + Σ kernel columns.
     pub n: usize,
     lu: Option<Lu<usize, f64>>,
 }
@@ -24,6 +27,7 @@ pub struct MacroProblem {
 pub struct SingularMacroProblem;
 
 impl MacroProblem {
+    /// Assemble and LU-factorise the macro matrix; `Err` if it is singular.
     pub fn new(
         subs: &[Substructure],
         interfaces: &[Interface],

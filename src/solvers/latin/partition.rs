@@ -3,26 +3,14 @@
 //! substructures sharing non-clamped nodes has one interface, its nodes in increasing global
 //! order (the order both sides use).
 
+use super::WeakInterfaces;
 use crate::structure::Structure;
 use std::collections::BTreeMap;
-
-/// What to do with interfaces of three nodes or fewer (SPEC §4 "Weak interfaces").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum WeakInterfaces {
-    /// All-macro (R = identity): exact continuity through the macro problem. The default.
-    #[default]
-    Macro,
-    /// All-micro (no macro part): the paper's literal statement; stalls on the paper's case.
-    Micro,
-    /// One-node interfaces whose node lies in another interface are dropped; other weak
-    /// interfaces are all-macro.
-    Drop,
-}
 
 /// Interfaces with at most this many nodes are weak (a 10-field basis cannot be defined).
 pub const WEAK_MAX_NODES: usize = 3;
 
+/// One substructure of a partition: its links (all those of its modules) and the nodes they touch.
 #[derive(Debug, Clone)]
 pub struct SubstructureTopology {
     /// Global link indices.
@@ -33,6 +21,7 @@ pub struct SubstructureTopology {
     pub clamped_nodes: Vec<usize>,
 }
 
+/// An interface Γ_EE': the pair of substructures (E, E') and the non-clamped nodes they share.
 #[derive(Debug, Clone)]
 pub struct InterfaceTopology {
     /// The two substructures, `sides[0] < sides[1]`; macro forces count positive on sides[0].
@@ -42,15 +31,20 @@ pub struct InterfaceTopology {
 }
 
 impl InterfaceTopology {
+    /// Weak interface: at most [`WEAK_MAX_NODES`] nodes, too few for the nine-field macro basis.
     pub fn is_weak(&self) -> bool {
         self.nodes.len() <= WEAK_MAX_NODES
     }
 }
 
+/// An `sx × sy` partition of the grid's modules into substructures, with their interfaces.
 #[derive(Debug, Clone)]
 pub struct Partition {
+    /// `[sx, sy]`: substructures along x and along y.
     pub shape: [usize; 2],
+    /// Per substructure, row by row (index `iy · sx + ix`): its links and nodes.
     pub substructures: Vec<SubstructureTopology>,
+    /// One per pair of substructures sharing non-clamped nodes, by increasing pair `(E, E')`.
     pub interfaces: Vec<InterfaceTopology>,
     /// One-node interfaces removed by [`WeakInterfaces::Drop`].
     pub dropped_interfaces: usize,

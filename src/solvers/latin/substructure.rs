@@ -14,6 +14,7 @@ use nalgebra::DMatrix;
 /// E's view of one of its interfaces.
 #[derive(Debug, Clone)]
 pub struct Side {
+    /// Index of the interface in the solver's interface list.
     pub interface: usize,
     /// 0 if E is the interface's first substructure (macro forces counted +), 1 otherwise (−).
     pub which: usize,
@@ -21,13 +22,16 @@ pub struct Side {
     pub gamma_offset: usize,
     /// First column of this interface in E's macro vector u_E.
     pub macro_offset: usize,
+    /// Rows of this interface in U_EΓ: 3 · its nodes (rows of R).
     pub rows: usize,
+    /// Its macro dofs in u_E (columns of R).
     pub cols: usize,
     /// The interface's macro basis R (rows × cols), a copy kept with E.
     pub basis: DMatrix<f64>,
 }
 
 impl Side {
+    /// The sign of `c_E` on this interface: +1 on its first substructure, −1 on its second.
     pub fn sign(&self) -> f64 {
         if self.which == 0 {
             1.0
@@ -41,6 +45,7 @@ impl Side {
 #[derive(Debug, Clone, Copy)]
 pub struct SingularSubstructure;
 
+/// One substructure E and its linear-stage operators, built once (SPEC §4 "Linear stage").
 pub struct Substructure {
     /// Global link indices, in the order of every per-link array of E.
     pub links: Vec<usize>,
@@ -48,17 +53,26 @@ pub struct Substructure {
     pub dof_global: Vec<usize>,
     /// Per local dof: the share of a nodal load E carries (1 / substructures holding the node).
     pub load_share: Vec<f64>,
+    /// Per link of E: its row of B_E on E's local dofs (`e = n·(U_b − U_a)`).
     pub link_dofs: Vec<LinkDofs>,
+    /// E's interfaces, by increasing interface index: their rows stacked in this order in U_EΓ
+    /// and their macro columns in u_E.
     pub sides: Vec<Side>,
     /// Local dof of each row of U_EΓ (C_E as an index map).
     pub gamma_dofs: Vec<usize>,
+    /// E's macro dofs: Σ over its sides of the columns of R (columns of R_E).
     pub n_macro: usize,
     /// Solves with K_E.
     pub factor: SpdSolver,
+    /// `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × `n_macro`).
     pub z: DMatrix<f64>,
+    /// `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, symmetrised.
     pub k_star: DMatrix<f64>,
+    /// `K⁺_E = (K*_E + Q_E Q_Eᵀ)⁻¹ − Q_E Q_Eᵀ`, the pseudo-inverse of K*_E.
     pub k_plus: DMatrix<f64>,
+    /// `L_E = K⁺_E − I/d_m`, the homogenised flexibility.
     pub flexibility: DMatrix<f64>,
+    /// `Q_E`: orthonormal columns spanning the kernel of K*_E (`n_macro` rows).
     pub kernel: DMatrix<f64>,
 }
 
@@ -88,7 +102,7 @@ impl Substructure {
         let link_dofs: Vec<LinkDofs> = topology
             .links
             .iter()
-            .map(|&i| LinkDofs::new(&structure.links[i], local_dof))
+            .map(|&i| structure.links[i].compatibility_row(local_dof))
             .collect();
         let mut sides = Vec::new();
         let mut gamma_dofs = Vec::new();
@@ -208,6 +222,7 @@ impl Substructure {
         Ok(sub)
     }
 
+    /// Number of E's free dofs (three per non-clamped node it touches).
     pub fn n_dofs(&self) -> usize {
         self.dof_global.len()
     }

@@ -1,43 +1,11 @@
-//! Validation of a parsed case: every number finite, physical quantities positive, the α list
-//! non-empty. Each error names the key, the value and the fix.
+//! From the raw file to a typed [`Case`]: every number checked (finite; positive where
+//! physical; bounded so that nothing can overflow), every default taken from the type it
+//! configures. Each error names the key, the value and the fix.
 
-use super::schema::Case;
+use super::raw::RawCase;
+use super::{Case, CaseError, Load, OutputChoice, SolverChoice};
 use crate::solvers::latin::SearchDirection;
-use thiserror::Error;
-
-/// Why a case cannot be used. Displayed messages are meant for the user as they are.
-#[derive(Debug, Error)]
-pub enum CaseError {
-    #[error("cannot read case file `{path}`: {reason}")]
-    Io { path: String, reason: String },
-    #[error("case file is not valid: {0}")]
-    Syntax(String),
-    #[error("`{key}` = {value} is not valid: {fix}")]
-    Invalid {
-        key: &'static str,
-        value: String,
-        fix: String,
-    },
-}
-
-impl CaseError {
-    pub(crate) fn from_toml(e: toml::de::Error) -> Self {
-        // toml's message already has the line, the column, the offending text and, for
-        // unknown keys or variants, the allowed names; keep it on one line per fact.
-        CaseError::Syntax(e.to_string().trim_end().to_string())
-    }
-
-    fn invalid(key: &'static str, value: impl ToString, fix: impl Into<String>) -> Self {
-        CaseError::Invalid {
-            key,
-            value: value.to_string(),
-            fix: fix.into(),
-        }
-    }
-}
-
-/// Substructures per axis when `solver.subdomains` is left out (the paper's 4 × 4).
-const DEFAULT_SUBDOMAINS: usize = 4;
+use crate::structure::{CableSpec, GridSpec, LoadPattern, Material};
 
 /// A number as a user would write it: exponent form when very large or very small.
 pub(crate) fn number(x: f64) -> String {
@@ -81,8 +49,10 @@ fn bounded(key: &'static str, value: f64, max: f64, what: &str) -> Result<(), Ca
 /// Largest load factor accepted.
 const ALPHA_MAX: f64 = 1e6;
 
-pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
-    let [nx, ny] = case.grid.modules;
+/// The typed case of a raw one, checked in file order.
+pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
+    let paper = GridSpec::default();
+    let [nx, ny] = raw.grid.modules;
     if nx == 0 || ny == 0 {
         return Err(CaseError::invalid(
             "grid.modules",
@@ -98,29 +68,35 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
             format!("at most {MAX_MODULES} modules in all"),
         ));
     }
-    positive("grid.length", case.grid.length, "the module side L in m")?;
-    positive("grid.height", case.grid.height, "the module height H in m")?;
+    let length = raw.grid.length.unwrap_or(paper.length);
+    positive("grid.length", length, "the module side L in m")?;
+    let height = raw.grid.height.unwrap_or(paper.height);
+    positive("grid.height", height, "the module height H in m")?;
+    let cables = Material {
+        young: raw.cables.young.unwrap_or(paper.cables.material.young),
+        section: raw.cables.section.unwrap_or(paper.cables.material.section),
+    };
     positive(
         "cables.young",
-        case.cables.young,
+        cables.young,
         "the cables' Young's modulus in Pa",
     )?;
     positive(
         "cables.section",
-        case.cables.section,
+        cables.section,
         "the cables' cross-section in m²",
     )?;
-    positive(
-        "bars.young",
-        case.bars.young,
-        "the bars' Young's modulus in Pa",
-    )?;
+    let bars = Material {
+        young: raw.bars.young.unwrap_or(paper.bars.young),
+        section: raw.bars.section.unwrap_or(paper.bars.section),
+    };
+    positive("bars.young", bars.young, "the bars' Young's modulus in Pa")?;
     positive(
         "bars.section",
-        case.bars.section,
+        bars.section,
         "the bars' cross-section in m²",
     )?;
-    let p = case.prestress.lower_cable;
+    let p = raw.prestress.lower_cable.unwrap_or(paper.prestress);
     if !(p.is_finite() && (0.0..=PHYSICAL_MAX).contains(&p)) {
         return Err(CaseError::invalid(
             "prestress.lower_cable",
@@ -128,20 +104,72 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
             format!("give the lower cables' prestress in N as a number ≥ 0 and ≤ {PHYSICAL_MAX:e}"),
         ));
     }
-    for (c, &f) in case.load.nodal.iter().enumerate() {
+    let grid = GridSpec {
+        modules: [nx, ny],
+        length,
+        height,
+        module: raw.grid.module.unwrap_or(paper.module),
+        cables: CableSpec {
+            material: cables,
+            unilateral: raw.cables.unilateral.unwrap_or(paper.cables.unilateral),
+        },
+        bars,
+        prestress: p,
+        clamp: raw.supports.clamp.unwrap_or(paper.clamp),
+    };
+
+    let pattern = LoadPattern {
+        nodal: raw.load.nodal.unwrap_or(LoadPattern::default().nodal),
+    };
+    for (c, &f) in pattern.nodal.iter().enumerate() {
         let key = ["load.nodal[0]", "load.nodal[1]", "load.nodal[2]"][c];
         bounded(key, f, PHYSICAL_MAX, "each nodal force component in N")?;
     }
-    case.load.alphas = alpha_values(&case.load.alpha)?;
+    let load = Load {
+        pattern,
+        alphas: alpha_values(&raw.load.alpha)?,
+    };
 
-    if case.solver.methods.is_empty() {
-        return Err(CaseError::invalid(
-            "solver.methods",
-            "[]",
-            "name at least one solver, e.g. [\"newton\"]",
-        ));
+    let solver = solver_choice(raw.solver, [nx, ny])?;
+    let defaults = OutputChoice::default();
+    let o = raw.output;
+    let output = OutputChoice {
+        dir: o.dir,
+        summary: o.summary.unwrap_or(defaults.summary),
+        tensions: o.tensions.unwrap_or(defaults.tensions),
+        displacements: o.displacements.unwrap_or(defaults.displacements),
+        history: o.history.unwrap_or(defaults.history),
+        plots: o.plots.unwrap_or(defaults.plots),
+        vtk: o.vtk.unwrap_or(defaults.vtk),
+        stability: o.stability.unwrap_or(defaults.stability),
+    };
+    Ok(Case {
+        grid,
+        load,
+        solver,
+        output,
+    })
+}
+
+/// `[solver]` of a grid of `modules`: the solvers' settings, the case's tolerance and
+/// iteration cap applied to every one of them.
+fn solver_choice(
+    raw: super::raw::RawSolver,
+    modules: [usize; 2],
+) -> Result<SolverChoice, CaseError> {
+    let [nx, ny] = modules;
+    let mut choice = SolverChoice::default();
+    if let Some(methods) = raw.methods {
+        if methods.is_empty() {
+            return Err(CaseError::invalid(
+                "solver.methods",
+                "[]",
+                "name at least one solver, e.g. [\"newton\"]",
+            ));
+        }
+        choice.methods = methods;
     }
-    if let Some(tol) = case.solver.tolerance {
+    if let Some(tol) = raw.tolerance {
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
             return Err(CaseError::invalid(
                 "solver.tolerance",
@@ -149,11 +177,13 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
                 "give a relative tolerance between 0 and 1 (exclusive), e.g. 1e-8",
             ));
         }
+        choice.newton.tolerance = tol;
+        choice.pcg_lcp.tolerance = tol;
+        choice.latin.tolerance = tol;
     }
-    let [sx, sy] = *case
-        .solver
-        .subdomains
-        .get_or_insert([DEFAULT_SUBDOMAINS.min(nx), DEFAULT_SUBDOMAINS.min(ny)]);
+    // The paper's partition, limited to the grid.
+    let [dx, dy] = choice.latin.subdomains;
+    let [sx, sy] = raw.subdomains.unwrap_or([dx.min(nx), dy.min(ny)]);
     if sx == 0 || sy == 0 || sx > nx || sy > ny {
         return Err(CaseError::invalid(
             "solver.subdomains",
@@ -161,37 +191,51 @@ pub(crate) fn validate(case: &mut Case) -> Result<(), CaseError> {
             format!("give 1 ≤ sx ≤ {nx} and 1 ≤ sy ≤ {ny} (at most one substructure per module)"),
         ));
     }
-    positive(
-        "solver.dm",
-        case.solver.dm,
-        "the interface search direction d_m in N/m",
-    )?;
-    case.solver.search = Some(match &case.solver.l {
-        toml::Value::String(s) if s == "stiffness" => SearchDirection::Stiffness,
-        toml::Value::Float(v) => {
-            positive("solver.l", *v, "the link search direction l in N/m")?;
-            SearchDirection::Uniform(*v)
-        }
-        toml::Value::Integer(v) => {
-            positive("solver.l", *v as f64, "the link search direction l in N/m")?;
-            SearchDirection::Uniform(*v as f64)
-        }
-        other => {
-            return Err(CaseError::invalid(
-                "solver.l",
-                other,
-                "give \"stiffness\" (l = k on every link) or a number of N/m",
-            ))
-        }
-    });
-    if case.solver.max_iterations == Some(0) {
-        return Err(CaseError::invalid(
-            "solver.max_iterations",
-            0,
-            "give at least 1 iteration",
-        ));
+    choice.latin.subdomains = [sx, sy];
+    if let Some(dm) = raw.dm {
+        positive("solver.dm", dm, "the interface search direction d_m in N/m")?;
+        choice.latin.dm = dm;
     }
-    Ok(())
+    if let Some(l) = &raw.l {
+        choice.latin.search = search_direction(l)?;
+    }
+    if let Some(weak) = raw.weak_interfaces {
+        choice.latin.weak = weak;
+    }
+    if let Some(reference) = raw.reference {
+        choice.reference = reference;
+    }
+    if let Some(max_iterations) = raw.max_iterations {
+        if max_iterations == 0 {
+            return Err(CaseError::invalid(
+                "solver.max_iterations",
+                0,
+                "give at least 1 iteration",
+            ));
+        }
+        choice.newton.max_iterations = max_iterations;
+        choice.pcg_lcp.max_iterations = max_iterations;
+        choice.latin.max_iterations = max_iterations;
+    }
+    Ok(choice)
+}
+
+/// `solver.l`: `"stiffness"` or a number of N/m.
+fn search_direction(l: &toml::Value) -> Result<SearchDirection, CaseError> {
+    let uniform = |v: f64| {
+        positive("solver.l", v, "the link search direction l in N/m")?;
+        Ok(SearchDirection::Uniform(v))
+    };
+    match l {
+        toml::Value::String(s) if s == "stiffness" => Ok(SearchDirection::Stiffness),
+        toml::Value::Float(v) => uniform(*v),
+        toml::Value::Integer(v) => uniform(*v as f64),
+        other => Err(CaseError::invalid(
+            "solver.l",
+            other,
+            "give \"stiffness\" (l = k on every link) or a number of N/m",
+        )),
+    }
 }
 
 /// The load factors of `load.alpha`: a non-empty list of finite numbers, or a range

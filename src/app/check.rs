@@ -1,0 +1,184 @@
+//! `tensolve check`: what a case describes, and whether every solver can be set up for it, as
+//! a report struct (tests read it directly; the command line prints its `Display`).
+
+use crate::case::Case;
+use crate::output::alpha_label;
+use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
+use crate::solvers::{Method, SetupError, TautStiffness};
+use crate::structure::ModuleKind;
+use std::fmt;
+use std::path::PathBuf;
+
+/// The model a case describes.
+#[derive(Debug, Clone)]
+pub struct ModelReport {
+    /// The case file.
+    pub case: PathBuf,
+    /// `[nx, ny]` modules.
+    pub modules: [usize; 2],
+    /// The module.
+    pub module: ModuleKind,
+    /// Nodes.
+    pub nodes: usize,
+    /// Free dofs.
+    pub free_dofs: usize,
+    /// Clamped nodes.
+    pub clamped_nodes: usize,
+    /// Cables.
+    pub cables: usize,
+    /// Whether the cables carry tension only.
+    pub unilateral: bool,
+    /// Bars.
+    pub bars: usize,
+    /// `max |Bᵀt0|` over all dofs, N.
+    pub prestress_imbalance: f64,
+    /// The lower cable prestress p, N.
+    pub prestress: f64,
+    /// The load factors.
+    pub alphas: Vec<f64>,
+    /// The solvers.
+    pub methods: Vec<Method>,
+}
+
+/// The partition of one LATIN solver.
+#[derive(Debug, Clone)]
+pub struct LatinReport {
+    /// `mono-latin` or `micro-macro`.
+    pub method: Method,
+    /// Its settings.
+    pub settings: LatinSettings,
+    /// Its partition.
+    pub partition: PartitionReport,
+}
+
+/// What `tensolve check` found.
+#[derive(Debug)]
+pub struct CheckReport {
+    /// The model.
+    pub model: ModelReport,
+    /// The stiffness with every cable taut is positive definite (no mechanism).
+    pub stiffness_regular: bool,
+    /// The partition of every LATIN solver set up before `error`.
+    pub latin: Vec<LatinReport>,
+    /// Why a solver cannot be set up: a mechanism, or a LATIN partition that cannot be.
+    pub error: Option<SetupError>,
+}
+
+/// Check `case` (read from `path`).
+pub fn check(case: &Case, path: PathBuf) -> CheckReport {
+    let s = case.structure();
+    let model = ModelReport {
+        case: path,
+        modules: case.grid.modules,
+        module: case.grid.module,
+        nodes: s.n_nodes(),
+        free_dofs: s.n_free,
+        clamped_nodes: s.clamped.iter().filter(|&&c| c).count(),
+        cables: s.n_cables(),
+        unilateral: case.grid.cables.unilateral,
+        bars: s.n_bars(),
+        prestress_imbalance: s.prestress_imbalance(),
+        prestress: s.prestress_scale,
+        alphas: case.load.alphas.clone(),
+        methods: case.solver.methods.clone(),
+    };
+    let mut report = CheckReport {
+        model,
+        stiffness_regular: false,
+        latin: Vec::new(),
+        error: None,
+    };
+    if let Err(e) = TautStiffness::new(&s) {
+        report.error = Some(e);
+        return report;
+    }
+    report.stiffness_regular = true;
+    for &method in &case.solver.methods {
+        let Some(settings) = case.solver.latin_settings(method) else {
+            continue;
+        };
+        match Latin::new(&s, settings) {
+            Ok(latin) => report.latin.push(LatinReport {
+                method,
+                settings,
+                partition: latin.report(),
+            }),
+            Err(e) => {
+                report.error = Some(e);
+                break;
+            }
+        }
+    }
+    report
+}
+
+impl fmt::Display for CheckReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.model;
+        writeln!(f, "case            {}", m.case.display())?;
+        writeln!(
+            f,
+            "grid            {} x {} modules ({:?})",
+            m.modules[0], m.modules[1], m.module
+        )?;
+        writeln!(f, "nodes           {}", m.nodes)?;
+        writeln!(f, "dofs            {}", 3 * m.nodes)?;
+        writeln!(f, "free dofs       {}", m.free_dofs)?;
+        writeln!(f, "clamped nodes   {}", m.clamped_nodes)?;
+        writeln!(
+            f,
+            "cables          {} ({})",
+            m.cables,
+            if m.unilateral {
+                "unilateral"
+            } else {
+                "bilateral"
+            }
+        )?;
+        writeln!(f, "bars            {}", m.bars)?;
+        writeln!(
+            f,
+            "max |B^T t0|    {:.3e} N ({:.1e} of the lower cable prestress)",
+            m.prestress_imbalance,
+            if m.prestress > 0.0 {
+                m.prestress_imbalance / m.prestress
+            } else {
+                0.0
+            }
+        )?;
+        let alphas: Vec<String> = m.alphas.iter().map(|&a| alpha_label(a)).collect();
+        writeln!(f, "load factors    {}", alphas.join(", "))?;
+        let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();
+        writeln!(f, "solvers         {}", methods.join(", "))?;
+        if !self.stiffness_regular {
+            return Ok(());
+        }
+        writeln!(f, "stiffness       positive definite with every cable taut")?;
+        for LatinReport {
+            method,
+            settings,
+            partition: r,
+        } in &self.latin
+        {
+            let [sx, sy] = settings.subdomains;
+            writeln!(f, "{}:", method.name())?;
+            writeln!(
+                f,
+                "  substructures {} ({sx} x {sy}), largest {} free dofs",
+                r.substructures, r.max_substructure_dofs
+            )?;
+            writeln!(
+                f,
+                "  interfaces    {} ({} strong, {} weak, {} dropped; weak = {:?})",
+                r.interfaces,
+                r.strong_interfaces,
+                r.weak_interfaces,
+                r.dropped_interfaces,
+                settings.weak
+            )?;
+            writeln!(f, "  macro dofs    {}", r.macro_dofs)?;
+            writeln!(f, "  kernel cols   {}", r.kernel_columns)?;
+        }
+        Ok(())
+    }
+}

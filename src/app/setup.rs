@@ -1,0 +1,78 @@
+//! Setting solvers up for a case: the structure and its mechanism check built once and timed,
+//! then each solver asked for, with the set-up time it is charged.
+
+use crate::case::{Case, SolverChoice};
+use crate::solvers::latin::Latin;
+use crate::solvers::newton::Newton;
+use crate::solvers::pcg_lcp::PcgLcp;
+use crate::solvers::{AnySolver, Method, SetupError, TautStiffness};
+use crate::structure::Structure;
+use std::time::Instant;
+
+/// The structure and its taut stiffness (the mechanism check), built once and timed.
+pub struct Prepared {
+    /// The structure of the case.
+    pub structure: Structure,
+    /// Its stiffness with every cable taut, factorized.
+    pub taut: TautStiffness,
+    /// Time to build the structure, s.
+    pub structure_seconds: f64,
+    /// Time to assemble and factorize the taut stiffness and check for a mechanism, s.
+    pub taut_seconds: f64,
+}
+
+/// Build the structure of `case` and refuse a mechanism.
+pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
+    let clock = Instant::now();
+    let structure = case.structure();
+    let structure_seconds = clock.elapsed().as_secs_f64();
+    let taut = TautStiffness::new(&structure)?;
+    Ok(Prepared {
+        structure,
+        taut,
+        structure_seconds,
+        taut_seconds: clock.elapsed().as_secs_f64() - structure_seconds,
+    })
+}
+
+/// A solver set up for the prepared structure.
+pub struct SetUpSolver<'s> {
+    /// Which solver.
+    pub method: Method,
+    /// The solver.
+    pub solver: Box<dyn AnySolver + 's>,
+    /// Its set-up time, s: the structure, plus for `newton` and `pcg-lcp` the factorization of
+    /// the taut stiffness they solve with (the LATIN solvers never use it), plus its own.
+    pub setup_seconds: f64,
+}
+
+/// Set `method` up with the settings of `choice`.
+pub fn set_up<'s>(
+    method: Method,
+    choice: &SolverChoice,
+    prepared: &'s Prepared,
+) -> Result<SetUpSolver<'s>, SetupError> {
+    let (structure, taut) = (&prepared.structure, &prepared.taut);
+    let clock = Instant::now();
+    let (solver, shared): (Box<dyn AnySolver + 's>, f64) = match method {
+        Method::Newton => (
+            Box::new(Newton::new(structure, taut, choice.newton)?),
+            prepared.taut_seconds,
+        ),
+        Method::PcgLcp => (
+            Box::new(PcgLcp::new(structure, taut, choice.pcg_lcp)),
+            prepared.taut_seconds,
+        ),
+        Method::MonoLatin | Method::MicroMacro => {
+            let settings = choice
+                .latin_settings(method)
+                .expect("a LATIN method has LATIN settings");
+            (Box::new(Latin::new(structure, settings)?), 0.0)
+        }
+    };
+    Ok(SetUpSolver {
+        method,
+        solver,
+        setup_seconds: prepared.structure_seconds + shared + clock.elapsed().as_secs_f64(),
+    })
+}

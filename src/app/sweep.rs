@@ -1,0 +1,264 @@
+//! `tensolve run`: one case, end to end. Build the structure, set the asked solvers up once,
+//! solve every α, hand every solve to the sinks the case asks for. Only what the case asks
+//! for is computed and written.
+
+use super::setup::{prepare, set_up, Prepared, SetUpSolver};
+use crate::case::{Case, CaseError};
+use crate::output::{
+    self, alpha_label,
+    sinks::{
+        DisplacementsSink, HistorySink, PlotsSink, StabilitySink, SummarySink, TensionsSink,
+        VtkSink,
+    },
+    Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
+};
+use crate::results;
+use crate::solvers::{Measure, Method, Reference, SetupError, Silent, Solution};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// What the command line adds to a case.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Overrides `output.dir`.
+    pub out_dir: Option<PathBuf>,
+    /// Overrides `solver.methods`.
+    pub methods: Option<Vec<Method>>,
+}
+
+/// Why a run failed, or did not produce all that was asked.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The case is invalid.
+    #[error(transparent)]
+    Case(#[from] CaseError),
+    /// A solver cannot be set up for the structure (a mechanism, a singular partition).
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// The output directory cannot be created or written.
+    #[error(
+        "output directory `{dir}` is not writable ({reason}): set `output.dir` in the case or \
+         pass `--out DIR` with a directory you can write to"
+    )]
+    OutputDir {
+        /// The directory.
+        dir: String,
+        /// Why.
+        reason: String,
+    },
+    /// A file could not be written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// Some solves did not meet their stopping criterion (their rows say so) or had no finite
+    /// answer (no row, no files).
+    #[error("{count} solve(s) did not converge: {list}; their rows say converged = false")]
+    NotConverged {
+        /// How many.
+        count: usize,
+        /// Which, and how they ended.
+        list: String,
+    },
+}
+
+impl RunError {
+    /// 2 for bad input (the case, the structure it describes, the output directory); 1 when
+    /// the run could not produce what was asked.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. } => 2,
+            RunError::Write { .. } | RunError::NotConverged { .. } => 1,
+        }
+    }
+}
+
+/// The output directory: `--out`, else `output.dir`, else `out/case`.
+pub fn output_dir(case: &Case, options: &RunOptions) -> PathBuf {
+    options
+        .out_dir
+        .clone()
+        .or_else(|| case.output.dir.clone())
+        .unwrap_or_else(|| PathBuf::from("out/case"))
+}
+
+/// Run a validated case. `on_row` sees every summary row as soon as it is written.
+pub fn run(
+    case: &Case,
+    options: &RunOptions,
+    on_row: &mut dyn FnMut(&SummaryRow),
+) -> Result<Vec<SummaryRow>, RunError> {
+    let dir = output_dir(case, options);
+    let methods = options
+        .methods
+        .clone()
+        .unwrap_or_else(|| case.solver.methods.clone());
+
+    // 1. The structure and its mechanism check (K with every cable taut, factorized).
+    let prepared = prepare(case)?;
+    let structure = &prepared.structure;
+    // 2. Every solver asked for, set up once.
+    let mut solvers = methods
+        .iter()
+        .map(|&m| set_up(m, &case.solver, &prepared))
+        .collect::<Result<Vec<_>, _>>()?;
+    // 3. Where LATIN's error e is measured from.
+    let mut reference = ReferenceSource::new(case, &solvers, &prepared)?;
+    // 4. The sinks of the files asked for; their directory, once the case is known solvable.
+    let mut sinks = sinks(case, &dir, &prepared, &solvers);
+    if !sinks.is_empty() {
+        output::ensure_writable(&dir).map_err(|e| RunError::OutputDir {
+            dir: dir.display().to_string(),
+            reason: e.to_string(),
+        })?;
+    }
+    // 5. Every α, every solver.
+    let mut rows = Vec::new();
+    let mut failures = Vec::new();
+    for &alpha in &case.load.alphas {
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let reference_solution = reference.solve(&load, &mut solvers);
+        let reference_errors = reference_solution
+            .as_ref()
+            .map(|r| Reference::new(structure, &r.equilibrium.displacements));
+        for (index, set_up) in solvers.iter_mut().enumerate() {
+            let key = SolveKey {
+                solver: set_up.method.name(),
+                alpha,
+                measure: set_up.solver.stopping_measure(),
+            };
+            sinks.start(&key)?;
+            let solution = match (reference.shared_index(), &reference_solution) {
+                (Some(i), Some(r)) if i == index => r.clone(),
+                _ => set_up
+                    .solver
+                    .solve(&load, reference_errors.as_ref(), &mut sinks),
+            };
+            // 6. A non-finite answer is reported, never written.
+            if !results::is_finite(&solution) {
+                sinks.end(&key, SolveEnd::NonFinite)?;
+                failures.push(format!(
+                    "{} at alpha = {}: produced non-finite values after {} iterations ({:?}); no files written for it",
+                    key.solver,
+                    alpha_label(alpha),
+                    solution.info.iterations,
+                    solution.info.status
+                ));
+                continue;
+            }
+            let row = SummaryRow::new(
+                key.solver,
+                alpha,
+                structure,
+                &solution,
+                set_up.setup_seconds,
+            );
+            if !row.converged {
+                failures.push(format!(
+                    "{} at alpha = {}: not converged after {} iterations ({:?}), {} = {:e}",
+                    row.solver,
+                    alpha_label(alpha),
+                    row.iterations,
+                    solution.info.status,
+                    solution.info.measure.short_name(),
+                    row.residual
+                ));
+            }
+            // 7. The files of this solve.
+            sinks.end(
+                &key,
+                SolveEnd::Solved {
+                    solution: &solution,
+                    row: &row,
+                },
+            )?;
+            on_row(&row);
+            rows.push(row);
+        }
+    }
+    // 8. The files of the whole sweep.
+    sinks.close()?;
+    if failures.is_empty() {
+        Ok(rows)
+    } else {
+        Err(RunError::NotConverged {
+            count: failures.len(),
+            list: failures.join("; "),
+        })
+    }
+}
+
+/// The sinks of the files `case` asks for, in the order they write.
+fn sinks<'s>(
+    case: &Case,
+    dir: &Path,
+    prepared: &'s Prepared,
+    solvers: &[SetUpSolver<'_>],
+) -> Sinks<'s> {
+    let (structure, taut) = (&prepared.structure, &prepared.taut);
+    let out = &case.output;
+    let has_history = solvers
+        .iter()
+        .any(|s| s.solver.stopping_measure() == Measure::Indicator);
+    let mut sinks = Sinks::default();
+    sinks.add(
+        out.history && has_history,
+        HistorySink::new(dir, structure.n_cables()),
+    );
+    sinks.add(out.tensions, TensionsSink::new(dir, structure));
+    sinks.add(out.displacements, DisplacementsSink::new(dir, structure));
+    sinks.add(out.vtk, VtkSink::new(dir, structure));
+    if let Some(first) = solvers.first().filter(|_| out.plots) {
+        sinks.add(true, PlotsSink::new(dir, structure, first.method.name()));
+    }
+    sinks.add(out.stability, StabilitySink::new(dir, structure, taut));
+    sinks.add(out.summary, SummarySink::new(dir));
+    sinks
+}
+
+/// Where the reference of the LATIN error comes from.
+enum ReferenceSource<'s> {
+    /// No solver reports e (none stops on η), or `solver.reference = "none"`.
+    Unneeded,
+    /// A solver of the case at its default settings: its own solution serves.
+    Shared(usize),
+    /// A solver of its own, with the solver's default (tight) settings.
+    Own(SetUpSolver<'s>),
+}
+
+impl<'s> ReferenceSource<'s> {
+    fn new(
+        case: &Case,
+        solvers: &[SetUpSolver<'_>],
+        prepared: &'s Prepared,
+    ) -> Result<Self, SetupError> {
+        let reports_error = solvers
+            .iter()
+            .any(|s| s.solver.stopping_measure() == Measure::Indicator);
+        let Some(method) = case.solver.reference.method().filter(|_| reports_error) else {
+            return Ok(ReferenceSource::Unneeded);
+        };
+        let shared = solvers
+            .iter()
+            .position(|s| s.method == method && case.solver.is_default(method));
+        Ok(match shared {
+            Some(i) => ReferenceSource::Shared(i),
+            None => ReferenceSource::Own(set_up(method, &Default::default(), prepared)?),
+        })
+    }
+
+    /// The reference solution at `load`, if one is needed.
+    fn solve(&mut self, load: &[f64], solvers: &mut [SetUpSolver<'_>]) -> Option<Solution> {
+        match self {
+            ReferenceSource::Unneeded => None,
+            ReferenceSource::Shared(i) => Some(solvers[*i].solver.solve(load, None, &mut Silent)),
+            ReferenceSource::Own(own) => Some(own.solver.solve(load, None, &mut Silent)),
+        }
+    }
+
+    /// The solver whose own solve is the reference.
+    fn shared_index(&self) -> Option<usize> {
+        match self {
+            ReferenceSource::Shared(i) => Some(*i),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,47 @@
+//! Why a case cannot be used: every message names the key (or the line and column), the value
+//! and the fix.
+
+use thiserror::Error;
+
+/// Why a case cannot be used. Displayed messages are meant for the user as they are.
+#[derive(Debug, Error)]
+pub enum CaseError {
+    /// The file cannot be read.
+    #[error("cannot read case file `{path}`: {reason}")]
+    Io {
+        /// The path as given.
+        path: String,
+        /// The operating system's reason.
+        reason: String,
+    },
+    /// Not TOML, an unknown key, or a value of the wrong type (toml's message, with line and
+    /// column).
+    #[error("case file is not valid: {0}")]
+    Syntax(String),
+    /// A value out of its range.
+    #[error("`{key}` = {value} is not valid: {fix}")]
+    Invalid {
+        /// The key, as written in the file.
+        key: &'static str,
+        /// The value, as a user would write it.
+        value: String,
+        /// What is allowed.
+        fix: String,
+    },
+}
+
+impl CaseError {
+    pub(crate) fn from_toml(e: toml::de::Error) -> Self {
+        // toml's message already has the line, the column, the offending text and, for
+        // unknown keys or variants, the allowed names; keep it on one line per fact.
+        CaseError::Syntax(e.to_string().trim_end().to_string())
+    }
+
+    pub(super) fn invalid(key: &'static str, value: impl ToString, fix: impl Into<String>) -> Self {
+        CaseError::Invalid {
+            key,
+            value: value.to_string(),
+            fix: fix.into(),
+        }
+    }
+}

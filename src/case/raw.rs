@@ -1,0 +1,110 @@
+//! The case file as written: serde structs mirroring its sections, every key optional but
+//! `grid.modules` and `load.alpha`, unknown keys rejected by name (`deny_unknown_fields`).
+//! Nothing here has a default value: [`super::convert`] takes each default from the type it
+//! configures.
+
+use crate::solvers::latin::WeakInterfaces;
+use crate::solvers::Method;
+use crate::structure::{Clamp, ModuleKind};
+use serde::Deserialize;
+use std::path::PathBuf;
+
+use super::ReferenceChoice;
+
+/// A whole case file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCase {
+    pub grid: RawGrid,
+    #[serde(default)]
+    pub cables: RawCables,
+    #[serde(default)]
+    pub bars: RawBars,
+    #[serde(default)]
+    pub prestress: RawPrestress,
+    #[serde(default)]
+    pub supports: RawSupports,
+    pub load: RawLoad,
+    #[serde(default)]
+    pub solver: RawSolver,
+    #[serde(default)]
+    pub output: RawOutput,
+}
+
+/// `[grid]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawGrid {
+    pub modules: [usize; 2],
+    pub length: Option<f64>,
+    pub height: Option<f64>,
+    pub module: Option<ModuleKind>,
+}
+
+/// `[cables]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCables {
+    pub young: Option<f64>,
+    pub section: Option<f64>,
+    pub unilateral: Option<bool>,
+}
+
+/// `[bars]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawBars {
+    pub young: Option<f64>,
+    pub section: Option<f64>,
+}
+
+/// `[prestress]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPrestress {
+    pub lower_cable: Option<f64>,
+}
+
+/// `[supports]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSupports {
+    pub clamp: Option<Clamp>,
+}
+
+/// `[load]`. `alpha` is a list or a `{ from, to, steps }` table, read by hand so that each
+/// mistake gets its own message.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawLoad {
+    pub nodal: Option<[f64; 3]>,
+    pub alpha: toml::Value,
+}
+
+/// `[solver]`. `l` is `"stiffness"` or a number, read by hand.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSolver {
+    pub methods: Option<Vec<Method>>,
+    pub tolerance: Option<f64>,
+    pub max_iterations: Option<usize>,
+    pub subdomains: Option<[usize; 2]>,
+    pub dm: Option<f64>,
+    pub l: Option<toml::Value>,
+    pub weak_interfaces: Option<WeakInterfaces>,
+    pub reference: Option<ReferenceChoice>,
+}
+
+/// `[output]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawOutput {
+    pub dir: Option<PathBuf>,
+    pub summary: Option<bool>,
+    pub tensions: Option<bool>,
+    pub displacements: Option<bool>,
+    pub history: Option<bool>,
+    pub plots: Option<bool>,
+    pub vtk: Option<bool>,
+    pub stability: Option<bool>,
+}

@@ -1,0 +1,151 @@
+//! The case as the program uses it: fully typed, every number validated, every default filled
+//! in from the type it configures.
+
+use crate::solvers::latin::LatinSettings;
+use crate::solvers::newton::NewtonSettings;
+use crate::solvers::pcg_lcp::PcgLcpSettings;
+use crate::solvers::Method;
+use crate::structure::{GridSpec, LoadPattern, Structure};
+use serde::Deserialize;
+use std::path::PathBuf;
+
+/// A validated case: what structure to build, which solvers to run over which load factors,
+/// and which files to write.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    /// The module grid, its members, prestress and supports.
+    pub grid: GridSpec,
+    /// The load pattern and the load factors.
+    pub load: Load,
+    /// The solvers and their settings.
+    pub solver: SolverChoice,
+    /// What to write, and where.
+    pub output: OutputChoice,
+}
+
+impl Case {
+    /// The structure the case describes, under its load pattern at α = 1.
+    pub fn structure(&self) -> Structure {
+        Structure::grid(&self.grid, &self.load.pattern)
+    }
+}
+
+/// The load: `α · pattern` for every α.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Load {
+    /// The load at α = 1.
+    pub pattern: LoadPattern,
+    /// The load factors α, in solve order; finite, at least one.
+    pub alphas: Vec<f64>,
+}
+
+/// The solution the LATIN error e is measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReferenceChoice {
+    /// newton at its own tight defaults.
+    #[default]
+    Newton,
+    /// pcg-lcp at its own tight defaults.
+    PcgLcp,
+    /// No reference is computed; e is left empty.
+    None,
+}
+
+impl ReferenceChoice {
+    /// The solver of the reference, if any.
+    pub fn method(self) -> Option<Method> {
+        match self {
+            ReferenceChoice::Newton => Some(Method::Newton),
+            ReferenceChoice::PcgLcp => Some(Method::PcgLcp),
+            ReferenceChoice::None => None,
+        }
+    }
+}
+
+/// `[solver]`: which solvers, with which settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverChoice {
+    /// Solvers to run, in order; at least one.
+    pub methods: Vec<Method>,
+    /// Settings of `newton`.
+    pub newton: NewtonSettings,
+    /// Settings of `pcg-lcp`.
+    pub pcg_lcp: PcgLcpSettings,
+    /// Settings of `micro-macro`; `mono-latin` uses them on a 1 × 1 partition.
+    pub latin: LatinSettings,
+    /// What LATIN's e is measured against.
+    pub reference: ReferenceChoice,
+}
+
+impl Default for SolverChoice {
+    fn default() -> Self {
+        SolverChoice {
+            methods: vec![Method::Newton, Method::PcgLcp],
+            newton: NewtonSettings::default(),
+            pcg_lcp: PcgLcpSettings::default(),
+            latin: LatinSettings::default(),
+            reference: ReferenceChoice::default(),
+        }
+    }
+}
+
+impl SolverChoice {
+    /// The LATIN settings of `method` (`mono-latin`: the 1 × 1 partition), `None` for the
+    /// other solvers.
+    pub fn latin_settings(&self, method: Method) -> Option<LatinSettings> {
+        match method {
+            Method::MonoLatin => Some(self.latin.monodomain()),
+            Method::MicroMacro => Some(self.latin),
+            Method::Newton | Method::PcgLcp => None,
+        }
+    }
+
+    /// Whether `method` runs at its own default settings (its solution then serves as the
+    /// reference of the LATIN error).
+    pub fn is_default(&self, method: Method) -> bool {
+        let defaults = SolverChoice::default();
+        match method {
+            Method::Newton => self.newton == defaults.newton,
+            Method::PcgLcp => self.pcg_lcp == defaults.pcg_lcp,
+            Method::MonoLatin | Method::MicroMacro => false,
+        }
+    }
+}
+
+/// `[output]`: which files to write, and where. Each default written once, at its field.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputChoice {
+    /// Output directory. Default `out/<case file stem>`; `--out` overrides it.
+    pub dir: Option<PathBuf>,
+    /// `summary.csv`, one row per solver and α. Default true.
+    pub summary: bool,
+    /// `tensions/{solver}_alpha{α}.csv`. Default true.
+    pub tensions: bool,
+    /// `displacements/{solver}_alpha{α}.csv`. Default true.
+    pub displacements: bool,
+    /// `history/{solver}_alpha{α}.csv` of the LATIN solvers (e, η per iteration). Default true.
+    pub history: bool,
+    /// SVG figures under `plots/` (the paper's Figures 6–11). Default false.
+    pub plots: bool,
+    /// `vtk/{solver}_alpha{α}.vtu`, VTK XML unstructured grids for ParaView. Default false.
+    pub vtk: bool,
+    /// `stability.csv`: the smallest eigenvalue of the tangent stiffness at every solution
+    /// (one more factorization per row). Default false.
+    pub stability: bool,
+}
+
+impl Default for OutputChoice {
+    fn default() -> Self {
+        OutputChoice {
+            dir: None,
+            summary: true,
+            tensions: true,
+            displacements: true,
+            history: true,
+            plots: false,
+            vtk: false,
+            stability: false,
+        }
+    }
+}

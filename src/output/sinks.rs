@@ -1,0 +1,394 @@
+//! One sink per file family. A sweep hands every solve to the sinks the case asks for: each
+//! sees the solve start, its iterations, its end, and the end of the sweep, and writes its own
+//! files. Nothing here solves.
+//!
+//! | sink | files |
+//! |---|---|
+//! | [`HistorySink`] | `history/{solver}_alpha{α}.csv`, as the iterations go |
+//! | [`TensionsSink`] | `tensions/{solver}_alpha{α}.csv` |
+//! | [`DisplacementsSink`] | `displacements/{solver}_alpha{α}.csv` |
+//! | [`VtkSink`] | `vtk/{solver}_alpha{α}.vtu` |
+//! | [`PlotsSink`] | `plots/*.svg`, at the end of the sweep |
+//! | [`StabilitySink`] | `stability.csv`, rewritten after every solve |
+//! | [`SummarySink`] | `summary.csv`, rewritten after every solve |
+
+use super::{
+    vtu_path, write_displacements, write_stability, write_summary, write_tensions, write_vtu,
+    FigureData, HistoryWriter, StabilityRow, SummaryRow,
+};
+use crate::results;
+use crate::solvers::{IterationRecord, Measure, Solution, TautStiffness};
+use crate::structure::Structure;
+use std::io;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// A file that could not be written.
+#[derive(Debug, Error)]
+#[error("could not write `{}`: {source}", path.display())]
+pub struct WriteError {
+    /// The file, or the directory of a family of files.
+    pub path: PathBuf,
+    /// Why.
+    pub source: io::Error,
+}
+
+impl WriteError {
+    fn at(path: impl Into<PathBuf>) -> impl FnOnce(io::Error) -> WriteError {
+        let path = path.into();
+        move |source| WriteError { path, source }
+    }
+}
+
+/// Which solve is starting.
+#[derive(Debug, Clone, Copy)]
+pub struct SolveKey<'a> {
+    /// The solver's name.
+    pub solver: &'a str,
+    /// The load factor.
+    pub alpha: f64,
+    /// What the solver's stopping measure measures.
+    pub measure: Measure,
+}
+
+/// How a solve ended, as the sinks see it.
+#[derive(Debug, Clone, Copy)]
+pub enum SolveEnd<'a> {
+    /// A finite answer and its summary row.
+    Solved {
+        /// The solver's answer.
+        solution: &'a Solution,
+        /// Its row of `summary.csv`.
+        row: &'a SummaryRow,
+    },
+    /// The answer has a non-finite value: no file of it is written.
+    NonFinite,
+}
+
+/// A family of output files.
+pub trait Sink {
+    /// A solve starts.
+    fn start(&mut self, _key: &SolveKey) -> Result<(), WriteError> {
+        Ok(())
+    }
+
+    /// An iterate of the current solve.
+    fn iteration(&mut self, _record: &IterationRecord) {}
+
+    /// The current solve ended.
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError>;
+
+    /// The sweep ended.
+    fn close(&mut self) -> Result<(), WriteError> {
+        Ok(())
+    }
+}
+
+/// `history/{solver}_alpha{α}.csv` of the solvers whose stopping measure is the indicator η.
+pub struct HistorySink {
+    dir: PathBuf,
+    cables: usize,
+    writer: Option<HistoryWriter>,
+}
+
+impl HistorySink {
+    /// Histories under `dir/history` of a structure of `cables` cables.
+    pub fn new(dir: &Path, cables: usize) -> Self {
+        HistorySink {
+            dir: dir.to_path_buf(),
+            cables,
+            writer: None,
+        }
+    }
+}
+
+impl Sink for HistorySink {
+    fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
+        if key.measure == Measure::Indicator {
+            let writer = HistoryWriter::create(&self.dir, key.solver, key.alpha, self.cables)
+                .map_err(WriteError::at(self.dir.join("history")))?;
+            self.writer = Some(writer);
+        }
+        Ok(())
+    }
+
+    fn iteration(&mut self, record: &IterationRecord) {
+        if let Some(writer) = self.writer.as_mut() {
+            crate::solvers::Observer::iteration(writer, record);
+        }
+    }
+
+    fn end(&mut self, _key: &SolveKey, _end: SolveEnd) -> Result<(), WriteError> {
+        match self.writer.take() {
+            Some(writer) => writer
+                .finish()
+                .map(|_| ())
+                .map_err(WriteError::at(self.dir.join("history"))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// `tensions/{solver}_alpha{α}.csv`.
+pub struct TensionsSink<'s> {
+    dir: PathBuf,
+    structure: &'s Structure,
+}
+
+impl<'s> TensionsSink<'s> {
+    /// Tension files of `structure` under `dir/tensions`.
+    pub fn new(dir: &Path, structure: &'s Structure) -> Self {
+        TensionsSink {
+            dir: dir.to_path_buf(),
+            structure,
+        }
+    }
+}
+
+impl Sink for TensionsSink<'_> {
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { solution, .. } = end else {
+            return Ok(());
+        };
+        write_tensions(
+            &self.dir,
+            key.solver,
+            key.alpha,
+            self.structure,
+            &solution.equilibrium,
+        )
+        .map(|_| ())
+        .map_err(WriteError::at(self.dir.join("tensions")))
+    }
+}
+
+/// `displacements/{solver}_alpha{α}.csv`.
+pub struct DisplacementsSink<'s> {
+    dir: PathBuf,
+    structure: &'s Structure,
+}
+
+impl<'s> DisplacementsSink<'s> {
+    /// Displacement files of `structure` under `dir/displacements`.
+    pub fn new(dir: &Path, structure: &'s Structure) -> Self {
+        DisplacementsSink {
+            dir: dir.to_path_buf(),
+            structure,
+        }
+    }
+}
+
+impl Sink for DisplacementsSink<'_> {
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { solution, .. } = end else {
+            return Ok(());
+        };
+        write_displacements(
+            &self.dir,
+            key.solver,
+            key.alpha,
+            self.structure,
+            &solution.equilibrium,
+        )
+        .map(|_| ())
+        .map_err(WriteError::at(self.dir.join("displacements")))
+    }
+}
+
+/// `vtk/{solver}_alpha{α}.vtu`.
+pub struct VtkSink<'s> {
+    dir: PathBuf,
+    structure: &'s Structure,
+}
+
+impl<'s> VtkSink<'s> {
+    /// VTU files of `structure` under `dir/vtk`.
+    pub fn new(dir: &Path, structure: &'s Structure) -> Self {
+        VtkSink {
+            dir: dir.to_path_buf(),
+            structure,
+        }
+    }
+}
+
+impl Sink for VtkSink<'_> {
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { solution, .. } = end else {
+            return Ok(());
+        };
+        write_vtu(
+            &self.dir,
+            key.solver,
+            key.alpha,
+            self.structure,
+            &solution.equilibrium,
+        )
+        .map(|_| ())
+        .map_err(WriteError::at(vtu_path(&self.dir, key.solver, key.alpha)))
+    }
+}
+
+/// `plots/*.svg`: gathers what the figures need along the sweep (the convergence figures from
+/// the iteration records of the solvers whose stopping measure is η) and draws them at its end.
+pub struct PlotsSink<'s> {
+    dir: PathBuf,
+    structure: &'s Structure,
+    figures: FigureData,
+    /// Records of the current solve, when its convergence is drawn.
+    records: Option<Vec<IterationRecord>>,
+}
+
+impl<'s> PlotsSink<'s> {
+    /// Figures of `structure` under `dir/plots`; Figures 6 and 8 show `first_solver`.
+    pub fn new(dir: &Path, structure: &'s Structure, first_solver: &str) -> Self {
+        PlotsSink {
+            dir: dir.to_path_buf(),
+            structure,
+            figures: FigureData::new(first_solver),
+            records: None,
+        }
+    }
+}
+
+impl Sink for PlotsSink<'_> {
+    fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
+        self.records = (key.measure == Measure::Indicator).then(Vec::new);
+        Ok(())
+    }
+
+    fn iteration(&mut self, record: &IterationRecord) {
+        if let Some(records) = self.records.as_mut() {
+            records.push(*record);
+        }
+    }
+
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let records = self.records.take();
+        if let SolveEnd::Solved { solution, .. } = end {
+            self.figures
+                .add_solve(key.solver, key.alpha, self.structure, &solution.equilibrium);
+            if let Some(records) = records {
+                self.figures.add_history(key.solver, key.alpha, records);
+            }
+        }
+        Ok(())
+    }
+
+    fn close(&mut self) -> Result<(), WriteError> {
+        self.figures
+            .write(&self.dir, self.structure)
+            .map(|_| ())
+            .map_err(WriteError::at(self.dir.join("plots")))
+    }
+}
+
+/// `stability.csv`: the smallest tangent eigenvalue of every solution.
+pub struct StabilitySink<'s> {
+    path: PathBuf,
+    structure: &'s Structure,
+    taut: &'s TautStiffness,
+    rows: Vec<StabilityRow>,
+}
+
+impl<'s> StabilitySink<'s> {
+    /// `dir/stability.csv`; the eigenvalues reuse the symbolic factorization of `taut`.
+    pub fn new(dir: &Path, structure: &'s Structure, taut: &'s TautStiffness) -> Self {
+        StabilitySink {
+            path: dir.join("stability.csv"),
+            structure,
+            taut,
+            rows: Vec::new(),
+        }
+    }
+}
+
+impl Sink for StabilitySink<'_> {
+    fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { solution, row } = end else {
+            return Ok(());
+        };
+        self.rows.push(StabilityRow {
+            solver: row.solver.clone(),
+            alpha: row.alpha,
+            slack_cables: row.slack_cables,
+            min_tangent_eigenvalue: results::smallest_tangent_eigenvalue(
+                self.structure,
+                &solution.equilibrium,
+                self.taut,
+            ),
+        });
+        write_stability(&self.path, &self.rows).map_err(WriteError::at(&self.path))
+    }
+}
+
+/// `summary.csv`, rewritten whole after every solve: an interrupted sweep leaves a complete
+/// file.
+pub struct SummarySink {
+    path: PathBuf,
+    rows: Vec<SummaryRow>,
+}
+
+impl SummarySink {
+    /// `dir/summary.csv`.
+    pub fn new(dir: &Path) -> Self {
+        SummarySink {
+            path: dir.join("summary.csv"),
+            rows: Vec::new(),
+        }
+    }
+}
+
+impl Sink for SummarySink {
+    fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { row, .. } = end else {
+            return Ok(());
+        };
+        self.rows.push(row.clone());
+        write_summary(&self.path, &self.rows).map_err(WriteError::at(&self.path))
+    }
+}
+
+/// Every sink of a sweep behind one: the solve's observer and its ending, in order.
+#[derive(Default)]
+pub struct Sinks<'s> {
+    sinks: Vec<Box<dyn Sink + 's>>,
+}
+
+impl<'s> Sinks<'s> {
+    /// Add `sink` when `wanted`.
+    pub fn add(&mut self, wanted: bool, sink: impl Sink + 's) {
+        if wanted {
+            self.sinks.push(Box::new(sink));
+        }
+    }
+
+    /// Whether any file is written.
+    pub fn is_empty(&self) -> bool {
+        self.sinks.is_empty()
+    }
+}
+
+impl Sink for Sinks<'_> {
+    fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
+        self.sinks.iter_mut().try_for_each(|s| s.start(key))
+    }
+
+    fn iteration(&mut self, record: &IterationRecord) {
+        self.sinks.iter_mut().for_each(|s| s.iteration(record));
+    }
+
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        self.sinks.iter_mut().try_for_each(|s| s.end(key, end))
+    }
+
+    fn close(&mut self) -> Result<(), WriteError> {
+        self.sinks.iter_mut().try_for_each(|s| s.close())
+    }
+}
+
+/// The sinks as the observer of a solve.
+impl crate::solvers::Observer for Sinks<'_> {
+    fn iteration(&mut self, record: &IterationRecord) {
+        Sink::iteration(self, record);
+    }
+}

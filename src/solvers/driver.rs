@@ -1,0 +1,108 @@
+//! The one driver of every solver: it owns the loop, the iteration cap, the timing and the
+//! calls to the observer.
+//!
+//! ```text
+//! state ← init(load)
+//! loop:
+//!     report the iterate (with e when a reference is given) to the observer
+//!     stop when the solver says so (converged or stalled), or at max_iterations
+//!     next_iter(state)
+//! answer ← iterate(state)
+//! ```
+//!
+//! The clock runs only while the solver works (`init`, `next_iter`, the final `iterate`):
+//! measuring e and the observers' own work are not charged to the solve.
+
+use super::{
+    Equilibrium, IterationRecord, Measure, Observer, Reference, Solution, SolveInfo, Solver, Status,
+};
+use std::time::{Duration, Instant};
+
+/// Solver time, accumulated over the calls it times.
+#[derive(Default)]
+struct Stopwatch(Duration);
+
+impl Stopwatch {
+    fn time<T>(&mut self, work: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let out = work();
+        self.0 += start.elapsed();
+        out
+    }
+
+    fn seconds(&self) -> f64 {
+        self.0.as_secs_f64()
+    }
+}
+
+/// Drive `solver` from `init` to its stop for `load` (free dofs, N). With `reference`, every
+/// iterate's energy error e is measured and reported.
+pub fn drive<S: Solver + ?Sized>(
+    solver: &mut S,
+    load: &[f64],
+    reference: Option<&Reference>,
+    observer: &mut dyn Observer,
+) -> Solution {
+    let mut clock = Stopwatch::default();
+    let mut state = clock.time(|| solver.init(load));
+    let (status, progress) = loop {
+        let progress = solver.progress(&state);
+        if progress.iteration > 0 || S::INIT_IS_ITERATE {
+            observer.iteration(&IterationRecord {
+                iteration: progress.iteration,
+                residual: progress.residual,
+                error: reference.map(|r| r.error(&solver.elongations(&state))),
+                slack_cables: progress.slack_cables,
+                elapsed_seconds: clock.seconds(),
+            });
+        }
+        if let Some(status) = progress.stop {
+            break (status, progress);
+        }
+        if progress.iteration >= solver.max_iterations() {
+            break (Status::MaxIterations, progress);
+        }
+        clock.time(|| solver.next_iter(&mut state));
+    };
+    let equilibrium: Equilibrium = clock.time(|| solver.iterate(&state));
+    Solution {
+        equilibrium,
+        info: SolveInfo {
+            status,
+            iterations: progress.iteration,
+            measure: solver.measure(),
+            residual: progress.residual,
+            solve_seconds: clock.seconds(),
+        },
+    }
+}
+
+/// A solver of any kind behind one object-safe interface: what the application holds in a
+/// list. Every [`Solver`] is one, solved through [`drive`].
+pub trait AnySolver {
+    /// Solve for `load` through the driver (see [`drive`]).
+    fn solve(
+        &mut self,
+        load: &[f64],
+        reference: Option<&Reference>,
+        observer: &mut dyn Observer,
+    ) -> Solution;
+
+    /// What the solver's stopping measure measures.
+    fn stopping_measure(&self) -> Measure;
+}
+
+impl<S: Solver> AnySolver for S {
+    fn solve(
+        &mut self,
+        load: &[f64],
+        reference: Option<&Reference>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        drive(self, load, reference, observer)
+    }
+
+    fn stopping_measure(&self) -> Measure {
+        self.measure()
+    }
+}

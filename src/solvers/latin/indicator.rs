@@ -1,0 +1,51 @@
+//! The LATIN indicator η (SPEC §4 "Indicator", paper §5.3) between s (a linear stage) and the
+//! ŝ that fed it, and what the state reports after each linear stage.
+
+use super::{Latin, LatinState, SubState};
+
+/// Δη below this fraction of the prestress scale is round-off (a load-induced Δη on the
+/// paper's case is 1e-4 of it at η = 1e-4).
+const ROUNDOFF: f64 = 1e-12;
+
+impl Latin<'_> {
+    /// `(Δη, η̃)`: η = Δη/η̃ between s and the ŝ that fed it (SPEC §4 "Indicator", §5.3).
+    fn indicator(&self, state: &[SubState]) -> (f64, f64) {
+        let dm = self.settings.dm;
+        let mut delta = 0.0;
+        let mut size = 0.0;
+        for (sub, st) in self.substructures.iter().zip(state) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                let l = self.search[i];
+                let d = (st.t[j] - st.t_hat[j]) + l * (st.e[j] - st.e_hat[j]);
+                delta += d * d / l;
+                let e_mid = 0.5 * (st.e[j] + st.e_hat[j]);
+                let t_mid = 0.5 * (st.t[j] + st.t_hat[j]);
+                size += l * e_mid * e_mid + t_mid * t_mid / l;
+            }
+            for ss in &st.sides {
+                for r in 0..ss.u.len() {
+                    let df = (ss.f[r] - ss.f_hat[r]) - dm * (ss.u[r] - ss.u_hat[r]);
+                    delta += df * df / dm;
+                    let u_mid = 0.5 * (ss.u[r] + ss.u_hat[r]);
+                    let f_mid = 0.5 * (ss.f[r] + ss.f_hat[r]);
+                    size += dm * u_mid * u_mid + f_mid * f_mid / dm;
+                }
+            }
+        }
+        ((0.5 * delta).sqrt(), (0.5 * size).sqrt())
+    }
+
+    /// η, the round-off stop and the slack count of `state` after a linear stage.
+    pub(super) fn measure_state(&self, state: &mut LatinState) {
+        let (distance, size) = self.indicator(&state.subs);
+        state.eta = if size > 0.0 { distance / size } else { 0.0 };
+        // η is scale-free: when s and ŝ are both round-off (no load: the exact answer is
+        // zero), it is a ratio of noise. Δη at round-off against the prestress is convergence.
+        state.at_roundoff = distance <= ROUNDOFF * self.prestress_scale;
+        state.slack_cables = state
+            .subs
+            .iter()
+            .map(|st| st.slack_hat.iter().filter(|&&x| x).count())
+            .sum();
+    }
+}

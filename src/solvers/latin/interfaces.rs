@@ -1,0 +1,120 @@
+//! The interfaces of a partition as the solver uses them: each with its macro basis and its
+//! place among the macro unknowns, redundant exact constraints at crosspoints left out.
+
+use super::macro_basis::macro_basis;
+use super::partition::{InterfaceTopology, Partition};
+use super::WeakInterfaces;
+use crate::structure::Structure;
+use nalgebra::DMatrix;
+
+/// An interface with its macro basis and where its macro forces sit in the macro problem.
+#[derive(Debug, Clone)]
+pub struct Interface {
+    /// Its two substructures and shared nodes.
+    pub topology: InterfaceTopology,
+    /// R: orthonormal columns, 3·nodes rows.
+    pub basis: DMatrix<f64>,
+    /// First column of its macro forces among the macro problem's unknowns.
+    pub macro_offset: usize,
+}
+
+/// Exact (all-macro) continuity constraints node by node, kept independent.
+///
+/// A node held by several substructures (a crosspoint) lies in one interface per pair of them.
+/// All-macro weak interfaces impose exact continuity of the node on each pair; around a
+/// crosspoint of four one-module substructures that is six constraints of which three are
+/// independent, and the macro problem would be singular. A union–find per node keeps a node in
+/// an interface only when the interface joins two substructures not yet tied at that node;
+/// otherwise its continuity already holds exactly through the others and the node leaves that
+/// interface.
+#[derive(Default)]
+struct ExactContinuity {
+    /// Per node: (substructure, component) of the substructures tied at it so far.
+    components: std::collections::HashMap<usize, Vec<(usize, usize)>>,
+}
+
+impl ExactContinuity {
+    fn keep_independent(&mut self, topology: &mut InterfaceTopology) {
+        let [a, b] = topology.sides;
+        let components = &mut self.components;
+        topology.nodes.retain(|&node| {
+            let comps = components.entry(node).or_default();
+            let mut find = |e: usize| -> usize {
+                match comps.iter().find(|(sub, _)| *sub == e) {
+                    Some(&(_, c)) => c,
+                    None => {
+                        comps.push((e, e));
+                        e
+                    }
+                }
+            };
+            let (ca, cb) = (find(a), find(b));
+            if ca == cb {
+                return false;
+            }
+            for entry in comps.iter_mut() {
+                if entry.1 == cb {
+                    entry.1 = ca;
+                }
+            }
+            true
+        });
+    }
+}
+
+/// The interfaces of `partition` that carry constraints, with their macro bases, and how many
+/// were dropped and how many nodes left out as redundant.
+pub(super) struct Interfaces {
+    /// The interfaces kept, macro offsets in this order.
+    pub list: Vec<Interface>,
+    /// Interfaces left out (`drop`, or all their nodes redundant).
+    pub dropped: usize,
+    /// Nodes left out of all-macro weak interfaces as redundant.
+    pub redundant_nodes: usize,
+}
+
+impl Interfaces {
+    /// The interfaces of `partition`, redundant exact constraints left out, with their bases.
+    pub(super) fn new(structure: &Structure, partition: &Partition, weak: WeakInterfaces) -> Self {
+        let mut offset = 0;
+        let mut exact = ExactContinuity::default();
+        let mut redundant_nodes = 0;
+        let mut dropped = partition.dropped_interfaces;
+        let list: Vec<Interface> = partition
+            .interfaces
+            .iter()
+            .filter_map(|topology| {
+                let mut topology = topology.clone();
+                if topology.is_weak() && weak != WeakInterfaces::Micro {
+                    let before = topology.nodes.len();
+                    exact.keep_independent(&mut topology);
+                    redundant_nodes += before - topology.nodes.len();
+                    if topology.nodes.is_empty() {
+                        dropped += 1;
+                        return None;
+                    }
+                }
+                Some(topology)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .map(|topology| {
+                let positions: Vec<[f64; 3]> =
+                    topology.nodes.iter().map(|&n| structure.nodes[n]).collect();
+                let basis = macro_basis(&positions, weak);
+                let iface = Interface {
+                    topology,
+                    macro_offset: offset,
+                    basis,
+                };
+                offset += iface.basis.ncols();
+                iface
+            })
+            .collect();
+        Interfaces {
+            list,
+            dropped,
+            redundant_nodes,
+        }
+    }
+}

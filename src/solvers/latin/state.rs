@@ -1,0 +1,85 @@
+//! Everything that changes along the LATIN iterations: per substructure its links' s = (e, t)
+//! and ŝ = (ê, t̂), its interface sides' (U, F) and (Û, F̂), and its displacements.
+
+use super::substructure::Substructure;
+
+/// One side of an interface as E holds it: s (U, F) and ŝ (Û, F̂), full nodal vectors in the
+/// interface's node order, and the load the micro search direction puts on E,
+/// `F̂^m + d_m Û^m`. F is the force of the interface on E.
+#[derive(Debug, Clone)]
+pub struct SideState {
+    /// U of s.
+    pub u: Vec<f64>,
+    /// F of s.
+    pub f: Vec<f64>,
+    /// Û of ŝ.
+    pub u_hat: Vec<f64>,
+    /// F̂ of ŝ.
+    pub f_hat: Vec<f64>,
+    /// `F̂^m + d_m Û^m`.
+    pub hat_load: Vec<f64>,
+}
+
+/// Everything that changes along the iterations for one substructure. Per-link arrays follow
+/// `Substructure::links`; `sides` follows `Substructure::sides`; `u` is U_E on E's dofs.
+#[derive(Debug, Clone)]
+pub struct SubState {
+    /// Elongations e of s, m.
+    pub e: Vec<f64>,
+    /// Additional tensions t of s (τ = t0 + t), N.
+    pub t: Vec<f64>,
+    /// Elongations ê of ŝ, m.
+    pub e_hat: Vec<f64>,
+    /// Additional tensions t̂ of ŝ, N.
+    pub t_hat: Vec<f64>,
+    /// Cables slack in ŝ.
+    pub slack_hat: Vec<bool>,
+    /// Its interface sides.
+    pub sides: Vec<SideState>,
+    /// U_E of the linear stage, on E's dofs.
+    pub u: Vec<f64>,
+}
+
+impl SubState {
+    /// ŝ = 0 and s = 0 on `sub`.
+    pub(super) fn zero(sub: &Substructure) -> SubState {
+        let m = sub.links.len();
+        SubState {
+            e: vec![0.0; m],
+            t: vec![0.0; m],
+            e_hat: vec![0.0; m],
+            t_hat: vec![0.0; m],
+            slack_hat: vec![false; m],
+            sides: sub
+                .sides
+                .iter()
+                .map(|side| SideState {
+                    u: vec![0.0; side.rows],
+                    f: vec![0.0; side.rows],
+                    u_hat: vec![0.0; side.rows],
+                    f_hat: vec![0.0; side.rows],
+                    hat_load: vec![0.0; side.rows],
+                })
+                .collect(),
+            u: vec![0.0; sub.n_dofs()],
+        }
+    }
+}
+
+/// The iterate of the LATIN state machine: after `init` or `next_iter` it holds s (the last
+/// linear stage) and the ŝ that fed it.
+#[derive(Debug, Clone)]
+pub struct LatinState {
+    /// Per substructure.
+    pub subs: Vec<SubState>,
+    /// Iterations done (0 after the first linear stage).
+    pub iteration: usize,
+    /// η between s and ŝ.
+    pub eta: f64,
+    /// Slack cables of ŝ.
+    pub slack_cables: usize,
+    /// Δη is at round-off level against the prestress: nothing is left to iterate on.
+    pub at_roundoff: bool,
+    /// The load on the free dofs, N.
+    pub(super) load: Vec<f64>,
+}

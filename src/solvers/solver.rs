@@ -1,0 +1,54 @@
+//! The solver interface, in the spirit of argmin: a solver is a state machine. [`Solver::init`]
+//! gives the first state for a load, [`Solver::next_iter`] advances it by one iteration, and
+//! [`Solver::progress`] and [`Solver::iterate`] let the driver (and, through it, the observers)
+//! see where it stands. A solver never loops, times or prints: the driver
+//! ([`super::driver::drive`]) does.
+
+use super::{Equilibrium, Measure, Status};
+
+/// Where a state stands, as the solver sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress {
+    /// Iterations done to reach this state (0 after `init`).
+    pub iteration: usize,
+    /// The stopping measure of this state (see [`Solver::measure`]).
+    pub residual: f64,
+    /// Slack cables of this state.
+    pub slack_cables: usize,
+    /// `Some` when the solver stops here: [`Status::Converged`] when its stopping criterion
+    /// holds, [`Status::Stalled`] when it cannot go on. `None`: it can take another iteration.
+    pub stop: Option<Status>,
+}
+
+/// An iterative solver, set up once for a structure, then driven for any load.
+pub trait Solver {
+    /// Everything that changes along the iterations of one solve.
+    type State;
+
+    /// Whether the state `init` returns is an iterate of the method that observers see as
+    /// iteration 0 (the LATIN solvers' first linear stage). A start guess that is not a result
+    /// of the method (newton's U = 0, pcg-lcp's λ = 0) is not reported.
+    const INIT_IS_ITERATE: bool;
+
+    /// What [`Progress::residual`] measures.
+    fn measure(&self) -> Measure;
+
+    /// Iteration cap: the driver stops the solve there with [`Status::MaxIterations`].
+    fn max_iterations(&self) -> usize;
+
+    /// The first state for `load` (on the free dofs, N).
+    fn init(&mut self, load: &[f64]) -> Self::State;
+
+    /// One iteration.
+    fn next_iter(&mut self, state: &mut Self::State);
+
+    /// Where `state` stands.
+    fn progress(&self, state: &Self::State) -> Progress;
+
+    /// Elongations `e = B U` of every link of the iterate, m: what the energy error e is
+    /// measured on.
+    fn elongations(&self, state: &Self::State) -> Vec<f64>;
+
+    /// The iterate as an equilibrium state: displacements U and tensions τ.
+    fn iterate(&self, state: &Self::State) -> Equilibrium;
+}

@@ -1,0 +1,80 @@
+//! How a solve ended and what it cost: [`Status`], the measure a solver stops on ([`Measure`])
+//! and the [`SolveInfo`] the driver returns with every solution.
+
+use std::fmt;
+
+/// How a solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// The stopping criterion was met: the stopping measure is at or below the tolerance.
+    Converged,
+    /// `max_iterations` was reached before the stopping criterion.
+    MaxIterations,
+    /// No further progress is possible in floating point (descent lost, a non-finite measure)
+    /// before the stopping criterion.
+    Stalled,
+}
+
+impl Status {
+    /// Whether the stopping criterion was met.
+    pub fn converged(self) -> bool {
+        self == Status::Converged
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Status::Converged => "converged",
+            Status::MaxIterations => "stopped at max_iterations",
+            Status::Stalled => "stalled",
+        })
+    }
+}
+
+/// What a solver's stopping measure (its `residual`) measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measure {
+    /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs
+    /// (`newton`).
+    EquilibriumResidual,
+    /// Relative complementarity residual `‖min(kλ, τ)‖ / ‖t0_c‖` of the cable LCP (`pcg-lcp`).
+    ComplementarityResidual,
+    /// The LATIN indicator η between the two half-steps (paper §5.3).
+    Indicator,
+}
+
+impl Measure {
+    /// A short name for messages: `residual` or `eta`.
+    pub fn short_name(self) -> &'static str {
+        match self {
+            Measure::EquilibriumResidual | Measure::ComplementarityResidual => "residual",
+            Measure::Indicator => "eta",
+        }
+    }
+}
+
+impl fmt::Display for Measure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Measure::EquilibriumResidual => "relative equilibrium residual",
+            Measure::ComplementarityResidual => "relative complementarity residual",
+            Measure::Indicator => "LATIN indicator eta",
+        })
+    }
+}
+
+/// What a solver did for one load.
+#[derive(Debug, Clone)]
+pub struct SolveInfo {
+    /// How the solve ended.
+    pub status: Status,
+    /// Iterations done (newton steps, MPRGP steps, LATIN iterations after iteration 0).
+    pub iterations: usize,
+    /// What `residual` measures.
+    pub measure: Measure,
+    /// The stopping measure at the end, as described by `measure`.
+    pub residual: f64,
+    /// Wall time of the iterations (the solver's own work, observers excluded), s.
+    pub solve_seconds: f64,
+}
