@@ -6,10 +6,7 @@ use super::setup::{prepare, set_up, Prepared, SetUpSolver};
 use crate::case::{Case, CaseError};
 use crate::output::{
     self, alpha_label,
-    sinks::{
-        DisplacementsSink, HistorySink, PlotsSink, StabilitySink, SummarySink, TensionsSink,
-        VtkSink,
-    },
+    sinks::{HistorySink, PerSolveSink, PlotsSink, StabilitySink, SummarySink},
     Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
@@ -203,9 +200,12 @@ fn sinks<'s>(
         out.history && has_history,
         HistorySink::new(dir, structure.n_cables()),
     );
-    sinks.add(out.tensions, TensionsSink::new(dir, structure));
-    sinks.add(out.displacements, DisplacementsSink::new(dir, structure));
-    sinks.add(out.vtk, VtkSink::new(dir, structure));
+    sinks.add(out.tensions, PerSolveSink::tensions(dir, structure));
+    sinks.add(
+        out.displacements,
+        PerSolveSink::displacements(dir, structure),
+    );
+    sinks.add(out.vtk, PerSolveSink::vtk(dir, structure));
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         sinks.add(true, PlotsSink::new(dir, structure, first.method.name()));
     }

@@ -5,9 +5,7 @@
 //! | sink | files |
 //! |---|---|
 //! | [`HistorySink`] | `history/{solver}_alpha{α}.csv`, as the iterations go |
-//! | [`TensionsSink`] | `tensions/{solver}_alpha{α}.csv` |
-//! | [`DisplacementsSink`] | `displacements/{solver}_alpha{α}.csv` |
-//! | [`VtkSink`] | `vtk/{solver}_alpha{α}.vtu` |
+//! | [`PerSolveSink`] | `tensions/{solver}_alpha{α}.csv`, `displacements/…`, `vtk/…vtu` |
 //! | [`PlotsSink`] | `plots/*.svg`, at the end of the sweep |
 //! | [`StabilitySink`] | `stability.csv`, rewritten after every solve |
 //! | [`SummarySink`] | `summary.csv`, rewritten after every solve |
@@ -17,7 +15,7 @@ use super::{
     FigureData, HistoryWriter, StabilityRow, SummaryRow,
 };
 use crate::results;
-use crate::solvers::{IterationRecord, Measure, Solution, TautStiffness};
+use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
 use crate::structure::Structure;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -129,28 +127,60 @@ impl Sink for HistorySink {
     }
 }
 
-/// `tensions/{solver}_alpha{α}.csv`.
-pub struct TensionsSink<'s> {
+/// Writes one file of a solve: `(dir, solver, α, structure, equilibrium) → its path`.
+type WriteSolve = fn(&Path, &str, f64, &Structure, &Equilibrium) -> io::Result<PathBuf>;
+
+/// One file per solve, written when the solve ends with a finite answer:
+/// `tensions/…`, `displacements/…`, `vtk/…`.
+pub struct PerSolveSink<'s> {
     dir: PathBuf,
     structure: &'s Structure,
+    write: WriteSolve,
+    /// What a write error names: the family's directory, or the file itself.
+    error_path: fn(&Path, &str, f64) -> PathBuf,
 }
 
-impl<'s> TensionsSink<'s> {
-    /// Tension files of `structure` under `dir/tensions`.
-    pub fn new(dir: &Path, structure: &'s Structure) -> Self {
-        TensionsSink {
+impl<'s> PerSolveSink<'s> {
+    /// `tensions/{solver}_alpha{α}.csv` of `structure` under `dir`.
+    pub fn tensions(dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(dir, structure, write_tensions, |dir, _, _| {
+            dir.join("tensions")
+        })
+    }
+
+    /// `displacements/{solver}_alpha{α}.csv` of `structure` under `dir`.
+    pub fn displacements(dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(dir, structure, write_displacements, |dir, _, _| {
+            dir.join("displacements")
+        })
+    }
+
+    /// `vtk/{solver}_alpha{α}.vtu` of `structure` under `dir`.
+    pub fn vtk(dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(dir, structure, write_vtu, vtu_path)
+    }
+
+    fn new(
+        dir: &Path,
+        structure: &'s Structure,
+        write: WriteSolve,
+        error_path: fn(&Path, &str, f64) -> PathBuf,
+    ) -> Self {
+        PerSolveSink {
             dir: dir.to_path_buf(),
             structure,
+            write,
+            error_path,
         }
     }
 }
 
-impl Sink for TensionsSink<'_> {
+impl Sink for PerSolveSink<'_> {
     fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
         let SolveEnd::Solved { solution, .. } = end else {
             return Ok(());
         };
-        write_tensions(
+        (self.write)(
             &self.dir,
             key.solver,
             key.alpha,
@@ -158,73 +188,9 @@ impl Sink for TensionsSink<'_> {
             &solution.equilibrium,
         )
         .map(|_| ())
-        .map_err(WriteError::at(self.dir.join("tensions")))
-    }
-}
-
-/// `displacements/{solver}_alpha{α}.csv`.
-pub struct DisplacementsSink<'s> {
-    dir: PathBuf,
-    structure: &'s Structure,
-}
-
-impl<'s> DisplacementsSink<'s> {
-    /// Displacement files of `structure` under `dir/displacements`.
-    pub fn new(dir: &Path, structure: &'s Structure) -> Self {
-        DisplacementsSink {
-            dir: dir.to_path_buf(),
-            structure,
-        }
-    }
-}
-
-impl Sink for DisplacementsSink<'_> {
-    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { solution, .. } = end else {
-            return Ok(());
-        };
-        write_displacements(
-            &self.dir,
-            key.solver,
-            key.alpha,
-            self.structure,
-            &solution.equilibrium,
-        )
-        .map(|_| ())
-        .map_err(WriteError::at(self.dir.join("displacements")))
-    }
-}
-
-/// `vtk/{solver}_alpha{α}.vtu`.
-pub struct VtkSink<'s> {
-    dir: PathBuf,
-    structure: &'s Structure,
-}
-
-impl<'s> VtkSink<'s> {
-    /// VTU files of `structure` under `dir/vtk`.
-    pub fn new(dir: &Path, structure: &'s Structure) -> Self {
-        VtkSink {
-            dir: dir.to_path_buf(),
-            structure,
-        }
-    }
-}
-
-impl Sink for VtkSink<'_> {
-    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { solution, .. } = end else {
-            return Ok(());
-        };
-        write_vtu(
-            &self.dir,
-            key.solver,
-            key.alpha,
-            self.structure,
-            &solution.equilibrium,
-        )
-        .map(|_| ())
-        .map_err(WriteError::at(vtu_path(&self.dir, key.solver, key.alpha)))
+        .map_err(WriteError::at((self.error_path)(
+            &self.dir, key.solver, key.alpha,
+        )))
     }
 }
 

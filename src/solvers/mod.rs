@@ -22,7 +22,7 @@ pub use method::Method;
 pub use observer::{IterationRecord, Observer, Silent, Tee};
 pub use residual::relative_unbalance;
 pub use solution::{Equilibrium, Solution};
-pub use solver::{Progress, Solver};
+pub use solver::{stop_when, Progress, Solver};
 pub use status::{Measure, SolveInfo, Status};
 pub use taut::TautStiffness;
 

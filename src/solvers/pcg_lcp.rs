@@ -9,7 +9,7 @@
 //! complementarity residual with the slack gap λ expressed as the force k λ so that both
 //! arguments are in N.
 
-use super::{Equilibrium, Measure, Progress, Solver, Status, TautStiffness};
+use super::{stop_when, Equilibrium, Measure, Progress, Solver, TautStiffness};
 use crate::linalg::{dot, norm, SparseCholesky};
 use crate::structure::Structure;
 
@@ -283,13 +283,7 @@ impl Solver for PcgLcp<'_> {
     }
 
     fn progress(&self, state: &PcgLcpState) -> Progress {
-        let stop = if state.residual <= self.settings.tolerance {
-            Some(Status::Converged)
-        } else if state.stalled {
-            Some(Status::Stalled)
-        } else {
-            None
-        };
+        let stop = stop_when(state.residual <= self.settings.tolerance, state.stalled);
         Progress {
             iteration: state.iteration,
             residual: state.residual,

@@ -20,6 +20,18 @@ pub struct Progress {
     pub stop: Option<Status>,
 }
 
+/// The stop of a solver whose criterion is a residual below its tolerance: converged when
+/// `converged`, else stalled when `stalled`, else none.
+pub fn stop_when(converged: bool, stalled: bool) -> Option<Status> {
+    if converged {
+        Some(Status::Converged)
+    } else if stalled {
+        Some(Status::Stalled)
+    } else {
+        None
+    }
+}
+
 /// An iterative solver, set up once for a structure, then driven for any load.
 pub trait Solver {
     /// Everything that changes along the iterations of one solve.

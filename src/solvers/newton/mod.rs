@@ -11,7 +11,8 @@
 mod line_search;
 
 use super::{
-    relative_unbalance, Equilibrium, Measure, Progress, SetupError, Solver, Status, TautStiffness,
+    relative_unbalance, stop_when, Equilibrium, Measure, Progress, SetupError, Solver,
+    TautStiffness,
 };
 use crate::linalg::{dot, SparseCholesky};
 use crate::structure::Structure;
@@ -191,13 +192,7 @@ impl Solver for Newton<'_> {
     }
 
     fn progress(&self, state: &NewtonState) -> Progress {
-        let stop = if state.residual <= self.settings.tolerance {
-            Some(Status::Converged)
-        } else if state.stalled {
-            Some(Status::Stalled)
-        } else {
-            None
-        };
+        let stop = stop_when(state.residual <= self.settings.tolerance, state.stalled);
         Progress {
             iteration: state.iteration,
             residual: state.residual,
