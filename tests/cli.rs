@@ -143,6 +143,31 @@ fn invalid_cases_exit_2_and_name_the_key() {
             with("[solver]\nweak_interfaces = \"glue\""),
             &["glue", "macro"],
         ),
+        (
+            "relaxation-zero",
+            with("[solver]\nrelaxation = 0.0"),
+            &["solver.relaxation", "(0, 1]"],
+        ),
+        (
+            "relaxation-above-one",
+            with("[solver]\nrelaxation = 1.5"),
+            &["solver.relaxation", "1.5"],
+        ),
+        (
+            "unknown-search-direction",
+            with("[solver]\nsearch_direction = \"newton\""),
+            &["newton", "status"],
+        ),
+        (
+            "unknown-stop-on",
+            with("[solver]\nstop_on = \"never\""),
+            &["never", "residual"],
+        ),
+        (
+            "residual-tolerance-one",
+            with("[solver]\nresidual_tolerance = 1.0"),
+            &["solver.residual_tolerance", "between 0 and 1"],
+        ),
     ];
     let out = Temp::dir("invalid-out");
     let mut failures = Vec::new();

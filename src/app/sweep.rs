@@ -144,6 +144,7 @@ pub fn run(
             let row = SummaryRow::new(
                 key.solver,
                 alpha,
+                &load,
                 structure,
                 &solution,
                 set_up.setup_seconds,

@@ -202,6 +202,32 @@ fn solver_choice(
     if let Some(weak) = raw.weak_interfaces {
         choice.latin.weak = weak;
     }
+    if let Some(mu) = raw.relaxation {
+        if !(mu.is_finite() && mu > 0.0 && mu <= 1.0) {
+            return Err(CaseError::invalid(
+                "solver.relaxation",
+                number(mu),
+                "give the relaxation μ of the LATIN linear stage in (0, 1], e.g. 0.8 (1: none)",
+            ));
+        }
+        choice.latin.relaxation = mu;
+    }
+    if let Some(policy) = raw.search_direction {
+        choice.latin.policy = policy;
+    }
+    if let Some(stop_on) = raw.stop_on {
+        choice.latin.stop_on = stop_on;
+    }
+    if let Some(tol) = raw.residual_tolerance {
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(CaseError::invalid(
+                "solver.residual_tolerance",
+                number(tol),
+                "give the LATIN equilibrium-residual tolerance between 0 and 1 (exclusive), e.g. 1e-8",
+            ));
+        }
+        choice.latin.residual_tolerance = Some(tol);
+    }
     if let Some(reference) = raw.reference {
         choice.reference = reference;
     }

@@ -3,7 +3,7 @@
 //! Nothing here has a default value: [`super::convert`] takes each default from the type it
 //! configures.
 
-use crate::solvers::latin::WeakInterfaces;
+use crate::solvers::latin::{SearchPolicy, StopOn, WeakInterfaces};
 use crate::solvers::Method;
 use crate::structure::{Clamp, ModuleKind};
 use serde::Deserialize;
@@ -92,6 +92,10 @@ pub(super) struct RawSolver {
     pub dm: Option<f64>,
     pub l: Option<toml::Value>,
     pub weak_interfaces: Option<WeakInterfaces>,
+    pub relaxation: Option<f64>,
+    pub search_direction: Option<SearchPolicy>,
+    pub stop_on: Option<StopOn>,
+    pub residual_tolerance: Option<f64>,
     pub reference: Option<ReferenceChoice>,
 }
 

@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 
 /// Header line of a history CSV file: per iteration, energy error e (empty without a
 /// reference), stopping measure η, fraction of cables slack, solver time (s).
-pub const HISTORY_HEADER: &str = "iteration,error_e,indicator_eta,slack_fraction,elapsed_seconds";
+pub const HISTORY_HEADER: &str =
+    "iteration,error_e,indicator_eta,equilibrium_residual,slack_fraction,search_updates,elapsed_seconds";
 
 /// An [`Observer`] writing one solve's iteration history CSV, renamed into place by
 /// [`HistoryWriter::finish`] (dropped unfinished, it removes its partial file).
@@ -71,10 +72,14 @@ impl Observer for HistoryWriter {
             0.0
         };
         let error = r.error.map(|e| format!("{e:e}")).unwrap_or_default();
+        let residual = r
+            .equilibrium_residual
+            .map(|x| format!("{x:e}"))
+            .unwrap_or_default();
         let result = writeln!(
             out,
-            "{},{},{:e},{},{}",
-            r.iteration, error, r.residual, fraction, r.elapsed_seconds
+            "{},{},{:e},{},{},{},{}",
+            r.iteration, error, r.residual, residual, fraction, r.setups, r.elapsed_seconds
         )
         .and_then(|_| out.flush());
         if let Err(e) = result {

@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::results;
-use crate::solvers::{Equilibrium, Solution};
+use crate::solvers::{displacement_residual, Equilibrium, Solution};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
@@ -33,6 +33,10 @@ pub struct SummaryRow {
     pub max_deflection: f64,
     /// The solver's stopping measure at the end.
     pub residual: f64,
+    /// r(U) of the answer's displacements: the measure every solver shares.
+    pub equilibrium_residual: f64,
+    /// Re-set-ups of the solver's operators during the solve.
+    pub search_updates: usize,
     /// Set-up of the solver for this structure, s.
     pub setup_seconds: f64,
     /// This solve, s.
@@ -40,10 +44,12 @@ pub struct SummaryRow {
 }
 
 impl SummaryRow {
-    /// The row of `solution`, by `solver` at `alpha` on `s`, set up in `setup_seconds`.
+    /// The row of `solution`, by `solver` at `alpha` (load `load` on the free dofs) on `s`,
+    /// set up in `setup_seconds`.
     pub fn new(
         solver: &str,
         alpha: f64,
+        load: &[f64],
         s: &Structure,
         solution: &Solution,
         setup_seconds: f64,
@@ -59,6 +65,8 @@ impl SummaryRow {
             max_tension: results::max_cable_tension(s, eq),
             max_deflection: results::max_deflection(s, eq),
             residual: solution.info.residual,
+            equilibrium_residual: displacement_residual(s, &eq.displacements, load),
+            search_updates: solution.info.setups,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
         }
@@ -66,7 +74,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,setup_seconds,solve_seconds";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,setup_seconds,solve_seconds";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
@@ -84,7 +92,7 @@ pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
             };
             writeln!(
                 w,
-                "{},{},{},{},{},{},{},{},{},{:e},{},{}",
+                "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{}",
                 r.solver,
                 alpha_label(r.alpha),
                 r.converged,
@@ -95,6 +103,8 @@ pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
                 r.max_tension,
                 r.max_deflection,
                 r.residual,
+                r.equilibrium_residual,
+                r.search_updates,
                 r.setup_seconds,
                 r.solve_seconds
             )?;

@@ -51,6 +51,8 @@ pub fn drive<S: Solver + ?Sized>(
             observer.iteration(&IterationRecord {
                 iteration: progress.iteration,
                 residual: progress.residual,
+                equilibrium_residual: progress.equilibrium_residual,
+                setups: progress.setups,
                 error: reference.map(|r| r.error(&solver.elongations(&state))),
                 slack_cables: progress.slack_cables,
                 elapsed_seconds: clock.seconds(),
@@ -72,6 +74,7 @@ pub fn drive<S: Solver + ?Sized>(
             iterations: progress.iteration,
             measure: solver.measure(),
             residual: progress.residual,
+            setups: progress.setups,
             solve_seconds: clock.seconds(),
         },
     }

@@ -287,6 +287,9 @@ impl Solver for PcgLcp<'_> {
         Progress {
             iteration: state.iteration,
             residual: state.residual,
+            // r(U) would cost a solve with K per iteration.
+            equilibrium_residual: None,
+            setups: 0,
             slack_cables: state.x.iter().filter(|&&xi| xi > 0.0).count(),
             stop,
         }

@@ -1,6 +1,7 @@
-//! The relative equilibrium residual of a set of tensions (SPEC §6): the unbalance of the
-//! nodal forces against the forces meeting at the nodes. newton stops on it; results checks
-//! every solver's answer with it.
+//! The relative equilibrium residual (SPEC §6): the unbalance of the nodal forces against the
+//! forces meeting at the nodes. [`displacement_residual`] is the one reference-free measure
+//! every solver shares: newton stops on it, the LATIN solvers may, and every summary row
+//! reports it.
 
 use crate::linalg::norm;
 use crate::structure::Structure;
@@ -22,4 +23,24 @@ pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut
     } else {
         norm(r)
     }
+}
+
+/// r(U): the relative equilibrium residual of displacements U under the exact law,
+/// `τ(U) = t0 + k B U`, clipped at 0 for unilateral cables. Zero exactly at the solution.
+pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
+    let tensions: Vec<f64> = s
+        .links
+        .iter()
+        .zip(&s.link_dofs)
+        .map(|(l, ld)| {
+            let trial = l.prestress + l.stiffness * ld.elongation(u);
+            if l.unilateral {
+                trial.max(0.0)
+            } else {
+                trial
+            }
+        })
+        .collect();
+    let mut r = vec![0.0; s.n_free];
+    relative_unbalance(s, &tensions, load, &mut r)
 }

@@ -13,6 +13,11 @@ pub struct Progress {
     pub iteration: usize,
     /// The stopping measure of this state (see [`Solver::measure`]).
     pub residual: f64,
+    /// r(U), the equilibrium residual of the state's displacements under the exact law
+    /// ([`super::displacement_residual`]), when the solver has it at no extra cost.
+    pub equilibrium_residual: Option<f64>,
+    /// Re-set-ups of the solver's operators so far in this solve (status-following LATIN).
+    pub setups: usize,
     /// Slack cables of this state.
     pub slack_cables: usize,
     /// `Some` when the solver stops here: [`Status::Converged`] when its stopping criterion

@@ -75,6 +75,8 @@ pub struct SolveInfo {
     pub measure: Measure,
     /// The stopping measure at the end, as described by `measure`.
     pub residual: f64,
+    /// Re-set-ups of the solver's operators during the solve (status-following LATIN).
+    pub setups: usize,
     /// Wall time of the iterations (the solver's own work, observers excluded), s.
     pub solve_seconds: f64,
 }

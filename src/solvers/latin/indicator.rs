@@ -1,7 +1,7 @@
 //! The LATIN indicator η (SPEC §4 "Indicator", paper §5.3) between s (a linear stage) and the
 //! ŝ that fed it, and what the state reports after each linear stage.
 
-use super::{Latin, LatinState, SubState};
+use super::{displacement_residual, Latin, LatinState, SubState};
 
 /// Δη below this fraction of the prestress scale is round-off (a load-induced Δη on the
 /// paper's case is 1e-4 of it at η = 1e-4).
@@ -35,13 +35,18 @@ impl Latin<'_> {
         ((0.5 * delta).sqrt(), (0.5 * size).sqrt())
     }
 
-    /// η, the round-off stop and the slack count of `state` after a linear stage.
+    /// η, the equilibrium residual r(U), the round-off stop and the slack count of `state`
+    /// after a linear stage.
     pub(super) fn measure_state(&self, state: &mut LatinState) {
         let (distance, size) = self.indicator(&state.subs);
         state.eta = if size > 0.0 { distance / size } else { 0.0 };
         // η is scale-free: when s and ŝ are both round-off (no load: the exact answer is
         // zero), it is a ratio of noise. Δη at round-off against the prestress is convergence.
         state.at_roundoff = distance <= ROUNDOFF * self.prestress_scale;
+        // r(U) of the linear stage's U under the exact law (SPEC §6).
+        let u = self.displacements(&state.subs);
+        state.residual = displacement_residual(self.structure, &u, &state.load);
+
         state.slack_cables = state
             .subs
             .iter()

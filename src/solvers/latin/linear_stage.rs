@@ -8,7 +8,14 @@ use rayon::prelude::*;
 
 impl Latin<'_> {
     /// Linear stage (SPEC §4): given ŝ in `state`, find s.
-    pub(super) fn linear_stage(&self, load: &[f64], state: &mut [SubState]) {
+    /// With `relaxation = Some(μ)`, s is then relaxed against the previous one on every field
+    /// (e, t, U, interface U and F): `s ← μ s_new + (1 − μ) s_old`.
+    pub(super) fn linear_stage(
+        &self,
+        load: &[f64],
+        state: &mut [SubState],
+        relaxation: Option<f64>,
+    ) {
         let s = self.structure;
         let dm = self.settings.dm;
         let search = &self.search;
@@ -53,6 +60,7 @@ impl Latin<'_> {
             .with_min_len(self.chunk)
             .enumerate()
             .for_each(|(e, ((sub, st), (y, g)))| {
+                let previous = relaxation.map(|mu| (mu, Relaxed::of(st)));
                 // f_E = c_E f_Γ, a_E; u_E = L_E f_E + K⁺_E g_E + Q_E a_E.
                 let mut f_e = vec![0.0; sub.n_macro];
                 for side in &sub.sides {
@@ -88,6 +96,48 @@ impl Latin<'_> {
                         ss.f[r] = f_macro[r] + ss.hat_load[r] - dm * (u - u_macro[r]);
                     }
                 }
+                if let Some((mu, previous)) = previous {
+                    previous.blend_into(st, mu);
+                }
             });
+    }
+}
+
+/// The fields of s that relaxation blends, as they were before a linear stage.
+struct Relaxed {
+    e: Vec<f64>,
+    t: Vec<f64>,
+    u: Vec<f64>,
+    sides: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Relaxed {
+    fn of(st: &SubState) -> Relaxed {
+        Relaxed {
+            e: st.e.clone(),
+            t: st.t.clone(),
+            u: st.u.clone(),
+            sides: st
+                .sides
+                .iter()
+                .map(|s| (s.u.clone(), s.f.clone()))
+                .collect(),
+        }
+    }
+
+    /// `new ← μ new + (1 − μ) old`, field by field.
+    fn blend_into(self, st: &mut SubState, mu: f64) {
+        let blend = |new: &mut [f64], old: &[f64]| {
+            new.iter_mut()
+                .zip(old)
+                .for_each(|(n, o)| *n = mu * *n + (1.0 - mu) * o);
+        };
+        blend(&mut st.e, &self.e);
+        blend(&mut st.t, &self.t);
+        blend(&mut st.u, &self.u);
+        for (side, (u, f)) in st.sides.iter_mut().zip(&self.sides) {
+            blend(&mut side.u, u);
+            blend(&mut side.f, f);
+        }
     }
 }

@@ -7,7 +7,7 @@ use super::substructure::Substructure;
 use super::Interface;
 use crate::linalg::{gemv, gemv_transposed};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::Lu;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, Triplet};
 
 /// The macro problem `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
@@ -20,7 +20,13 @@ pub struct MacroProblem {
     /// Size of the macro system: `n_forces` + Σ kernel columns.
     pub n: usize,
     lu: Option<Lu<usize, f64>>,
+    /// The LU's symbolic analysis and the pattern it was made for (column pointers, row
+    /// indices).
+    symbolic: Option<(SymbolicLu<usize>, Pattern)>,
 }
+
+/// A sparse pattern: column pointers and row indices.
+type Pattern = (Vec<usize>, Vec<usize>);
 
 /// The macro matrix is singular (an interface or kernel mode is left undetermined).
 #[derive(Debug, Clone, Copy)]
@@ -31,6 +37,25 @@ impl MacroProblem {
     pub fn new(
         subs: &[Substructure],
         interfaces: &[Interface],
+    ) -> Result<MacroProblem, SingularMacroProblem> {
+        Self::assemble(subs, interfaces, None)
+    }
+
+    /// The macro problem of new substructure operators on the same partition, reusing this
+    /// one's symbolic LU analysis when the pattern is the same (the search directions changed,
+    /// the kernels did not).
+    pub fn refactor(
+        &self,
+        subs: &[Substructure],
+        interfaces: &[Interface],
+    ) -> Result<MacroProblem, SingularMacroProblem> {
+        Self::assemble(subs, interfaces, Some(self))
+    }
+
+    fn assemble(
+        subs: &[Substructure],
+        interfaces: &[Interface],
+        previous: Option<&MacroProblem>,
     ) -> Result<MacroProblem, SingularMacroProblem> {
         let n_forces: usize = interfaces.iter().map(|i| i.basis.ncols()).sum();
         let mut kernel_offset = Vec::with_capacity(subs.len());
@@ -68,12 +93,23 @@ impl MacroProblem {
                 }
             }
         }
+        let mut analysed = None;
         let lu = if n == 0 {
             None
         } else {
             let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
                 .map_err(|_| SingularMacroProblem)?;
-            let lu = matrix.sp_lu().map_err(|_| SingularMacroProblem)?;
+            let pattern = (
+                matrix.symbolic().col_ptr().to_vec(),
+                matrix.symbolic().row_idx().to_vec(),
+            );
+            let symbolic = match previous.and_then(|p| p.symbolic.as_ref()) {
+                Some((symbolic, old)) if *old == pattern => symbolic.clone(),
+                _ => SymbolicLu::try_new(matrix.symbolic()).map_err(|_| SingularMacroProblem)?,
+            };
+            let lu = Lu::try_new_with_symbolic(symbolic.clone(), matrix.as_ref())
+                .map_err(|_| SingularMacroProblem)?;
+            analysed = Some((symbolic, pattern));
             // LU does not report a singular matrix reliably: solve M x = M x0 for a known x0.
             let x0: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
             let mut x = vec![0.0; n];
@@ -96,6 +132,7 @@ impl MacroProblem {
             kernel_offset,
             n,
             lu,
+            symbolic: analysed,
         })
     }
 

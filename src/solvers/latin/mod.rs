@@ -36,11 +36,11 @@ pub use interfaces::Interface;
 pub use local_stage::link_local_stage;
 pub use macro_basis::macro_basis;
 pub use partition::Partition;
-pub use settings::{LatinSettings, SearchDirection, WeakInterfaces};
+pub use settings::{LatinSettings, SearchDirection, SearchPolicy, StopOn, WeakInterfaces};
 pub use state::{LatinState, SideState, SubState};
 pub use substructure::Substructure;
 
-use super::{Equilibrium, Measure, Progress, SetupError, Solver, Status};
+use super::{displacement_residual, Equilibrium, Measure, Progress, SetupError, Solver, Status};
 use crate::structure::{Structure, CLAMPED};
 use interfaces::Interfaces;
 use macro_problem::MacroProblem;
@@ -74,8 +74,18 @@ pub struct PartitionReport {
 pub struct Latin<'s> {
     structure: &'s Structure,
     settings: LatinSettings,
-    /// Search direction l of every link.
+    partition: Partition,
+    /// Per node: how many substructures hold it.
+    holders: Vec<u8>,
+    /// Substructure operators kept as dense inverses (see `DENSE_BUDGET_BYTES`).
+    dense: bool,
+    /// Search direction l of every link as set up (`solver.l`).
+    base_search: Vec<f64>,
+    /// Search direction l of every link now: `base_search`, times ε on the cables of
+    /// `search_slack` (status-following l).
     search: Vec<f64>,
+    /// The cables whose l is ε·l: the slack set of ŝ when the operators were last built.
+    search_slack: Vec<bool>,
     /// The interfaces that carry constraints.
     pub interfaces: Vec<Interface>,
     /// The substructures, row by row of the partition.
@@ -96,6 +106,15 @@ pub struct Latin<'s> {
 /// (2397 dofs, 16 substructures) two threads were slower than one (547 µs against 423 µs).
 const PARALLEL_MIN_DOFS: usize = 20_000;
 
+/// ε of status-following l: a slack cable's search direction is ε·l. It must stay > 0 (a link
+/// with l = 0 has no local stage). SPEC §6's prototype used 1e-6; here that left r(U) on a
+/// floor of 3e-6 on 32 × 32 and 64 × 64 grids (substructure operators nearly singular where
+/// only slack cables hold a node), while 1e-3 and 1e-2 converged alike without floor
+/// (iterations to e < 1e-3 on 16 / 64 / 256 substructures: 29 / 49 / 116 and 30 / 48 / 120) and
+/// 1e-1 was slower (32 / 59 / 137, 205 re-set-ups on 64 × 64). 1e-2 keeps the widest margin
+/// from the floor.
+const SLACK_SEARCH_FACTOR: f64 = 1e-2;
+
 /// Memory all dense substructure inverses together may take (see
 /// [`crate::linalg::SpdSolver::new`]).
 const DENSE_BUDGET_BYTES: usize = 16 << 20;
@@ -106,7 +125,7 @@ impl<'s> Latin<'s> {
     pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let interfaces = Interfaces::new(structure, &partition, settings.weak);
-        let search: Vec<f64> = structure
+        let base_search: Vec<f64> = structure
             .links
             .iter()
             .map(|l| match settings.search {
@@ -127,58 +146,36 @@ impl<'s> Latin<'s> {
             .iter()
             .map(|t| 8 * (3 * t.nodes.len()).pow(2))
             .sum();
-        let dense = dense_bytes <= DENSE_BUDGET_BYTES;
-        let built: Vec<Result<Substructure, usize>> = partition
-            .substructures
-            .par_iter()
-            .enumerate()
-            .map_init(
-                || vec![CLAMPED; 3 * structure.n_nodes()],
-                |scratch, (e, topo)| {
-                    Substructure::new(
-                        e,
-                        topo,
-                        structure,
-                        &interfaces.list,
-                        &holders,
-                        &search,
-                        settings.dm,
-                        dense,
-                        scratch,
-                    )
-                    .map_err(|_| e)
-                },
-            )
-            .collect();
-        let mut substructures = Vec::with_capacity(built.len());
-        for b in built {
-            substructures.push(b.map_err(|index| SetupError::SingularSubstructure { index })?);
-        }
-        let mut side_slots = vec![[0usize; 2]; interfaces.list.len()];
-        for sub in &substructures {
-            for (slot, side) in sub.sides.iter().enumerate() {
-                side_slots[side.interface][side.which] = slot;
-            }
-        }
-        // (½ Σ t0² / l)^{1/2}.
+        // (½ Σ t0² / l)^{1/2} with l as set up: the prestress in the units of Δη.
         let prestress_scale = (0.5
             * structure
                 .links
                 .iter()
-                .zip(&search)
+                .zip(&base_search)
                 .map(|(l, k)| l.prestress * l.prestress / k)
                 .sum::<f64>())
         .sqrt();
-        let macro_problem = MacroProblem::new(&substructures, &interfaces.list)
-            .map_err(|_| SetupError::SingularMacroProblem)?;
-        Ok(Latin {
+        let (substructures, macro_problem) = operators(
+            structure,
+            &partition,
+            &interfaces.list,
+            &holders,
+            &base_search,
+            settings.dm,
+            dense_bytes <= DENSE_BUDGET_BYTES,
+        )?;
+        let mut latin = Latin {
             structure,
             settings,
-            search,
+            holders,
+            dense: dense_bytes <= DENSE_BUDGET_BYTES,
+            search: base_search.clone(),
+            search_slack: vec![false; structure.links.len()],
+            base_search,
             interfaces: interfaces.list,
             substructures,
             macro_problem,
-            side_slots,
+            side_slots: Vec::new(),
             dropped_interfaces: interfaces.dropped,
             redundant_nodes: interfaces.redundant_nodes,
             prestress_scale,
@@ -187,7 +184,116 @@ impl<'s> Latin<'s> {
             } else {
                 1
             },
-        })
+            partition,
+        };
+        let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
+        for sub in &latin.substructures {
+            for (slot, side) in sub.sides.iter().enumerate() {
+                side_slots[side.interface][side.which] = slot;
+            }
+        }
+        latin.side_slots = side_slots;
+        Ok(latin)
+    }
+
+    /// Status-following l (SPEC §6): l for bars and taut cables, ε·l for slack ones, when at
+    /// least `update_threshold` cables changed status since the operators were built; then
+    /// the operators are rebuilt for it. A cable counts as slack when the linear stage's trial
+    /// tension `t0 + k e` is not positive (newton's active set): the slack set of ŝ would keep
+    /// a taut cable held at ε·l slack, since with l ≪ k its local stage barely moves.
+    /// `true` when rebuilt.
+    fn follow_status(&mut self, state: &LatinState) -> bool {
+        let links = &self.structure.links;
+        let mut slack = vec![false; links.len()];
+        for (sub, st) in self.substructures.iter().zip(&state.subs) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                let l = &links[i];
+                slack[i] = l.unilateral && l.prestress + l.stiffness * st.e[j] <= 0.0;
+            }
+        }
+        let changed = slack
+            .iter()
+            .zip(&self.search_slack)
+            .filter(|(a, b)| a != b)
+            .count();
+        if changed < self.settings.update_threshold.max(1) {
+            return false;
+        }
+        self.set_search(slack)
+    }
+
+    /// New operators with ε·l on the cables of `slack`: the substructures where l changed,
+    /// then the macro problem. On failure (a substructure left without stiffness) the previous
+    /// ones are kept. `true` when rebuilt.
+    fn set_search(&mut self, slack: Vec<bool>) -> bool {
+        let mut search = self.base_search.clone();
+        for (l, &is_slack) in search.iter_mut().zip(&slack) {
+            if is_slack {
+                *l *= SLACK_SEARCH_FACTOR;
+            }
+        }
+        let changed: Vec<usize> = (0..self.substructures.len())
+            .filter(|&e| {
+                self.substructures[e]
+                    .links
+                    .iter()
+                    .any(|&i| search[i] != self.search[i])
+            })
+            .collect();
+        let Ok(rebuilt) = substructures(
+            self.structure,
+            &self.partition,
+            &changed,
+            &self.interfaces,
+            &self.holders,
+            &search,
+            self.settings.dm,
+            self.dense,
+        ) else {
+            return false;
+        };
+        let mut substructures = std::mem::take(&mut self.substructures);
+        let previous: Vec<Substructure> = changed
+            .iter()
+            .zip(rebuilt)
+            .map(|(&e, sub)| std::mem::replace(&mut substructures[e], sub))
+            .collect();
+        match self
+            .macro_problem
+            .refactor(&substructures, &self.interfaces)
+        {
+            Ok(macro_problem) => {
+                self.substructures = substructures;
+                self.macro_problem = macro_problem;
+                self.search = search;
+                self.search_slack = slack;
+                true
+            }
+            Err(_) => {
+                for (&e, sub) in changed.iter().zip(previous) {
+                    substructures[e] = sub;
+                }
+                self.substructures = substructures;
+                false
+            }
+        }
+    }
+
+    /// U of the linear stage on the free dofs, interface nodes averaged over the
+    /// substructures holding them.
+    fn displacements(&self, subs: &[SubState]) -> Vec<f64> {
+        let n = self.structure.n_free;
+        let (mut u, mut count) = (vec![0.0; n], vec![0u32; n]);
+        for (sub, st) in self.substructures.iter().zip(subs) {
+            for (local, &global) in sub.dof_global.iter().enumerate() {
+                u[global] += st.u[local];
+                count[global] += 1;
+            }
+        }
+        u.iter_mut()
+            .zip(&count)
+            .for_each(|(ui, &c)| *ui /= c.max(1) as f64);
+        u
     }
 
     /// The settings it was set up with.
@@ -221,6 +327,54 @@ impl<'s> Latin<'s> {
     }
 }
 
+/// Every substructure's operators for the search direction `search` (in parallel), and the
+/// macro problem they make.
+fn operators(
+    structure: &Structure,
+    partition: &Partition,
+    interfaces: &[Interface],
+    holders: &[u8],
+    search: &[f64],
+    dm: f64,
+    dense: bool,
+) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
+    let all: Vec<usize> = (0..partition.substructures.len()).collect();
+    let substructures = substructures(
+        structure, partition, &all, interfaces, holders, search, dm, dense,
+    )?;
+    let macro_problem = MacroProblem::new(&substructures, interfaces)
+        .map_err(|_| SetupError::SingularMacroProblem)?;
+    Ok((substructures, macro_problem))
+}
+
+/// The operators of the substructures `which` for the search direction `search`, in
+/// parallel, in the order of `which`.
+#[allow(clippy::too_many_arguments)]
+fn substructures(
+    structure: &Structure,
+    partition: &Partition,
+    which: &[usize],
+    interfaces: &[Interface],
+    holders: &[u8],
+    search: &[f64],
+    dm: f64,
+    dense: bool,
+) -> Result<Vec<Substructure>, SetupError> {
+    which
+        .par_iter()
+        .map_init(
+            || vec![CLAMPED; 3 * structure.n_nodes()],
+            |scratch, &e| {
+                let topo = &partition.substructures[e];
+                Substructure::new(
+                    e, topo, structure, interfaces, holders, search, dm, dense, scratch,
+                )
+                .map_err(|_| SetupError::SingularSubstructure { index: e })
+            },
+        )
+        .collect()
+}
+
 impl Solver for Latin<'_> {
     type State = LatinState;
     /// Iteration 0 is the first linear stage.
@@ -235,32 +389,58 @@ impl Solver for Latin<'_> {
     }
 
     /// Iteration 0: the linear stage from ŝ = 0.
+    /// Iteration 0: the linear stage from ŝ = 0, with l as set up (a previous solve's
+    /// status-following l is undone, so that every solve starts alike).
     fn init(&mut self, load: &[f64]) -> LatinState {
+        if self.search_slack.iter().any(|&x| x) {
+            self.set_search(vec![false; self.structure.links.len()]);
+        }
         let mut state = LatinState {
             subs: self.substructures.iter().map(SubState::zero).collect(),
             iteration: 0,
             eta: f64::INFINITY,
+            residual: f64::INFINITY,
             slack_cables: 0,
+            updates: 0,
+            relax: false,
+
             at_roundoff: false,
             load: load.to_vec(),
         };
-        self.linear_stage(&state.load, &mut state.subs);
+        self.linear_stage(&state.load, &mut state.subs, None);
+        state.relax = true;
         self.measure_state(&mut state);
         state
     }
 
-    /// One iteration: local stage on s, then linear stage.
+    /// One iteration: local stage on s; with status-following l, new operators when the slack
+    /// set changed (relaxation then restarts: the old s was computed with another l); then
+    /// the linear stage, relaxed `s ← μ s_new + (1 − μ) s_old`.
     fn next_iter(&mut self, state: &mut LatinState) {
         self.local_stage(&mut state.subs);
-        self.linear_stage(&state.load, &mut state.subs);
+        if self.settings.policy == SearchPolicy::Status && self.follow_status(state) {
+            state.updates += 1;
+            state.relax = false;
+        }
+        let mu = self.settings.relaxation;
+        let relaxation = (state.relax && mu < 1.0).then_some(mu);
+        self.linear_stage(&state.load, &mut state.subs, relaxation);
+        state.relax = true;
         state.iteration += 1;
         self.measure_state(state);
     }
 
     fn progress(&self, state: &LatinState) -> Progress {
-        let stop = if !state.eta.is_finite() {
+        let eta_met = state.eta <= self.settings.tolerance;
+        let residual_met = state.residual <= self.settings.residual_tolerance();
+        let criterion = match self.settings.stop_on {
+            StopOn::Eta => eta_met,
+            StopOn::Residual => residual_met,
+            StopOn::Both => eta_met && residual_met,
+        };
+        let stop = if !(state.eta.is_finite() && state.residual.is_finite()) {
             Some(Status::Stalled)
-        } else if state.eta <= self.settings.tolerance || state.at_roundoff {
+        } else if criterion || state.at_roundoff {
             Some(Status::Converged)
         } else {
             None
@@ -268,6 +448,8 @@ impl Solver for Latin<'_> {
         Progress {
             iteration: state.iteration,
             residual: state.eta,
+            equilibrium_residual: Some(state.residual),
+            setups: state.updates,
             slack_cables: state.slack_cables,
             stop,
         }
@@ -291,15 +473,10 @@ impl Solver for Latin<'_> {
         let s = self.structure;
         let mut subs = state.subs.clone();
         self.local_stage(&mut subs);
-        let mut u = vec![0.0; s.n_free];
-        let mut count = vec![0u32; s.n_free];
+        let u = self.displacements(&state.subs);
         let mut tensions = vec![0.0; s.links.len()];
         let mut slack = vec![false; s.links.len()];
         for (sub, st) in self.substructures.iter().zip(&subs) {
-            for (local, &global) in sub.dof_global.iter().enumerate() {
-                u[global] += st.u[local];
-                count[global] += 1;
-            }
             for (j, &i) in sub.links.iter().enumerate() {
                 slack[i] = st.slack_hat[j];
                 tensions[i] = if slack[i] {
@@ -309,9 +486,6 @@ impl Solver for Latin<'_> {
                 };
             }
         }
-        u.iter_mut()
-            .zip(&count)
-            .for_each(|(ui, &c)| *ui /= c.max(1) as f64);
         Equilibrium {
             displacements: u,
             tensions,

@@ -76,8 +76,15 @@ pub struct LatinState {
     pub iteration: usize,
     /// η between s and ŝ.
     pub eta: f64,
+    /// r(U): the equilibrium residual of the linear stage's U under the exact law.
+    pub residual: f64,
     /// Slack cables of ŝ.
     pub slack_cables: usize,
+    /// Re-set-ups of the operators (status-following l) so far in this solve.
+    pub updates: usize,
+    /// Whether the next linear stage may be relaxed against this s (not after a re-set-up).
+    pub(super) relax: bool,
+
     /// Δη is at round-off level against the prestress: nothing is left to iterate on.
     pub at_roundoff: bool,
     /// The load on the free dofs, N.

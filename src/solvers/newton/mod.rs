@@ -196,6 +196,9 @@ impl Solver for Newton<'_> {
         Progress {
             iteration: state.iteration,
             residual: state.residual,
+            // newton's own measure is r(U).
+            equilibrium_residual: Some(state.residual),
+            setups: 0,
             slack_cables: slack_flags(self.structure, &state.tensions)
                 .iter()
                 .filter(|&&x| x)
