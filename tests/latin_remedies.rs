@@ -190,3 +190,77 @@ fn plain_method_stays_reachable() {
     assert!(records.iter().all(|r| r.setups == 0));
     assert!(sol.info.residual <= 1e-6);
 }
+
+#[test]
+fn homogenised_files_describe_every_macro_dof() {
+    use std::collections::BTreeMap;
+    let case = common::Temp::file(
+        "homogenised",
+        "[grid]\nmodules = [4, 4]\n[load]\nalpha = [1.0]\n[solver]\nmethods = [\"micro-macro\"]\n\
+         subdomains = [2, 2]\n[output]\nhomogenised = true\nsummary = false\ntensions = false\n\
+         displacements = false\nhistory = false\n",
+    );
+    let out = common::Temp::dir("homogenised-out");
+    let o = common::tensolve(&["run", case.arg(), "--out", out.arg(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let parsed = tensolve::case::load(&case.0).unwrap();
+    let s = parsed.structure();
+    let latin = Latin::new(&s, parsed.solver.latin).unwrap();
+    let report = latin.report();
+    // (interface, field) → (substructure, neighbour, centroid) as each side reports it.
+    type Side = (usize, usize, String);
+    let mut sides: BTreeMap<(usize, String), Vec<Side>> = BTreeMap::new();
+    let mut total = 0;
+    for e in 0..report.substructures {
+        let path = out.0.join(format!("homogenised/substructure_{e}.csv"));
+        let mut reader = csv::Reader::from_path(&path).expect("a file per substructure");
+        let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+        let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
+        let m = rows.len();
+        assert_eq!(
+            header[..7],
+            [
+                "macro_dof",
+                "interface",
+                "neighbour",
+                "field",
+                "centroid_x",
+                "centroid_y",
+                "centroid_z"
+            ]
+        );
+        assert_eq!(header.len(), 7 + m, "one L column per macro dof");
+        let l: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|r| (0..m).map(|j| r[7 + j].parse().unwrap()).collect())
+            .collect();
+        let scale = l.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+        assert!(scale > 0.0);
+        for (i, row) in l.iter().enumerate() {
+            for (j, &value) in row.iter().enumerate() {
+                assert!(
+                    (value - l[j][i]).abs() <= 1e-9 * scale,
+                    "substructure {e}: L not symmetric at ({i}, {j})"
+                );
+            }
+        }
+        for r in &rows {
+            let neighbour: usize = r[2].parse().unwrap();
+            assert_ne!(neighbour, e);
+            sides
+                .entry((r[1].parse().unwrap(), r[3].to_string()))
+                .or_default()
+                .push((e, neighbour, format!("{},{},{}", &r[4], &r[5], &r[6])));
+        }
+        total += m;
+    }
+    // Every macro dof of every interface is seen from both of its substructures, each naming
+    // the other, at the same centroid.
+    assert_eq!(total, 2 * report.macro_dofs);
+    for ((interface, field), seen) in &sides {
+        assert_eq!(seen.len(), 2, "interface {interface} {field}: {seen:?}");
+        assert_eq!((seen[0].0, seen[0].1), (seen[1].1, seen[1].0));
+        assert_eq!(seen[0].2, seen[1].2);
+    }
+    assert!(sides.keys().any(|(_, f)| f.starts_with("rotation about")));
+}

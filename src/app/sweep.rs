@@ -101,13 +101,23 @@ pub fn run(
     let mut reference = ReferenceSource::new(case, &solvers, &prepared)?;
     // 4. The sinks of the files asked for; their directory, once the case is known solvable.
     let mut sinks = sinks(case, &dir, &prepared, &solvers);
-    if !sinks.is_empty() {
+    if !sinks.is_empty() || case.output.homogenised {
         output::ensure_writable(&dir).map_err(|e| RunError::OutputDir {
             dir: dir.display().to_string(),
             reason: e.to_string(),
         })?;
     }
-    // 5. Every α, every solver.
+    // 5. The homogenised substructure operators, when asked (set-up products, written once).
+    if case.output.homogenised {
+        for set_up in &mut solvers {
+            let operators = set_up.solver.homogenised_operators();
+            output::write_homogenised(&dir, &operators).map_err(|source| WriteError {
+                path: dir.join("homogenised"),
+                source,
+            })?;
+        }
+    }
+    // 6. Every α, every solver.
     let mut rows = Vec::new();
     let mut failures = Vec::new();
     for &alpha in &case.load.alphas {
@@ -129,7 +139,7 @@ pub fn run(
                     .solver
                     .solve(&load, reference_errors.as_ref(), &mut sinks),
             };
-            // 6. A non-finite answer is reported, never written.
+            // 7. A non-finite answer is reported, never written.
             if !results::is_finite(&solution) {
                 sinks.end(&key, SolveEnd::NonFinite)?;
                 failures.push(format!(
@@ -160,7 +170,7 @@ pub fn run(
                     row.residual
                 ));
             }
-            // 7. The files of this solve.
+            // 8. The files of this solve.
             sinks.end(
                 &key,
                 SolveEnd::Solved {
@@ -172,7 +182,7 @@ pub fn run(
             rows.push(row);
         }
     }
-    // 8. The files of the whole sweep.
+    // 9. The files of the whole sweep.
     sinks.close()?;
     if failures.is_empty() {
         Ok(rows)

@@ -142,6 +142,7 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
         plots: o.plots.unwrap_or(defaults.plots),
         vtk: o.vtk.unwrap_or(defaults.vtk),
         stability: o.stability.unwrap_or(defaults.stability),
+        homogenised: o.homogenised.unwrap_or(defaults.homogenised),
     };
     Ok(Case {
         grid,

@@ -111,4 +111,5 @@ pub(super) struct RawOutput {
     pub plots: Option<bool>,
     pub vtk: Option<bool>,
     pub stability: Option<bool>,
+    pub homogenised: Option<bool>,
 }

@@ -133,6 +133,9 @@ pub struct OutputChoice {
     /// `stability.csv`: the smallest eigenvalue of the tangent stiffness at every solution
     /// (one more factorization per row). Default false.
     pub stability: bool,
+    /// `homogenised/substructure_{E}.csv`: micro-macro's homogenised flexibility of every
+    /// substructure and its macro basis. Default false.
+    pub homogenised: bool,
 }
 
 impl Default for OutputChoice {
@@ -146,6 +149,7 @@ impl Default for OutputChoice {
             plots: false,
             vtk: false,
             stability: false,
+            homogenised: false,
         }
     }
 }

@@ -4,6 +4,7 @@
 
 mod atomic;
 mod history;
+mod homogenised;
 pub mod plots;
 pub mod sinks;
 mod tables;
@@ -11,6 +12,7 @@ mod vtk;
 
 pub use atomic::{ensure_writable, write_atomic};
 pub use history::{HistoryWriter, HISTORY_HEADER};
+pub use homogenised::{homogenised_path, write_homogenised};
 pub use plots::FigureData;
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{

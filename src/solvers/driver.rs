@@ -93,6 +93,9 @@ pub trait AnySolver {
 
     /// What the solver's stopping measure measures.
     fn stopping_measure(&self) -> Measure;
+
+    /// Homogenised substructure operators ([`Solver::homogenised`]).
+    fn homogenised_operators(&mut self) -> Vec<super::latin::Homogenised>;
 }
 
 impl<S: Solver> AnySolver for S {
@@ -107,5 +110,9 @@ impl<S: Solver> AnySolver for S {
 
     fn stopping_measure(&self) -> Measure {
         self.measure()
+    }
+
+    fn homogenised_operators(&mut self) -> Vec<super::latin::Homogenised> {
+        self.homogenised()
     }
 }

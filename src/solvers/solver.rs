@@ -68,4 +68,9 @@ pub trait Solver {
 
     /// The iterate as an equilibrium state: displacements U and tensions τ.
     fn iterate(&self, state: &Self::State) -> Equilibrium;
+
+    /// Homogenised substructure operators, for solvers that have them (micro-macro LATIN).
+    fn homogenised(&mut self) -> Vec<super::latin::Homogenised> {
+        Vec::new()
+    }
 }

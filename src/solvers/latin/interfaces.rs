@@ -1,7 +1,7 @@
 //! The interfaces of a partition as the solver uses them: each with its macro basis and its
 //! place among the macro unknowns, redundant exact constraints at crosspoints left out.
 
-use super::macro_basis::macro_basis;
+use super::macro_basis::labelled_macro_basis;
 use super::partition::{InterfaceTopology, Partition};
 use super::WeakInterfaces;
 use crate::structure::Structure;
@@ -16,6 +16,10 @@ pub struct Interface {
     pub basis: DMatrix<f64>,
     /// First column of its macro forces among the macro problem's unknowns.
     pub macro_offset: usize,
+    /// What each column of R is (see [`super::macro_basis::labelled_macro_basis`]).
+    pub fields: Vec<String>,
+    /// Centroid G of its nodes, m.
+    pub centroid: [f64; 3],
 }
 
 /// Exact (all-macro) continuity constraints node by node, kept independent.
@@ -101,11 +105,16 @@ impl Interfaces {
             .map(|topology| {
                 let positions: Vec<[f64; 3]> =
                     topology.nodes.iter().map(|&n| structure.nodes[n]).collect();
-                let basis = macro_basis(&positions, weak);
+                let (basis, fields) = labelled_macro_basis(&positions, weak);
+                let count = positions.len().max(1) as f64;
+                let centroid =
+                    [0, 1, 2].map(|c| positions.iter().map(|p| p[c]).sum::<f64>() / count);
                 let iface = Interface {
                     topology,
                     macro_offset: offset,
                     basis,
+                    fields,
+                    centroid,
                 };
                 offset += iface.basis.ncols();
                 iface

@@ -8,8 +8,15 @@ use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
 
 /// Orthonormal columns spanning `fields` (each of length `rows`), dependent ones dropped.
 pub fn orthonormal_columns(fields: &[Vec<f64>], rows: usize) -> DMatrix<f64> {
+    orthonormal_columns_kept(fields, rows).0
+}
+
+/// [`orthonormal_columns`], and the indices of the fields kept (column j of the result is
+/// field `kept[j]` made orthogonal to the fields kept before it, and normalised).
+fn orthonormal_columns_kept(fields: &[Vec<f64>], rows: usize) -> (DMatrix<f64>, Vec<usize>) {
     let mut kept: Vec<Vec<f64>> = Vec::new();
-    for f in fields {
+    let mut indices = Vec::new();
+    for (index, f) in fields.iter().enumerate() {
         let mut v = f.clone();
         let before = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         if before == 0.0 {
@@ -25,19 +32,38 @@ pub fn orthonormal_columns(fields: &[Vec<f64>], rows: usize) -> DMatrix<f64> {
         if after > 1e-10 * before {
             v.iter_mut().for_each(|x| *x /= after);
             kept.push(v);
+            indices.push(index);
         }
     }
-    DMatrix::from_fn(rows, kept.len(), |i, j| kept[j][i])
+    (
+        DMatrix::from_fn(rows, kept.len(), |i, j| kept[j][i]),
+        indices,
+    )
 }
 
 /// The macro basis (3·nodes rows, node-major, x y z) of an interface through `positions`.
 pub fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64> {
+    labelled_macro_basis(positions, weak).0
+}
+
+/// [`macro_basis`], and what each column is: the field it was made from, with its axes
+/// (`translation along (…)`, `rotation about (…) through G`, …; for an all-macro weak
+/// interface `node k, x` etc., k counting the interface's nodes).
+pub fn labelled_macro_basis(
+    positions: &[[f64; 3]],
+    weak: WeakInterfaces,
+) -> (DMatrix<f64>, Vec<String>) {
     let n = positions.len();
     let rows = 3 * n;
     if n <= super::partition::WEAK_MAX_NODES {
         return match weak {
-            WeakInterfaces::Macro | WeakInterfaces::Drop => DMatrix::identity(rows, rows),
-            WeakInterfaces::Micro => DMatrix::zeros(rows, 0),
+            WeakInterfaces::Macro | WeakInterfaces::Drop => (
+                DMatrix::identity(rows, rows),
+                (0..rows)
+                    .map(|r| format!("node {}, {}", r / 3, ["x", "y", "z"][r % 3]))
+                    .collect(),
+            ),
+            WeakInterfaces::Micro => (DMatrix::zeros(rows, 0), Vec::new()),
         };
     }
     let x: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::from(*p)).collect();
@@ -78,11 +104,27 @@ pub fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64>
     // `orthonormal_columns` judges each field only against its own length.
     let norm = |f: &Vec<f64>| f.iter().map(|x| x * x).sum::<f64>().sqrt();
     let largest = fields.iter().map(norm).fold(0.0, f64::max);
-    let fields: Vec<Vec<f64>> = fields
+    let axis_text = |v: &Vector3<f64>| format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2]);
+    let (a1, a2, a3) = (axis_text(&n1), axis_text(&n2), axis_text(&n3));
+    let names = [
+        format!("translation along {a1}"),
+        format!("translation along {a2}"),
+        format!("translation along {a3}"),
+        format!("rotation about {a1} through G"),
+        format!("rotation about {a2} through G"),
+        format!("rotation about {a3} through G"),
+        format!("extension along {a1}"),
+        format!("extension along {a2}"),
+        format!("distortion in the plane of {a1} and {a2}"),
+    ];
+    let (fields, names): (Vec<Vec<f64>>, Vec<String>) = fields
         .into_iter()
-        .filter(|f| norm(f) > DEPENDENT_RELATIVE * largest)
-        .collect();
-    orthonormal_columns(&fields, rows)
+        .zip(names)
+        .filter(|(f, _)| norm(f) > DEPENDENT_RELATIVE * largest)
+        .unzip();
+    let (basis, kept) = orthonormal_columns_kept(&fields, rows);
+    let labels = kept.into_iter().map(|k| names[k].clone()).collect();
+    (basis, labels)
 }
 
 /// A macro field smaller than this fraction of the largest one vanishes on the interface.

@@ -70,6 +70,31 @@ pub struct PartitionReport {
     pub max_substructure_dofs: usize,
 }
 
+/// One macro dof of a substructure: a column of one of its interfaces' macro bases.
+#[derive(Debug, Clone)]
+pub struct MacroDof {
+    /// The interface (numbered as `check` counts them).
+    pub interface: usize,
+    /// The substructure on the other side.
+    pub neighbour: usize,
+    /// The macro field, with its axes.
+    pub field: String,
+    /// Centroid of the interface, m.
+    pub centroid: [f64; 3],
+}
+
+/// The paper's "second-hand product" of one substructure (its conclusion): its homogenised
+/// flexibility `L_E = K⁺_E − I/d_m` on its macro dofs, with l as set up.
+#[derive(Debug, Clone)]
+pub struct Homogenised {
+    /// The substructure, row by row of the partition.
+    pub substructure: usize,
+    /// Its macro dofs, in the order of `flexibility`'s rows and columns.
+    pub dofs: Vec<MacroDof>,
+    /// L_E, m/N.
+    pub flexibility: nalgebra::DMatrix<f64>,
+}
+
 /// The LATIN solver, set up for one structure and one partition.
 pub struct Latin<'s> {
     structure: &'s Structure,
@@ -114,6 +139,10 @@ const PARALLEL_MIN_DOFS: usize = 20_000;
 /// 1e-1 was slower (32 / 59 / 137, 205 re-set-ups on 64 × 64). 1e-2 keeps the widest margin
 /// from the floor.
 const SLACK_SEARCH_FACTOR: f64 = 1e-2;
+
+/// Half-width of the band around zero tension inside which a cable keeps its search
+/// direction, relative to the RMS trial tension of the cables.
+const STATUS_BAND: f64 = 1e-3;
 
 /// Memory all dense substructure inverses together may take (see
 /// [`crate::linalg::SpdSolver::new`]).
@@ -198,19 +227,35 @@ impl<'s> Latin<'s> {
 
     /// Status-following l (SPEC §6): l for bars and taut cables, ε·l for slack ones, when at
     /// least `update_threshold` cables changed status since the operators were built; then
-    /// the operators are rebuilt for it. A cable counts as slack when the linear stage's trial
-    /// tension `t0 + k e` is not positive (newton's active set): the slack set of ŝ would keep
-    /// a taut cable held at ε·l slack, since with l ≪ k its local stage barely moves.
+    /// the operators are rebuilt for it. A cable's status is read from the linear stage's
+    /// trial tension `τ = t0 + k e` (newton's active set; the slack set of ŝ would keep a
+    /// taut cable held at ε·l slack, since with l ≪ k its local stage barely moves), with a
+    /// band: it goes slack below −δ and taut above +δ, δ = `STATUS_BAND` × the RMS trial
+    /// tension of the cables, so that cables near zero tension do not flip back and forth
+    /// (l is a search direction: any choice converges, only the rate changes).
     /// `true` when rebuilt.
     fn follow_status(&mut self, state: &LatinState) -> bool {
         let links = &self.structure.links;
-        let mut slack = vec![false; links.len()];
+        let mut trial = vec![0.0; links.len()];
         for (sub, st) in self.substructures.iter().zip(&state.subs) {
             for (j, &i) in sub.links.iter().enumerate() {
-                let l = &links[i];
-                slack[i] = l.unilateral && l.prestress + l.stiffness * st.e[j] <= 0.0;
+                trial[i] = links[i].prestress + links[i].stiffness * st.e[j];
             }
         }
+        let (sum2, cables) = links
+            .iter()
+            .zip(&trial)
+            .filter(|(l, _)| l.unilateral)
+            .fold((0.0, 0usize), |(s, n), (_, t)| (s + t * t, n + 1));
+        let band = STATUS_BAND * (sum2 / cables.max(1) as f64).sqrt();
+        let slack: Vec<bool> = links
+            .iter()
+            .zip(&trial)
+            .zip(&self.search_slack)
+            .map(|((l, &tau), &was_slack)| {
+                l.unilateral && if was_slack { tau <= band } else { tau < -band }
+            })
+            .collect();
         let changed = slack
             .iter()
             .zip(&self.search_slack)
@@ -296,6 +341,36 @@ impl<'s> Latin<'s> {
         u
     }
 
+    /// Every substructure's homogenised flexibility and macro basis, with l as set up (a
+    /// solve's status-following l is undone first).
+    pub fn homogenised(&mut self) -> Vec<Homogenised> {
+        if self.search_slack.iter().any(|&x| x) {
+            self.set_search(vec![false; self.structure.links.len()]);
+        }
+        self.substructures
+            .iter()
+            .enumerate()
+            .map(|(e, sub)| Homogenised {
+                substructure: e,
+                dofs: sub
+                    .sides
+                    .iter()
+                    .flat_map(|side| {
+                        let iface = &self.interfaces[side.interface];
+                        let neighbour = iface.topology.sides[1 - side.which];
+                        iface.fields.iter().map(move |field| MacroDof {
+                            interface: side.interface,
+                            neighbour,
+                            field: field.clone(),
+                            centroid: iface.centroid,
+                        })
+                    })
+                    .collect(),
+                flexibility: sub.flexibility.clone(),
+            })
+            .collect()
+    }
+
     /// The settings it was set up with.
     pub fn settings(&self) -> &LatinSettings {
         &self.settings
@@ -377,6 +452,11 @@ fn substructures(
 
 impl Solver for Latin<'_> {
     type State = LatinState;
+
+    fn homogenised(&mut self) -> Vec<Homogenised> {
+        Latin::homogenised(self)
+    }
+
     /// Iteration 0 is the first linear stage.
     const INIT_IS_ITERATE: bool = true;
 
