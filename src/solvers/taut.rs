@@ -10,11 +10,11 @@ use crate::structure::Structure;
 use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
-/// plane coordinates rather than AMD. Measured (factor entries, numeric factorization, one
-/// run): paper case (799 nodes) AMD 0.19 M against ND 0.32 M entries; 64 × 64 (12 k nodes)
-/// 6.5 M against 6.9 M; 128 × 128 (49 k) 35.4 M, 1.0 s against 32.4 M, 0.9 s; 256 × 256
-/// (197 k) 194 M, 13 s against 149 M, 4.4 s.
-const NESTED_DISSECTION_MIN_NODES: usize = 40_000;
+/// plane coordinates rather than AMD. Factor entries, AMD against nested dissection: paper
+/// case (799 free nodes) 0.19 M against 0.20 M; 64 × 64 (12 k) 6.5 M against 5.3 M; 128 × 128
+/// (49 k) 35.4 M against 26.1 M; 256 × 256 (197 k) 194 M against 124 M, whose numeric
+/// factorization takes 13 s with AMD and 4.4 s with nested dissection (one run, one core).
+const NESTED_DISSECTION_MIN_NODES: usize = 10_000;
 
 /// `K = Bᵀ k B` with every cable taut, its pattern (shared by every stiffness of the structure)
 /// and its factor.

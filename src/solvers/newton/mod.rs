@@ -72,13 +72,16 @@ pub struct NewtonWork {
 const REGULARISATION: f64 = 1e-6;
 
 /// CG on a new Hessian, preconditioned by the factor of an earlier one, is tried when their
-/// taut sets differ by at most this many links; beyond, CG would need about as many
-/// iterations and the Hessian is refactorised at once.
-const REUSE_MAX_CHANGED_LINKS: usize = 48;
-/// CG iterations allowed before giving up and refactorising: a CG iteration costs a solve
-/// with the factor and a product with the Hessian; a factorization costs about 10 solves on
-/// the paper case and 64 × 64 (measured: 1.9 ms / 0.2 ms, 130 ms / 15 ms).
-const REUSE_MAX_CG_ITERATIONS: usize = 8;
+/// taut sets differ by at most this many links. A CG iteration costs a solve with the factor
+/// and a product with the Hessian; a factorization costs about 10 of them on every grid
+/// measured (paper case 1.9 ms / 0.2 ms, 64 × 64 130 ms / 15 ms, 256 × 256 4.4 s / 0.36 s).
+/// Measured on a 41-α sweep of the paper case with no cap, CG needed about 2 + 0.45 r
+/// iterations for r changed links up to r ≈ 60, then about 30 whatever r: it pays up to
+/// r ≈ 16, and the sweep took 142 ms with 17 factorizations against 200 ms with 75 without
+/// reuse.
+const REUSE_MAX_CHANGED_LINKS: usize = 16;
+/// CG iterations allowed before giving up and refactorising (the break-even point above).
+const REUSE_MAX_CG_ITERATIONS: usize = 12;
 /// Relative residual `‖H ΔU + ∇Π‖ ≤ tol · ‖∇Π‖` of a Newton step solved by CG: far below
 /// what the outer iteration needs, so that its convergence is that of exact steps.
 const REUSE_CG_TOLERANCE: f64 = 1e-12;
