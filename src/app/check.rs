@@ -181,7 +181,7 @@ impl fmt::Display for CheckReport {
             let origin = if settings.dm.is_some() {
                 "solver.dm"
             } else {
-                "default 0.4 k/sqrt(H)"
+                "default 0.45 k/sqrt(H)"
             };
             writeln!(f, "  d_m           {:.4e} N/m ({origin})", r.dm)?;
         }

@@ -20,7 +20,7 @@ use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LdltRef, SymbolicCholesky, SymmetricOrdering,
 };
-use faer::sparse::{SparseColMat, SymbolicSparseColMatRef, Triplet};
+use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
@@ -48,11 +48,22 @@ pub struct MacroProblem {
     factor: Option<Factor>,
 }
 
+/// The pattern of the macro matrix, fixed by the partition and the kernels (the search
+/// directions change only values): its lower triangle, the order that maps the assembly's
+/// entries onto it, and the symbolic `L D Lᵀ` analysis (AMD).
+struct MacroPattern {
+    lower: SymbolicSparseColMat<usize>,
+    argsort: Argsort<usize>,
+    /// Number of assembled entries the order maps (the same partition always gives the same).
+    argsort_len: usize,
+    symbolic: SymbolicCholesky<usize>,
+}
+
 /// The scaled augmented matrix `D [Ã, N; Nᵀ, 0] D` (lower triangle, D = √d_m on forces,
 /// 1/√d_m on kernel amplitudes: every block O(1)) and its `L D Lᵀ` factor.
 struct Factor {
+    pattern: Arc<MacroPattern>,
     lower: SparseColMat<usize, f64>,
-    symbolic: Arc<SymbolicCholesky<usize>>,
     values: Vec<f64>,
 }
 
@@ -104,12 +115,15 @@ impl MacroProblem {
         if n == 0 {
             return Ok(problem(None));
         }
-        // Lower triangle of D [Ã, N; Nᵀ, 0] D; duplicates are summed by faer.
+        // Lower triangle of D [Ã, N; Nᵀ, 0] D, entry by entry in an order fixed by the
+        // partition (zeros included, so the pattern never changes); duplicates are summed.
         let gamma = AUGMENTATION / dm;
-        let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        let mut entries: Vec<Pair<usize, usize>> = Vec::new();
+        let mut values: Vec<f64> = Vec::new();
         let mut add = |r: usize, c: usize, v: f64| {
-            if v != 0.0 && r >= c {
-                triplets.push(Triplet::new(r, c, v));
+            if r >= c {
+                entries.push(Pair::new(r, c));
+                values.push(v);
             }
         };
         for (e, sub) in subs.iter().enumerate() {
@@ -136,33 +150,45 @@ impl MacroProblem {
                 }
             }
         }
-        // Explicit (zero) diagonal entries: every pivot is in the pattern.
-        triplets.extend((0..n).map(|i| Triplet::new(i, i, 0.0)));
-        let lower = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
-            .map_err(|_| SingularMacroProblem)?;
-        let symbolic = match previous {
-            Some(old) if same_pattern(old.lower.symbolic(), lower.symbolic()) => {
-                Arc::clone(&old.symbolic)
-            }
-            _ => Arc::new(
-                factorize_symbolic_cholesky(
-                    lower.symbolic(),
+        // Every pivot is in the pattern.
+        for i in 0..n {
+            add(i, i, 0.0);
+        }
+        let pattern = match previous {
+            Some(old) if old.pattern.argsort_len == values.len() => Arc::clone(&old.pattern),
+            _ => {
+                let (lower, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &entries)
+                    .map_err(|_| SingularMacroProblem)?;
+                let symbolic = factorize_symbolic_cholesky(
+                    lower.as_ref(),
                     Side::Lower,
                     SymmetricOrdering::Amd,
                     Default::default(),
                 )
-                .map_err(|_| SingularMacroProblem)?,
-            ),
+                .map_err(|_| SingularMacroProblem)?;
+                Arc::new(MacroPattern {
+                    argsort_len: values.len(),
+                    lower,
+                    argsort,
+                    symbolic,
+                })
+            }
         };
+        drop(entries);
+        let lower =
+            SparseColMat::new_from_argsort(pattern.lower.clone(), &pattern.argsort, &values)
+                .map_err(|_| SingularMacroProblem)?;
+        drop(values);
+        let symbolic = &pattern.symbolic;
         // + for the forces, − for the kernel amplitudes.
         let signs: Vec<i8> = (0..n).map(|i| if i < n_forces { 1 } else { -1 }).collect();
-        let mut values = vec![0.0; symbolic.len_val()];
+        let mut factor_values = vec![0.0; symbolic.len_val()];
         let mut scratch = MemBuffer::new(
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
         );
         symbolic
             .factorize_numeric_ldlt(
-                &mut values,
+                &mut factor_values,
                 lower.as_ref(),
                 Side::Lower,
                 LdltRegularization {
@@ -176,9 +202,9 @@ impl MacroProblem {
             )
             .map_err(|_| SingularMacroProblem)?;
         let factor = Factor {
+            pattern: Arc::clone(&pattern),
             lower,
-            symbolic,
-            values,
+            values: factor_values,
         };
         // A regularised factor of a singular matrix solves nothing: solve M y = M y0 for a
         // known y0 and compare.
@@ -265,8 +291,9 @@ impl Factor {
     /// `y ← M⁻¹ y`: the regularised factor, then iterative refinement against M.
     fn solve(&self, b: &mut [f64]) {
         let n = b.len();
-        let ldlt = LdltRef::new(&self.symbolic, &self.values);
-        let mut scratch = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let symbolic = &self.pattern.symbolic;
+        let ldlt = LdltRef::new(symbolic, &self.values);
+        let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         let mut solve = |x: &mut [f64]| {
             ldlt.solve_in_place_with_conj(
                 Conj::No,
@@ -291,12 +318,4 @@ impl Factor {
             b.iter_mut().zip(&r).for_each(|(y, d)| *y += d);
         }
     }
-}
-
-/// Whether two patterns are the same.
-fn same_pattern(
-    a: SymbolicSparseColMatRef<'_, usize>,
-    b: SymbolicSparseColMatRef<'_, usize>,
-) -> bool {
-    a.nrows() == b.nrows() && a.col_ptr() == b.col_ptr() && a.row_idx() == b.row_idx()
 }

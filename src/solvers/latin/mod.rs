@@ -108,9 +108,6 @@ pub struct Latin<'s> {
     settings: LatinSettings,
     /// d_m as used: `settings.dm`, or [`auto_dm`] for this structure and partition.
     dm: f64,
-    partition: Partition,
-    /// Per node: how many substructures hold it.
-    holders: Vec<u8>,
     /// Substructure operators kept as dense inverses (see `DENSE_BUDGET_BYTES`).
     dense: bool,
     /// Search direction l of every link as set up (`solver.l`).
@@ -253,7 +250,6 @@ impl<'s> Latin<'s> {
             structure,
             settings,
             dm,
-            holders,
             dense: dense_bytes <= DENSE_BUDGET_BYTES,
             search: base_search.clone(),
             search_slack: vec![false; structure.links.len()],
@@ -270,7 +266,6 @@ impl<'s> Latin<'s> {
             } else {
                 1
             },
-            partition,
         };
         let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
         for sub in &latin.substructures {
@@ -358,16 +353,13 @@ impl<'s> Latin<'s> {
                     .any(|&i| search[i] != self.search[i])
             })
             .collect();
-        let Ok(rebuilt) = substructures(
-            self.structure,
-            &self.partition,
-            &changed,
-            &self.interfaces,
-            &self.holders,
-            &search,
-            self.dm,
-            self.dense,
-        ) else {
+        // Only l changed: each substructure keeps its pattern, symbolic analysis and kernel.
+        let (dm, dense) = (self.dm, self.dense);
+        let Ok(rebuilt) = changed
+            .par_iter()
+            .map(|&e| self.substructures[e].with_search(&search, dm, dense))
+            .collect::<Result<Vec<Substructure>, _>>()
+        else {
             return false;
         };
         let mut substructures = std::mem::take(&mut self.substructures);
