@@ -76,13 +76,19 @@ fn bench_case(
         Box::new(Newton::new(s, t, NewtonSettings::default()).expect("newton set-up"))
     });
     // The method before factor reuse (a factorization at every step that is not all-taut).
-    bench_solver(&mut group, "newton-refactorise", &structure, &load, |s, t| {
-        let settings = NewtonSettings {
-            reuse_factor: false,
-            ..NewtonSettings::default()
-        };
-        Box::new(Newton::new(s, t, settings).expect("newton set-up"))
-    });
+    bench_solver(
+        &mut group,
+        "newton-refactorise",
+        &structure,
+        &load,
+        |s, t| {
+            let settings = NewtonSettings {
+                reuse_factor: false,
+                ..NewtonSettings::default()
+            };
+            Box::new(Newton::new(s, t, settings).expect("newton set-up"))
+        },
+    );
     bench_solver(&mut group, "pcg-lcp", &structure, &load, |s, t| {
         Box::new(PcgLcp::new(s, t, PcgLcpSettings::default()))
     });
