@@ -345,7 +345,6 @@ impl Solver for PcgLcp<'_> {
     fn iterate(&self, state: &PcgLcpState) -> Equilibrium {
         let s = self.structure;
         let u = self.displacements(state);
-        let mut slack = vec![false; s.links.len()];
         let mut tensions: Vec<f64> = s
             .links
             .iter()
@@ -354,16 +353,11 @@ impl Solver for PcgLcp<'_> {
             .collect();
         for (j, &i) in self.cables.iter().enumerate() {
             if state.x[j] > 0.0 {
-                // τ = t0 + k(e + λ) = 0 up to the tolerance: a slack cable carries nothing.
-                slack[i] = true;
+                // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing.
                 tensions[i] = 0.0;
             }
         }
-        Equilibrium {
-            displacements: u,
-            tensions,
-            slack,
-        }
+        Equilibrium::classified(s, u, tensions)
     }
 }
 

@@ -341,11 +341,7 @@ impl Solver for Newton<'_> {
     }
 
     fn iterate(&self, state: &NewtonState) -> Equilibrium {
-        Equilibrium {
-            displacements: state.u.clone(),
-            tensions: state.tensions.clone(),
-            slack: slack_flags(self.structure, &state.tensions),
-        }
+        Equilibrium::classified(self.structure, state.u.clone(), state.tensions.clone())
     }
 }
 
