@@ -45,11 +45,30 @@ pub enum SetupError {
     /// A LATIN substructure operator could not be factorized or pseudo-inverted.
     #[error(
         "substructure {index} has a singular operator (K_E or K*_E + QQᵀ): change \
-         `solver.subdomains` or `solver.dm`"
+         `solver.subdomains`, `solver.dm` or `solver.l`"
     )]
     SingularSubstructure {
         /// The substructure, numbered row by row of the partition.
         index: usize,
+    },
+    /// A uniform LATIN search direction `solver.l` too far from the links' stiffness for the
+    /// stages to be resolved in f64.
+    #[error(
+        "`solver.l` = {l:e} N/m is out of range for this structure: its links' stiffness k is \
+         between {k_min:e} and {k_max:e} N/m; give l between {min:e} and {max:e} N/m, or \
+         \"stiffness\" (l = k on every link)"
+    )]
+    SearchDirectionOutOfRange {
+        /// The value given.
+        l: f64,
+        /// The smallest link stiffness, N/m.
+        k_min: f64,
+        /// The largest link stiffness, N/m.
+        k_max: f64,
+        /// The smallest l accepted.
+        min: f64,
+        /// The largest l accepted.
+        max: f64,
     },
     /// The LATIN macro problem is singular.
     #[error(

@@ -35,10 +35,11 @@ impl fmt::Display for Status {
 /// What a solver's stopping measure (its `residual`) measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Measure {
-    /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs
+    /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` on the free dofs
     /// (`newton`).
     EquilibriumResidual,
-    /// Relative complementarity residual `‖min(kλ, τ)‖ / ‖t0_c‖` of the cable LCP (`pcg-lcp`).
+    /// Relative complementarity residual `‖min(kλ, τ)‖ / (‖t0_c‖ + ‖k_c B_c K⁻¹ F‖)` of the
+    /// cable LCP (`pcg-lcp`).
     ComplementarityResidual,
     /// The LATIN indicator η between the two half-steps (paper §5.3).
     Indicator,

@@ -43,6 +43,12 @@ impl Default for NewtonSettings {
 /// α = 0.3 and the 64 × 64 case).
 const REGULARISATION: f64 = 1e-6;
 
+/// Stall: the residual has not fallen below half its best value for this many iterations.
+/// Newton converges quadratically on a fixed taut set and changes the set at most once per
+/// cable, so ten steps without halving the residual mean it sits at round-off (issue 13, C7:
+/// `tolerance = 1e-15` ran all iterations).
+const STALL_ITERATIONS: usize = 10;
+
 /// The newton solver, set up for one structure.
 pub struct Newton<'s> {
     structure: &'s Structure,
@@ -65,7 +71,10 @@ pub struct NewtonState {
     gradient: Vec<f64>,
     residual: f64,
     iteration: usize,
-    /// The last step was not a descent direction: no further progress is possible.
+    /// The smallest residual so far that halved the one before it, and its iteration.
+    best: (f64, usize),
+    /// The last step was not a descent direction, or the residual stopped falling for
+    /// [`STALL_ITERATIONS`] iterations: no further progress is possible.
     stalled: bool,
 }
 
@@ -163,9 +172,11 @@ impl Solver for Newton<'_> {
             gradient: vec![0.0; n],
             residual: f64::INFINITY,
             iteration: 0,
+            best: (f64::INFINITY, 0),
             stalled: false,
         };
         self.evaluate(&mut state);
+        state.best = (state.residual, 0);
         state
     }
 
@@ -189,6 +200,11 @@ impl Solver for Newton<'_> {
             .zip(&step)
             .for_each(|(u, d)| *u += length * d);
         self.evaluate(state);
+        if state.residual <= 0.5 * state.best.0 {
+            state.best = (state.residual, state.iteration);
+        } else if state.iteration - state.best.1 >= STALL_ITERATIONS {
+            state.stalled = true;
+        }
     }
 
     fn progress(&self, state: &NewtonState) -> Progress {
