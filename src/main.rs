@@ -224,7 +224,10 @@ fn run_command(
     reporter.finish();
     if !matches!(
         result,
-        Err(RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. } | RunError::Busy(_))
+        Err(RunError::Case(_)
+            | RunError::Setup(_)
+            | RunError::OutputDir { .. }
+            | RunError::Busy(_))
     ) {
         reporter.line(&format!("results in {}", dir.display()));
     }

@@ -20,13 +20,7 @@ fn small_case(methods: &str, alphas: &str, extra: &str) -> String {
 
 /// `tensolve run CASE --out DIR --quiet`.
 fn run(case: &Temp, dir: &Path) -> Output {
-    tensolve(&[
-        "run",
-        case.arg(),
-        "--out",
-        dir.to_str().unwrap(),
-        "--quiet",
-    ])
+    tensolve(&["run", case.arg(), "--out", dir.to_str().unwrap(), "--quiet"])
 }
 
 fn code(o: &Output) -> i32 {
@@ -131,7 +125,11 @@ fn d5a_newton_is_not_converged_at_zero_under_huge_prestress() {
         (newton - pcg).abs() <= 1e-6 * pcg,
         "newton {newton} against pcg-lcp {pcg}"
     );
-    assert_ne!(column(&rows[0], "iterations"), "0", "U = 0 is not an answer");
+    assert_ne!(
+        column(&rows[0], "iterations"),
+        "0",
+        "U = 0 is not an answer"
+    );
 }
 
 #[test]
@@ -139,8 +137,10 @@ fn d5b_pcg_lcp_is_scale_free_at_zero_prestress() {
     for alpha in ["1.0", "1e-30"] {
         let case = Temp::file(
             "d5b",
-            &small_case("[\"newton\", \"pcg-lcp\"]", &format!("[{alpha}]"), "")
-                .replace("[load]", "[prestress]\nlower_cable = 0\n[load]\nnodal = [0, 0, -4e-11]"),
+            &small_case("[\"newton\", \"pcg-lcp\"]", &format!("[{alpha}]"), "").replace(
+                "[load]",
+                "[prestress]\nlower_cable = 0\n[load]\nnodal = [0, 0, -4e-11]",
+            ),
         );
         let dir = Temp::dir("d5b-out");
         let out = run(&case, &dir.0);
@@ -169,7 +169,10 @@ fn c7_newton_reports_a_stall_at_round_off() {
     let rows = summary(&dir.0);
     assert_eq!(column(&rows[0], "converged"), "false");
     let iterations: usize = column(&rows[0], "iterations").parse().unwrap();
-    assert!(iterations < 100, "stopped before max_iterations: {iterations}");
+    assert!(
+        iterations < 100,
+        "stopped before max_iterations: {iterations}"
+    );
 }
 
 // ---- Files torn, stale, mixed or overwritten ----
@@ -306,7 +309,13 @@ fn d7_a_killed_sweep_shows_no_file_without_its_row() {
         "[grid]\nmodules = [16, 16]\n[load]\nalpha = { from = 0.02, to = 2.0, steps = 100 }\n",
     );
     let mut child = Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(["run", case.arg(), "--out", dir.0.to_str().unwrap(), "--quiet"])
+        .args([
+            "run",
+            case.arg(),
+            "--out",
+            dir.0.to_str().unwrap(),
+            "--quiet",
+        ])
         .spawn()
         .unwrap();
     let start = Instant::now();
@@ -338,7 +347,8 @@ fn c5_summary_rows_are_appended_not_rewritten() {
     out.append("summary.csv", "a,b", "1,2").unwrap();
     let inode = std::fs::metadata(dir.0.join("summary.csv")).unwrap().ino();
     for i in 0..100 {
-        out.append("summary.csv", "a,b", &format!("{i},{i}")).unwrap();
+        out.append("summary.csv", "a,b", &format!("{i},{i}"))
+            .unwrap();
     }
     // Same file (a rewrite would rename a new one over it), every row once.
     assert_eq!(
@@ -394,7 +404,10 @@ fn c6_duplicate_solver_names_are_refused() {
 #[test]
 fn e1_arrays_have_exactly_their_length() {
     for (bad, key) in [
-        ("[grid]\nmodules = [4, 4, 4]\n[load]\nalpha = [1]\n", "modules"),
+        (
+            "[grid]\nmodules = [4, 4, 4]\n[load]\nalpha = [1]\n",
+            "modules",
+        ),
         (
             "[grid]\nmodules = [4, 4]\n[load]\nnodal = [0, 0, -40, \"junk\"]\nalpha = [1]\n",
             "nodal",
@@ -469,21 +482,28 @@ fn m1_m4_failure_messages_are_true_and_bounded() {
         &small_case(
             "[\"newton\"]",
             "{ from = 0.1, to = 3.0, steps = 30 }",
-            "max_iterations = 1\n",
+            "tolerance = 1e-15\n",
         ),
     );
     let dir = Temp::dir("m1-out");
     let out = run(&case, &dir.0);
     assert_eq!(code(&out), 1);
     let message = stderr(&out);
-    assert!(message.contains("30 solve(s) did not converge"), "{message}");
+    assert!(
+        message.contains("30 solve(s) did not converge"),
+        "{message}"
+    );
     assert!(message.contains("and 20 more"), "{message}");
     assert!(message.contains("its row says converged = false"));
     assert!(message.len() < 3000, "{} bytes", message.len());
     // A huge value is echoed cut short.
     let case = Temp::file(
         "m4",
-        &small_case("[\"newton\"]", "[1.0]", &format!("l = \"{}\"\n", "x".repeat(1 << 20))),
+        &small_case(
+            "[\"newton\"]",
+            "[1.0]",
+            &format!("l = \"{}\"\n", "x".repeat(1 << 20)),
+        ),
     );
     let out = tensolve(&["check", case.arg()]);
     assert_eq!(code(&out), 2);
@@ -495,7 +515,11 @@ fn m1_m4_failure_messages_are_true_and_bounded() {
 fn m2_set_up_failures_of_l_name_l() {
     let case = Temp::file(
         "m2",
-        &small_case("[\"micro-macro\"]", "[1.0]", "l = 1e15\nsubdomains = [2, 2]\n"),
+        &small_case(
+            "[\"micro-macro\"]",
+            "[1.0]",
+            "l = 1e15\nsubdomains = [2, 2]\n",
+        ),
     );
     let dir = Temp::dir("m2-out");
     let out = run(&case, &dir.0);
@@ -538,4 +562,34 @@ fn m6_output_directory_names_are_kept_or_refused() {
     assert!(status.success());
     let stem = std::ffi::OsStr::from_bytes(b"case\xff");
     assert!(work.0.join("out").join(stem).join("summary.csv").exists());
+}
+
+#[test]
+fn c4_a_long_strip_mechanism_is_refused_without_counting_every_mode() {
+    let case = Temp::file(
+        "c4",
+        "[grid]\nmodules = [1000, 1]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\nalpha = [1]\n",
+    );
+    // A hang guard (the defect took over 300 s), not a speed measurement.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args(["check", case.arg()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(120) {
+            child.kill().unwrap();
+            panic!("the mechanism check of a 1000 x 1 strip did not end in 120 s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(code(&out), 2);
+    assert!(
+        stderr(&out).contains("at least 64 zero-stiffness mode(s)"),
+        "{}",
+        stderr(&out)
+    );
 }

@@ -95,8 +95,13 @@ fn check_search_direction(
         .links
         .iter()
         .map(|l| l.stiffness)
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), k| (lo.min(k), hi.max(k)));
-    let (min, max) = (k_min / SEARCH_DIRECTION_RANGE, k_max * SEARCH_DIRECTION_RANGE);
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), k| {
+            (lo.min(k), hi.max(k))
+        });
+    let (min, max) = (
+        k_min / SEARCH_DIRECTION_RANGE,
+        k_max * SEARCH_DIRECTION_RANGE,
+    );
     if k_max > 0.0 && !(min..=max).contains(&l) {
         return Err(SetupError::SearchDirectionOutOfRange {
             l,

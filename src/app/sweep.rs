@@ -9,9 +9,9 @@ use crate::output::{
     sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
     OpenError, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
-use std::cell::RefCell;
 use crate::results;
 use crate::solvers::{Measure, Method, Reference, SetupError, Silent, Solution};
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 

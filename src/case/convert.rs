@@ -37,7 +37,9 @@ fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> 
         Err(CaseError::invalid(
             key,
             number(value),
-            format!("give {what} as a number ≥ {PHYSICAL_MIN:e} and ≤ {PHYSICAL_MAX:e}"),
+            format!(
+                "give {what} as a number > 0, at least {PHYSICAL_MIN:e} and ≤ {PHYSICAL_MAX:e}"
+            ),
         ))
     }
 }
@@ -283,7 +285,11 @@ pub(crate) fn check_distinct_methods(
         if methods[..i].contains(m) {
             return Err(CaseError::invalid(
                 key,
-                format!("{} solvers naming `{}` more than once", methods.len(), m.name()),
+                format!(
+                    "{} solvers naming `{}` more than once",
+                    methods.len(),
+                    m.name()
+                ),
                 "name each solver once (its files would overwrite each other)",
             ));
         }

@@ -6,8 +6,8 @@
 mod atomic;
 mod history;
 mod homogenised;
-pub mod publish;
 pub mod plots;
+pub mod publish;
 pub mod sinks;
 mod tables;
 mod vtk;

@@ -316,7 +316,10 @@ fn read_manifest(path: &Path) -> Vec<PathBuf> {
 fn remove_stale_staging(root: &Path) -> io::Result<()> {
     for entry in std::fs::read_dir(root)? {
         let entry = entry?;
-        let stale = entry.file_name().to_string_lossy().starts_with(STAGING_PREFIX);
+        let stale = entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with(STAGING_PREFIX);
         if stale && entry.file_type()?.is_dir() {
             std::fs::remove_dir_all(entry.path())?;
         }

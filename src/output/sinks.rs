@@ -19,10 +19,10 @@ use super::{
     write_vtu, FigureData, HistoryWriter, OutputDir, StabilityRow, SummaryRow, STABILITY_HEADER,
     SUMMARY_HEADER,
 };
-use std::cell::RefCell;
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
 use crate::structure::Structure;
+use std::cell::RefCell;
 use std::io;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -129,9 +129,12 @@ impl Sink for HistorySink {
 
     fn end(&mut self, key: &SolveKey, _end: SolveEnd) -> Result<(), WriteError> {
         match self.writer.take() {
-            Some(writer) => writer.finish().map(|_| ()).map_err(WriteError::at(result_path(
-                &self.root, "history", key.solver, key.alpha,
-            ))),
+            Some(writer) => writer
+                .finish()
+                .map(|_| ())
+                .map_err(WriteError::at(result_path(
+                    &self.root, "history", key.solver, key.alpha,
+                ))),
             None => Ok(()),
         }
     }
@@ -155,17 +158,25 @@ impl<'s> PerSolveSink<'s> {
     /// `tensions/{solver}_alpha{α}.csv` of `structure`, written under `dir` (the staging
     /// directory); errors name the file under `root`.
     pub fn tensions(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(root, dir, structure, write_tensions, |dir, solver, alpha| {
-            result_path(dir, "tensions", solver, alpha)
-        })
+        Self::new(
+            root,
+            dir,
+            structure,
+            write_tensions,
+            |dir, solver, alpha| result_path(dir, "tensions", solver, alpha),
+        )
     }
 
     /// `displacements/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name
     /// the file under `root`.
     pub fn displacements(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(root, dir, structure, write_displacements, |dir, solver, alpha| {
-            result_path(dir, "displacements", solver, alpha)
-        })
+        Self::new(
+            root,
+            dir,
+            structure,
+            write_displacements,
+            |dir, solver, alpha| result_path(dir, "displacements", solver, alpha),
+        )
     }
 
     /// `vtk/{solver}_alpha{α}.vtu` of `structure`, written under `dir`; errors name the file
@@ -341,7 +352,12 @@ impl Sink for StabilitySink<'_> {
                 self.taut,
             ),
         };
-        append(self.out, "stability.csv", STABILITY_HEADER, &stability_line(&row))
+        append(
+            self.out,
+            "stability.csv",
+            STABILITY_HEADER,
+            &stability_line(&row),
+        )
     }
 }
 
@@ -368,7 +384,12 @@ impl Sink for SummarySink<'_> {
 }
 
 /// Append `line` to the ledger `name` of `out`.
-fn append(out: &RefCell<OutputDir>, name: &str, header: &str, line: &str) -> Result<(), WriteError> {
+fn append(
+    out: &RefCell<OutputDir>,
+    name: &str,
+    header: &str,
+    line: &str,
+) -> Result<(), WriteError> {
     let mut out = out.borrow_mut();
     let path = out.root().join(name);
     out.append(name, header, line).map_err(WriteError::at(path))

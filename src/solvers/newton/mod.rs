@@ -11,8 +11,8 @@
 mod line_search;
 
 use super::{
-    relative_unbalance, stop_when, Equilibrium, Measure, Progress, SetupError, Solver,
-    TautStiffness,
+    displacement_residual, load_relative_unbalance, stop_when, Equilibrium, Measure, Progress,
+    SetupError, Solver, TautStiffness,
 };
 use crate::linalg::{dot, SparseCholesky};
 use crate::structure::Structure;
@@ -43,10 +43,10 @@ impl Default for NewtonSettings {
 /// α = 0.3 and the 64 × 64 case).
 const REGULARISATION: f64 = 1e-6;
 
-/// Stall: the residual has not fallen below half its best value for this many iterations.
-/// Newton converges quadratically on a fixed taut set and changes the set at most once per
-/// cable, so ten steps without halving the residual mean it sits at round-off (issue 13, C7:
-/// `tolerance = 1e-15` ran all iterations).
+/// Stall: for this many iterations the residual has not fallen below half its best value and
+/// the slack set has not changed. Newton converges quadratically on a fixed taut set, so ten
+/// such steps mean it sits at round-off (issue 13, C7: `tolerance = 1e-15` ran all
+/// iterations).
 const STALL_ITERATIONS: usize = 10;
 
 /// The newton solver, set up for one structure.
@@ -103,7 +103,8 @@ impl<'s> Newton<'s> {
             state.trial[i] = trial;
             state.tensions[i] = if l.unilateral { trial.max(0.0) } else { trial };
         }
-        state.residual = relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
+        state.residual =
+            load_relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
     }
 
     /// `step ← H⁻¹ step` with H the Hessian on the taut set of `state` (SPEC §3) plus the
@@ -184,6 +185,7 @@ impl Solver for Newton<'_> {
     fn next_iter(&mut self, state: &mut NewtonState) {
         let s = self.structure;
         state.iteration += 1;
+        let slack_before: Vec<bool> = state.tensions.iter().map(|&t| t == 0.0).collect();
         let mut step: Vec<f64> = state.gradient.iter().map(|g| -g).collect();
         self.newton_step(state, &mut step);
         let mut step_elongation = vec![0.0; s.links.len()];
@@ -200,8 +202,13 @@ impl Solver for Newton<'_> {
             .zip(&step)
             .for_each(|(u, d)| *u += length * d);
         self.evaluate(state);
-        if state.residual <= 0.5 * state.best.0 {
-            state.best = (state.residual, state.iteration);
+        let slack_changed = state
+            .tensions
+            .iter()
+            .zip(&slack_before)
+            .any(|(&t, &was)| (t == 0.0) != was);
+        if state.residual <= 0.5 * state.best.0 || slack_changed {
+            state.best = (state.residual.min(state.best.0), state.iteration);
         } else if state.iteration - state.best.1 >= STALL_ITERATIONS {
             state.stalled = true;
         }
@@ -212,8 +219,13 @@ impl Solver for Newton<'_> {
         Progress {
             iteration: state.iteration,
             residual: state.residual,
-            // newton's own measure is r(U).
-            equilibrium_residual: Some(state.residual),
+            // newton's measure leaves the prestress out of its scale; r(U) is the measure every
+            // solver shares.
+            equilibrium_residual: Some(displacement_residual(
+                self.structure,
+                &state.u,
+                &state.load,
+            )),
             setups: 0,
             slack_cables: slack_flags(self.structure, &state.tensions)
                 .iter()
