@@ -51,7 +51,7 @@ impl std::fmt::Debug for SparseCholesky {
 /// correct, so a pattern that is not node-major only loses fill quality.
 fn node_ordering(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
     let n = p.n;
-    if n % 3 != 0 || n == 0 {
+    if !n.is_multiple_of(3) || n == 0 {
         return ((0..n).collect(), (0..n).collect());
     }
     let nodes = n / 3;
