@@ -149,6 +149,11 @@ fn d5b_pcg_lcp_is_scale_free_at_zero_prestress() {
         let deflection = |r: &[String]| column(r, "max_deflection").parse::<f64>().unwrap();
         let (newton, pcg) = (deflection(&rows[0]), deflection(&rows[1]));
         assert!(newton > 0.0);
+        assert_eq!(
+            column(&rows[0], "slack_cables"),
+            column(&rows[1], "slack_cables"),
+            "alpha = {alpha}: slack cables"
+        );
         assert!(
             (newton - pcg).abs() <= 1e-6 * newton,
             "alpha = {alpha}: newton {newton} against pcg-lcp {pcg}"

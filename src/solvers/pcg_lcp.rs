@@ -326,8 +326,11 @@ impl Solver for PcgLcp<'_> {
             .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(&u))
             .collect();
         for (j, &i) in self.cables.iter().enumerate() {
-            if state.x[j] > 0.0 {
-                // τ = t0 + k(e + λ) = 0 up to the tolerance: a slack cable carries nothing.
+            // τ = t0 + k(e + λ) = 0 up to the tolerance: a slack cable carries nothing. A
+            // cable at the switch point (λ = 0, τ = t0 + k e ≤ 0: at zero prestress, an
+            // unstretched one) carries nothing either, and is slack as newton counts it
+            // (issue 13, D5b: 54 against 62).
+            if state.x[j] > 0.0 || tensions[i] <= 0.0 {
                 slack[i] = true;
                 tensions[i] = 0.0;
             }

@@ -35,8 +35,9 @@ impl fmt::Display for Status {
 /// What a solver's stopping measure (its `residual`) measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Measure {
-    /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` on the free dofs
-    /// (`newton`).
+    /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs
+    /// (`newton`, which stops when `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)`, the stricter, meets
+    /// the tolerance too).
     EquilibriumResidual,
     /// Relative complementarity residual `‖min(kλ, τ)‖ / (‖t0_c‖ + ‖k_c B_c K⁻¹ F‖)` of the
     /// cable LCP (`pcg-lcp`).

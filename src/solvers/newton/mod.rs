@@ -11,7 +11,7 @@
 mod line_search;
 
 use super::{
-    displacement_residual, load_relative_unbalance, stop_when, Equilibrium, Measure, Progress,
+    load_relative_unbalance, relative_unbalance, stop_when, Equilibrium, Measure, Progress,
     SetupError, Solver, TautStiffness,
 };
 use crate::linalg::{dot, SparseCholesky};
@@ -69,9 +69,12 @@ pub struct NewtonState {
     tensions: Vec<f64>,
     /// `Bᵀτ − F`, the energy's gradient.
     gradient: Vec<f64>,
+    /// r(U), the relative equilibrium residual every solver reports.
     residual: f64,
+    /// The unbalance relative to `‖F‖ + ‖|B|ᵀ|τ − t0|‖`: the stop needs it ≤ tol too.
+    load_residual: f64,
     iteration: usize,
-    /// The smallest residual so far that halved the one before it, and its iteration.
+    /// The smallest load-relative residual so far that halved the one before it, and its iteration.
     best: (f64, usize),
     /// The last step was not a descent direction, or the residual stopped falling for
     /// [`STALL_ITERATIONS`] iterations: no further progress is possible.
@@ -103,7 +106,9 @@ impl<'s> Newton<'s> {
             state.trial[i] = trial;
             state.tensions[i] = if l.unilateral { trial.max(0.0) } else { trial };
         }
-        state.residual =
+        let mut scratch = vec![0.0; s.n_free];
+        state.residual = relative_unbalance(s, &state.tensions, &state.load, &mut scratch);
+        state.load_residual =
             load_relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
     }
 
@@ -172,12 +177,13 @@ impl Solver for Newton<'_> {
             tensions: vec![0.0; m],
             gradient: vec![0.0; n],
             residual: f64::INFINITY,
+            load_residual: f64::INFINITY,
             iteration: 0,
             best: (f64::INFINITY, 0),
             stalled: false,
         };
         self.evaluate(&mut state);
-        state.best = (state.residual, 0);
+        state.best = (state.load_residual, 0);
         state
     }
 
@@ -207,25 +213,26 @@ impl Solver for Newton<'_> {
             .iter()
             .zip(&slack_before)
             .any(|(&t, &was)| (t == 0.0) != was);
-        if state.residual <= 0.5 * state.best.0 || slack_changed {
-            state.best = (state.residual.min(state.best.0), state.iteration);
+        if state.load_residual <= 0.5 * state.best.0 || slack_changed {
+            state.best = (state.load_residual.min(state.best.0), state.iteration);
         } else if state.iteration - state.best.1 >= STALL_ITERATIONS {
             state.stalled = true;
         }
     }
 
     fn progress(&self, state: &NewtonState) -> Progress {
-        let stop = stop_when(state.residual <= self.settings.tolerance, state.stalled);
+        // r(U) ≤ tol, and the same unbalance relative to the forces the load brings into play
+        // (the prestress left out): the second is the stricter, and keeps U = 0 from passing
+        // at a huge prestress (issue 13, D5a).
+        let stop = stop_when(
+            state.load_residual <= self.settings.tolerance,
+            state.stalled,
+        );
         Progress {
             iteration: state.iteration,
             residual: state.residual,
-            // newton's measure leaves the prestress out of its scale; r(U) is the measure every
-            // solver shares.
-            equilibrium_residual: Some(displacement_residual(
-                self.structure,
-                &state.u,
-                &state.load,
-            )),
+            // newton's own measure is r(U).
+            equilibrium_residual: Some(state.residual),
             setups: 0,
             slack_cables: slack_flags(self.structure, &state.tensions)
                 .iter()
