@@ -67,6 +67,9 @@ pub fn set_up<'s>(
             let settings = choice
                 .latin_settings(method)
                 .expect("a LATIN method has LATIN settings");
+            if structure.has_partial_or_prescribed_supports() {
+                return Err(SetupError::LatinSupports);
+            }
             (Box::new(Latin::new(structure, settings)?), 0.0)
         }
     };

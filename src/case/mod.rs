@@ -6,7 +6,10 @@
 mod convert;
 mod error;
 mod raw;
+mod tables;
 mod typed;
+
+pub use tables::read_geometry;
 
 pub use error::CaseError;
 pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
@@ -20,7 +23,8 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
         path: path.display().to_string(),
         reason: e.to_string(),
     })?;
-    let mut case = parse(&text)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut case = parse_in(&text, base)?;
     if case.output.dir.is_none() {
         let stem = path
             .file_stem()
@@ -31,8 +35,14 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
     Ok(case)
 }
 
-/// Parse and validate case text (no output directory default is applied here).
+/// Parse and validate case text (no output directory default is applied here); `[structure]`
+/// tables are read relative to the current directory.
 pub fn parse(text: &str) -> Result<Case, CaseError> {
+    parse_in(text, Path::new(""))
+}
+
+/// Parse and validate case text whose `[structure]` tables are relative to `base`.
+pub fn parse_in(text: &str, base: &Path) -> Result<Case, CaseError> {
     let raw: raw::RawCase = toml::from_str(text).map_err(CaseError::from_toml)?;
-    convert::convert(raw)
+    convert::convert(raw, base)
 }

@@ -133,8 +133,7 @@ impl Structure {
     /// The grid `spec` under the load pattern `load` (at α = 1): the grid's generated
     /// geometry and clamped nodes, assembled like any other structure.
     pub fn grid(spec: &GridSpec, load: &LoadPattern) -> Structure {
-        let (geometry, layout) = grid::geometry(spec);
-        let fixes = supports::clamp_fixes(&layout, spec.clamp);
+        let (geometry, layout, fixes) = Structure::grid_parts(spec);
         let loading = Loading {
             nodal: load.nodal,
             ..Loading::default()
@@ -143,6 +142,14 @@ impl Structure {
         s.layout = Some(layout);
         s.prestress_scale = spec.prestress;
         s
+    }
+
+    /// The grid of `spec` as a general description: nodes and members, layout, and the nodes
+    /// its clamp preset holds.
+    pub fn grid_parts(spec: &GridSpec) -> (Geometry, GridLayout, Vec<NodeFix>) {
+        let (geometry, layout) = grid::geometry(spec);
+        let fixes = supports::clamp_fixes(&layout, spec.clamp);
+        (geometry, layout, fixes)
     }
 
     /// Assemble `geometry` held by `fixes` (later fixes of the same component win) under
@@ -324,11 +331,13 @@ impl Structure {
         f.iter().fold(0.0, |m, x| m.max(x.abs()))
     }
 
-    /// Expand free-dof displacements to all `3·nodes` components (clamped ones zero).
+    /// Expand free-dof displacements to all `3·nodes` components (held ones at their
+    /// prescribed value, zero when clamped).
     pub fn full_displacements(&self, u: &[f64]) -> Vec<f64> {
         self.dof_of
             .iter()
-            .map(|&d| if d == CLAMPED { 0.0 } else { u[d] })
+            .zip(&self.prescribed)
+            .map(|(&d, &ud)| if d == CLAMPED { ud } else { u[d] })
             .collect()
     }
 }
