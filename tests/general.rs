@@ -487,12 +487,19 @@ fn perturbed() -> Structure {
 fn four_solvers_agree_on_a_perturbed_general_structure() {
     let s = perturbed();
     assert!(s.layout.is_none());
-    let f: Vec<f64> = s.unit_load.iter().map(|x| 1.0 * x).collect();
-    let reference = newton(&s, &f);
-    let slack = reference.equilibrium.slack.iter().filter(|&&x| x).count();
-    assert!(
-        slack * 20 >= s.n_cables(),
-        "{slack} slack of {}",
+    // The smallest of these load factors at which at least 5 % of the cables are slack.
+    let (f, reference) = [4.0, 8.0, 16.0, 32.0]
+        .iter()
+        .map(|alpha| {
+            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+            let sol = newton(&s, &f);
+            (f, sol)
+        })
+        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
+        .expect("some load factor slackens 5 % of the cables");
+    println!(
+        "slack: {} of {}",
+        reference.equilibrium.slack.iter().filter(|&&x| x).count(),
         s.n_cables()
     );
     let p = pcg(&s, &f);
