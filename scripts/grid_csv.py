@@ -2,7 +2,7 @@
 """Write the module grid of tensolve's `[grid]` (SPEC §2) as `[structure]` tables.
 
     scripts/grid_csv.py OUTDIR [--modules NX NY] [--length L] [--height H] [--prestress P]
-                              [--braced]
+                              [--braced] [--shear S] [--tilt T]
 
 Writes OUTDIR/nodes.csv (node,x,y,z) and OUTDIR/members.csv
 (member,a,b,kind,young,section,prestress) with the grid generator's node numbering and member
@@ -53,8 +53,16 @@ def main():
     ap.add_argument("--height", type=float, default=0.5)
     ap.add_argument("--prestress", type=float, default=2000.0)
     ap.add_argument("--braced", action="store_true")
+    ap.add_argument("--shear", type=float, default=0.0,
+                    help="x += SHEAR * y: parallelogram modules")
+    ap.add_argument("--tilt", type=float, default=0.0,
+                    help="z += TILT * x: a tilted plane")
     a = ap.parse_args()
     nodes, links = generate(a.modules[0], a.modules[1], a.length, a.height, a.braced)
+    # An affine map keeps the prestress self-balanced when the force densities t0/length are
+    # kept: sum q (x_b - x_a) = 0 is linear in the positions.
+    if a.shear or a.tilt:
+        nodes = [(x + a.shear * y, y, z + a.tilt * x) for (x, y, z) in nodes]
     os.makedirs(a.outdir, exist_ok=True)
     with open(os.path.join(a.outdir, "nodes.csv"), "w") as f:
         f.write("node,x,y,z\n")

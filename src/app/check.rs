@@ -35,7 +35,7 @@ pub struct ModelReport {
     pub unilateral: bool,
     /// Bars.
     pub bars: usize,
-    /// `max |Bᵀt0|` over all dofs, N.
+    /// `max |Bᵀt0|` over all dofs, N, of the given prestress t0 (without settlements).
     pub prestress_imbalance: f64,
     /// `max |Bᵀt0|` over the free dofs, N (zero up to round-off for an admissible prestress).
     pub free_prestress_imbalance: f64,
@@ -130,7 +130,17 @@ pub struct CheckReport {
 /// Check `case` (read from `path`).
 pub fn check(case: &Case, path: PathBuf) -> CheckReport {
     let s = case.structure();
-    let free_prestress_imbalance = s
+    // The given prestress t0, without the tensions prescribed displacements impose.
+    let unsettled: Vec<_> = case
+        .fixes
+        .iter()
+        .map(|f| crate::structure::NodeFix {
+            displacement: [0.0; 3],
+            ..*f
+        })
+        .collect();
+    let given = Structure::new(&case.geometry, &unsettled, &Default::default());
+    let free_prestress_imbalance = given
         .free_prestress_imbalance()
         .iter()
         .flat_map(|(f, _)| *f)
@@ -145,7 +155,7 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         cables: s.n_cables(),
         unilateral: case.unilateral(),
         bars: s.n_bars(),
-        prestress_imbalance: s.prestress_imbalance(),
+        prestress_imbalance: given.prestress_imbalance(),
         free_prestress_imbalance,
         counts: equilibrium_counts(&s),
         prestress: s.prestress_scale,
