@@ -245,12 +245,13 @@ fn table_reads_the_first_iterate_below_each_threshold() {
         ],
     };
     assert_eq!(series.seconds_to_reach(1e-2), Some(0.003));
+    assert_eq!(series.seconds_to_reach(1e-3), Some(0.005));
     assert_eq!(series.seconds_to_reach(1e-4), Some(0.005));
     assert_eq!(series.seconds_to_reach(1e-6), None);
     let table = Table::new(&[series]);
     assert_eq!(
         table.rows[0].seconds_to_reach,
-        [Some(0.003), Some(0.005), None, None]
+        [Some(0.003), Some(0.005), Some(0.005), None, None]
     );
     let text = table.to_string();
     let row = text.lines().find(|l| l.starts_with("micro-macro")).unwrap();
@@ -261,6 +262,8 @@ fn table_reads_the_first_iterate_below_each_threshold() {
             "micro-macro",
             "0.5",
             "3.00",
+            "ms",
+            "5.00",
             "ms",
             "5.00",
             "ms",

@@ -282,6 +282,12 @@ impl fmt::Display for CheckReport {
             )?;
             writeln!(f, "  macro dofs    {}", r.macro_dofs)?;
             writeln!(f, "  kernel cols   {}", r.kernel_columns)?;
+            let origin = if settings.dm.is_some() {
+                "solver.dm"
+            } else {
+                "default 0.45 k/sqrt(H)"
+            };
+            writeln!(f, "  d_m           {:.4e} N/m ({origin})", r.dm)?;
         }
         Ok(())
     }

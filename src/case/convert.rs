@@ -9,6 +9,10 @@ use crate::structure::{CableSpec, Geometry, GridSpec, LoadPattern, Material, Nod
 use std::collections::HashMap;
 use std::path::Path;
 
+/// The deepest Anderson history a case may ask for: each level keeps two vectors of the size
+/// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
+const MAX_ANDERSON_DEPTH: usize = 50;
+
 /// A number as a user would write it: exponent form when very large or very small.
 pub(crate) fn number(x: f64) -> String {
     if x != 0.0 && x.is_finite() && (x.abs() < 1e-3 || x.abs() >= 1e6) {
@@ -455,7 +459,7 @@ fn solver_choice(
     choice.latin.subdomains = [sx, sy];
     if let Some(dm) = raw.dm {
         positive("solver.dm", dm, "the interface search direction d_m in N/m")?;
-        choice.latin.dm = dm;
+        choice.latin.dm = Some(dm);
     }
     if let Some(l) = &raw.l {
         choice.latin.search = search_direction(l)?;
@@ -472,6 +476,16 @@ fn solver_choice(
             ));
         }
         choice.latin.relaxation = mu;
+    }
+    if let Some(depth) = raw.anderson {
+        if depth > MAX_ANDERSON_DEPTH {
+            return Err(CaseError::invalid(
+                "solver.anderson",
+                depth.to_string(),
+                "give the Anderson acceleration depth of the LATIN solvers between 0 (none) and 50, e.g. 5",
+            ));
+        }
+        choice.latin.anderson = depth;
     }
     if let Some(policy) = raw.search_direction {
         choice.latin.policy = policy;

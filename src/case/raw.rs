@@ -150,6 +150,7 @@ pub(super) struct RawSolver {
     pub l: Option<toml::Value>,
     pub weak_interfaces: Option<WeakInterfaces>,
     pub relaxation: Option<f64>,
+    pub anderson: Option<usize>,
     pub search_direction: Option<SearchPolicy>,
     pub stop_on: Option<StopOn>,
     pub residual_tolerance: Option<f64>,

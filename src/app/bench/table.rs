@@ -6,7 +6,7 @@ use crate::output::alpha_label;
 use std::fmt;
 
 /// The error levels of the table.
-pub const THRESHOLDS: [f64; 4] = [1e-2, 1e-4, 1e-6, 1e-8];
+pub const THRESHOLDS: [f64; 5] = [1e-2, 1e-3, 1e-4, 1e-6, 1e-8];
 
 /// One row of the table: a solver at one α.
 #[derive(Debug, Clone)]

@@ -8,15 +8,18 @@ use super::{displacement_residual, Latin, LatinState, SubState};
 const ROUNDOFF: f64 = 1e-12;
 
 impl Latin<'_> {
-    /// `(Δη, η̃)`: η = Δη/η̃ between s and the ŝ that fed it (SPEC §4 "Indicator", §5.3).
+    /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (SPEC §4 "Indicator", §5.3). The distance is
+    /// measured along the search direction that does not relate them: E⁺ (`t − t̂ = −l(e − ê)`)
+    /// when ŝ fed s (the relaxed iteration), E⁻ when ŝ = local(s) (the accelerated one).
     fn indicator(&self, state: &[SubState]) -> (f64, f64) {
-        let dm = self.settings.dm;
+        let dm = self.dm;
+        let sign = if self.accelerated() { -1.0 } else { 1.0 };
         let mut delta = 0.0;
         let mut size = 0.0;
         for (sub, st) in self.substructures.iter().zip(state) {
             for (j, &i) in sub.links.iter().enumerate() {
                 let l = self.search[i];
-                let d = (st.t[j] - st.t_hat[j]) + l * (st.e[j] - st.e_hat[j]);
+                let d = (st.t[j] - st.t_hat[j]) + sign * l * (st.e[j] - st.e_hat[j]);
                 delta += d * d / l;
                 let e_mid = 0.5 * (st.e[j] + st.e_hat[j]);
                 let t_mid = 0.5 * (st.t[j] + st.t_hat[j]);
@@ -24,7 +27,7 @@ impl Latin<'_> {
             }
             for ss in &st.sides {
                 for r in 0..ss.u.len() {
-                    let df = (ss.f[r] - ss.f_hat[r]) - dm * (ss.u[r] - ss.u_hat[r]);
+                    let df = (ss.f[r] - ss.f_hat[r]) - sign * dm * (ss.u[r] - ss.u_hat[r]);
                     delta += df * df / dm;
                     let u_mid = 0.5 * (ss.u[r] + ss.u_hat[r]);
                     let f_mid = 0.5 * (ss.f[r] + ss.f_hat[r]);

@@ -17,7 +17,7 @@ impl Latin<'_> {
         relaxation: Option<f64>,
     ) {
         let s = self.structure;
-        let dm = self.settings.dm;
+        let dm = self.dm;
         let search = &self.search;
         // Per substructure: F̂d_E, y_E = K_E⁻¹ F̂d_E, g_E = d_m R_Eᵀ C_E y_E.
         let condensed: Vec<(Vec<f64>, Vec<f64>)> = self

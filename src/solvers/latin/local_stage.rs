@@ -31,7 +31,7 @@ impl Latin<'_> {
             let (lo, hi) = state.split_at_mut(b);
             interface_local_stage(
                 &iface.basis,
-                self.settings.dm,
+                self.dm,
                 &mut lo[a].sides[ia],
                 &mut hi[0].sides[ib],
             );

@@ -56,21 +56,31 @@ pub enum StopOn {
 /// r = 1.65e-10.
 const RESIDUAL_FLOOR: f64 = 1e-9;
 
+/// The paper's interface search direction d_m, N/m (§5.2): for its 16 × 16 grid on 4 × 4
+/// substructures.
+pub const PAPER_DM: f64 = 3.92e6;
+
 /// Settings of one LATIN solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LatinSettings {
     /// Substructures along x and y; `[1, 1]` is the monodomain solver. Default `[4, 4]` (the
     /// paper's), limited to the grid by the case.
     pub subdomains: [usize; 2],
-    /// Interface search direction d_m, N/m. Default 3.92e6 (paper §5.2).
-    pub dm: f64,
+    /// Interface search direction d_m, N/m. Default `None`: `0.4 k̄ / √H` (see
+    /// [`super::auto_dm`]), which scales with the cables' stiffness and falls as the
+    /// substructures grow; the paper's 3.92e6 is [`PAPER_DM`].
+    pub dm: Option<f64>,
     /// Link search direction l. Default `l = k`.
     pub search: SearchDirection,
     /// Interfaces of ≤ 3 nodes. Default all-macro.
     pub weak: WeakInterfaces,
     /// Relaxation μ ∈ (0, 1] of the linear stage, `s ← μ s_new + (1 − μ) s_old` on every
-    /// field of s. Default 0.8; 1 is the paper's plain method.
+    /// field of s (with Anderson acceleration, the damping β of its step, which is the same
+    /// relaxation when no history is kept). Default 0.8; 1 is the paper's plain method.
     pub relaxation: f64,
+    /// Anderson acceleration: how many previous iterates the fixed point ŝ ↦ local(linear(ŝ))
+    /// extrapolates from (0: none, the plain relaxed iteration). Default 5.
+    pub anderson: usize,
     /// How l evolves. Default status-following.
     pub policy: SearchPolicy,
     /// With status-following l: rebuild the operators once at least this many cables differ
@@ -94,10 +104,11 @@ impl Default for LatinSettings {
     fn default() -> Self {
         Self {
             subdomains: [4, 4],
-            dm: 3.92e6,
+            dm: None,
             search: SearchDirection::Stiffness,
             weak: WeakInterfaces::Macro,
             relaxation: 0.8,
+            anderson: 5,
             policy: SearchPolicy::Status,
             update_threshold: 1,
             stop_on: StopOn::Both,
@@ -115,11 +126,13 @@ impl LatinSettings {
             .unwrap_or((self.tolerance / 100.0).max(RESIDUAL_FLOOR))
     }
 
-    /// The paper's plain method (§3–4, SPEC §4): no relaxation, l fixed at its set-up value,
-    /// stopping on η alone; the rest as `self`.
+    /// The paper's plain method (§3–4): its d_m (unless `self` sets one), no relaxation, no
+    /// acceleration, l fixed at its set-up value, stopping on η alone; the rest as `self`.
     pub fn plain(self) -> LatinSettings {
         LatinSettings {
+            dm: Some(self.dm.unwrap_or(PAPER_DM)),
             relaxation: 1.0,
+            anderson: 0,
             policy: SearchPolicy::Stiffness,
             stop_on: StopOn::Eta,
             ..self

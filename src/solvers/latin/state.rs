@@ -1,6 +1,7 @@
 //! Everything that changes along the LATIN iterations: per substructure its links' s = (e, t)
 //! and ŝ = (ê, t̂), its interface sides' (U, F) and (Û, F̂), and its displacements.
 
+use super::anderson::Anderson;
 use super::substructure::Substructure;
 
 /// One side of an interface as E holds it: s (U, F) and ŝ (Û, F̂), full nodal vectors in the
@@ -82,8 +83,16 @@ pub struct LatinState {
     pub slack_cables: usize,
     /// Re-set-ups of the operators (status-following l) so far in this solve.
     pub updates: usize,
-    /// Whether the next linear stage may be relaxed against this s (not after a re-set-up).
+    /// Whether s was computed with the current operators, so that the next linear stage may
+    /// be relaxed (or extrapolated) against it: not after a re-set-up.
     pub(super) relax: bool,
+    /// With Anderson acceleration: the linear stage's input that gave s (see
+    /// [`super::anderson`]), and the history it extrapolates from.
+    pub(super) input: Vec<f64>,
+    pub(super) anderson: Anderson,
+    /// Per link: for how many linear stages in a row its status has differed from the one its
+    /// search direction was built for (status-following l).
+    pub(super) status_streak: Vec<u8>,
 
     /// Δη is at round-off level against the prestress: nothing is left to iterate on.
     pub at_roundoff: bool,

@@ -62,6 +62,8 @@ pub struct Substructure {
     pub gamma_dofs: Vec<usize>,
     /// E's macro dofs: Σ over its sides of the columns of R (columns of R_E).
     pub n_macro: usize,
+    /// The pattern of K_E (fixed by E's links).
+    pattern: StiffnessPattern,
     /// Solves with K_E.
     pub factor: SpdSolver,
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × `n_macro`).
@@ -135,28 +137,17 @@ impl Substructure {
             }
         }
 
-        // K_E = B_Eᵀ l B_E + d_m C_Eᵀ C_E.
         let n = dof_global.len();
         let pattern = StiffnessPattern::new(n, &link_dofs);
-        let mut values = vec![0.0; pattern.nnz()];
-        pattern.assemble(&link_dofs, |j| search[topology.links[j]], &mut values);
-        for &d in &gamma_dofs {
-            values[pattern.diag_slot[d]] += dm;
-        }
+        let values = stiffness(
+            &pattern,
+            &link_dofs,
+            &gamma_dofs,
+            &topology.links,
+            search,
+            dm,
+        );
         let factor = SpdSolver::new(&pattern, &values, dense).map_err(|_| SingularSubstructure)?;
-
-        // Z_E = K_E⁻¹ C_Eᵀ R_E, column by column of the block-diagonal R_E.
-        let mut z = DMatrix::<f64>::zeros(n, n_macro);
-        for side in &sides {
-            let basis = &side.basis;
-            for j in 0..side.cols {
-                let mut col = z.column_mut(side.macro_offset + j);
-                for r in 0..side.rows {
-                    col[gamma_dofs[side.gamma_offset + r]] += basis[(r, j)];
-                }
-            }
-        }
-        factor.solve_columns(&mut z);
         let mut sub = Substructure {
             links: topology.links.clone(),
             dof_global,
@@ -165,6 +156,7 @@ impl Substructure {
             sides,
             gamma_dofs,
             n_macro,
+            pattern,
             factor,
             z: DMatrix::zeros(0, 0),
             k_star: DMatrix::zeros(0, 0),
@@ -172,16 +164,8 @@ impl Substructure {
             flexibility: DMatrix::zeros(0, 0),
             kernel: DMatrix::zeros(0, 0),
         };
-        // K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
-        let mut k_star = DMatrix::<f64>::identity(n_macro, n_macro) * dm;
-        for j in 0..n_macro {
-            let rz = sub.project(z.column(j).as_slice());
-            for i in 0..n_macro {
-                k_star[(i, j)] -= dm * dm * rz[i];
-            }
-        }
-        let k_star = (&k_star + k_star.transpose()) * 0.5;
-        // Kernel from the rigid motions (SPEC §4), pseudo-inverse and flexibility.
+        sub.condense(dm);
+        // Kernel from the rigid motions (SPEC §4), completed by the null space of K*_E.
         let traces: Vec<InterfaceTrace<'_>> = sub
             .sides
             .iter()
@@ -207,19 +191,99 @@ impl Substructure {
             .map(|&node| structure.nodes[node])
             .collect();
         let rigid = substructure_kernel(&all_positions, &clamped_positions, &traces);
-        let kernel = complete_kernel(&k_star, rigid, dm).ok_or(SingularSubstructure)?;
-        let qqt = &kernel * kernel.transpose();
-        let k_plus = match (&k_star + &qqt).cholesky() {
+        sub.kernel = complete_kernel(&sub.k_star, rigid, dm).ok_or(SingularSubstructure)?;
+        sub.invert(dm)?;
+        Ok(sub)
+    }
+
+    /// E with the search directions `search`: its indexing, the pattern of K_E and its
+    /// symbolic analysis, and the kernel Q_E are kept (they depend on E's links and
+    /// supports, not on l > 0); K_E is factorised anew and Z_E, K*_E, K⁺_E, L_E recomputed.
+    pub fn with_search(
+        &self,
+        search: &[f64],
+        dm: f64,
+        dense: bool,
+    ) -> Result<Substructure, SingularSubstructure> {
+        let values = stiffness(
+            &self.pattern,
+            &self.link_dofs,
+            &self.gamma_dofs,
+            &self.links,
+            search,
+            dm,
+        );
+        let factor = match &self.factor {
+            SpdSolver::Sparse(old) => {
+                let mut factor = old.share_symbolic();
+                factor
+                    .factorize(&self.pattern, &values)
+                    .map_err(|_| SingularSubstructure)?;
+                SpdSolver::Sparse(factor)
+            }
+            SpdSolver::Dense(_) => {
+                SpdSolver::new(&self.pattern, &values, dense).map_err(|_| SingularSubstructure)?
+            }
+        };
+        let mut sub = Substructure {
+            links: self.links.clone(),
+            dof_global: self.dof_global.clone(),
+            load_share: self.load_share.clone(),
+            link_dofs: self.link_dofs.clone(),
+            sides: self.sides.clone(),
+            gamma_dofs: self.gamma_dofs.clone(),
+            n_macro: self.n_macro,
+            pattern: self.pattern.clone(),
+            factor,
+            z: DMatrix::zeros(0, 0),
+            k_star: DMatrix::zeros(0, 0),
+            k_plus: DMatrix::zeros(0, 0),
+            flexibility: DMatrix::zeros(0, 0),
+            kernel: self.kernel.clone(),
+        };
+        sub.condense(dm);
+        sub.invert(dm)?;
+        Ok(sub)
+    }
+
+    /// `Z_E = K_E⁻¹ C_Eᵀ R_E` and `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E` (symmetrised) from the
+    /// factor of K_E.
+    fn condense(&mut self, dm: f64) {
+        // Z_E column by column of the block-diagonal R_E.
+        let n_macro = self.n_macro;
+        let mut z = DMatrix::<f64>::zeros(self.n_dofs(), n_macro);
+        for side in &self.sides {
+            let basis = &side.basis;
+            for j in 0..side.cols {
+                let mut col = z.column_mut(side.macro_offset + j);
+                for r in 0..side.rows {
+                    col[self.gamma_dofs[side.gamma_offset + r]] += basis[(r, j)];
+                }
+            }
+        }
+        self.factor.solve_columns(&mut z);
+        let mut k_star = DMatrix::<f64>::identity(n_macro, n_macro) * dm;
+        for j in 0..n_macro {
+            let rz = self.project(z.column(j).as_slice());
+            for i in 0..n_macro {
+                k_star[(i, j)] -= dm * dm * rz[i];
+            }
+        }
+        self.k_star = (&k_star + k_star.transpose()) * 0.5;
+        self.z = z;
+    }
+
+    /// `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and `L_E = K⁺_E − I/d_m`, with the kernel Q_E set.
+    fn invert(&mut self, dm: f64) -> Result<(), SingularSubstructure> {
+        let qqt = &self.kernel * self.kernel.transpose();
+        let k_plus = match (&self.k_star + &qqt).cholesky() {
             Some(c) => c.inverse() - &qqt,
             None => return Err(SingularSubstructure),
         };
-        let flexibility = &k_plus - DMatrix::<f64>::identity(n_macro, n_macro) / dm;
-        sub.z = z;
-        sub.k_star = k_star;
-        sub.k_plus = k_plus;
-        sub.flexibility = flexibility;
-        sub.kernel = kernel;
-        Ok(sub)
+        let n_macro = self.n_macro;
+        self.flexibility = &k_plus - DMatrix::<f64>::identity(n_macro, n_macro) / dm;
+        self.k_plus = k_plus;
+        Ok(())
     }
 
     /// Number of E's free dofs (three per non-clamped node it touches).
@@ -250,6 +314,24 @@ impl Substructure {
         }
         out
     }
+}
+
+/// The values of `K_E = B_Eᵀ l B_E + d_m C_Eᵀ C_E` on `pattern` (`links`: E's global link
+/// indices, for their search direction in `search`).
+fn stiffness(
+    pattern: &StiffnessPattern,
+    link_dofs: &[LinkDofs],
+    gamma_dofs: &[usize],
+    links: &[usize],
+    search: &[f64],
+    dm: f64,
+) -> Vec<f64> {
+    let mut values = vec![0.0; pattern.nnz()];
+    pattern.assemble(link_dofs, |j| search[links[j]], &mut values);
+    for &d in gamma_dofs {
+        values[pattern.diag_slot[d]] += dm;
+    }
+    values
 }
 
 /// Eigenvalues of K*_E below `NULL_RELATIVE · d_m` span its kernel; those above
