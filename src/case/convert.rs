@@ -304,10 +304,10 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             ))
         }
         (None, None) => {
-            return Err(CaseError::invalid(
-                "grid",
-                "missing",
-                "give [grid] with `modules = [nx, ny]`, or [structure] with `nodes` and `members` tables",
+            return Err(CaseError::Syntax(
+                "missing field `grid`: give [grid] with `modules = [nx, ny]`, or [structure] \
+                 with `nodes` and `members` tables"
+                    .into(),
             ))
         }
     };
