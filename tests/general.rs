@@ -61,8 +61,8 @@ fn tripod(h: f64, kinds: [&str; 3], unilateral: bool) -> Geometry {
     }
     nodes += &format!("3,0,0,{h}\n");
     let mut members = String::from("member,a,b,kind,young,section,prestress,density\n");
-    for k in 0..3 {
-        members += &format!("{},{},3,{},2e11,1e-4,0,7850\n", 100 + k, 10 + k, kinds[k]);
+    for (k, kind) in kinds.iter().enumerate() {
+        members += &format!("{},{},3,{kind},2e11,1e-4,0,7850\n", 100 + k, 10 + k);
     }
     read_geometry("nodes.csv", &nodes, "members.csv", &members, unilateral).unwrap()
 }

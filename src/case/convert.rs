@@ -292,17 +292,18 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             general_only("bars.section", raw.bars.section.is_some())?;
             general_only("prestress.lower_cable", raw.prestress.lower_cable.is_some())?;
             general_only("supports.clamp", raw.supports.clamp.is_some())?;
-            let geometry =
-                super::tables::load_geometry(&base.join(&st.nodes), &base.join(&st.members), unilateral)?;
+            let geometry = super::tables::load_geometry(
+                &base.join(&st.nodes),
+                &base.join(&st.members),
+                unilateral,
+            )?;
             (None, geometry, Vec::new())
         }
-        (Some(_), Some(_)) => {
-            return Err(CaseError::invalid(
-                "grid",
-                "[grid] and [structure]",
-                "give exactly one of [grid] (the module grid) and [structure] (node and member tables)",
-            ))
-        }
+        (Some(_), Some(_)) => return Err(CaseError::invalid(
+            "grid",
+            "[grid] and [structure]",
+            "give exactly one of [grid] (the module grid) and [structure] (node and member tables)",
+        )),
         (None, None) => {
             return Err(CaseError::Syntax(
                 "missing field `grid`: give [grid] with `modules = [nx, ny]`, or [structure] \

@@ -44,7 +44,7 @@ impl Table<'_> {
         let mut records = reader.records();
         let expected = || {
             let mut all: Vec<&str> = required.to_vec();
-            all.extend(optional.iter().map(|o| *o));
+            all.extend(optional.iter().copied());
             all.join(",")
         };
         let header = match records.next() {
@@ -250,7 +250,8 @@ pub fn read_geometry(
             .iter()
             .chain(&nodes[b])
             .fold(0.0, |m: f64, x| m.max(x.abs()));
-        if !(length > 1e-12 * scale.max(1e-300)) {
+        // Coordinates are finite and ≤ 1e15, so the length is finite.
+        if length <= 1e-12 * scale.max(1e-300) {
             return Err(table.error(
                 line,
                 "b",
