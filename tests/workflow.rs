@@ -102,3 +102,46 @@ fn sweep_script_collects_slack_fraction_against_prestress() {
     // More prestress, fewer slack cables at the same load.
     assert!(fraction("2000", "12") < fraction("1000", "12"), "{text}");
 }
+
+#[test]
+fn one_slack_classification_for_every_solver() {
+    // The braced grid at α = 0: the unprestressed diagonals carry τ = 0 with a closed gap
+    // (taut at rest), so every solver reports 0 slack cables; at α = 0.05 they all agree.
+    let case = manifest_path("cases/paper-braced.toml");
+    let out = Temp::dir("slack-classification");
+    let o = tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--quiet",
+        "--set",
+        "load.alpha=[0.0, 0.05]",
+        "--set",
+        "solver.methods=[\"newton\", \"pcg-lcp\", \"mono-latin\", \"micro-macro\"]",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let summary = std::fs::read_to_string(out.0.join("summary.csv")).unwrap();
+    let mut lines = summary.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 8, "{summary}");
+    for alpha in ["0", "0.05"] {
+        let counts: Vec<&str> = rows
+            .iter()
+            .filter(|r| r[col("alpha")] == alpha)
+            .map(|r| r[col("slack_cables")])
+            .collect();
+        assert_eq!(counts.len(), 4, "{summary}");
+        assert!(
+            counts.iter().all(|c| *c == counts[0]),
+            "alpha {alpha}: {counts:?}"
+        );
+        if alpha == "0" {
+            assert_eq!(counts[0], "0", "{summary}");
+        } else {
+            assert_ne!(counts[0], "0", "{summary}");
+        }
+    }
+}

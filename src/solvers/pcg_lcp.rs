@@ -163,22 +163,9 @@ impl<'s> PcgLcp<'s> {
         self.factor.solve_in_place(&mut u);
         u
     }
-}
 
-impl Solver for PcgLcp<'_> {
-    type State = PcgLcpState;
-    const INIT_IS_ITERATE: bool = false;
-
-    fn measure(&self) -> Measure {
-        Measure::ComplementarityResidual
-    }
-
-    fn max_iterations(&self) -> usize {
-        self.settings.max_iterations
-    }
-
-    /// λ = 0: every cable taut.
-    fn init(&mut self, load: &[f64]) -> PcgLcpState {
+    /// The first MPRGP state for `load` at the scaled slack gaps `x` (`None`: λ = 0).
+    fn state_from(&mut self, load: &[f64], x: Option<Vec<f64>>) -> PcgLcpState {
         let s = self.structure;
         let m = self.cables.len();
         // The split τ = t0 + t assumes B_fᵀ t0 = 0; prescribed displacements break it by
@@ -197,7 +184,8 @@ impl Solver for PcgLcp<'_> {
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
             .collect();
-        let x = vec![0.0; m];
+        let cold = x.is_none();
+        let x = x.unwrap_or_else(|| vec![0.0; m]);
         let g = q.clone();
         let p = free_part(&x, &g);
         let mut state = PcgLcpState {
@@ -212,8 +200,60 @@ impl Solver for PcgLcp<'_> {
             iteration: 0,
             stalled: false,
         };
+        if !cold {
+            // g = W̃ x + q̃, p on its free face.
+            self.refresh_gradient(&mut state);
+            state.p = free_part(&state.x, &state.g);
+        }
         self.measure_state(&mut state);
         state
+    }
+}
+
+impl Solver for PcgLcp<'_> {
+    type State = PcgLcpState;
+    const INIT_IS_ITERATE: bool = false;
+
+    fn measure(&self) -> Measure {
+        Measure::ComplementarityResidual
+    }
+
+    fn max_iterations(&self) -> usize {
+        self.settings.max_iterations
+    }
+
+    /// λ = 0: every cable taut.
+    fn init(&mut self, load: &[f64]) -> PcgLcpState {
+        self.state_from(load, None)
+    }
+
+    /// λ = the previous answer's slack gaps: on each cable it says is slack,
+    /// `λ = −(t0 + k B U)/k ≥ 0` at its displacements U (0 elsewhere). A previous answer of
+    /// another size, or not finite, is ignored (λ = 0).
+    fn warm_init(&mut self, load: &[f64], previous: &Equilibrium) -> PcgLcpState {
+        let s = self.structure;
+        let usable = previous.displacements.len() == s.n_free
+            && previous.slack.len() == s.links.len()
+            && previous.displacements.iter().all(|x| x.is_finite());
+        if !usable {
+            return self.init(load);
+        }
+        // x = k^{1/2} λ = ⟨−(t0 + k e)⟩₊ / k^{1/2}.
+        let x: Vec<f64> = self
+            .cables
+            .iter()
+            .zip(&self.sqrt_k)
+            .map(|(&i, &sk)| {
+                if previous.slack[i] {
+                    let trial = s.links[i].prestress
+                        + s.links[i].stiffness * s.link_dofs[i].elongation(&previous.displacements);
+                    (-trial).max(0.0) / sk
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        self.state_from(load, Some(x))
     }
 
     /// One MPRGP step: conjugate gradient on the free face, expansion, or proportioning.
@@ -312,7 +352,6 @@ impl Solver for PcgLcp<'_> {
     fn iterate(&self, state: &PcgLcpState) -> Equilibrium {
         let s = self.structure;
         let u = self.displacements(state);
-        let mut slack = vec![false; s.links.len()];
         let mut tensions: Vec<f64> = s
             .links
             .iter()
@@ -321,16 +360,11 @@ impl Solver for PcgLcp<'_> {
             .collect();
         for (j, &i) in self.cables.iter().enumerate() {
             if state.x[j] > 0.0 {
-                // τ = t0 + k(e + λ) = 0 up to the tolerance: a slack cable carries nothing.
-                slack[i] = true;
+                // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing.
                 tensions[i] = 0.0;
             }
         }
-        Equilibrium {
-            displacements: u,
-            tensions,
-            slack,
-        }
+        Equilibrium::classified(s, u, tensions)
     }
 }
 
