@@ -303,11 +303,14 @@ fn check_passes_on_every_new_case() {
     let linear = case::load(&manifest_path("cases/paper-linear.toml")).unwrap();
     let linear_braced = case::load(&manifest_path("cases/paper-linear-braced.toml")).unwrap();
     for c in [&linear, &linear_braced] {
-        assert!(!c.grid.cables.unilateral);
+        assert!(!c.grid.as_ref().unwrap().cables.unilateral);
         assert_eq!(c.load.alphas, [1.0]);
         assert_eq!(c.solver.methods, [Method::MonoLatin, Method::MicroMacro]);
     }
-    assert_ne!(linear.grid.module, linear_braced.grid.module);
+    assert_ne!(
+        linear.grid.as_ref().unwrap().module,
+        linear_braced.grid.as_ref().unwrap().module
+    );
     let bench = case::load(&manifest_path("cases/paper-bench.toml")).unwrap();
     assert_eq!(bench.solver.methods, Method::ALL);
     assert_eq!(bench.load.alphas, [1.0]);

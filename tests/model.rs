@@ -77,7 +77,7 @@ fn expected_prestress(kind: LinkKind, l: f64, h: f64) -> f64 {
         LinkKind::UpperCable => 2f64.sqrt() * P,
         LinkKind::BracingCable => (1.0 + r).sqrt() * P,
         LinkKind::Bar => -(5.0 + r).sqrt() * P,
-        LinkKind::DiagonalCable => 0.0,
+        LinkKind::DiagonalCable | LinkKind::Cable => 0.0,
     }
 }
 

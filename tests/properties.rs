@@ -157,13 +157,13 @@ proptest! {
         }
         if let Ok(case) = case::parse(&text) {
             // Whatever got through validation is usable.
-            prop_assert!(case.grid.modules.iter().all(|&m| m >= 1));
-            prop_assert!(case.grid.length > 0.0 && case.grid.length.is_finite());
-            prop_assert!(case.grid.cables.material.young > 0.0 && case.grid.cables.material.young.is_finite());
+            prop_assert!(case.grid.as_ref().unwrap().modules.iter().all(|&m| m >= 1));
+            prop_assert!(case.grid.as_ref().unwrap().length > 0.0 && case.grid.as_ref().unwrap().length.is_finite());
+            prop_assert!(case.grid.as_ref().unwrap().cables.material.young > 0.0 && case.grid.as_ref().unwrap().cables.material.young.is_finite());
             prop_assert!(!case.load.alphas.is_empty() && case.load.alphas.iter().all(|a| a.is_finite()));
             prop_assert!(case.load.pattern.nodal.iter().all(|f| f.is_finite()));
             let [sx, sy] = case.solver.latin.subdomains;
-            prop_assert!(sx >= 1 && sx <= case.grid.modules[0] && sy >= 1 && sy <= case.grid.modules[1]);
+            prop_assert!(sx >= 1 && sx <= case.grid.as_ref().unwrap().modules[0] && sy >= 1 && sy <= case.grid.as_ref().unwrap().modules[1]);
         }
     }
 }

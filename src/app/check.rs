@@ -2,10 +2,15 @@
 //! a report struct (tests read it directly; the command line prints its `Display`).
 
 use crate::case::Case;
+use crate::linalg::{
+    smallest_eigenvalue_bound, zero_mode_count, SparseCholesky, StiffnessPattern,
+    ZERO_MODE_RELATIVE,
+};
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
-use crate::structure::ModuleKind;
+use crate::structure::{ModuleKind, Structure};
+use faer::Par;
 use std::fmt;
 use std::path::PathBuf;
 
@@ -14,10 +19,10 @@ use std::path::PathBuf;
 pub struct ModelReport {
     /// The case file.
     pub case: PathBuf,
-    /// `[nx, ny]` modules.
-    pub modules: [usize; 2],
-    /// The module.
-    pub module: ModuleKind,
+    /// `[nx, ny]` modules, when the case is a grid.
+    pub modules: Option<[usize; 2]>,
+    /// The module, when the case is a grid.
+    pub module: Option<ModuleKind>,
     /// Nodes.
     pub nodes: usize,
     /// Free dofs.
@@ -30,14 +35,72 @@ pub struct ModelReport {
     pub unilateral: bool,
     /// Bars.
     pub bars: usize,
-    /// `max |Bᵀt0|` over all dofs, N.
+    /// `max |Bᵀt0|` over all dofs, N, of the given prestress t0 (without settlements).
     pub prestress_imbalance: f64,
+    /// `max |Bᵀt0|` over the free dofs, N (zero up to round-off for an admissible prestress).
+    pub free_prestress_imbalance: f64,
+    /// The equilibrium matrix `A = Bᵀ` (free dofs × members): rank r, s = members − r
+    /// self-stress states, m = free dofs − r mechanisms (SPEC §7).
+    pub counts: EquilibriumCounts,
     /// The lower cable prestress p, N.
     pub prestress: f64,
     /// The load factors.
     pub alphas: Vec<f64>,
     /// The solvers.
     pub methods: Vec<Method>,
+}
+
+/// The Pellegrino–Calladine counts of the equilibrium matrix `A = Bᵀ` (SPEC §7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EquilibriumCounts {
+    /// Members (columns of A).
+    pub members: usize,
+    /// Free dofs (rows of A).
+    pub free_dofs: usize,
+    /// rank r of A.
+    pub rank: usize,
+    /// s = members − r: independent self-stress states.
+    pub self_stress_states: usize,
+    /// m = free dofs − r: mechanisms, rigid-body motions included.
+    pub mechanisms: usize,
+}
+
+/// The counts of `structure`, from the zero modes of `A Aᵀ = Bᵀ B` (unit member stiffness):
+/// one sparse Cholesky factorization, and when it reveals a singular matrix, block inverse
+/// iterations for the eigenvalues below `ZERO_MODE_RELATIVE` × mean diagonal — no dense
+/// matrix, so it scales like a solve (64 × 64 grids included).
+pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
+    let n = structure.n_free;
+    let members = structure.links.len();
+    let mechanisms = if n == 0 {
+        0
+    } else {
+        let pattern = StiffnessPattern::new(n, &structure.link_dofs);
+        let mut values = vec![0.0; pattern.nnz()];
+        pattern.assemble(&structure.link_dofs, |_| 1.0, &mut values);
+        let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
+        let singular = match factor.factorize(&pattern, &values) {
+            Err(_) => true,
+            Ok(()) => {
+                smallest_eigenvalue_bound(&pattern, &values, &factor, 3)
+                    < ZERO_MODE_RELATIVE * pattern.mean_diagonal(&values)
+            }
+        };
+        if singular {
+            let mut probe = factor.share_symbolic();
+            zero_mode_count(&pattern, &values, &mut probe).max(1)
+        } else {
+            0
+        }
+    };
+    let rank = n - mechanisms;
+    EquilibriumCounts {
+        members,
+        free_dofs: n,
+        rank,
+        self_stress_states: members - rank.min(members),
+        mechanisms,
+    }
 }
 
 /// The partition of one LATIN solver.
@@ -67,17 +130,34 @@ pub struct CheckReport {
 /// Check `case` (read from `path`).
 pub fn check(case: &Case, path: PathBuf) -> CheckReport {
     let s = case.structure();
+    // The given prestress t0, without the tensions prescribed displacements impose.
+    let unsettled: Vec<_> = case
+        .fixes
+        .iter()
+        .map(|f| crate::structure::NodeFix {
+            displacement: [0.0; 3],
+            ..*f
+        })
+        .collect();
+    let given = Structure::new(&case.geometry, &unsettled, &Default::default());
+    let free_prestress_imbalance = given
+        .free_prestress_imbalance()
+        .iter()
+        .flat_map(|(f, _)| *f)
+        .fold(0.0, |m: f64, x| m.max(x.abs()));
     let model = ModelReport {
         case: path,
-        modules: case.grid.modules,
-        module: case.grid.module,
+        modules: case.grid.as_ref().map(|g| g.modules),
+        module: case.grid.as_ref().map(|g| g.module),
         nodes: s.n_nodes(),
         free_dofs: s.n_free,
         clamped_nodes: s.clamped.iter().filter(|&&c| c).count(),
         cables: s.n_cables(),
-        unilateral: case.grid.cables.unilateral,
+        unilateral: case.unilateral(),
         bars: s.n_bars(),
-        prestress_imbalance: s.prestress_imbalance(),
+        prestress_imbalance: given.prestress_imbalance(),
+        free_prestress_imbalance,
+        counts: equilibrium_counts(&s),
         prestress: s.prestress_scale,
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
@@ -97,6 +177,10 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         let Some(settings) = case.solver.latin_settings(method) else {
             continue;
         };
+        if s.has_partial_or_prescribed_supports() {
+            report.error = Some(SetupError::LatinSupports);
+            break;
+        }
         match Latin::new(&s, settings) {
             Ok(latin) => report.latin.push(LatinReport {
                 method,
@@ -116,15 +200,20 @@ impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let m = &self.model;
         writeln!(f, "case            {}", m.case.display())?;
-        writeln!(
-            f,
-            "grid            {} x {} modules ({:?})",
-            m.modules[0], m.modules[1], m.module
-        )?;
+        match (m.modules, m.module) {
+            (Some([nx, ny]), Some(module)) => {
+                writeln!(f, "grid            {nx} x {ny} modules ({module:?})")?
+            }
+            _ => writeln!(f, "structure       general (node and member tables)")?,
+        }
         writeln!(f, "nodes           {}", m.nodes)?;
         writeln!(f, "dofs            {}", 3 * m.nodes)?;
         writeln!(f, "free dofs       {}", m.free_dofs)?;
-        writeln!(f, "clamped nodes   {}", m.clamped_nodes)?;
+        writeln!(
+            f,
+            "held nodes      {} (all three components)",
+            m.clamped_nodes
+        )?;
         writeln!(
             f,
             "cables          {} ({})",
@@ -138,7 +227,7 @@ impl fmt::Display for CheckReport {
         writeln!(f, "bars            {}", m.bars)?;
         writeln!(
             f,
-            "max |B^T t0|    {:.3e} N ({:.1e} of the lower cable prestress)",
+            "max |B^T t0|    {:.3e} N ({:.1e} of the prestress scale)",
             m.prestress_imbalance,
             if m.prestress > 0.0 {
                 m.prestress_imbalance / m.prestress
@@ -146,6 +235,21 @@ impl fmt::Display for CheckReport {
                 0.0
             }
         )?;
+        writeln!(f, "  at free dofs  {:.3e} N", m.free_prestress_imbalance)?;
+        let c = &m.counts;
+        writeln!(
+            f,
+            "equilibrium     A = B^T is {} x {}, rank {}: {} self-stress state(s), {} mechanism(s) (rigid motions included)",
+            c.free_dofs, c.members, c.rank, c.self_stress_states, c.mechanisms
+        )?;
+        if c.mechanisms > 0 {
+            writeln!(
+                f,
+                "                a mechanism is refused: the model is linear in the displacements and has no \
+                 geometric stiffness, so a structure stabilised only by its prestress (e.g. a tensegrity prism) \
+                 cannot be solved; hold more components (`supports.fix`) or add members"
+            )?;
+        }
         let alphas: Vec<String> = m.alphas.iter().map(|&a| alpha_label(a)).collect();
         writeln!(f, "load factors    {}", alphas.join(", "))?;
         let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();

@@ -2,14 +2,16 @@
 //! physical; bounded so that nothing can overflow), every default taken from the type it
 //! configures. Each error names the key, the value and the fix.
 
-use super::raw::RawCase;
+use super::raw::{RawBox, RawCase};
 use super::{Case, CaseError, Load, OutputChoice, SolverChoice};
 use crate::solvers::latin::SearchDirection;
+use crate::structure::{CableSpec, Geometry, GridSpec, LoadPattern, Material, NodeFix};
+use std::collections::HashMap;
+use std::path::Path;
 
 /// The deepest Anderson history a case may ask for: each level keeps two vectors of the size
 /// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
 const MAX_ANDERSON_DEPTH: usize = 50;
-use crate::structure::{CableSpec, GridSpec, LoadPattern, Material};
 
 /// A number as a user would write it: exponent form when very large or very small.
 pub(crate) fn number(x: f64) -> String {
@@ -30,7 +32,7 @@ const PHYSICAL_MAX: f64 = 1e15;
 const PHYSICAL_MIN: f64 = 1e-15;
 
 /// A physical quantity: finite, between [`PHYSICAL_MIN`] and [`PHYSICAL_MAX`].
-fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> {
+fn positive(key: &str, value: f64, what: &str) -> Result<(), CaseError> {
     if value.is_finite() && (PHYSICAL_MIN..=PHYSICAL_MAX).contains(&value) {
         Ok(())
     } else {
@@ -45,7 +47,7 @@ fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> 
 }
 
 /// A finite number of magnitude at most `max`.
-fn bounded(key: &'static str, value: f64, max: f64, what: &str) -> Result<(), CaseError> {
+fn bounded(key: &str, value: f64, max: f64, what: &str) -> Result<(), CaseError> {
     if value.is_finite() && value.abs() <= max {
         Ok(())
     } else {
@@ -60,10 +62,10 @@ fn bounded(key: &'static str, value: f64, max: f64, what: &str) -> Result<(), Ca
 /// Largest load factor accepted.
 const ALPHA_MAX: f64 = 1e6;
 
-/// The typed case of a raw one, checked in file order.
-pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
+/// `[grid]` of a raw case: the grid's description, checked.
+fn grid_spec(raw: &RawCase, g: &super::raw::RawGrid) -> Result<GridSpec, CaseError> {
     let paper = GridSpec::default();
-    let [nx, ny] = raw.grid.modules.0;
+    let [nx, ny] = g.modules.0;
     if nx == 0 || ny == 0 {
         return Err(CaseError::invalid(
             "grid.modules",
@@ -79,9 +81,9 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
             format!("at most {MAX_MODULES} modules in all"),
         ));
     }
-    let length = raw.grid.length.unwrap_or(paper.length);
+    let length = g.length.unwrap_or(paper.length);
     positive("grid.length", length, "the module side L in m")?;
-    let height = raw.grid.height.unwrap_or(paper.height);
+    let height = g.height.unwrap_or(paper.height);
     positive("grid.height", height, "the module height H in m")?;
     let cables = Material {
         young: raw.cables.young.unwrap_or(paper.cables.material.young),
@@ -115,11 +117,11 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
             format!("give the lower cables' prestress in N as a number ≥ 0 and ≤ {PHYSICAL_MAX:e}"),
         ));
     }
-    let grid = GridSpec {
+    Ok(GridSpec {
         modules: [nx, ny],
         length,
         height,
-        module: raw.grid.module.unwrap_or(paper.module),
+        module: g.module.unwrap_or(paper.module),
         cables: CableSpec {
             material: cables,
             unilateral: raw.cables.unilateral.unwrap_or(paper.cables.unilateral),
@@ -127,21 +129,272 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
         bars,
         prestress: p,
         clamp: raw.supports.clamp.unwrap_or(paper.clamp),
-    };
+    })
+}
 
+/// The nodes (indices) a `nodes = [...]` list or a `box = { min, max }` selects.
+fn select(
+    key: &str,
+    geometry: &Geometry,
+    index_of: &HashMap<u64, usize>,
+    ids: &Option<Vec<u64>>,
+    in_box: &Option<RawBox>,
+) -> Result<Vec<usize>, CaseError> {
+    match (ids, in_box) {
+        (Some(ids), None) => {
+            if ids.is_empty() {
+                return Err(CaseError::invalid(
+                    format!("{key}.nodes"),
+                    "[]",
+                    "name at least one node id",
+                ));
+            }
+            ids.iter()
+                .map(|id| {
+                    index_of.get(id).copied().ok_or_else(|| {
+                        CaseError::invalid(
+                            format!("{key}.nodes"),
+                            id,
+                            "name a node of the structure (grid: its node index; [structure]: an id of the nodes table)",
+                        )
+                    })
+                })
+                .collect()
+        }
+        (None, Some(b)) => {
+            for (k, (&lo, &hi)) in b.min.iter().zip(&b.max).enumerate() {
+                bounded(
+                    &format!("{key}.box.min[{k}]"),
+                    lo,
+                    PHYSICAL_MAX,
+                    "each coordinate in m",
+                )?;
+                bounded(
+                    &format!("{key}.box.max[{k}]"),
+                    hi,
+                    PHYSICAL_MAX,
+                    "each coordinate in m",
+                )?;
+            }
+            // Boundaries count as inside, to a relative 1e-9 of the structure's size.
+            let size = geometry
+                .nodes
+                .iter()
+                .flatten()
+                .fold(0.0, |m: f64, x| m.max(x.abs()))
+                .max(1.0);
+            let tol = 1e-9 * size;
+            let nodes: Vec<usize> = (0..geometry.nodes.len())
+                .filter(|&n| {
+                    let p = geometry.nodes[n];
+                    (0..3).all(|k| p[k] >= b.min[k] - tol && p[k] <= b.max[k] + tol)
+                })
+                .collect();
+            if nodes.is_empty() {
+                return Err(CaseError::invalid(
+                    format!("{key}.box"),
+                    format!("{{ min = {:?}, max = {:?} }}", b.min, b.max),
+                    "the box holds no node: widen it (positions in m, boundaries included)",
+                ));
+            }
+            Ok(nodes)
+        }
+        _ => Err(CaseError::invalid(
+            key.to_string(),
+            "",
+            "give exactly one of `nodes = [ids]` and `box = { min = [x, y, z], max = [x, y, z] }`",
+        )),
+    }
+}
+
+/// A force or displacement vector: finite components.
+fn vector(key: &str, v: [f64; 3], max: f64, what: &str) -> Result<[f64; 3], CaseError> {
+    for (k, &x) in v.iter().enumerate() {
+        bounded(&format!("{key}[{k}]"), x, max, what)?;
+    }
+    Ok(v)
+}
+
+/// Relative prestress imbalance above which a prestress is refused: `|Bᵀt0|` at a node
+/// against the `Σ|t0|` of the links meeting there.
+const IMBALANCE_RELATIVE: f64 = 1e-9;
+
+/// Refuse a prestress not in equilibrium at the free dofs (SPEC §7), naming the worst nodes.
+fn check_prestress(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(), CaseError> {
+    let s = crate::structure::Structure::new(geometry, fixes, &Default::default());
+    // Without settlements the effective prestress is t0 itself; with them, the imposed
+    // part is carried by the supports on purpose, so check t0 on the same free dofs.
+    let mut unsettled = fixes.to_vec();
+    for f in &mut unsettled {
+        f.displacement = [0.0; 3];
+    }
+    let s = if s.prescribed.iter().any(|&u| u != 0.0) {
+        crate::structure::Structure::new(geometry, &unsettled, &Default::default())
+    } else {
+        s
+    };
+    let mut worst: Vec<(f64, usize, f64)> = s
+        .free_prestress_imbalance()
+        .iter()
+        .enumerate()
+        .filter_map(|(n, (f, scale))| {
+            let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            (norm > IMBALANCE_RELATIVE * scale.max(f64::MIN_POSITIVE)).then_some((
+                norm / scale,
+                n,
+                norm,
+            ))
+        })
+        .collect();
+    if worst.is_empty() {
+        return Ok(());
+    }
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let names: Vec<String> = worst
+        .iter()
+        .take(3)
+        .map(|&(_, n, norm)| {
+            format!(
+                "node {} (|Bᵀt0| = {} N)",
+                geometry.node_ids[n],
+                number(norm)
+            )
+        })
+        .collect();
+    Err(CaseError::invalid(
+        "prestress",
+        format!("{} unbalanced node(s): {}", worst.len(), names.join(", ")),
+        "give member prestresses t0 in equilibrium at every free node (Bᵀt0 = 0 on the free dofs), or hold those nodes",
+    ))
+}
+
+/// The typed case of a raw one, checked in file order; `[structure]` tables are read
+/// relative to `base`.
+pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
+    let unilateral = raw
+        .cables
+        .unilateral
+        .unwrap_or(GridSpec::default().cables.unilateral);
+    let (grid, geometry, mut fixes) = match (&raw.grid, &raw.structure) {
+        (Some(g), None) => {
+            let spec = grid_spec(&raw, g)?;
+            let (geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
+            (Some(spec), geometry, fixes)
+        }
+        (None, Some(st)) => {
+            let general_only = |key: &str, given: bool| {
+                if given {
+                    Err(CaseError::invalid(
+                        key.to_string(),
+                        "given",
+                        "with [structure], members carry their own material and prestress in the members table, and supports are given by [[supports.fix]]: remove this key",
+                    ))
+                } else {
+                    Ok(())
+                }
+            };
+            general_only("cables.young", raw.cables.young.is_some())?;
+            general_only("cables.section", raw.cables.section.is_some())?;
+            general_only("bars.young", raw.bars.young.is_some())?;
+            general_only("bars.section", raw.bars.section.is_some())?;
+            general_only("prestress.lower_cable", raw.prestress.lower_cable.is_some())?;
+            general_only("supports.clamp", raw.supports.clamp.is_some())?;
+            let geometry = super::tables::load_geometry(
+                &base.join(&st.nodes),
+                &base.join(&st.members),
+                unilateral,
+            )?;
+            (None, geometry, Vec::new())
+        }
+        (Some(_), Some(_)) => return Err(CaseError::invalid(
+            "grid",
+            "[grid] and [structure]",
+            "give exactly one of [grid] (the module grid) and [structure] (node and member tables)",
+        )),
+        (None, None) => {
+            return Err(CaseError::Syntax(
+                "missing field `grid`: give [grid] with `modules = [nx, ny]`, or [structure] \
+                 with `nodes` and `members` tables"
+                    .into(),
+            ))
+        }
+    };
+    let index_of: HashMap<u64, usize> = geometry
+        .node_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &id)| (id, i))
+        .collect();
+    for (i, f) in raw.supports.fix.iter().flatten().enumerate() {
+        let key = format!("supports.fix[{i}]");
+        let nodes = select(&key, &geometry, &index_of, &f.nodes, &f.in_box)?;
+        let mut dofs = [f.dofs.is_none(); 3];
+        for d in f.dofs.iter().flatten() {
+            dofs[*d as usize] = true;
+        }
+        if dofs == [false; 3] {
+            return Err(CaseError::invalid(
+                format!("{key}.dofs"),
+                "[]",
+                "name the held components, e.g. [\"x\", \"y\", \"z\"] (the default)",
+            ));
+        }
+        let displacement = vector(
+            &format!("{key}.displacement"),
+            f.displacement.unwrap_or([0.0; 3]),
+            PHYSICAL_MAX,
+            "each prescribed displacement component in m",
+        )?;
+        fixes.extend(nodes.into_iter().map(|node| NodeFix {
+            node,
+            dofs,
+            displacement,
+        }));
+    }
+    check_prestress(&geometry, &fixes)?;
+
+    let default_nodal = if grid.is_some() {
+        LoadPattern::default().nodal
+    } else {
+        [0.0; 3]
+    };
     let pattern = LoadPattern {
-        nodal: raw.load.nodal.map_or(LoadPattern::default().nodal, |n| n.0),
+        nodal: raw.load.nodal.map_or(default_nodal, |n| n.0),
     };
     for (c, &f) in pattern.nodal.iter().enumerate() {
         let key = ["load.nodal[0]", "load.nodal[1]", "load.nodal[2]"][c];
         bounded(key, f, PHYSICAL_MAX, "each nodal force component in N")?;
     }
+    let mut points = Vec::new();
+    for (i, p) in raw.load.point.iter().flatten().enumerate() {
+        let key = format!("load.point[{i}]");
+        let nodes = select(&key, &geometry, &index_of, &p.nodes, &p.in_box)?;
+        let force = vector(
+            &format!("{key}.force"),
+            p.force,
+            PHYSICAL_MAX,
+            "each force component in N",
+        )?;
+        points.extend(nodes.into_iter().map(|n| (n, force)));
+    }
+    let gravity = match &raw.load.self_weight {
+        None => None,
+        Some(w) => Some(vector(
+            "load.self_weight.gravity",
+            w.gravity.unwrap_or([0.0, 0.0, -9.81]),
+            1e6,
+            "each gravity component in m/s²",
+        )?),
+    };
     let load = Load {
         pattern,
+        points,
+        gravity,
         alphas: alpha_values(&raw.load.alpha)?,
     };
 
-    let solver = solver_choice(raw.solver, [nx, ny])?;
+    let modules = grid.as_ref().map(|g| g.modules);
+    let solver = solver_choice(raw.solver, modules)?;
     let defaults = OutputChoice::default();
     let o = raw.output;
     if o.dir.as_ref().is_some_and(|d| d.as_os_str().is_empty()) {
@@ -164,19 +417,23 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
     };
     Ok(Case {
         grid,
+        geometry,
+        fixes,
         load,
         solver,
         output,
     })
 }
 
-/// `[solver]` of a grid of `modules`: the solvers' settings, the case's tolerance and
+/// `[solver]` of a grid of `modules` (`None`: a general structure): the solvers' settings, the case's tolerance and
 /// iteration cap applied to every one of them.
 fn solver_choice(
     raw: super::raw::RawSolver,
-    modules: [usize; 2],
+    modules: Option<[usize; 2]>,
 ) -> Result<SolverChoice, CaseError> {
-    let [nx, ny] = modules;
+    // A general structure may be cut into any number of boxes (empty ones are refused at
+    // set-up); up to 1000 along each axis.
+    let [nx, ny] = modules.unwrap_or([1000, 1000]);
     let mut choice = SolverChoice::default();
     if let Some(methods) = raw.methods {
         if methods.is_empty() {
@@ -203,7 +460,11 @@ fn solver_choice(
     }
     // The paper's partition, limited to the grid.
     let [dx, dy] = choice.latin.subdomains;
-    let [sx, sy] = raw.subdomains.map_or([dx.min(nx), dy.min(ny)], |s| s.0);
+    let default = match modules {
+        Some(_) => [dx.min(nx), dy.min(ny)],
+        None => [1, 1],
+    };
+    let [sx, sy] = raw.subdomains.map_or(default, |s| s.0);
     if sx == 0 || sy == 0 || sx > nx || sy > ny {
         return Err(CaseError::invalid(
             "solver.subdomains",

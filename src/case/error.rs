@@ -18,6 +18,20 @@ pub enum CaseError {
     /// column).
     #[error("case file is not valid: {0}")]
     Syntax(String),
+    /// A row of a `[structure]` table that cannot be used.
+    #[error("{file}, line {line}, column `{column}`: `{value}` is not valid: {fix}")]
+    Table {
+        /// The table's path, as resolved from the case file.
+        file: String,
+        /// The line (1-based; the header is line 1).
+        line: u64,
+        /// The column's name (or `header`, `row`).
+        column: String,
+        /// The value as written.
+        value: String,
+        /// What is wrong and how to fix it.
+        fix: String,
+    },
     /// A command-line override (`--set key=value`) that cannot be applied or is not valid.
     #[error("--set {set}: {reason}")]
     Override {
@@ -30,7 +44,7 @@ pub enum CaseError {
     #[error("`{key}` = {value} is not valid: {fix}")]
     Invalid {
         /// The key, as written in the file.
-        key: &'static str,
+        key: String,
         /// The value, as a user would write it.
         value: String,
         /// What is allowed.
@@ -47,9 +61,13 @@ impl CaseError {
         CaseError::Syntax(lines.join("\n"))
     }
 
-    pub(super) fn invalid(key: &'static str, value: impl ToString, fix: impl Into<String>) -> Self {
+    pub(super) fn invalid(
+        key: impl Into<String>,
+        value: impl ToString,
+        fix: impl Into<String>,
+    ) -> Self {
         CaseError::Invalid {
-            key,
+            key: key.into(),
             value: shorten(&value.to_string()),
             fix: fix.into(),
         }

@@ -6,7 +6,10 @@
 mod convert;
 mod error;
 mod raw;
+mod tables;
 mod typed;
+
+pub use tables::read_geometry;
 
 pub use error::CaseError;
 pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
@@ -25,10 +28,11 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
 /// `"newton"`). An override that does not fit is named in the error.
 pub fn load_with(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
     let text = read_bounded(path)?;
+    let base = path.parent().unwrap_or(Path::new(""));
     let mut case = if overrides.is_empty() {
-        parse(&text)?
+        parse_in(&text, base)?
     } else {
-        parse_with(&text, overrides)?
+        parse_with_in(&text, overrides, base)?
     };
     if case.output.dir.is_none() {
         // The stem as the file system gave it: a name that is not UTF-8 stays that name.
@@ -78,14 +82,26 @@ pub fn check_distinct_methods(
     convert::check_distinct_methods(key, methods)
 }
 
-/// Parse and validate case text (no output directory default is applied here).
+/// Parse and validate case text (no output directory default is applied here); `[structure]`
+/// tables are read relative to the current directory.
 pub fn parse(text: &str) -> Result<Case, CaseError> {
-    let raw: raw::RawCase = toml::from_str(text).map_err(CaseError::from_toml)?;
-    convert::convert(raw)
+    parse_in(text, Path::new(""))
 }
 
-/// Parse case text, apply `key=value` overrides, and validate.
+/// Parse and validate case text whose `[structure]` tables are relative to `base`.
+pub fn parse_in(text: &str, base: &Path) -> Result<Case, CaseError> {
+    let raw: raw::RawCase = toml::from_str(text).map_err(CaseError::from_toml)?;
+    convert::convert(raw, base)
+}
+
+/// Parse case text, apply `key=value` overrides, and validate (`[structure]` tables relative
+/// to the current directory).
 pub fn parse_with(text: &str, overrides: &[String]) -> Result<Case, CaseError> {
+    parse_with_in(text, overrides, Path::new(""))
+}
+
+/// As [`parse_with`], with `[structure]` tables relative to `base`.
+pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Case, CaseError> {
     let mut table: toml::Table = toml::from_str(text).map_err(CaseError::from_toml)?;
     for set in overrides {
         apply_override(&mut table, set)?;
@@ -95,10 +111,13 @@ pub fn parse_with(text: &str, overrides: &[String]) -> Result<Case, CaseError> {
             set: overrides.join(" "),
             reason: e.to_string().trim_end().to_string(),
         })?;
-    convert::convert(raw).map_err(|e| match e {
+    convert::convert(raw, base).map_err(|e| match e {
         // A value an override set: say so.
         CaseError::Invalid { key, value, fix } => {
-            match overrides.iter().find(|s| s.split('=').next() == Some(key)) {
+            match overrides
+                .iter()
+                .find(|s| s.split('=').next() == Some(key.as_str()))
+            {
                 Some(set) => CaseError::Override {
                     set: set.clone(),
                     reason: format!("`{key}` = {value} is not valid: {fix}"),

@@ -1,5 +1,5 @@
 //! The case file as written: serde structs mirroring its sections, every key optional but
-//! `grid.modules` and `load.alpha`, unknown keys rejected by name (`deny_unknown_fields`).
+//! `load.alpha` and one of `[grid]` / `[structure]`, unknown keys rejected by name (`deny_unknown_fields`).
 //! Nothing here has a default value: [`super::convert`] takes each default from the type it
 //! configures.
 
@@ -30,7 +30,8 @@ impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawCase {
-    pub grid: RawGrid,
+    pub grid: Option<RawGrid>,
+    pub structure: Option<RawStructure>,
     #[serde(default)]
     pub cables: RawCables,
     #[serde(default)]
@@ -54,6 +55,59 @@ pub(super) struct RawGrid {
     pub length: Option<f64>,
     pub height: Option<f64>,
     pub module: Option<ModuleKind>,
+}
+
+/// `[structure]`: the node and member tables, paths relative to the case file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawStructure {
+    pub nodes: PathBuf,
+    pub members: PathBuf,
+}
+
+/// Which nodes: by id, or by a box of positions.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawBox {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+/// A displacement component.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum RawDof {
+    X,
+    Y,
+    Z,
+}
+
+/// `[[supports.fix]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawFix {
+    pub nodes: Option<Vec<u64>>,
+    #[serde(rename = "box")]
+    pub in_box: Option<RawBox>,
+    pub dofs: Option<Vec<RawDof>>,
+    pub displacement: Option<[f64; 3]>,
+}
+
+/// `[[load.point]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPoint {
+    pub nodes: Option<Vec<u64>>,
+    #[serde(rename = "box")]
+    pub in_box: Option<RawBox>,
+    pub force: [f64; 3],
+}
+
+/// `[load.self_weight]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSelfWeight {
+    pub gravity: Option<[f64; 3]>,
 }
 
 /// `[cables]`.
@@ -85,6 +139,7 @@ pub(super) struct RawPrestress {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawSupports {
     pub clamp: Option<Clamp>,
+    pub fix: Option<Vec<RawFix>>,
 }
 
 /// `[load]`. `alpha` is a list or a `{ from, to, steps }` table, read by hand so that each
@@ -93,6 +148,8 @@ pub(super) struct RawSupports {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawLoad {
     pub nodal: Option<Exact<f64, 3>>,
+    pub point: Option<Vec<RawPoint>>,
+    pub self_weight: Option<RawSelfWeight>,
     pub alpha: toml::Value,
 }
 

@@ -5,7 +5,7 @@ use crate::solvers::latin::LatinSettings;
 use crate::solvers::newton::NewtonSettings;
 use crate::solvers::pcg_lcp::PcgLcpSettings;
 use crate::solvers::Method;
-use crate::structure::{GridSpec, LoadPattern, Structure};
+use crate::structure::{Geometry, GridLayout, GridSpec, LoadPattern, Loading, NodeFix, Structure};
 use serde::Deserialize;
 use std::path::PathBuf;
 
@@ -13,8 +13,12 @@ use std::path::PathBuf;
 /// and which files to write.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Case {
-    /// The module grid, its members, prestress and supports.
-    pub grid: GridSpec,
+    /// The module grid, its members, prestress and supports, when the case has `[grid]`.
+    pub grid: Option<GridSpec>,
+    /// Nodes and members: generated from `[grid]`, or read from `[structure]`'s tables.
+    pub geometry: Geometry,
+    /// Held displacement components: the grid's `supports.clamp`, then `supports.fix`.
+    pub fixes: Vec<NodeFix>,
     /// The load pattern and the load factors.
     pub load: Load,
     /// The solvers and their settings.
@@ -24,17 +28,36 @@ pub struct Case {
 }
 
 impl Case {
-    /// The structure the case describes, under its load pattern at α = 1.
+    /// The structure the case describes, under its load at α = 1.
     pub fn structure(&self) -> Structure {
-        Structure::grid(&self.grid, &self.load.pattern)
+        let loading = Loading {
+            nodal: self.load.pattern.nodal,
+            points: self.load.points.clone(),
+            gravity: self.load.gravity,
+        };
+        let mut s = Structure::new(&self.geometry, &self.fixes, &loading);
+        if let Some(grid) = &self.grid {
+            s.layout = Some(GridLayout::new(grid.modules[0], grid.modules[1]));
+            s.prestress_scale = grid.prestress;
+        }
+        s
+    }
+
+    /// Whether cables carry tension only.
+    pub fn unilateral(&self) -> bool {
+        self.geometry.unilateral
     }
 }
 
 /// The load: `α · pattern` for every α.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Load {
-    /// The load at α = 1.
+    /// The force on every free node at α = 1 (`load.nodal`).
     pub pattern: LoadPattern,
+    /// Point loads at α = 1 (`load.point`): node index and force, N.
+    pub points: Vec<(usize, [f64; 3])>,
+    /// Gravity for self-weight (`load.self_weight.gravity`), m/s².
+    pub gravity: Option<[f64; 3]>,
     /// The load factors α, in solve order; finite, at least one.
     pub alphas: Vec<f64>,
 }

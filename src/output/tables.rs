@@ -178,25 +178,25 @@ pub fn write_tensions(
         .zip(&eq.tensions)
         .filter(|(l, _)| l.kind.is_cable())
         .enumerate();
+    // A grid numbers its cables 0.. among cables; a general structure reports the members
+    // and nodes by the ids of its tables.
+    let general = s.layout.is_none();
     let rows = cables.map(|(cable, (l, t))| {
         [
-            cable.to_string(),
+            if general { l.id } else { cable as u64 }.to_string(),
             l.kind.name().to_string(),
-            l.a.to_string(),
-            l.b.to_string(),
+            s.node_ids[l.a].to_string(),
+            s.node_ids[l.b].to_string(),
             t.to_string(),
         ]
     });
-    write_rows(
-        &path,
-        ["cable", "kind", "node_a", "node_b", "tension"],
-        rows,
-    )?;
+    let first = if general { "member" } else { "cable" };
+    write_rows(&path, [first, "kind", "node_a", "node_b", "tension"], rows)?;
     Ok(path)
 }
 
 /// Write `dir/displacements/{solver}_alpha{α}.csv`: per node, its initial position and
-/// displacement (m, zero on clamped nodes); returns its path.
+/// displacement (m; the prescribed value on held components), by node id; returns its path.
 pub fn write_displacements(
     dir: &Path,
     solver: &str,
@@ -209,7 +209,7 @@ pub fn write_displacements(
     let rows = s.nodes.iter().enumerate().map(|(node, x)| {
         let u = &full[3 * node..3 * node + 3];
         [
-            node.to_string(),
+            s.node_ids[node].to_string(),
             x[0].to_string(),
             x[1].to_string(),
             x[2].to_string(),

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 pub const VTK_LINE: u8 = 3;
 
 /// The `kind` code of a link in the VTU files: 0 lower cable, 1 upper cable, 2 bracing cable,
-/// 3 diagonal cable (braced module), 4 bar.
+/// 3 diagonal cable (braced module), 4 bar, 5 cable of a general structure.
 pub fn kind_code(kind: LinkKind) -> i32 {
     match kind {
         LinkKind::LowerCable => 0,
@@ -26,6 +26,7 @@ pub fn kind_code(kind: LinkKind) -> i32 {
         LinkKind::BracingCable => 2,
         LinkKind::DiagonalCable => 3,
         LinkKind::Bar => 4,
+        LinkKind::Cable => 5,
     }
 }
 

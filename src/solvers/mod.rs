@@ -35,8 +35,8 @@ pub enum SetupError {
     /// The stiffness with every cable taut is singular.
     #[error(
         "the structure is a mechanism: its stiffness with every cable taut has {} \
-         zero-stiffness mode(s), so no load that works on them can be carried; clamp more \
-         nodes (`supports.clamp`) or use a stiffer module (`grid.module = \"braced\"`)",
+         zero-stiffness mode(s), so no load that works on them can be carried; hold more \
+         nodes (`supports.clamp`, `supports.fix`) or use a stiffer module (`grid.module = \"braced\"`)",
         mode_count(*zero_modes)
     )]
     Mechanism {
@@ -71,6 +71,13 @@ pub enum SetupError {
         /// The largest l accepted.
         max: f64,
     },
+    /// The LATIN solvers hold nodes on all three components at zero only.
+    #[error(
+        "the LATIN solvers need every supported node held on all three components at zero; \
+         this structure has partial supports or prescribed displacements (`supports.fix`): \
+         use `newton` or `pcg-lcp`"
+    )]
+    LatinSupports,
     /// The LATIN macro problem is singular.
     #[error(
         "the macro problem is singular: an interface or a rigid mode is left undetermined; \

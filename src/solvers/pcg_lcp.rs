@@ -173,8 +173,15 @@ impl<'s> PcgLcp<'s> {
     fn state_from(&mut self, load: &[f64], x: Option<Vec<f64>>) -> PcgLcpState {
         let s = self.structure;
         let m = self.cables.len();
+        // The split τ = t0 + t assumes B_fᵀ t0 = 0; prescribed displacements break it by
+        // B_fᵀ (k e_p), which moves to the load: F ← F − B_fᵀ (k e_p) (SPEC §7).
+        let load: Vec<f64> = load
+            .iter()
+            .zip(&s.settlement_force)
+            .map(|(f, p)| f - p)
+            .collect();
         // U_F = K⁻¹ F; q̃ = k^{-1/2}(k_c B_c U_F + t0_c) = k^{1/2} B_c U_F + k^{-1/2} t0_c.
-        let mut u_load = load.to_vec();
+        let mut u_load = load.clone();
         self.factor.solve_in_place(&mut u_load);
         let q: Vec<f64> = self
             .cables
@@ -196,7 +203,7 @@ impl<'s> PcgLcp<'s> {
         let g = q.clone();
         let p = free_part(&x, &g);
         let mut state = PcgLcpState {
-            load: load.to_vec(),
+            load,
             scale,
             q,
             x,

@@ -1,7 +1,7 @@
 //! Module and grid generator (SPEC §2, paper §5.1). Nodes at the same position are one node;
 //! links are never merged (a lower edge shared by two modules carries two cables).
 
-use super::{LinkKind, ModuleKind};
+use super::{length_and_direction, Geometry, GridSpec, LinkKind, Member, ModuleKind};
 
 /// Node numbering of an `nx × ny` grid: first the lower corners `(i, j)`, then the upper
 /// midpoints of edges along x (`(i + ½, j)`), then those of edges along y (`(i, j + ½)`).
@@ -115,4 +115,51 @@ pub(super) fn generate(
         }
     }
     (nodes, links)
+}
+
+/// The grid of `spec` as a general description: its nodes (ids = indices), its members (ids =
+/// indices) with the prestress of SPEC §2, and its layout.
+pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
+    let layout = GridLayout::new(spec.modules[0], spec.modules[1]);
+    let (nodes, raw_links) = generate(&layout, spec.length, spec.height, spec.module);
+    let p = spec.prestress;
+    let members = raw_links
+        .into_iter()
+        .enumerate()
+        .map(|(id, (a, b, kind, module))| {
+            let (length, _) = length_and_direction(nodes[a], nodes[b]);
+            let material = if kind.is_cable() {
+                spec.cables.material
+            } else {
+                spec.bars
+            };
+            // SPEC §2: force densities p/L (lower cables), 2p/L (the others), bars in
+            // compression; the diagonals of the braced module carry none.
+            let l = spec.length;
+            let density = match kind {
+                LinkKind::LowerCable => p / l,
+                LinkKind::UpperCable | LinkKind::BracingCable => 2.0 * p / l,
+                LinkKind::Bar => -2.0 * p / l,
+                LinkKind::DiagonalCable | LinkKind::Cable => 0.0,
+            };
+            Member {
+                id: id as u64,
+                a,
+                b,
+                kind,
+                young: material.young,
+                section: material.section,
+                prestress: density * length,
+                density: 0.0,
+                module,
+            }
+        })
+        .collect();
+    let geometry = Geometry {
+        node_ids: (0..nodes.len() as u64).collect(),
+        nodes,
+        members,
+        unilateral: spec.cables.unilateral,
+    };
+    (geometry, layout)
 }

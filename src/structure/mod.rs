@@ -4,10 +4,12 @@
 //! Invariants: `dof_of[3·node + c]` is the free-dof index of that displacement component or
 //! [`CLAMPED`]; free dofs are numbered node by node; `Bᵀ t0 = 0` to round-off.
 
+mod geometry;
 mod grid;
 mod spec;
 mod supports;
 
+pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 
@@ -31,6 +33,8 @@ pub enum LinkKind {
     BracingCable,
     /// The braced module's unprestressed diagonals.
     DiagonalCable,
+    /// A cable of a general structure (`kind = cable` in a members table).
+    Cable,
     /// Bar from a lower corner to an upper node: bilateral, compressed by the prestress.
     Bar,
 }
@@ -48,6 +52,7 @@ impl LinkKind {
             LinkKind::UpperCable => "upper",
             LinkKind::BracingCable => "bracing",
             LinkKind::DiagonalCable => "diagonal",
+            LinkKind::Cable => "cable",
             LinkKind::Bar => "bar",
         }
     }
@@ -56,6 +61,8 @@ impl LinkKind {
 /// A bar or a cable from node `a` to node `b`.
 #[derive(Debug, Clone)]
 pub struct Link {
+    /// The member's id as the user knows it (the link index for grids).
+    pub id: u64,
     /// Start node.
     pub a: usize,
     /// End node.
@@ -70,7 +77,8 @@ pub struct Link {
     pub length: f64,
     /// Axial stiffness k = E·S/ℓ, N/m.
     pub stiffness: f64,
-    /// Prestress t0, N (tension positive).
+    /// Prestress t0, N (tension positive), plus `k e_p` where prescribed displacements
+    /// impose an elongation `e_p` (SPEC §7).
     pub prestress: f64,
     /// Tension-only: complementarity `0 ≤ τ ⊥ λ ≥ 0` instead of a linear law.
     pub unilateral: bool,
@@ -91,14 +99,19 @@ impl Link {
 /// The assembled discrete structure.
 #[derive(Debug, Clone)]
 pub struct Structure {
-    /// Node numbering of the grid.
-    pub layout: GridLayout,
+    /// Node numbering when the structure is a module grid; `None` for general structures.
+    pub layout: Option<GridLayout>,
+    /// Node ids as the user knows them (the CSV's `node`; the index for grids).
+    pub node_ids: Vec<u64>,
     /// Initial node positions, m.
     pub nodes: Vec<[f64; 3]>,
     /// Bars and cables; tensions and elongations are indexed like this.
     pub links: Vec<Link>,
-    /// Per node: clamped (all three components zero).
+    /// Per node: all three components held (at zero or at a prescribed displacement).
     pub clamped: Vec<bool>,
+    /// Per global dof `3·node + c`: the prescribed displacement Ud of a held component, m
+    /// (zero on free components).
+    pub prescribed: Vec<f64>,
     /// Per global dof `3·node + c`: free-dof index, or [`CLAMPED`].
     pub dof_of: Vec<usize>,
     /// Number of free dofs (the unknowns' size).
@@ -107,82 +120,172 @@ pub struct Structure {
     pub link_dofs: Vec<LinkDofs>,
     /// Load at α = 1 on the free dofs, N.
     pub unit_load: Vec<f64>,
-    /// Lower cable prestress p, N (the scale of every prestress).
+    /// `B_fᵀ (k e_p)` on the free dofs: the nodal forces of the tensions the prescribed
+    /// displacements impose (zero without settlements). Solvers that split `τ = t0 + t` and
+    /// assume `B_fᵀ t0 = 0` solve under `α F − settlement_force`.
+    pub settlement_force: Vec<f64>,
+    /// The scale of every prestress, N: the grid's lower cable prestress p, else the largest
+    /// `|t0|` of a member.
     pub prestress_scale: f64,
 }
 
 impl Structure {
-    /// The grid `spec` under the load pattern `load` (at α = 1).
+    /// The grid `spec` under the load pattern `load` (at α = 1): the grid's generated
+    /// geometry and clamped nodes, assembled like any other structure.
     pub fn grid(spec: &GridSpec, load: &LoadPattern) -> Structure {
-        let layout = GridLayout::new(spec.modules[0], spec.modules[1]);
-        let (nodes, raw_links) = grid::generate(&layout, spec.length, spec.height, spec.module);
-        let p = spec.prestress;
-        let links: Vec<Link> = raw_links
-            .into_iter()
-            .map(|(a, b, kind, module)| {
-                let (xa, xb) = (nodes[a], nodes[b]);
-                let d = [xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]];
-                let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                let direction = [d[0] / length, d[1] / length, d[2] / length];
-                let material = if kind.is_cable() {
-                    spec.cables.material
-                } else {
-                    spec.bars
-                };
-                // SPEC §2: force densities p/L (lower cables), 2p/L (the others), bars in
-                // compression; the diagonals of the braced module carry none.
-                let l = spec.length;
-                let density = match kind {
-                    LinkKind::LowerCable => p / l,
-                    LinkKind::UpperCable | LinkKind::BracingCable => 2.0 * p / l,
-                    LinkKind::Bar => -2.0 * p / l,
-                    LinkKind::DiagonalCable => 0.0,
-                };
+        let (geometry, layout, fixes) = Structure::grid_parts(spec);
+        let loading = Loading {
+            nodal: load.nodal,
+            ..Loading::default()
+        };
+        let mut s = Structure::new(&geometry, &fixes, &loading);
+        s.layout = Some(layout);
+        s.prestress_scale = spec.prestress;
+        s
+    }
+
+    /// The grid of `spec` as a general description: nodes and members, layout, and the nodes
+    /// its clamp preset holds.
+    pub fn grid_parts(spec: &GridSpec) -> (Geometry, GridLayout, Vec<NodeFix>) {
+        let (geometry, layout) = grid::geometry(spec);
+        let fixes = supports::clamp_fixes(&layout, spec.clamp);
+        (geometry, layout, fixes)
+    }
+
+    /// Assemble `geometry` held by `fixes` (later fixes of the same component win) under
+    /// `loading` at α = 1.
+    ///
+    /// Prescribed displacements `Ud` enter as an imposed elongation `e_p = B_p Ud` of every
+    /// link (SPEC §7): the link's tension is `τ = t0 + k (B_f U_f + e_p)`, so its effective
+    /// prestress is `t0 + k e_p`, and [`Structure::settlement_force`] holds `B_fᵀ (k e_p)`.
+    pub fn new(geometry: &Geometry, fixes: &[NodeFix], loading: &Loading) -> Structure {
+        let n_nodes = geometry.nodes.len();
+        let mut fixed = vec![false; 3 * n_nodes];
+        let mut prescribed = vec![0.0; 3 * n_nodes];
+        for fix in fixes {
+            for k in 0..3 {
+                if fix.dofs[k] {
+                    fixed[3 * fix.node + k] = true;
+                    prescribed[3 * fix.node + k] = fix.displacement[k];
+                }
+            }
+        }
+        let clamped: Vec<bool> = (0..n_nodes)
+            .map(|n| (0..3).all(|k| fixed[3 * n + k]))
+            .collect();
+        let mut dof_of = vec![CLAMPED; 3 * n_nodes];
+        let mut n_free = 0;
+        for (d, &f) in dof_of.iter_mut().zip(&fixed) {
+            if !f {
+                *d = n_free;
+                n_free += 1;
+            }
+        }
+        let links: Vec<Link> = geometry
+            .members
+            .iter()
+            .map(|m| {
+                let (length, direction) =
+                    length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]);
+                let stiffness = m.young * m.section / length;
+                // e_p = n·(Ud_b − Ud_a), the elongation the prescribed displacements impose.
+                let imposed: f64 = (0..3)
+                    .map(|k| direction[k] * (prescribed[3 * m.b + k] - prescribed[3 * m.a + k]))
+                    .sum();
                 Link {
-                    a,
-                    b,
-                    kind,
-                    module,
+                    id: m.id,
+                    a: m.a,
+                    b: m.b,
+                    kind: m.kind,
+                    module: m.module,
                     direction,
                     length,
-                    stiffness: material.young * material.section / length,
-                    prestress: density * length,
-                    unilateral: kind.is_cable() && spec.cables.unilateral,
+                    stiffness,
+                    prestress: m.prestress + stiffness * imposed,
+                    unilateral: m.kind.is_cable() && geometry.unilateral,
                 }
             })
             .collect();
-        let clamped = supports::clamped_nodes(&layout, &nodes, spec.clamp);
-        let mut dof_of = vec![CLAMPED; 3 * nodes.len()];
-        let mut n_free = 0;
-        for (node, &c) in clamped.iter().enumerate() {
-            if !c {
-                for k in 0..3 {
-                    dof_of[3 * node + k] = n_free;
-                    n_free += 1;
-                }
+        let link_dofs: Vec<LinkDofs> = links.iter().map(|l| l.compatibility_row(&dof_of)).collect();
+        let mut settlement_force = vec![0.0; n_free];
+        for ((l, m), ld) in links.iter().zip(&geometry.members).zip(&link_dofs) {
+            let imposed_tension = l.prestress - m.prestress;
+            if imposed_tension != 0.0 {
+                ld.scatter(imposed_tension, &mut settlement_force);
             }
         }
-        let link_dofs = links.iter().map(|l| l.compatibility_row(&dof_of)).collect();
         let mut unit_load = vec![0.0; n_free];
-        for node in 0..nodes.len() {
+        let add = |node: usize, force: [f64; 3], load: &mut Vec<f64>| {
             for k in 0..3 {
                 let d = dof_of[3 * node + k];
                 if d != CLAMPED {
-                    unit_load[d] = load.nodal[k];
+                    load[d] += force[k];
                 }
             }
+        };
+        for node in 0..n_nodes {
+            add(node, loading.nodal, &mut unit_load);
         }
+        for &(node, force) in &loading.points {
+            add(node, force, &mut unit_load);
+        }
+        if let Some(g) = loading.gravity {
+            for (m, l) in geometry.members.iter().zip(&links) {
+                // ρ S ℓ g / 2 on each end (SPEC §7).
+                let half = m.density * m.section * l.length / 2.0;
+                let w = [half * g[0], half * g[1], half * g[2]];
+                add(m.a, w, &mut unit_load);
+                add(m.b, w, &mut unit_load);
+            }
+        }
+        let prestress_scale = geometry
+            .members
+            .iter()
+            .fold(0.0, |s: f64, m| s.max(m.prestress.abs()));
         Structure {
-            layout,
-            nodes,
+            layout: None,
+            node_ids: geometry.node_ids.clone(),
+            nodes: geometry.nodes.clone(),
             links,
             clamped,
+            prescribed,
             dof_of,
             n_free,
             link_dofs,
             unit_load,
-            prestress_scale: p,
+            settlement_force,
+            prestress_scale,
         }
+    }
+
+    /// Whether some node is held on some but not all of its components, or some component
+    /// is held at a non-zero displacement (the LATIN solvers need neither).
+    pub fn has_partial_or_prescribed_supports(&self) -> bool {
+        let partial = (0..self.n_nodes()).any(|n| {
+            let fixed = (0..3)
+                .filter(|&k| self.dof_of[3 * n + k] == CLAMPED)
+                .count();
+            fixed != 0 && fixed != 3
+        });
+        partial || self.prescribed.iter().any(|&u| u != 0.0)
+    }
+
+    /// `Bᵀ t0` per node (free components only, prescribed ones zero), with each node's scale
+    /// `Σ |t0|` of the links meeting there: the prestress is admissible where the first is
+    /// at round-off against the second (SPEC §7).
+    pub fn free_prestress_imbalance(&self) -> Vec<([f64; 3], f64)> {
+        let mut out = vec![([0.0; 3], 0.0); self.n_nodes()];
+        for l in &self.links {
+            for (node, sign) in [(l.a, -1.0), (l.b, 1.0)] {
+                for k in 0..3 {
+                    if self.dof_of[3 * node + k] != CLAMPED {
+                        out[node].0[k] += sign * l.prestress * l.direction[k];
+                    }
+                }
+                out[node].1 += l.prestress.abs();
+            }
+        }
+        out
     }
 
     /// Number of nodes, clamped ones included.
@@ -228,11 +331,13 @@ impl Structure {
         f.iter().fold(0.0, |m, x| m.max(x.abs()))
     }
 
-    /// Expand free-dof displacements to all `3·nodes` components (clamped ones zero).
+    /// Expand free-dof displacements to all `3·nodes` components (held ones at their
+    /// prescribed value, zero when clamped).
     pub fn full_displacements(&self, u: &[f64]) -> Vec<f64> {
         self.dof_of
             .iter()
-            .map(|&d| if d == CLAMPED { 0.0 } else { u[d] })
+            .zip(&self.prescribed)
+            .map(|(&d, &ud)| if d == CLAMPED { ud } else { u[d] })
             .collect()
     }
 }

@@ -1,9 +1,10 @@
 //! Supports: which nodes are clamped (U = 0 on all three components).
 
-use super::{Clamp, GridLayout};
+use super::{Clamp, GridLayout, NodeFix};
 
-pub(super) fn clamped_nodes(layout: &GridLayout, nodes: &[[f64; 3]], clamp: Clamp) -> Vec<bool> {
-    let mut clamped = vec![false; nodes.len()];
+/// The nodes a clamp preset holds, each on all three components at zero.
+pub(super) fn clamp_fixes(layout: &GridLayout, clamp: Clamp) -> Vec<NodeFix> {
+    let mut clamped = vec![false; layout.n_nodes()];
     let (nx, ny) = (layout.nx, layout.ny);
     let mut set = |i: usize, j: usize| clamped[layout.corner(i, j)] = true;
     match clamp {
@@ -28,5 +29,12 @@ pub(super) fn clamped_nodes(layout: &GridLayout, nodes: &[[f64; 3]], clamp: Clam
         }
         Clamp::None => {}
     }
-    clamped
+    (0..clamped.len())
+        .filter(|&n| clamped[n])
+        .map(|node| NodeFix {
+            node,
+            dofs: [true; 3],
+            displacement: [0.0; 3],
+        })
+        .collect()
 }

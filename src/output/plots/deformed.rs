@@ -48,7 +48,11 @@ impl TopView {
         };
         let (x, y) = (span(0), span(1));
         let longer = (x.end - x.start).max(y.end - y.start);
-        let modules = s.layout.nx.max(s.layout.ny) as f64;
+        // A general structure is drawn at the scale of a grid as wide as its longest member.
+        let modules = match &s.layout {
+            Some(layout) => layout.nx.max(layout.ny) as f64,
+            None => longer / typical_member(s).max(1e-12),
+        };
         let pixels = (MODULE_PIXELS * modules).clamp(GRID_PIXELS.0, GRID_PIXELS.1);
         TopView {
             x,
@@ -68,7 +72,10 @@ impl TopView {
     }
 
     fn node_radius(&self, s: &Structure) -> i32 {
-        let module = s.nodes[s.layout.corner(1, 0)][0] - s.nodes[s.layout.corner(0, 0)][0];
+        let module = match &s.layout {
+            Some(layout) => s.nodes[layout.corner(1, 0)][0] - s.nodes[layout.corner(0, 0)][0],
+            None => typical_member(s),
+        };
         (0.08 * module * self.scale).round().clamp(1.0, 5.0) as i32
     }
 }
@@ -145,10 +152,14 @@ fn drawn_ends(s: &Structure, link: &Link) -> [(f64, f64); 2] {
         LinkKind::BracingCable => 0.25,
         LinkKind::DiagonalCable => 0.15,
         LinkKind::UpperCable => 0.04,
-        LinkKind::Bar => 0.0,
+        LinkKind::Bar | LinkKind::Cable => 0.0,
     };
-    let nx = s.layout.nx;
-    let corners = &module_nodes(&s.layout, link.module % nx, link.module / nx)[..4];
+    let Some(layout) = &s.layout else {
+        // General structures: members drawn end to end.
+        return [link.a, link.b].map(|n| (s.nodes[n][0], s.nodes[n][1]));
+    };
+    let nx = layout.nx;
+    let corners = &module_nodes(layout, link.module % nx, link.module / nx)[..4];
     let centre = |k: usize| corners.iter().map(|&c| s.nodes[c][k]).sum::<f64>() / 4.0;
     let (cx, cy) = (centre(0), centre(1));
     let pull = |node: usize| {
@@ -267,4 +278,9 @@ fn draw_panel<DB: DrawingBackend>(
     let tension = (0.0, colouring.max_tension);
     draw_colour_bar(&bars[1], "taut cables: τ (N)", tension, &tension_grey)?;
     Ok(())
+}
+
+/// The longest member's length, m: the drawing scale of a general structure.
+fn typical_member(s: &Structure) -> f64 {
+    s.links.iter().fold(0.0, |m: f64, l| m.max(l.length))
 }

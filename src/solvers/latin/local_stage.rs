@@ -103,6 +103,7 @@ mod tests {
     /// A link 0 → 1 along x of stiffness `k` and prestress `t0`.
     fn link(kind: LinkKind, k: f64, t0: f64, unilateral: bool) -> Link {
         Link {
+            id: 0,
             a: 0,
             b: 1,
             kind,

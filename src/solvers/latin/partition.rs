@@ -1,5 +1,7 @@
 //! Substructuring (SPEC §4): a partition `sx × sy` assigns each module, with all its links, to
-//! one substructure (modules split as evenly as possible, so splits may be uneven). Each pair of
+//! one substructure (modules split as evenly as possible, so splits may be uneven); on a
+//! general structure (SPEC §7) each link goes to the box of its midpoint among `sx × sy` equal
+//! boxes of the plan (x, y) bounding box of the nodes. Each pair of
 //! substructures sharing non-clamped nodes has one interface, its nodes in increasing global
 //! order (the order both sides use).
 
@@ -55,17 +57,56 @@ fn split(n: usize, parts: usize) -> Vec<usize> {
     (0..n).map(|i| i * parts / n).collect()
 }
 
-impl Partition {
-    /// Requires `1 ≤ sx ≤ nx`, `1 ≤ sy ≤ ny` (checked by case validation).
-    pub fn new(structure: &Structure, shape: [usize; 2], weak: WeakInterfaces) -> Partition {
-        let (nx, ny) = (structure.layout.nx, structure.layout.ny);
+/// The substructure (row by row, `iy · sx + ix`) of every link: by module on a grid, by
+/// midpoint in the plan bounding box otherwise (a midpoint on a box boundary goes to the box
+/// above it, the last box keeping the upper edge).
+fn substructure_of_link(structure: &Structure, shape: [usize; 2]) -> Vec<usize> {
+    if let Some(layout) = &structure.layout {
+        let (nx, ny) = (layout.nx, layout.ny);
         let (px, py) = (split(nx, shape[0]), split(ny, shape[1]));
-        let sub_of_module = |m: usize| py[m / nx] * shape[0] + px[m % nx];
+        return structure
+            .links
+            .iter()
+            .map(|l| py[l.module / nx] * shape[0] + px[l.module % nx])
+            .collect();
+    }
+    let span = |k: usize| {
+        structure
+            .nodes
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[k]), hi.max(p[k]))
+            })
+    };
+    let boxes = [span(0), span(1)];
+    let index = |k: usize, x: f64| {
+        let (lo, hi) = boxes[k];
+        let width = hi - lo;
+        if width <= 0.0 {
+            return 0;
+        }
+        (((x - lo) / width * shape[k] as f64).floor() as usize).min(shape[k] - 1)
+    };
+    structure
+        .links
+        .iter()
+        .map(|l| {
+            let (a, b) = (structure.nodes[l.a], structure.nodes[l.b]);
+            let mid = |k: usize| 0.5 * (a[k] + b[k]);
+            index(1, mid(1)) * shape[0] + index(0, mid(0))
+        })
+        .collect()
+}
+
+impl Partition {
+    /// On a grid, requires `1 ≤ sx ≤ nx`, `1 ≤ sy ≤ ny` (checked by case validation).
+    pub fn new(structure: &Structure, shape: [usize; 2], weak: WeakInterfaces) -> Partition {
+        let sub_of_link = substructure_of_link(structure, shape);
         let n_subs = shape[0] * shape[1];
         let mut links = vec![Vec::new(); n_subs];
         let mut subs_of_node: Vec<Vec<usize>> = vec![Vec::new(); structure.n_nodes()];
         for (i, link) in structure.links.iter().enumerate() {
-            let e = sub_of_module(link.module);
+            let e = sub_of_link[i];
             links[e].push(i);
             for node in [link.a, link.b] {
                 if !subs_of_node[node].contains(&e) {

@@ -67,6 +67,7 @@ mod tests {
 
     fn link(stiffness: f64, unilateral: bool) -> Link {
         Link {
+            id: 0,
             a: 0,
             b: 1,
             kind: if unilateral {

@@ -1,0 +1,307 @@
+//! The `[structure]` tables: `nodes.csv` (`node,x,y,z`) and `members.csv`
+//! (`member,a,b,kind,young,section,prestress[,density]`). Every row is checked and an error
+//! names the file, the line, the column, the value and the fix.
+
+use super::convert::number;
+use super::CaseError;
+use crate::structure::{length_and_direction, Geometry, LinkKind, Member};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Largest magnitude accepted for a coordinate or a member property (as for case numbers).
+const PHYSICAL_MAX: f64 = 1e15;
+
+/// One table being read: its file name for messages.
+struct Table<'a> {
+    file: &'a str,
+}
+
+impl Table<'_> {
+    fn error(&self, line: u64, column: &str, value: &str, fix: impl Into<String>) -> CaseError {
+        CaseError::Table {
+            file: self.file.to_string(),
+            line,
+            column: column.to_string(),
+            value: value.to_string(),
+            fix: fix.into(),
+        }
+    }
+
+    /// Read `text` as CSV with the header `required` (+ `optional`, in order): the rows, each
+    /// with its line number and one string per column (optional ones empty when absent).
+    fn rows(
+        &self,
+        text: &str,
+        required: &[&str],
+        optional: &[&str],
+    ) -> Result<Vec<(u64, Vec<String>)>, CaseError> {
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_reader(text.as_bytes());
+        let mut records = reader.records();
+        let expected = || {
+            let mut all: Vec<&str> = required.to_vec();
+            all.extend(optional.iter().copied());
+            all.join(",")
+        };
+        let header = match records.next() {
+            None => {
+                return Err(self.error(
+                    1,
+                    "header",
+                    "",
+                    format!(
+                        "the file is empty: start it with the header `{}`",
+                        expected()
+                    ),
+                ))
+            }
+            Some(Err(e)) => return Err(self.csv_error(e)),
+            Some(Ok(h)) => h,
+        };
+        let line = header.position().map_or(1, |p| p.line());
+        let names: Vec<&str> = header.iter().collect();
+        let n = names.len();
+        let ok = n >= required.len()
+            && n <= required.len() + optional.len()
+            && names
+                .iter()
+                .zip(required.iter().chain(optional))
+                .all(|(a, b)| a == b);
+        if !ok {
+            return Err(self.error(
+                line,
+                "header",
+                &names.join(","),
+                format!("the header must be `{}`", expected()),
+            ));
+        }
+        let mut rows = Vec::new();
+        for record in records {
+            let record = record.map_err(|e| self.csv_error(e))?;
+            let line = record.position().map_or(0, |p| p.line());
+            if record.len() == 1 && record[0].is_empty() {
+                continue;
+            }
+            if record.len() != n {
+                return Err(self.error(
+                    line,
+                    names
+                        .get(record.len().min(n - 1))
+                        .copied()
+                        .unwrap_or("header"),
+                    &record.iter().collect::<Vec<_>>().join(","),
+                    format!(
+                        "the row has {} values: give exactly {n} (`{}`)",
+                        record.len(),
+                        names.join(",")
+                    ),
+                ));
+            }
+            rows.push((line, record.iter().map(str::to_string).collect()));
+        }
+        Ok(rows)
+    }
+
+    fn csv_error(&self, e: csv::Error) -> CaseError {
+        let line = e.position().map_or(0, |p| p.line());
+        self.error(
+            line,
+            "row",
+            "",
+            format!("not valid CSV ({e}); write plain UTF-8 comma-separated values"),
+        )
+    }
+
+    /// A finite number within ±[`PHYSICAL_MAX`], `positive` if asked.
+    fn number(
+        &self,
+        line: u64,
+        column: &str,
+        text: &str,
+        positive: bool,
+    ) -> Result<f64, CaseError> {
+        let value: f64 = text
+            .parse()
+            .map_err(|_| self.error(line, column, text, format!("`{column}` must be a number")))?;
+        if !value.is_finite() || value.abs() > PHYSICAL_MAX || (positive && value <= 0.0) {
+            let what = if positive {
+                "> 0 and "
+            } else {
+                "finite and of magnitude "
+            };
+            return Err(self.error(
+                line,
+                column,
+                &number(value),
+                format!("`{column}` must be {what}≤ {PHYSICAL_MAX:e}"),
+            ));
+        }
+        Ok(value)
+    }
+
+    fn id(&self, line: u64, column: &str, text: &str) -> Result<u64, CaseError> {
+        text.parse().map_err(|_| {
+            self.error(
+                line,
+                column,
+                text,
+                format!("`{column}` must be a non-negative integer id"),
+            )
+        })
+    }
+}
+
+/// Nodes and members of the `[structure]` tables given as texts; `nodes_name` and
+/// `members_name` are the file names used in messages.
+pub fn read_geometry(
+    nodes_name: &str,
+    nodes_text: &str,
+    members_name: &str,
+    members_text: &str,
+    unilateral: bool,
+) -> Result<Geometry, CaseError> {
+    let table = Table { file: nodes_name };
+    let mut node_ids = Vec::new();
+    let mut nodes = Vec::new();
+    let mut index_of: HashMap<u64, (usize, u64)> = HashMap::new();
+    for (line, row) in table.rows(nodes_text, &["node", "x", "y", "z"], &[])? {
+        let id = table.id(line, "node", &row[0])?;
+        if let Some(&(_, first)) = index_of.get(&id) {
+            return Err(table.error(
+                line,
+                "node",
+                &row[0],
+                format!(
+                    "node {id} is already defined on line {first}: give every node a unique id"
+                ),
+            ));
+        }
+        let mut p = [0.0; 3];
+        for k in 0..3 {
+            p[k] = table.number(line, ["x", "y", "z"][k], &row[k + 1], false)?;
+        }
+        index_of.insert(id, (nodes.len(), line));
+        node_ids.push(id);
+        nodes.push(p);
+    }
+    if nodes.is_empty() {
+        return Err(table.error(1, "node", "", "give at least two nodes, one row each"));
+    }
+    let table = Table { file: members_name };
+    let mut members = Vec::new();
+    let mut seen: HashMap<u64, u64> = HashMap::new();
+    let columns = ["member", "a", "b", "kind", "young", "section", "prestress"];
+    for (line, row) in table.rows(members_text, &columns, &["density"])? {
+        let id = table.id(line, "member", &row[0])?;
+        if let Some(first) = seen.insert(id, line) {
+            return Err(table.error(
+                line,
+                "member",
+                &row[0],
+                format!(
+                    "member {id} is already defined on line {first}: give every member a unique id"
+                ),
+            ));
+        }
+        let end = |column: &str, text: &str| -> Result<usize, CaseError> {
+            let node = table.id(line, column, text)?;
+            index_of.get(&node).map(|&(i, _)| i).ok_or_else(|| {
+                table.error(
+                    line,
+                    column,
+                    text,
+                    format!("node {node} is not in `{nodes_name}`: name a node defined there"),
+                )
+            })
+        };
+        let a = end("a", &row[1])?;
+        let b = end("b", &row[2])?;
+        let kind = match row[3].as_str() {
+            "bar" => LinkKind::Bar,
+            "cable" => LinkKind::Cable,
+            other => {
+                return Err(table.error(line, "kind", other, "`kind` must be `bar` or `cable`"))
+            }
+        };
+        let young = table.number(line, "young", &row[4], true)?;
+        let section = table.number(line, "section", &row[5], true)?;
+        let prestress = table.number(line, "prestress", &row[6], false)?;
+        let density = match row.get(7) {
+            Some(text) if !text.is_empty() => {
+                let d = table.number(line, "density", text, false)?;
+                if d < 0.0 {
+                    return Err(table.error(
+                        line,
+                        "density",
+                        text,
+                        "`density` must be ≥ 0 (kg/m³)",
+                    ));
+                }
+                d
+            }
+            _ => 0.0,
+        };
+        let (length, _) = length_and_direction(nodes[a], nodes[b]);
+        let scale = nodes[a]
+            .iter()
+            .chain(&nodes[b])
+            .fold(0.0, |m: f64, x| m.max(x.abs()));
+        // Coordinates are finite and ≤ 1e15, so the length is finite.
+        if length <= 1e-12 * scale.max(1e-300) {
+            return Err(table.error(
+                line,
+                "b",
+                &row[2],
+                format!(
+                    "member {id} joins nodes {} and {} at the same position (zero length): join two distinct positions",
+                    row[1], row[2]
+                ),
+            ));
+        }
+        members.push(Member {
+            id,
+            a,
+            b,
+            kind,
+            young,
+            section,
+            prestress,
+            density,
+            module: 0,
+        });
+    }
+    if members.is_empty() {
+        return Err(table.error(1, "member", "", "give at least one member, one row each"));
+    }
+    Ok(Geometry {
+        node_ids,
+        nodes,
+        members,
+        unilateral,
+    })
+}
+
+/// Read the two tables from files (paths as given, already resolved against the case file).
+pub fn load_geometry(
+    nodes: &Path,
+    members: &Path,
+    unilateral: bool,
+) -> Result<Geometry, CaseError> {
+    let read = |path: &Path| {
+        std::fs::read_to_string(path).map_err(|e| CaseError::Io {
+            path: path.display().to_string(),
+            reason: e.to_string(),
+        })
+    };
+    read_geometry(
+        &nodes.display().to_string(),
+        &read(nodes)?,
+        &members.display().to_string(),
+        &read(members)?,
+        unilateral,
+    )
+}

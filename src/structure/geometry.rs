@@ -1,0 +1,71 @@
+//! A structure as an engineer describes it (SPEC §7): nodes with ids, members between them,
+//! supports per node and direction, and loads per node. The module grid is one generator of
+//! this description ([`super::grid`]); a case's `[structure]` tables are another.
+
+use super::LinkKind;
+
+/// One bar or cable as described.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Member {
+    /// The member's id as the user knows it (the CSV's `member`; the link index for grids).
+    pub id: u64,
+    /// Start node (index into [`Geometry::nodes`]).
+    pub a: usize,
+    /// End node.
+    pub b: usize,
+    /// Bar, or which cable.
+    pub kind: LinkKind,
+    /// Young's modulus E, Pa.
+    pub young: f64,
+    /// Cross-section S, m².
+    pub section: f64,
+    /// Prestress t0, N (tension positive).
+    pub prestress: f64,
+    /// Density ρ, kg/m³ (for self-weight; 0 when not given).
+    pub density: f64,
+    /// The module the member belongs to on a grid; 0 for general structures.
+    pub module: usize,
+}
+
+/// Nodes and members.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Geometry {
+    /// The node ids as the user knows them (the CSV's `node`; the index for grids).
+    pub node_ids: Vec<u64>,
+    /// Initial positions, m.
+    pub nodes: Vec<[f64; 3]>,
+    /// Bars and cables.
+    pub members: Vec<Member>,
+    /// Whether cables carry tension only.
+    pub unilateral: bool,
+}
+
+/// Displacement components of one node held at prescribed values (`U|Γu = Ud`, SPEC §7).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeFix {
+    /// The node (index into [`Geometry::nodes`]).
+    pub node: usize,
+    /// Which of x, y, z are prescribed.
+    pub dofs: [bool; 3],
+    /// The prescribed displacement of those components, m (never scaled by α).
+    pub displacement: [f64; 3],
+}
+
+/// What loads the structure at α = 1.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Loading {
+    /// The same force on every node's free components, N (`load.nodal`).
+    pub nodal: [f64; 3],
+    /// Forces on given nodes, N (`load.point`), summed.
+    pub points: Vec<(usize, [f64; 3])>,
+    /// Gravity acceleration, m/s², for self-weight (`load.self_weight`): a member of mass
+    /// `ρ S ℓ` puts `ρ S ℓ g / 2` on each end (SPEC §7).
+    pub gravity: Option<[f64; 3]>,
+}
+
+/// Length ℓ of the segment from `xa` to `xb` and its unit direction.
+pub fn length_and_direction(xa: [f64; 3], xb: [f64; 3]) -> (f64, [f64; 3]) {
+    let d = [xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]];
+    let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    (length, [d[0] / length, d[1] / length, d[2] / length])
+}

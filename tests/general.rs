@@ -1,0 +1,535 @@
+//! General structures (SPEC §7): node/member tables, supports and loads anywhere, prescribed
+//! displacements, and the self-stress / mechanism counts.
+
+mod common;
+
+use common::{manifest_path, solve_both, tensolve, Temp};
+use nalgebra::DMatrix;
+use proptest::prelude::*;
+use tensolve::app::check::equilibrium_counts;
+use tensolve::case::{self, read_geometry};
+use tensolve::solvers::latin::{Latin, LatinSettings};
+use tensolve::solvers::newton::{Newton, NewtonSettings};
+use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
+use tensolve::solvers::{AnySolver, Silent, Solution, TautStiffness};
+use tensolve::structure::{Geometry, Loading, NodeFix, Structure, CLAMPED};
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .fold(0.0, |m: f64, (x, y)| m.max((x - y).abs()))
+}
+
+fn max_abs(a: &[f64]) -> f64 {
+    a.iter().fold(0.0, |m: f64, x| m.max(x.abs()))
+}
+
+#[test]
+fn paper_grid_as_tables_reproduces_the_grid() {
+    let grid = case::load(&manifest_path("cases/paper.toml"))
+        .unwrap()
+        .structure();
+    let tables = case::load(&manifest_path("cases/paper-csv.toml"))
+        .unwrap()
+        .structure();
+    assert!(tables.layout.is_none());
+    assert_eq!(tables.n_free, grid.n_free);
+    for (alpha, slack) in [(1.0, 408), (0.5, 36)] {
+        let (gn, gp) = solve_both(&grid, alpha);
+        let (tn, tp) = solve_both(&tables, alpha);
+        for sol in [&gn, &gp, &tn, &tp] {
+            assert_eq!(sol.equilibrium.slack.iter().filter(|&&s| s).count(), slack);
+        }
+        let scale = max_abs(&gn.equilibrium.displacements);
+        assert!(
+            max_abs_diff(&gn.equilibrium.displacements, &tn.equilibrium.displacements)
+                <= 1e-12 * scale
+        );
+        assert!(
+            max_abs_diff(&gp.equilibrium.displacements, &tp.equilibrium.displacements)
+                <= 1e-12 * scale
+        );
+    }
+}
+
+/// A tripod: apex 3 at (0, 0, h) on three bars from supports on the unit circle.
+fn tripod(h: f64, kinds: [&str; 3], unilateral: bool) -> Geometry {
+    let mut nodes = String::from("node,x,y,z\n");
+    for k in 0..3 {
+        let a = 2.0 * std::f64::consts::PI * k as f64 / 3.0;
+        nodes += &format!("{},{},{},0\n", 10 + k, a.cos(), a.sin());
+    }
+    nodes += &format!("3,0,0,{h}\n");
+    let mut members = String::from("member,a,b,kind,young,section,prestress,density\n");
+    for (k, kind) in kinds.iter().enumerate() {
+        members += &format!("{},{},3,{kind},2e11,1e-4,0,7850\n", 100 + k, 10 + k);
+    }
+    read_geometry("nodes.csv", &nodes, "members.csv", &members, unilateral).unwrap()
+}
+
+fn held(nodes: &[usize], displacement: [f64; 3]) -> Vec<NodeFix> {
+    nodes
+        .iter()
+        .map(|&node| NodeFix {
+            node,
+            dofs: [true; 3],
+            displacement,
+        })
+        .collect()
+}
+
+fn newton(s: &Structure, f: &[f64]) -> Solution {
+    let taut = TautStiffness::new(s).unwrap();
+    let sol = Newton::new(s, &taut, NewtonSettings::default())
+        .unwrap()
+        .solve(f, None, &mut Silent);
+    assert!(sol.info.status.converged(), "{:?}", sol.info);
+    sol
+}
+
+fn pcg(s: &Structure, f: &[f64]) -> Solution {
+    let taut = TautStiffness::new(s).unwrap();
+    let sol = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(f, None, &mut Silent);
+    assert!(sol.info.status.converged(), "{:?}", sol.info);
+    sol
+}
+
+#[test]
+fn tripod_tensions_follow_from_statics() {
+    // A vertical load P on the apex: each bar carries t = −P ℓ / (3 h) by symmetry.
+    let h = 2.0;
+    let g = tripod(h, ["bar"; 3], false);
+    let p = 3000.0;
+    let loading = Loading {
+        points: vec![(3, [0.0, 0.0, -p])],
+        ..Loading::default()
+    };
+    let s = Structure::new(&g, &held(&[0, 1, 2], [0.0; 3]), &loading);
+    assert_eq!(s.n_free, 3);
+    let want = -p * (1.0 + h * h).sqrt() / (3.0 * h);
+    for sol in [newton(&s, &s.unit_load), pcg(&s, &s.unit_load)] {
+        for t in &sol.equilibrium.tensions {
+            assert!((t - want).abs() <= 1e-9 * want.abs(), "{t} vs {want}");
+        }
+    }
+}
+
+/// The structure's full stiffness `Σ k nnᵀ` on all 3·nodes dofs, from the geometry alone.
+fn full_stiffness(s: &Structure) -> DMatrix<f64> {
+    let n = 3 * s.n_nodes();
+    let mut k = DMatrix::zeros(n, n);
+    for l in &s.links {
+        for (p, sp) in [(l.a, -1.0), (l.b, 1.0)] {
+            for (q, sq) in [(l.a, -1.0), (l.b, 1.0)] {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        k[(3 * p + i, 3 * q + j)] +=
+                            sp * sq * l.stiffness * l.direction[i] * l.direction[j];
+                    }
+                }
+            }
+        }
+    }
+    k
+}
+
+#[test]
+fn settlement_matches_the_condensed_linear_system() {
+    // Bilateral tripod, one support settled by (0.001, −0.002, −0.01), a point load too:
+    // independently, K_ff U_f = F_f − K_fp U_d.
+    let g = tripod(1.5, ["bar", "cable", "cable"], false);
+    let ud = [0.001, -0.002, -0.01];
+    let mut fixes = held(&[0, 1], [0.0; 3]);
+    fixes.extend(held(&[2], ud));
+    let loading = Loading {
+        points: vec![(3, [100.0, 50.0, -400.0])],
+        ..Loading::default()
+    };
+    let s = Structure::new(&g, &fixes, &loading);
+    let k = full_stiffness(&s);
+    let n = 3 * s.n_nodes();
+    let free: Vec<usize> = (0..n).filter(|&d| s.dof_of[d] != CLAMPED).collect();
+    let fixed: Vec<usize> = (0..n).filter(|&d| s.dof_of[d] == CLAMPED).collect();
+    let kff = DMatrix::from_fn(free.len(), free.len(), |i, j| k[(free[i], free[j])]);
+    let rhs = DMatrix::from_fn(free.len(), 1, |i, _| {
+        s.unit_load[i]
+            - fixed
+                .iter()
+                .map(|&p| k[(free[i], p)] * s.prescribed[p])
+                .sum::<f64>()
+    });
+    let u = kff.lu().solve(&rhs).unwrap();
+    for sol in [newton(&s, &s.unit_load), pcg(&s, &s.unit_load)] {
+        let got = &sol.equilibrium.displacements;
+        let err = (0..free.len()).fold(0.0, |m: f64, i| m.max((got[i] - u[i]).abs()));
+        assert!(err <= 1e-9 * u.amax(), "{err} vs {}", u.amax());
+        // Reactions balance the load: Σ over all dofs of Bᵀτ, with the applied force, is 0.
+        let full = s.full_displacements(got);
+        assert_eq!(&full[6..9], &ud);
+    }
+}
+
+#[test]
+fn self_weight_is_carried_by_the_reactions_and_superposes_with_point_loads() {
+    let g = tripod(1.0, ["bar"; 3], false);
+    let fixes = held(&[0, 1, 2], [0.0; 3]);
+    let gravity = [0.0, 0.0, -9.81];
+    let weight = Loading {
+        gravity: Some(gravity),
+        ..Loading::default()
+    };
+    let s = Structure::new(&g, &fixes, &weight);
+    let sol = newton(&s, &s.unit_load);
+    // Total weight Σ ρ S ℓ g; the reactions at the held nodes are Σ τ n there, plus the half
+    // weights of the members that fall on those nodes directly.
+    let total: f64 = s
+        .links
+        .iter()
+        .map(|l| 7850.0 * 1e-4 * l.length * 9.81)
+        .sum();
+    let mut reaction_z = 0.0;
+    for (l, t) in s.links.iter().zip(&sol.equilibrium.tensions) {
+        // node a is the support: the member pulls it by τ n (towards b).
+        reaction_z += -t * l.direction[2] + 0.5 * 7850.0 * 1e-4 * l.length * 9.81;
+    }
+    assert!(
+        (reaction_z - total).abs() <= 1e-9 * total,
+        "{reaction_z} vs {total}"
+    );
+    // Superposition, linear regime: U(weight + point) = U(weight) + U(point).
+    let point = Loading {
+        points: vec![(3, [20.0, -10.0, -50.0])],
+        ..Loading::default()
+    };
+    let both = Loading {
+        gravity: Some(gravity),
+        points: point.points.clone(),
+        ..Loading::default()
+    };
+    let sp = Structure::new(&g, &fixes, &point);
+    let sb = Structure::new(&g, &fixes, &both);
+    let (uw, up, ub) = (
+        sol.equilibrium.displacements,
+        newton(&sp, &sp.unit_load).equilibrium.displacements,
+        newton(&sb, &sb.unit_load).equilibrium.displacements,
+    );
+    let sum: Vec<f64> = uw.iter().zip(&up).map(|(a, b)| a + b).collect();
+    assert!(max_abs_diff(&sum, &ub) <= 1e-10 * max_abs(&ub));
+}
+
+/// s and m from a dense SVD of A = Bᵀ (free dofs × members).
+fn dense_counts(s: &Structure) -> (usize, usize) {
+    let mut a = DMatrix::<f64>::zeros(s.n_free, s.links.len());
+    for (j, row) in s.link_dofs.iter().enumerate() {
+        for (d, v) in row.iter() {
+            a[(d, j)] += v;
+        }
+    }
+    let sv = a.singular_values();
+    let top = sv.max();
+    let rank = sv.iter().filter(|&&x| x > 1e-10 * top).count();
+    (s.links.len() - rank, s.n_free - rank)
+}
+
+fn grid_case(modules: [usize; 2], module: &str, clamp: &str) -> Structure {
+    case::parse(&format!(
+        "[grid]\nmodules = {modules:?}\nmodule = \"{module}\"\n[supports]\nclamp = \"{clamp}\"\n[load]\nalpha = [1.0]\n"
+    ))
+    .unwrap()
+    .structure()
+}
+
+#[test]
+fn self_stress_and_mechanism_counts_agree_with_a_dense_svd() {
+    let cases = [
+        (
+            "paper module alone",
+            grid_case([1, 1], "standard", "none"),
+            Some(9),
+        ),
+        (
+            "braced module alone",
+            grid_case([1, 1], "braced", "none"),
+            None,
+        ),
+        (
+            "2 x 2 clamped on x edges",
+            grid_case([2, 2], "standard", "lower-x-edges"),
+            Some(0),
+        ),
+        (
+            "3 x 2 braced on corners",
+            grid_case([3, 2], "braced", "lower-corners"),
+            None,
+        ),
+        (
+            "tripod",
+            Structure::new(
+                &tripod(1.0, ["bar"; 3], false),
+                &held(&[0, 1, 2], [0.0; 3]),
+                &Loading::default(),
+            ),
+            Some(0),
+        ),
+        (
+            "free tripod",
+            Structure::new(&tripod(1.0, ["bar"; 3], false), &[], &Loading::default()),
+            None,
+        ),
+    ];
+    for (name, s, m_known) in cases {
+        let c = equilibrium_counts(&s);
+        let (s_dense, m_dense) = dense_counts(&s);
+        assert_eq!(
+            (c.self_stress_states, c.mechanisms),
+            (s_dense, m_dense),
+            "{name}"
+        );
+        assert_eq!(c.rank + c.mechanisms, s.n_free, "{name}");
+        if let Some(m) = m_known {
+            assert_eq!(c.mechanisms, m, "{name}");
+        }
+    }
+}
+
+/// The bad tables: (nodes, members, line, column).
+const BAD: &[(&str, &str, u64, &str)] = &[
+    (
+        "node,x,y,z\n0,0,0,0\n0,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n",
+        3,
+        "node",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,zz\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n",
+        3,
+        "z",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,inf\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n",
+        3,
+        "z",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n-1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n",
+        3,
+        "node",
+    ),
+    (
+        "node,x,y\n0,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n",
+        1,
+        "header",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,7,bar,1,1,0\n",
+        2,
+        "b",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,0,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n",
+        2,
+        "b",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,rope,1,1,0\n",
+        2,
+        "kind",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,-1,1,0\n",
+        2,
+        "young",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,0,0\n",
+        2,
+        "section",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,NaN\n",
+        2,
+        "prestress",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1,0\n0,1,0,bar,1,1,0\n",
+        3,
+        "member",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress,density\n0,0,1,bar,1,1,0,-3\n",
+        2,
+        "density",
+    ),
+    (
+        "node,x,y,z\n0,0,0,0\n1,1,0,0\n",
+        "member,a,b,kind,young,section,prestress\n0,0,1,bar,1,1\n",
+        2,
+        "prestress",
+    ),
+];
+
+#[test]
+fn every_bad_row_exits_2_naming_file_line_and_column() {
+    for (i, &(nodes, members, line, column)) in BAD.iter().enumerate() {
+        let dir = Temp::dir(&format!("bad-table-{i}"));
+        std::fs::create_dir_all(&dir.0).unwrap();
+        std::fs::write(dir.0.join("nodes.csv"), nodes).unwrap();
+        std::fs::write(dir.0.join("members.csv"), members).unwrap();
+        let case = dir.0.join("case.toml");
+        std::fs::write(
+            &case,
+            "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n[load]\nalpha = [1.0]\n",
+        )
+        .unwrap();
+        let out = tensolve(&["check", case.to_str().unwrap()]);
+        let err = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "case {i}: {err}");
+        let file = if i < 5 { "nodes.csv" } else { "members.csv" };
+        assert!(err.contains(file), "case {i}: {err}");
+        assert!(err.contains(&format!("line {line}")), "case {i}: {err}");
+        assert!(
+            err.contains(&format!("column `{column}`")),
+            "case {i}: {err}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    #[test]
+    fn mutated_tables_never_panic(
+        cut in 0usize..200,
+        byte in any::<u8>(),
+        at in 0usize..200,
+        which in 0usize..2,
+    ) {
+        let mut texts = [
+            b"node,x,y,z\n0,0,0,0\n1,1,0,0\n2,0,1,0\n3,0.3,0.3,1\n".to_vec(),
+            b"member,a,b,kind,young,section,prestress,density\n0,0,3,bar,2e11,1e-4,0,7850\n1,1,3,cable,1e11,1e-4,0,\n2,2,3,bar,2e11,1e-4,0,1\n".to_vec(),
+        ];
+        let t = &mut texts[which];
+        let at = at % t.len();
+        t[at] = byte;
+        let cut = cut.min(t.len());
+        t.truncate(t.len() - cut / 4);
+        let nodes = String::from_utf8_lossy(&texts[0]).into_owned();
+        let members = String::from_utf8_lossy(&texts[1]).into_owned();
+        if let Err(e) = read_geometry("n.csv", &nodes, "m.csv", &members, true) {
+            prop_assert!(e.to_string().contains("line"));
+        }
+    }
+}
+
+/// A 3 × 3 grid of the paper's modules with every node moved off the grid by up to 3 % of
+/// the module, the prestress projected onto the self-stress states at the free dofs
+/// (`t0 − Aᵀ (A Aᵀ)⁻¹ A t0`), clamped on the lower x-edges.
+fn perturbed() -> Structure {
+    let grid = grid_case([3, 3], "standard", "lower-x-edges");
+    let mut nodes = String::from("node,x,y,z\n");
+    for (n, p) in grid.nodes.iter().enumerate() {
+        let wobble = |k: usize| 0.03 * (((n * 7 + k * 13) % 11) as f64 / 10.0 - 0.5);
+        let moved = if grid.clamped[n] {
+            *p
+        } else {
+            [p[0] + wobble(0), p[1] + wobble(1), p[2] + wobble(2)]
+        };
+        nodes += &format!("{n},{},{},{}\n", moved[0], moved[1], moved[2]);
+    }
+    let write = |t0: &[f64]| {
+        let mut members = String::from("member,a,b,kind,young,section,prestress\n");
+        for (i, l) in grid.links.iter().enumerate() {
+            let (kind, young, section) = if l.kind.is_cable() {
+                ("cable", 1e11, 0.5e-4)
+            } else {
+                ("bar", 2e11, 2.8e-4)
+            };
+            members += &format!("{i},{},{},{kind},{young},{section},{}\n", l.a, l.b, t0[i]);
+        }
+        members
+    };
+    let fixes: Vec<NodeFix> = (0..grid.n_nodes())
+        .filter(|&n| grid.clamped[n])
+        .map(|n| held(&[n], [0.0; 3])[0])
+        .collect();
+    let t0: Vec<f64> = grid.links.iter().map(|l| l.prestress).collect();
+    let raw = read_geometry("n", &nodes, "m", &write(&t0), true).unwrap();
+    let s = Structure::new(&raw, &fixes, &Loading::default());
+    let mut a = DMatrix::<f64>::zeros(s.n_free, s.links.len());
+    for (j, row) in s.link_dofs.iter().enumerate() {
+        for (d, v) in row.iter() {
+            a[(d, j)] += v;
+        }
+    }
+    let t = nalgebra::DVector::from_vec(t0);
+    let y = (&a * a.transpose()).cholesky().unwrap().solve(&(&a * &t));
+    let balanced = &t - a.transpose() * y;
+    let g = read_geometry("n", &nodes, "m", &write(balanced.as_slice()), true).unwrap();
+    let loading = Loading {
+        nodal: [0.0, 0.0, -40.0],
+        ..Loading::default()
+    };
+    Structure::new(&g, &fixes, &loading)
+}
+
+#[test]
+fn four_solvers_agree_on_a_perturbed_general_structure() {
+    let s = perturbed();
+    assert!(s.layout.is_none());
+    // The smallest of these load factors at which at least 5 % of the cables are slack.
+    let (f, reference) = [4.0, 8.0, 16.0, 32.0]
+        .iter()
+        .map(|alpha| {
+            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+            let sol = newton(&s, &f);
+            (f, sol)
+        })
+        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
+        .expect("some load factor slackens 5 % of the cables");
+    println!(
+        "slack: {} of {}",
+        reference.equilibrium.slack.iter().filter(|&&x| x).count(),
+        s.n_cables()
+    );
+    let p = pcg(&s, &f);
+    let scale = max_abs(&reference.equilibrium.displacements);
+    assert!(
+        max_abs_diff(
+            &p.equilibrium.displacements,
+            &reference.equilibrium.displacements
+        ) <= 1e-8 * scale
+    );
+    for subdomains in [[1, 1], [2, 2]] {
+        let settings = LatinSettings {
+            subdomains,
+            ..LatinSettings::default()
+        };
+        let mut latin = Latin::new(&s, settings).unwrap();
+        let sol = latin.solve(&f, None, &mut Silent);
+        assert!(
+            sol.info.status.converged(),
+            "LATIN {subdomains:?}: {:?}",
+            sol.info
+        );
+        assert_eq!(
+            sol.equilibrium.slack, reference.equilibrium.slack,
+            "LATIN {subdomains:?}"
+        );
+        let d = max_abs_diff(
+            &sol.equilibrium.displacements,
+            &reference.equilibrium.displacements,
+        );
+        assert!(d <= 1e-5 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+    }
+}
