@@ -1,4 +1,4 @@
-//! LATIN timings on the paper's case at α = 1 (SPEC §5, paper §5.4): set-up and one iteration
+//! LATIN timings on the paper's case at α = 1 (docs/method.md §5, paper §5.4): set-up and one iteration
 //! of `mono-latin` and `micro-macro` (4 × 4 substructures), on all cores and on one thread
 //! (the paper's ratios are for one processor), and the whole solve to e < 1e-3 against the
 //! Newton reference (set-up included, reference excluded).

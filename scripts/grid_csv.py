@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Write the module grid of tensolve's `[grid]` (SPEC §2) as `[structure]` tables.
+"""Write the module grid of tensolve's `[grid]` (docs/method.md §2) as `[structure]` tables.
 
     scripts/grid_csv.py OUTDIR [--modules NX NY] [--length L] [--height H] [--prestress P]
                               [--braced] [--shear S] [--tilt T]
@@ -69,7 +69,7 @@ def main():
         for n, p in enumerate(nodes):
             f.write(f"{n},{p[0]!r},{p[1]!r},{p[2]!r}\n")
     p, l = a.prestress, a.length
-    # SPEC §2: force densities p/L (lower), 2p/L (upper, bracing), -2p/L (bars), 0 (diagonals);
+    # docs/method.md §2: force densities p/L (lower), 2p/L (upper, bracing), -2p/L (bars), 0 (diagonals);
     # t0 = density * length, computed as tensolve's grid generator does.
     density = {"lower": p / l, "upper": 2.0 * p / l, "bracing": 2.0 * p / l,
                "bar": -2.0 * p / l, "diagonal": 0.0}

@@ -83,7 +83,7 @@ pub fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
 
 /// Smallest eigenvalue (N/m) of the tangent stiffness at an equilibrium: `Bᵀ k B` over the
 /// members that carry load there (bars, bilateral cables, taut unilateral cables). How far the
-/// structure is from a mechanism (SPEC §2–3); 0 when the taut members form one.
+/// structure is from a mechanism (docs/method.md §2–3); 0 when the taut members form one.
 pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> f64 {
     let pattern = &taut.pattern;
     let mut values = vec![0.0; pattern.nnz()];

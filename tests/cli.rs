@@ -251,7 +251,7 @@ fn number(s: &str) -> f64 {
     s.parse().unwrap_or_else(|_| panic!("not a number: {s}"))
 }
 
-/// What the paper case must give whatever the golden file says (SPEC §2).
+/// What the paper case must give whatever the golden file says (docs/method.md §2).
 fn assert_plausible_summary(header: &[String], rows: &[Vec<String>]) {
     let expected_slack = [(0.05, 0), (0.25, 2), (0.5, 36), (0.75, 272), (1.0, 408)];
     assert_eq!(rows.len(), 10);
@@ -431,6 +431,6 @@ fn stability_csv_reports_the_smallest_tangent_eigenvalue() {
     let lambda: f64 = row[3].parse().unwrap();
     assert!(
         (lambda - 164.0).abs() < 2.0,
-        "SPEC: ≈ 164 N/m, got {lambda}"
+        "docs/method.md: ≈ 164 N/m, got {lambda}"
     );
 }

@@ -1,4 +1,4 @@
-//! General structures (SPEC §7): node/member tables, supports and loads anywhere, prescribed
+//! General structures (docs/method.md §7): node/member tables, supports and loads anywhere, prescribed
 //! displacements, and the self-stress / mechanism counts.
 
 mod common;

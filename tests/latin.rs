@@ -1,4 +1,4 @@
-//! The LATIN solvers (SPEC §4) on the paper case: convergence rates against the newton
+//! The LATIN solvers (docs/method.md §4) on the paper case: convergence rates against the newton
 //! solution, the partition report and the kernels of K*_E, the stall with all-micro weak
 //! interfaces, convergence to the exact solution at tight tolerance, the linear case, the
 //! invariants of the linear stage, the law of the local stage, uneven partitions, and the CLI.
@@ -69,7 +69,7 @@ fn first_below(history: &[f64], threshold: f64) -> Option<usize> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 1. Convergence rates of the paper's plain method (SPEC §4 "Measured on the paper case"):
+// 1. Convergence rates of the paper's plain method (docs/method.md §4 "Measured on the paper case"):
 //    `LatinSettings::plain()`, the behaviour the paper describes, stays reachable.
 
 #[test]
@@ -83,7 +83,7 @@ fn micro_macro_rate_on_paper_case() {
         "micro-macro 4x4, alpha 1: e < 1e-2 at {at_2:?}, e < 1e-3 at {at_3:?}, e(80) = {:.3e}",
         h[80]
     );
-    // Measured: 30 and 63 (SPEC's prototype: 31, 64).
+    // Measured: 30 and 63 (the prototype of docs/method.md §6: 31, 64).
     assert!(at_2.is_some_and(|k| k <= 40), "e < 1e-2 first at {at_2:?}");
     assert!(at_3.is_some_and(|k| k <= 80), "e < 1e-3 first at {at_3:?}");
 }
@@ -101,7 +101,7 @@ fn mono_latin_rate_on_paper_case() {
         "mono-latin, alpha 1: e < 1e-2 at {at_2:?}, e(15) = {:.3e}",
         h[15]
     );
-    // Measured: 10 (SPEC's prototype: 11).
+    // Measured: 10 (the prototype of docs/method.md §6: 11).
     assert!(at_2.is_some_and(|k| k <= 15), "e < 1e-2 first at {at_2:?}");
 }
 
@@ -118,14 +118,14 @@ fn micro_macro_rate_at_small_load() {
         first_below(&h, 1e-2),
         first_below(&h, 1e-3)
     );
-    // Measured: 27 (SPEC's prototype: 28).
+    // Measured: 27 (the prototype of docs/method.md §6: 28).
     assert!(at_4.is_some_and(|k| k <= 40), "e < 1e-4 first at {at_4:?}");
 }
 
 // ---------------------------------------------------------------------------------------------
 // 2. Partition report, and kernels checked against the operator K*_E.
 
-/// Dimension of the null space of K*_E computed from first principles (SPEC §4): K*_E u = 0
+/// Dimension of the null space of K*_E computed from first principles (docs/method.md §4): K*_E u = 0
 /// exactly when some U on E's free dofs has `B_E U = 0` and `C_E U = R_E u`, so
 /// `ker K*_E = { R_Eᵀ C_E ρ : B_E ρ = 0, (I − R Rᵀ) C_E ρ = 0 on every interface }`.
 /// Uses only the structure, the partition and the interfaces' macro bases.
@@ -293,7 +293,7 @@ fn partition_report_and_kernels_of_paper_case() {
         assert_eq!(r.dropped_interfaces, dropped, "{weak:?}");
         assert_eq!(r.macro_dofs, macro_dofs, "{weak:?}");
         assert_eq!(latin.interfaces.len(), interfaces);
-        // SPEC §2/§4: 195 free dofs for the substructures without supports.
+        // docs/method.md §2/§4: 195 free dofs for the substructures without supports.
         assert_eq!(r.max_substructure_dofs, 195, "{weak:?}");
         let (total, gap, worst_null) = check_kernels(&latin, &format!("{weak:?}"));
         assert_eq!(total, r.kernel_columns, "{weak:?}");
@@ -332,7 +332,7 @@ fn partition_report_and_kernels_of_paper_case() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 3. All-micro weak interfaces stall (SPEC §4 "Weak interfaces").
+// 3. All-micro weak interfaces stall (docs/method.md §4 "Weak interfaces").
 
 #[test]
 fn micro_weak_interfaces_stall() {
@@ -341,7 +341,7 @@ fn micro_weak_interfaces_stall() {
     let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Micro).plain()).unwrap();
     let h = error_history(&s, &mut latin, 1.0, &reference, 100);
     println!("weak = micro, alpha 1: e(100) = {:.3e}", h[100]);
-    // Measured: 0.806 (SPEC: ≈ 0.8).
+    // Measured: 0.806 (docs/method.md: ≈ 0.8).
     assert!(h[100] > 0.1, "e after 100 iterations = {:e}", h[100]);
 }
 

@@ -1,4 +1,4 @@
-//! The LATIN remedies of SPEC §6 at their defaults (relaxation μ = 0.8, status-following l,
+//! The LATIN remedies of docs/method.md §6 at their defaults (relaxation μ = 0.8, status-following l,
 //! stopping on both η and the equilibrium residual r(U)): η converges where the plain method
 //! stalls, a converged row is accurate, and r(U) is the same measure for every solver.
 //!

@@ -1,4 +1,4 @@
-//! The discrete model of SPEC §1–2 on the paper's grid: counts, prestress, supports.
+//! The discrete model of docs/method.md §1–2 on the paper's grid: counts, prestress, supports.
 
 mod common;
 
@@ -69,7 +69,7 @@ fn prestress_is_self_balanced() {
     }
 }
 
-/// SPEC §2's table: t0 per link kind, for module side `l` and height `h`.
+/// docs/method.md §2's table: t0 per link kind, for module side `l` and height `h`.
 fn expected_prestress(kind: LinkKind, l: f64, h: f64) -> f64 {
     let r = 4.0 * h * h / (l * l);
     match kind {
@@ -86,7 +86,7 @@ fn assert_prestress_table(s: &Structure, l: f64, h: f64) {
         let want = expected_prestress(link.kind, l, h);
         assert!(
             (link.prestress - want).abs() <= 1e-12 * P,
-            "link {i} ({:?}): t0 = {} N, SPEC §2 says {want} N",
+            "link {i} ({:?}): t0 = {} N, docs/method.md §2 says {want} N",
             link.kind,
             link.prestress
         );

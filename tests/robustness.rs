@@ -110,7 +110,7 @@ fn paper_case_far_beyond_its_load() {
     let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     for sol in [&newton, &pcg] {
         assert!(sol.info.status.converged() && all_finite(sol));
-        assert_eq!(sol.equilibrium.slack_count(), 846); // SPEC §2
+        assert_eq!(sol.equilibrium.slack_count(), 846); // docs/method.md §2
     }
     assert_eq!(newton.equilibrium.slack, pcg.equilibrium.slack);
     assert!(newton.info.residual <= 1e-10);
@@ -137,7 +137,7 @@ fn paper_case_far_beyond_its_load() {
 
 #[test]
 fn grid_32_with_x_edges_at_alpha_0_3() {
-    // A general truss code's one-step Newton fails here (SPEC §2); ours must not.
+    // A general truss code's one-step Newton fails here (docs/method.md §2); ours must not.
     let s = (grid_case([32, 32], "lower-x-edges", "")).structure();
     let taut = TautStiffness::new(&s).unwrap();
     let f = load(&s, 0.3);
@@ -254,7 +254,7 @@ fn degenerate_but_valid_cases_solve_and_agree() {
 
 #[test]
 fn smallest_tangent_eigenvalues_match_spec() {
-    // SPEC §2: K ≈ 463 N/m; with the 408 slack cables of α = 1 removed ≈ 164 N/m; α = 3
+    // docs/method.md §2: K ≈ 463 N/m; with the 408 slack cables of α = 1 removed ≈ 164 N/m; α = 3
     // (846 slack) ≈ 143 N/m.
     let s = (paper_with(&[])).structure();
     let taut = TautStiffness::new(&s).unwrap();

@@ -1,4 +1,4 @@
-//! The two reference solvers on the paper case (SPEC §2–3): slack counts, agreement, residuals,
+//! The two reference solvers on the paper case (docs/method.md §2–3): slack counts, agreement, residuals,
 //! the linear case and the refusal of mechanisms.
 
 mod common;
@@ -115,7 +115,7 @@ fn constitutive_residual_detects_a_wrong_tension() {
 fn linear_case_has_no_slack_cable() {
     let s = paper_structure(&[("cables", "unilateral", false.into())]);
     assert!(s.links.iter().all(|l| !l.unilateral));
-    // At α = 3 the unilateral model slackens 846 cables (SPEC §2): here they take compression.
+    // At α = 3 the unilateral model slackens 846 cables (docs/method.md §2): here they take compression.
     for alpha in [1.0, 3.0] {
         let (newton, pcg) = solve_both(&s, alpha);
         assert_eq!(newton.equilibrium.slack_count(), 0);
@@ -210,7 +210,7 @@ fn unsupported_grid_is_a_mechanism() {
 
 #[test]
 fn single_module_on_its_corners_has_one_mode() {
-    // 12 free dofs, 12 links acting on them, one self-stress: one mechanism (SPEC §2).
+    // 12 free dofs, 12 links acting on them, one self-stress: one mechanism (docs/method.md §2).
     assert_eq!(zero_modes([1, 1], "standard", "lower-corners"), 1);
 }
 

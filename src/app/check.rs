@@ -40,7 +40,7 @@ pub struct ModelReport {
     /// `max |Bᵀt0|` over the free dofs, N (zero up to round-off for an admissible prestress).
     pub free_prestress_imbalance: f64,
     /// The equilibrium matrix `A = Bᵀ` (free dofs × members): rank r, s = members − r
-    /// self-stress states, m = free dofs − r mechanisms (SPEC §7).
+    /// self-stress states, m = free dofs − r mechanisms (docs/method.md §7).
     pub counts: EquilibriumCounts,
     /// The lower cable prestress p, N.
     pub prestress: f64,
@@ -50,7 +50,7 @@ pub struct ModelReport {
     pub methods: Vec<Method>,
 }
 
-/// The Pellegrino–Calladine counts of the equilibrium matrix `A = Bᵀ` (SPEC §7).
+/// The Pellegrino–Calladine counts of the equilibrium matrix `A = Bᵀ` (docs/method.md §7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EquilibriumCounts {
     /// Members (columns of A).

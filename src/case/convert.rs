@@ -219,7 +219,7 @@ fn vector(key: &str, v: [f64; 3], max: f64, what: &str) -> Result<[f64; 3], Case
 /// against the `Σ|t0|` of the links meeting there.
 const IMBALANCE_RELATIVE: f64 = 1e-9;
 
-/// Refuse a prestress not in equilibrium at the free dofs (SPEC §7), naming the worst nodes.
+/// Refuse a prestress not in equilibrium at the free dofs (docs/method.md §7), naming the worst nodes.
 fn check_prestress(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(), CaseError> {
     let s = crate::structure::Structure::new(geometry, fixes, &Default::default());
     // Without settlements the effective prestress is t0 itself; with them, the imposed

@@ -1,7 +1,7 @@
 //! Smallest eigenvalues of a sparse symmetric positive semidefinite stiffness, by block inverse
 //! subspace iteration with a small shift and a Rayleigh–Ritz step (dense, nalgebra). Used to
 //! count the zero-stiffness modes of a mechanism and to report how far a tangent stiffness is
-//! from one (SPEC §2 "Existence", §3).
+//! from one (docs/method.md §2 "Existence", §3).
 
 use super::{dot, SparseCholesky, StiffnessPattern};
 use faer::Mat;

@@ -1,10 +1,10 @@
-//! The energy error e of an iterate against a reference solution (paper §5.3, SPEC §4):
+//! The energy error e of an iterate against a reference solution (paper §5.3, docs/method.md §4):
 //! `e² = Σ_links k (e_i − e_i^ref)² / Σ_links k (e_i^ref)²`, with `e = B U` the link
 //! elongations and k the link stiffness; absolute (no denominator) when the reference strains
 //! nothing. This is the one implementation of e: the driver measures it on every iterate of
 //! every solver when a solve is given a [`Reference`].
 //!
-//! SPEC weighs by the LATIN search direction l; with the default `l = k` the two agree, and the
+//! The paper weighs by the LATIN search direction l; with the default `l = k` the two agree, and the
 //! stiffness makes e a property of the iterate alone, comparable across solvers and settings.
 
 use crate::structure::Structure;

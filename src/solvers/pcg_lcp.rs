@@ -1,11 +1,11 @@
-//! The paper's reference solver (§2.3, SPEC §3): the LCP on the unilateral cables,
+//! The paper's reference solver (§2.3, docs/method.md §3): the LCP on the unilateral cables,
 //! `τ = Wλ + q ≥ 0, λ ≥ 0, λ ⊥ τ`, with `W = k_c − k_c B_c K⁻¹ B_cᵀ k_c` and
 //! `q = k_c B_c K⁻¹ F + t0_c`, solved as `min ½λᵀWλ + qᵀλ, λ ≥ 0` by a projected conjugate
 //! gradient (Dostál's MPRGP). W is never formed: `W v` is one solve with the factor of K.
 //! The variables are scaled, `x = k^{1/2} λ`, so that the scaled W has spectrum in [0, 1]
 //! (a Jacobi preconditioning that also fixes the step length of the expansion steps).
 //!
-//! Stopping measure: [`Measure::ComplementarityResidual`], `‖min(k λ, τ)‖ / ‖t0_c‖` — SPEC's
+//! Stopping measure: [`Measure::ComplementarityResidual`], `‖min(k λ, τ)‖ / ‖t0_c‖` — the method's
 //! complementarity residual with the slack gap λ expressed as the force k λ so that both
 //! arguments are in N.
 
@@ -174,7 +174,7 @@ impl<'s> PcgLcp<'s> {
         let s = self.structure;
         let m = self.cables.len();
         // The split τ = t0 + t assumes B_fᵀ t0 = 0; prescribed displacements break it by
-        // B_fᵀ (k e_p), which moves to the load: F ← F − B_fᵀ (k e_p) (SPEC §7).
+        // B_fᵀ (k e_p), which moves to the load: F ← F − B_fᵀ (k e_p) (docs/method.md §7).
         let load: Vec<f64> = load
             .iter()
             .zip(&s.settlement_force)

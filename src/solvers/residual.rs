@@ -1,4 +1,4 @@
-//! The relative equilibrium residual (SPEC §6): the unbalance of the nodal forces against the
+//! The relative equilibrium residual (docs/method.md §6): the unbalance of the nodal forces against the
 //! forces meeting at the nodes. [`displacement_residual`] is the one reference-free measure
 //! every solver shares: newton stops on it, the LATIN solvers may, and every summary row
 //! reports it.

@@ -1,4 +1,4 @@
-//! The stiffness with every cable taut, `K = Bᵀ k B` on the free dofs (SPEC §2–3), factorized
+//! The stiffness with every cable taut, `K = Bᵀ k B` on the free dofs (docs/method.md §2–3), factorized
 //! once per structure and shared by the solvers; building it is where a mechanism is refused.
 
 use super::SetupError;

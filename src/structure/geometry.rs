@@ -1,4 +1,4 @@
-//! A structure as an engineer describes it (SPEC §7): nodes with ids, members between them,
+//! A structure as an engineer describes it (docs/method.md §7): nodes with ids, members between them,
 //! supports per node and direction, and loads per node. The module grid is one generator of
 //! this description ([`super::grid`]); a case's `[structure]` tables are another.
 
@@ -40,7 +40,7 @@ pub struct Geometry {
     pub unilateral: bool,
 }
 
-/// Displacement components of one node held at prescribed values (`U|Γu = Ud`, SPEC §7).
+/// Displacement components of one node held at prescribed values (`U|Γu = Ud`, docs/method.md §7).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NodeFix {
     /// The node (index into [`Geometry::nodes`]).
@@ -59,7 +59,7 @@ pub struct Loading {
     /// Forces on given nodes, N (`load.point`), summed.
     pub points: Vec<(usize, [f64; 3])>,
     /// Gravity acceleration, m/s², for self-weight (`load.self_weight`): a member of mass
-    /// `ρ S ℓ` puts `ρ S ℓ g / 2` on each end (SPEC §7).
+    /// `ρ S ℓ` puts `ρ S ℓ g / 2` on each end (docs/method.md §7).
     pub gravity: Option<[f64; 3]>,
 }
 

@@ -1,4 +1,4 @@
-//! Module and grid generator (SPEC §2, paper §5.1). Nodes at the same position are one node;
+//! Module and grid generator (docs/method.md §2, paper §5.1). Nodes at the same position are one node;
 //! links are never merged (a lower edge shared by two modules carries two cables).
 
 use super::{length_and_direction, Geometry, GridSpec, LinkKind, Member, ModuleKind};
@@ -46,7 +46,7 @@ impl GridLayout {
 }
 
 /// The 8 nodes of module `(i, j)`: `[c0, c1, c2, c3, m0, m1, m2, m3]`, counter-clockwise
-/// (SPEC §2).
+/// (docs/method.md §2).
 pub fn module_nodes(layout: &GridLayout, i: usize, j: usize) -> [usize; 8] {
     [
         layout.corner(i, j),
@@ -118,7 +118,7 @@ pub(super) fn generate(
 }
 
 /// The grid of `spec` as a general description: its nodes (ids = indices), its members (ids =
-/// indices) with the prestress of SPEC §2, and its layout.
+/// indices) with the prestress of docs/method.md §2, and its layout.
 pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
     let layout = GridLayout::new(spec.modules[0], spec.modules[1]);
     let (nodes, raw_links) = generate(&layout, spec.length, spec.height, spec.module);
@@ -133,7 +133,7 @@ pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
             } else {
                 spec.bars
             };
-            // SPEC §2: force densities p/L (lower cables), 2p/L (the others), bars in
+            // docs/method.md §2: force densities p/L (lower cables), 2p/L (the others), bars in
             // compression; the diagonals of the braced module carry none.
             let l = spec.length;
             let density = match kind {

@@ -1,4 +1,4 @@
-//! The discrete structure (SPEC §1–2): nodes, links, supports, prestress and load, with the
+//! The discrete structure (docs/method.md §1–2): nodes, links, supports, prestress and load, with the
 //! free-dof numbering every solver works in.
 //!
 //! Invariants: `dof_of[3·node + c]` is the free-dof index of that displacement component or
@@ -15,7 +15,7 @@ pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 
 use crate::linalg::SparseRow;
 
-/// A row of the compatibility operator B (SPEC §1): `e_i = n·(U_b − U_a)` on the link's free
+/// A row of the compatibility operator B (docs/method.md §1): `e_i = n·(U_b − U_a)` on the link's free
 /// dofs. B is never formed as a matrix.
 pub type LinkDofs = SparseRow;
 
@@ -78,7 +78,7 @@ pub struct Link {
     /// Axial stiffness k = E·S/ℓ, N/m.
     pub stiffness: f64,
     /// Prestress t0, N (tension positive), plus `k e_p` where prescribed displacements
-    /// impose an elongation `e_p` (SPEC §7).
+    /// impose an elongation `e_p` (docs/method.md §7).
     pub prestress: f64,
     /// Tension-only: complementarity `0 ≤ τ ⊥ λ ≥ 0` instead of a linear law.
     pub unilateral: bool,
@@ -156,7 +156,7 @@ impl Structure {
     /// `loading` at α = 1.
     ///
     /// Prescribed displacements `Ud` enter as an imposed elongation `e_p = B_p Ud` of every
-    /// link (SPEC §7): the link's tension is `τ = t0 + k (B_f U_f + e_p)`, so its effective
+    /// link (docs/method.md §7): the link's tension is `τ = t0 + k (B_f U_f + e_p)`, so its effective
     /// prestress is `t0 + k e_p`, and [`Structure::settlement_force`] holds `B_fᵀ (k e_p)`.
     pub fn new(geometry: &Geometry, fixes: &[NodeFix], loading: &Loading) -> Structure {
         let n_nodes = geometry.nodes.len();
@@ -231,7 +231,7 @@ impl Structure {
         }
         if let Some(g) = loading.gravity {
             for (m, l) in geometry.members.iter().zip(&links) {
-                // ρ S ℓ g / 2 on each end (SPEC §7).
+                // ρ S ℓ g / 2 on each end (docs/method.md §7).
                 let half = m.density * m.section * l.length / 2.0;
                 let w = [half * g[0], half * g[1], half * g[2]];
                 add(m.a, w, &mut unit_load);
@@ -272,7 +272,7 @@ impl Structure {
 
     /// `Bᵀ t0` per node (free components only, prescribed ones zero), with each node's scale
     /// `Σ |t0|` of the links meeting there: the prestress is admissible where the first is
-    /// at round-off against the second (SPEC §7).
+    /// at round-off against the second (docs/method.md §7).
     pub fn free_prestress_imbalance(&self) -> Vec<([f64; 3], f64)> {
         let mut out = vec![([0.0; 3], 0.0); self.n_nodes()];
         for l in &self.links {
@@ -303,7 +303,7 @@ impl Structure {
         self.links.len() - self.n_cables()
     }
 
-    /// Length variations `e = B U` of every link, U on the free dofs (SPEC §1).
+    /// Length variations `e = B U` of every link, U on the free dofs (docs/method.md §1).
     pub fn elongations(&self, u: &[f64], e: &mut [f64]) {
         for (ei, ld) in e.iter_mut().zip(&self.link_dofs) {
             *ei = ld.elongation(u);

@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-/// The repeated module (SPEC §2).
+/// The repeated module (docs/method.md §2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ModuleKind {
@@ -65,7 +65,7 @@ pub struct GridSpec {
     pub cables: CableSpec,
     /// The bars.
     pub bars: Material,
-    /// Prestress p of the lower cables, N; the other members follow (SPEC §2).
+    /// Prestress p of the lower cables, N; the other members follow (docs/method.md §2).
     pub prestress: f64,
     /// Which lower nodes are clamped.
     pub clamp: Clamp,

@@ -72,7 +72,7 @@ pub fn solve_both(s: &Structure, alpha: f64) -> (Solution, Solution) {
     (newton, pcg)
 }
 
-/// Independent check of the cable law, written from SPEC §1 alone: the largest violation, in N
+/// Independent check of the cable law, written from docs/method.md §1 alone: the largest violation, in N
 /// relative to p, of `τ = t0 + k e` (bars, bilateral cables, taut cables) or of
 /// `0 ≤ τ ⊥ λ ≥ 0` with the slack gap `kλ = τ − t0 − k e` (unilateral cables).
 pub fn max_law_violation(s: &Structure, sol: &Solution) -> f64 {

@@ -1,4 +1,4 @@
-//! The LATIN indicator η (SPEC §4 "Indicator", paper §5.3) between s (a linear stage) and the
+//! The LATIN indicator η (docs/method.md §4 "Indicator", paper §5.3) between s (a linear stage) and the
 //! ŝ that fed it, and what the state reports after each linear stage.
 
 use super::{displacement_residual, Latin, LatinState, SubState};
@@ -8,7 +8,7 @@ use super::{displacement_residual, Latin, LatinState, SubState};
 const ROUNDOFF: f64 = 1e-12;
 
 impl Latin<'_> {
-    /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (SPEC §4 "Indicator", §5.3). The distance is
+    /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (docs/method.md §4 "Indicator", §5.3). The distance is
     /// measured along the search direction that does not relate them: E⁺ (`t − t̂ = −l(e − ê)`)
     /// when ŝ fed s (the relaxed iteration), E⁻ when ŝ = local(s) (the accelerated one).
     fn indicator(&self, state: &[SubState]) -> (f64, f64) {
@@ -46,7 +46,7 @@ impl Latin<'_> {
         // η is scale-free: when s and ŝ are both round-off (no load: the exact answer is
         // zero), it is a ratio of noise. Δη at round-off against the prestress is convergence.
         state.at_roundoff = distance <= ROUNDOFF * self.prestress_scale;
-        // r(U) of the linear stage's U under the exact law (SPEC §6).
+        // r(U) of the linear stage's U under the exact law (docs/method.md §6).
         let u = self.displacements(&state.subs);
         state.residual = displacement_residual(self.structure, &u, &state.load);
 

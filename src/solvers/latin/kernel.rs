@@ -1,4 +1,4 @@
-//! Kernel of a substructure's condensed operator K*_E (SPEC §4): the rigid motions ρ of E that
+//! Kernel of a substructure's condensed operator K*_E (docs/method.md §4): the rigid motions ρ of E that
 //! vanish on its clamped nodes and have no micro trace on any of its interfaces; then
 //! `Q_E = orth(R_Eᵀ C_E ρ)`.
 

@@ -1,4 +1,4 @@
-//! Linear stage (SPEC §4): given ŝ, find s: per substructure a solve with K_E, one macro
+//! Linear stage (docs/method.md §4): given ŝ, find s: per substructure a solve with K_E, one macro
 //! solve gluing the substructures by exact macro continuity, then per substructure its
 //! displacements, its links' (e, t) and its interface sides' (U, F).
 
@@ -7,7 +7,7 @@ use crate::linalg::gemv;
 use rayon::prelude::*;
 
 impl Latin<'_> {
-    /// Linear stage (SPEC §4): given ŝ in `state`, find s.
+    /// Linear stage (docs/method.md §4): given ŝ in `state`, find s.
     /// With `relaxation = Some(μ)`, s is then relaxed against the previous one on every field
     /// (e, t, U, interface U and F): `s ← μ s_new + (1 − μ) s_old`.
     pub(super) fn linear_stage(

@@ -1,4 +1,4 @@
-//! Local stage (SPEC §4): given s, find ŝ on the constitutive set Γ along the search
+//! Local stage (docs/method.md §4): given s, find ŝ on the constitutive set Γ along the search
 //! direction, independently per link and per interface.
 
 use super::{Latin, SideState, SubState};
@@ -8,7 +8,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 impl Latin<'_> {
-    /// Local stage (SPEC §4): given s in `state`, find ŝ.
+    /// Local stage (docs/method.md §4): given s in `state`, find ŝ.
     pub(super) fn local_stage(&self, state: &mut [SubState]) {
         let s = self.structure;
         let search = &self.search;
@@ -181,7 +181,7 @@ mod tests {
         // Search direction: (t̂ − t) + l (ê − e) = 0.
         let d = (t_hat - t) + l * (e_hat - e);
         assert!(d.abs() <= 1e-12 * scale, "off the search direction: {d}");
-        // Total tension τ̂ = t0 + t̂ and gap λ̂ = −ê + t̂/k (SPEC §1): 0 ≤ τ̂ ⊥ λ̂ ≥ 0.
+        // Total tension τ̂ = t0 + t̂ and gap λ̂ = −ê + t̂/k (docs/method.md §1): 0 ≤ τ̂ ⊥ λ̂ ≥ 0.
         let tau_hat = t0 + t_hat;
         let gap = -e_hat + t_hat / k;
         if slack {

@@ -1,4 +1,4 @@
-//! Macro basis R of an interface (SPEC §4, paper §4.1.2): nine first-order nodal fields about
+//! Macro basis R of an interface (docs/method.md §4, paper §4.1.2): nine first-order nodal fields about
 //! the centroid G in the interface's principal frame (n3 the normal, least spread), made
 //! orthonormal by modified Gram–Schmidt (twice), dependent fields dropped. Weak interfaces get
 //! the identity (all-macro) or nothing (all-micro).

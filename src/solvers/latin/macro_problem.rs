@@ -1,4 +1,4 @@
-//! The macro problem (SPEC §4), assembled and factorised once per set of substructure
+//! The macro problem (docs/method.md §4), assembled and factorised once per set of substructure
 //! operators: `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
 //! `N = [c_Eᵀ Q_E]_E`. Unknowns: the macro forces of every interface, then the kernel amplitudes
 //! of every substructure.

@@ -1,4 +1,4 @@
-//! The LATIN solver (SPEC §4, paper §3–4): one implementation for `micro-macro` (an `sx × sy`
+//! The LATIN solver (docs/method.md §4, paper §3–4): one implementation for `micro-macro` (an `sx × sy`
 //! partition with a homogenised macro problem) and `mono-latin` (a 1 × 1 partition: no
 //! interfaces, `K = Bᵀ l B`, the augmented Lagrangian method of the paper's §5.4).
 //!
@@ -138,7 +138,7 @@ pub struct Latin<'s> {
 const PARALLEL_MIN_DOFS: usize = 20_000;
 
 /// ε of status-following l: a slack cable's search direction is ε·l. It must stay > 0 (a link
-/// with l = 0 has no local stage). SPEC §6's prototype used 1e-6; here that left r(U) on a
+/// with l = 0 has no local stage). docs/method.md §6's prototype used 1e-6; here that left r(U) on a
 /// floor of 3e-6 on 32 × 32 and 64 × 64 grids (substructure operators nearly singular where
 /// only slack cables hold a node), while 1e-3 and 1e-2 converged alike without floor
 /// (iterations to e < 1e-3 on 16 / 64 / 256 substructures: 29 / 49 / 116 and 30 / 48 / 120) and
@@ -277,7 +277,7 @@ impl<'s> Latin<'s> {
         Ok(latin)
     }
 
-    /// Status-following l (SPEC §6): l for bars and taut cables, ε·l for slack ones, when at
+    /// Status-following l (docs/method.md §6): l for bars and taut cables, ε·l for slack ones, when at
     /// least `update_threshold` cables changed status since the operators were built; then
     /// the operators are rebuilt for it. A cable's status is read from the linear stage's
     /// trial tension `τ = t0 + k e` (newton's active set; the slack set of ŝ would keep a
@@ -644,7 +644,7 @@ impl Solver for Latin<'_> {
         state
     }
 
-    /// One iteration (SPEC §6): with status-following l, new operators when the cables'
+    /// One iteration (docs/method.md §6): with status-following l, new operators when the cables'
     /// status changed (relaxation and acceleration then restart: the old s was computed with
     /// another l); then the linear stage, relaxed `s ← μ s_new + (1 − μ) s_old`, or with
     /// Anderson acceleration on its input.

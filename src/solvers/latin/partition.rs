@@ -1,6 +1,6 @@
-//! Substructuring (SPEC §4): a partition `sx × sy` assigns each module, with all its links, to
+//! Substructuring (docs/method.md §4): a partition `sx × sy` assigns each module, with all its links, to
 //! one substructure (modules split as evenly as possible, so splits may be uneven); on a
-//! general structure (SPEC §7) each link goes to the box of its midpoint among `sx × sy` equal
+//! general structure (docs/method.md §7) each link goes to the box of its midpoint among `sx × sy` equal
 //! boxes of the plan (x, y) bounding box of the nodes. Each pair of
 //! substructures sharing non-clamped nodes has one interface, its nodes in increasing global
 //! order (the order both sides use).

@@ -2,7 +2,7 @@
 
 use serde::Deserialize;
 
-/// The search direction `l` on the links (SPEC §4 "Search directions").
+/// The search direction `l` on the links (docs/method.md §4 "Search directions").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SearchDirection {
     /// `l = k` on every link (the paper's choice). The default.
@@ -11,7 +11,7 @@ pub enum SearchDirection {
     Uniform(f64),
 }
 
-/// What to do with interfaces of three nodes or fewer (SPEC §4 "Weak interfaces").
+/// What to do with interfaces of three nodes or fewer (docs/method.md §4 "Weak interfaces").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum WeakInterfaces {
@@ -25,7 +25,7 @@ pub enum WeakInterfaces {
     Drop,
 }
 
-/// How the link search direction l evolves along the iterations (docs: SPEC §6).
+/// How the link search direction l evolves along the iterations (docs: docs/method.md §6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SearchPolicy {

@@ -1,4 +1,4 @@
-//! One substructure E and its linear-stage operators (SPEC §4 "Linear stage"):
+//! One substructure E and its linear-stage operators (docs/method.md §4 "Linear stage"):
 //! `K_E = B_Eᵀ l B_E + d_m C_Eᵀ C_E` (sparse, factorized once), `Z_E = K_E⁻¹ C_Eᵀ R_E`,
 //! `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, its kernel Q_E, `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and the
 //! homogenised flexibility `L_E = K⁺_E − I/d_m`.
@@ -45,7 +45,7 @@ impl Side {
 #[derive(Debug, Clone, Copy)]
 pub struct SingularSubstructure;
 
-/// One substructure E and its linear-stage operators, built once (SPEC §4 "Linear stage").
+/// One substructure E and its linear-stage operators, built once (docs/method.md §4 "Linear stage").
 pub struct Substructure {
     /// Global link indices, in the order of every per-link array of E.
     pub links: Vec<usize>,
@@ -165,7 +165,7 @@ impl Substructure {
             kernel: DMatrix::zeros(0, 0),
         };
         sub.condense(dm);
-        // Kernel from the rigid motions (SPEC §4), completed by the null space of K*_E.
+        // Kernel from the rigid motions (docs/method.md §4), completed by the null space of K*_E.
         let traces: Vec<InterfaceTrace<'_>> = sub
             .sides
             .iter()
@@ -340,7 +340,7 @@ fn stiffness(
 const NULL_RELATIVE: f64 = 1e-8;
 const GAP_RELATIVE: f64 = 1e-6;
 
-/// The kernel Q_E of K*_E: the rigid motions with no micro trace (SPEC §4, exact) completed by
+/// The kernel Q_E of K*_E: the rigid motions with no micro trace (docs/method.md §4, exact) completed by
 /// the numerical null space of K*_E, which also holds the internal mechanisms of small
 /// substructures (a one-module substructure has three) that rigid motions miss. `None` when
 /// an eigenvalue falls between the null and regular bounds.

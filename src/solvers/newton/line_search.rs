@@ -1,4 +1,4 @@
-//! Exact line search on the energy (SPEC §3): `φ(s) = Π(U + sΔU)` is a piecewise quadratic in
+//! Exact line search on the energy (docs/method.md §3): `φ(s) = Π(U + sΔU)` is a piecewise quadratic in
 //! s, its derivative piecewise linear and non-decreasing, with a breakpoint wherever a
 //! unilateral cable changes state; the minimiser is found by walking the breakpoints in order.
 

@@ -1,4 +1,4 @@
-//! Exact active-set (semismooth Newton) solver on the energy (SPEC §1, §3), beyond the paper.
+//! Exact active-set (semismooth Newton) solver on the energy (docs/method.md §1, §3), beyond the paper.
 //!
 //! Minimises `Π(U) = Σ_bars (½ k e² + t0 e) + Σ_cables ½ k ⟨e + t0/k⟩₊² − Fᵀ U`. Each iteration
 //! solves `(K_bars + B_Aᵀ k_A B_A + μ I) ΔU = −∇Π` on the taut set A, then takes the exact
@@ -118,7 +118,7 @@ pub struct NewtonState {
     u: Vec<f64>,
     /// `t0 + k e` of every link, before a unilateral cable's clipping at 0.
     trial: Vec<f64>,
-    /// Total tensions τ (SPEC §1): the trial tension, clipped at 0 for unilateral cables.
+    /// Total tensions τ (docs/method.md §1): the trial tension, clipped at 0 for unilateral cables.
     tensions: Vec<f64>,
     /// `Bᵀτ − F`, the energy's gradient.
     gradient: Vec<f64>,
@@ -172,7 +172,7 @@ impl<'s> Newton<'s> {
             load_relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
     }
 
-    /// `step ← H⁻¹ step` with H the Hessian on the taut set of `state` (SPEC §3) plus the
+    /// `step ← H⁻¹ step` with H the Hessian on the taut set of `state` (docs/method.md §3) plus the
     /// vanishing regularisation. With every link taut H is K, whose factor is reused; with a
     /// taut set close to a factored one, by CG preconditioned with that factor; otherwise H is
     /// factorized.
