@@ -236,7 +236,7 @@ impl Reporter {
 }
 
 fn format_row(r: &SummaryRow) -> String {
-    format!(
+    let mut line = format!(
         "{:>11} alpha = {:<6} {} in {} it, {} / {} slack, residual {:.1e}, {:.1} ms",
         r.solver,
         alpha_label(r.alpha),
@@ -250,7 +250,21 @@ fn format_row(r: &SummaryRow) -> String {
         r.cables,
         r.residual,
         1e3 * r.solve_seconds
-    )
+    );
+    if !r.small_displacement_ok() {
+        line.push_str(&format!(
+            "\n  warning: {} at alpha = {}: a member's ends moved apart by {:.0} % of its length \
+             (max deflection {:.3} m); the small-perturbation model (geometry not updated) is \
+             not valid beyond {:.0} %: read this row with care (summary.csv: \
+             small_displacement_ok = false)",
+            r.solver,
+            alpha_label(r.alpha),
+            100.0 * r.max_member_rotation,
+            r.max_deflection,
+            100.0 * tensolve::results::SMALL_DISPLACEMENT_LIMIT
+        ));
+    }
+    line
 }
 
 fn run_command(

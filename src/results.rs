@@ -3,7 +3,7 @@
 
 use crate::linalg::{norm, smallest_eigenvalues, ZERO_MODE_RELATIVE};
 use crate::solvers::{relative_unbalance, Equilibrium, Solution, TautStiffness};
-use crate::structure::Structure;
+use crate::structure::{LinkKind, Structure};
 
 /// Every number of a solution is finite (displacements, tensions, stopping measure).
 pub fn is_finite(solution: &Solution) -> bool {
@@ -59,6 +59,47 @@ pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
         .map(|u| u[0].hypot(u[1]).hypot(u[2]))
         .fold(0.0, f64::max)
 }
+
+/// The small-perturbation model (docs/method.md §1: geometry not updated) is trusted while no
+/// member's ends move apart, relative to each other, by more than this fraction of its length
+/// (about its rotation, in radians).
+pub const SMALL_DISPLACEMENT_LIMIT: f64 = 0.1;
+
+/// The largest relative displacement of a member's ends over its length, `max |U_b − U_a| / ℓ`
+/// (about the largest member rotation). A whole grid may sag by more than a module height while
+/// every member turns by little; this measures what the linearised geometry neglects.
+pub fn max_member_rotation(s: &Structure, eq: &Equilibrium) -> f64 {
+    let full = s.full_displacements(&eq.displacements);
+    s.links
+        .iter()
+        .map(|l| {
+            let (a, b) = (&full[3 * l.a..3 * l.a + 3], &full[3 * l.b..3 * l.b + 3]);
+            (b[0] - a[0]).hypot(b[1] - a[1]).hypot(b[2] - a[2]) / l.length
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Slack cables per kind, in the order of [`SLACK_KINDS`].
+pub fn slack_by_kind(s: &Structure, eq: &Equilibrium) -> [usize; SLACK_KINDS.len()] {
+    let mut counts = [0; SLACK_KINDS.len()];
+    for (l, &slack) in s.links.iter().zip(&eq.slack) {
+        if slack {
+            if let Some(k) = SLACK_KINDS.iter().position(|&k| k == l.kind) {
+                counts[k] += 1;
+            }
+        }
+    }
+    counts
+}
+
+/// The cable kinds `summary.csv` breaks the slack count down by (`slack_{name}` columns).
+pub const SLACK_KINDS: [LinkKind; 5] = [
+    LinkKind::LowerCable,
+    LinkKind::UpperCable,
+    LinkKind::BracingCable,
+    LinkKind::DiagonalCable,
+    LinkKind::Cable,
+];
 
 /// Largest cable tension, N (0 without cables).
 pub fn max_cable_tension(s: &Structure, eq: &Equilibrium) -> f64 {

@@ -133,6 +133,25 @@ fn one_slack_classification_for_every_solver() {
             .filter(|r| r[col("alpha")] == alpha)
             .map(|r| r[col("slack_cables")])
             .collect();
+        // Broken down by kind, the four solvers agree too, and the kinds add up.
+        for kind in ["lower", "upper", "bracing", "diagonal", "cable"] {
+            let by_kind: Vec<&str> = rows
+                .iter()
+                .filter(|r| r[col("alpha")] == alpha)
+                .map(|r| r[col(&format!("slack_{kind}"))])
+                .collect();
+            assert!(
+                by_kind.iter().all(|c| *c == by_kind[0]),
+                "alpha {alpha} {kind}: {by_kind:?}"
+            );
+        }
+        for r in rows.iter().filter(|r| r[col("alpha")] == alpha) {
+            let sum: usize = ["lower", "upper", "bracing", "diagonal", "cable"]
+                .iter()
+                .map(|k| r[col(&format!("slack_{k}"))].parse::<usize>().unwrap())
+                .sum();
+            assert_eq!(sum.to_string(), r[col("slack_cables")], "{summary}");
+        }
         assert_eq!(counts.len(), 4, "{summary}");
         assert!(
             counts.iter().all(|c| *c == counts[0]),
@@ -144,4 +163,46 @@ fn one_slack_classification_for_every_solver() {
             assert_ne!(counts[0], "0", "{summary}");
         }
     }
+}
+
+#[test]
+fn large_displacements_are_flagged() {
+    // A 24 x 10 grid clamped on its short edges sags 3.47 m at α = 1: members turn by about
+    // 49 % of their length, beyond the small-perturbation model. The paper's case at α = 1
+    // (0.24 m, 6 %) is within it.
+    let flagged = Temp::file(
+        "large-displacement",
+        "[grid]\nmodules = [24, 10]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\n\
+         alpha = [0.05, 1.0]\n[solver]\nmethods = [\"newton\"]\n",
+    );
+    let out = Temp::dir("large-displacement-out");
+    let o = tensolve(&["run", flagged.arg(), "--out", out.arg()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let warning = stderr(&o);
+    assert!(
+        warning.contains("warning: newton at alpha = 1") && !warning.contains("alpha = 0.05:"),
+        "{warning}"
+    );
+    let summary = std::fs::read_to_string(out.0.join("summary.csv")).unwrap();
+    let header: Vec<&str> = summary.lines().next().unwrap().split(',').collect();
+    let ok = header
+        .iter()
+        .position(|h| *h == "small_displacement_ok")
+        .unwrap();
+    let flags: Vec<&str> = summary
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(ok).unwrap())
+        .collect();
+    assert_eq!(flags, ["true", "false"], "{summary}");
+    let golden = std::fs::read_to_string(manifest_path("tests/golden/paper_summary.csv")).unwrap();
+    let header: Vec<&str> = golden.lines().next().unwrap().split(',').collect();
+    let ok = header
+        .iter()
+        .position(|h| *h == "small_displacement_ok")
+        .unwrap();
+    assert!(golden
+        .lines()
+        .skip(1)
+        .all(|l| l.split(',').nth(ok) == Some("true")));
 }

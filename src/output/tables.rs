@@ -47,6 +47,10 @@ pub struct SummaryRow {
     pub equilibrium_residual: f64,
     /// Re-set-ups of the solver's operators during the solve.
     pub search_updates: usize,
+    /// Slack cables per kind ([`results::SLACK_KINDS`]).
+    pub slack_by_kind: [usize; results::SLACK_KINDS.len()],
+    /// The largest relative displacement of a member's ends over its length.
+    pub max_member_rotation: f64,
     /// Set-up of the solver for this structure, s.
     pub setup_seconds: f64,
     /// This solve, s.
@@ -77,6 +81,8 @@ impl SummaryRow {
             residual: solution.info.residual,
             equilibrium_residual: displacement_residual(s, &eq.displacements, load),
             search_updates: solution.info.setups,
+            slack_by_kind: results::slack_by_kind(s, eq),
+            max_member_rotation: results::max_member_rotation(s, eq),
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
         }
@@ -84,6 +90,12 @@ impl SummaryRow {
 }
 
 impl SummaryRow {
+    /// Whether the small-perturbation model holds for this answer: no member's ends moved
+    /// apart by more than [`results::SMALL_DISPLACEMENT_LIMIT`] of its length.
+    pub fn small_displacement_ok(&self) -> bool {
+        self.max_member_rotation <= results::SMALL_DISPLACEMENT_LIMIT
+    }
+
     /// Whether every number of the row is finite (a row with inf or NaN is never written).
     pub fn is_finite(&self) -> bool {
         [
@@ -91,6 +103,7 @@ impl SummaryRow {
             self.max_deflection,
             self.residual,
             self.equilibrium_residual,
+            self.max_member_rotation,
         ]
         .iter()
         .all(|x| x.is_finite())
@@ -98,7 +111,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,setup_seconds,solve_seconds";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
@@ -122,8 +135,9 @@ pub fn summary_line(r: &SummaryRow) -> String {
     } else {
         0.0
     };
+    let [lower, upper, bracing, diagonal, cable] = r.slack_by_kind;
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{:e},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -136,6 +150,13 @@ pub fn summary_line(r: &SummaryRow) -> String {
         r.residual,
         r.equilibrium_residual,
         r.search_updates,
+        lower,
+        upper,
+        bracing,
+        diagonal,
+        cable,
+        r.max_member_rotation,
+        r.small_displacement_ok(),
         r.setup_seconds,
         r.solve_seconds
     )
