@@ -7,10 +7,13 @@ use crate::case::{Case, CaseError};
 use crate::output::{
     self, alpha_label,
     sinks::{HistorySink, PerSolveSink, PlotsSink, StabilitySink, SummarySink},
-    Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
+    plots::{self, History},
+    FigureSettings, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
-use crate::solvers::{Measure, Method, Reference, SetupError, Silent, Solution};
+use crate::solvers::{
+    IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent, Solution,
+};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -184,6 +187,10 @@ pub fn run(
     }
     // 9. The files of the whole sweep.
     sinks.close()?;
+    // 10. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
+    if case.output.plots && !case.output.compare_modules.is_empty() {
+        write_module_comparison(case, &methods, &dir)?;
+    }
     if failures.is_empty() {
         Ok(rows)
     } else {
@@ -192,6 +199,66 @@ pub fn run(
             list: failures.join("; "),
         })
     }
+}
+
+/// Keeps every iteration record of a solve.
+#[derive(Default)]
+struct Recorder(Vec<IterationRecord>);
+
+impl Observer for Recorder {
+    fn iteration(&mut self, record: &IterationRecord) {
+        self.0.push(*record);
+    }
+}
+
+/// `plots/error_modules.svg`: every LATIN solver of `methods` at the case's largest α, on the
+/// case's grid made of each module kind of `output.compare_modules` (the paper's Figure 12).
+fn write_module_comparison(case: &Case, methods: &[Method], dir: &Path) -> Result<(), RunError> {
+    let alpha = case
+        .load
+        .alphas
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut histories = Vec::new();
+    for &module in &case.output.compare_modules {
+        let mut grid_case = case.clone();
+        grid_case.grid.module = module;
+        let prepared = prepare(&grid_case)?;
+        let mut solvers = Vec::new();
+        for &method in methods {
+            let set_up = set_up(method, &case.solver, &prepared)?;
+            if set_up.solver.stopping_measure() == Measure::Indicator {
+                solvers.push(set_up);
+            }
+        }
+        let structure = &prepared.structure;
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let mut reference = ReferenceSource::new(&grid_case, &solvers, &prepared)?;
+        let reference_solution = reference.solve(&load, &mut solvers);
+        let errors = reference_solution
+            .as_ref()
+            .map(|r| Reference::new(structure, &r.equilibrium.displacements));
+        for set_up in &mut solvers {
+            let mut recorder = Recorder::default();
+            set_up.solver.solve(&load, errors.as_ref(), &mut recorder);
+            histories.push((
+                module.name(),
+                History {
+                    solver: set_up.method.name().to_string(),
+                    alpha,
+                    records: recorder.0,
+                },
+            ));
+        }
+    }
+    let settings = FigureSettings {
+        amplification: case.output.amplification,
+        max_plot_iterations: case.output.max_plot_iterations,
+    };
+    let path = dir.join("plots").join("error_modules.svg");
+    let written = plots::write_module_comparison(&path, &histories, &settings);
+    written.map_err(|source| RunError::Write(WriteError { path, source }))
 }
 
 /// The sinks of the files `case` asks for, in the order they write.
@@ -218,7 +285,14 @@ fn sinks<'s>(
     );
     sinks.add(out.vtk, PerSolveSink::vtk(dir, structure));
     if let Some(first) = solvers.first().filter(|_| out.plots) {
-        sinks.add(true, PlotsSink::new(dir, structure, first.method.name()));
+        let settings = FigureSettings {
+            amplification: out.amplification,
+            max_plot_iterations: out.max_plot_iterations,
+        };
+        sinks.add(
+            true,
+            PlotsSink::new(dir, structure, first.method.name(), settings),
+        );
     }
     sinks.add(out.stability, StabilitySink::new(dir, structure, taut));
     sinks.add(out.summary, SummarySink::new(dir));

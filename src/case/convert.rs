@@ -147,7 +147,37 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
         vtk: o.vtk.unwrap_or(defaults.vtk),
         stability: o.stability.unwrap_or(defaults.stability),
         homogenised: o.homogenised.unwrap_or(defaults.homogenised),
+        amplification: o.amplification.unwrap_or(defaults.amplification),
+        max_plot_iterations: o.max_plot_iterations.unwrap_or(defaults.max_plot_iterations),
+        compare_modules: o.compare_modules.unwrap_or(defaults.compare_modules),
     };
+    positive(
+        "output.amplification",
+        output.amplification,
+        "the factor the displacements are drawn multiplied by (the paper's is 10)",
+    )?;
+    let kinds = &output.compare_modules;
+    if let Some(twice) = kinds
+        .iter()
+        .enumerate()
+        .find(|(i, k)| kinds[..*i].contains(k))
+    {
+        return Err(CaseError::invalid(
+            "output.compare_modules",
+            format!("{:?}", kinds.iter().map(|k| k.name()).collect::<Vec<_>>()),
+            format!(
+                "list each module kind once (`{}` is listed twice), e.g. [\"standard\", \"braced\"]",
+                twice.1.name()
+            ),
+        ));
+    }
+    if output.max_plot_iterations == 0 {
+        return Err(CaseError::invalid(
+            "output.max_plot_iterations",
+            "0",
+            "give the last iteration the convergence figures show as an integer ≥ 1 (the paper's is 100)",
+        ));
+    }
     Ok(Case {
         grid,
         load,

@@ -13,7 +13,7 @@ mod vtk;
 pub use atomic::{ensure_writable, write_atomic};
 pub use history::{HistoryWriter, HISTORY_HEADER};
 pub use homogenised::{homogenised_path, write_homogenised};
-pub use plots::FigureData;
+pub use plots::{FigureData, FigureSettings};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
     alpha_label, result_path, write_displacements, write_stability, write_summary, write_tensions,

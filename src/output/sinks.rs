@@ -12,7 +12,7 @@
 
 use super::{
     vtu_path, write_displacements, write_stability, write_summary, write_tensions, write_vtu,
-    FigureData, HistoryWriter, StabilityRow, SummaryRow,
+    FigureData, FigureSettings, HistoryWriter, StabilityRow, SummaryRow,
 };
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
@@ -206,11 +206,16 @@ pub struct PlotsSink<'s> {
 
 impl<'s> PlotsSink<'s> {
     /// Figures of `structure` under `dir/plots`; Figures 6 and 8 show `first_solver`.
-    pub fn new(dir: &Path, structure: &'s Structure, first_solver: &str) -> Self {
+    pub fn new(
+        dir: &Path,
+        structure: &'s Structure,
+        first_solver: &str,
+        settings: FigureSettings,
+    ) -> Self {
         PlotsSink {
             dir: dir.to_path_buf(),
             structure,
-            figures: FigureData::new(first_solver),
+            figures: FigureData::new(first_solver, settings),
             records: None,
         }
     }

@@ -86,11 +86,36 @@ pub struct LineChart {
     pub series: Vec<Series>,
 }
 
+/// Which part of the data a [`LineChart`] shows (by default, all of it).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Frame {
+    /// Points with a larger x are left out (the convergence figures stop at
+    /// `output.max_plot_iterations`).
+    pub x_max: Option<f64>,
+    /// The y axis spans only the points with at least this x (the convergence figures leave
+    /// iteration 0 out, whose start value may lie decades above the rest); a series starting
+    /// beyond that span is drawn from where its first segment crosses the axis' edge.
+    pub y_from_x: Option<f64>,
+}
+
 impl LineChart {
     /// The chart as an SVG document. Non-finite points, and points with a value ≤ 0 on a log
     /// axis, are left out.
     pub fn to_svg(&self) -> io::Result<String> {
-        let series: Vec<Series> = self.series.iter().map(|s| self.drawable(s)).collect();
+        self.to_svg_framed(&Frame::default())
+    }
+
+    /// The chart as an SVG document showing the part of the data `frame` says. Non-finite
+    /// points, and points with a value ≤ 0 on a log axis, are left out. A series of a single
+    /// point is drawn as a dot (markers or not), and its value does not set the y axis when
+    /// another series has two points or more: a solve that stopped at its first iteration
+    /// must not stretch the axis of the others.
+    pub fn to_svg_framed(&self, frame: &Frame) -> io::Result<String> {
+        let series: Vec<Series> = self
+            .series
+            .iter()
+            .map(|s| self.drawable(s, frame))
+            .collect();
         let legend_width = legend_width(&self.legend_title, &self.series);
         let mut svg = String::new();
         {
@@ -99,7 +124,8 @@ impl LineChart {
             root.fill(&WHITE).map_err(plot_error)?;
             let (plot, legend) = root.split_horizontally(PLOT_WIDTH);
             let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-            let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+            let ys = y_span_values(&series, frame);
+            let ys = ys.into_iter();
             let (x, x_factor) = match self.x_scale {
                 Scale::Linear => (x_range(&series, self.markers), 1.0),
                 Scale::Log => log_axis(log_x_range(xs, self.markers)),
@@ -108,6 +134,14 @@ impl LineChart {
                 Scale::Linear => (linear_range(ys), 1.0),
                 Scale::Log => log_axis(log_range(ys)),
             };
+            let y_edges = match self.y_scale {
+                Scale::Linear => y.clone(),
+                Scale::Log => y.start / y_factor..y.end / y_factor,
+            };
+            let series: Vec<Series> = series
+                .into_iter()
+                .map(|s| clip_start(s, &y_edges, self.y_scale))
+                .collect();
             let series = scaled(series, x_factor, y_factor);
             let tick = |scale: Scale, factor: f64| {
                 move |v: f64| match scale {
@@ -146,9 +180,12 @@ impl LineChart {
         Ok(svg)
     }
 
-    fn drawable(&self, s: &Series) -> Series {
+    fn drawable(&self, s: &Series, frame: &Frame) -> Series {
         let on_axis = |v: f64, scale: Scale| v.is_finite() && (scale == Scale::Linear || v > 0.0);
-        let keep = |&(x, y): &(f64, f64)| on_axis(x, self.x_scale) && on_axis(y, self.y_scale);
+        let in_frame = |x: f64| frame.x_max.map_or(true, |max| x <= max);
+        let keep = |&(x, y): &(f64, f64)| {
+            on_axis(x, self.x_scale) && on_axis(y, self.y_scale) && in_frame(x)
+        };
         let points: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
         Series {
             label: s.label.clone(),
@@ -195,6 +232,11 @@ impl LineChart {
         for (i, s) in series.iter().enumerate() {
             let style = s.colour.stroke_width(SERIES_STROKE_WIDTH);
             chart.draw_series(LineSeries::new(s.points.iter().copied(), style))?;
+            if let [only] = s.points.as_slice() {
+                if !self.markers {
+                    chart.draw_series([Circle::new(*only, 4, s.colour.filled())])?;
+                }
+            }
             if self.markers {
                 Marker::nth(i).draw_on_chart(&mut chart, &s.points, s.colour)?;
             }
@@ -277,6 +319,61 @@ fn log_axis(range: Range<f64>) -> (Range<f64>, f64) {
     }
     let factor = 10f64.powi(-(range.start.log10().floor() as i32));
     (range.start * factor..range.end * factor, factor)
+}
+
+/// The y values the y axis spans: those of the series of two points or more (of all series
+/// when none has two), at x ≥ `frame.y_from_x` when some are.
+fn y_span_values(series: &[Series], frame: &Frame) -> Vec<f64> {
+    let lines: Vec<&Series> = series.iter().filter(|s| s.points.len() >= 2).collect();
+    let lines = if lines.is_empty() {
+        series.iter().collect()
+    } else {
+        lines
+    };
+    let from = frame.y_from_x.unwrap_or(f64::NEG_INFINITY);
+    let after: Vec<f64> = lines
+        .iter()
+        .flat_map(|s| s.points.iter().filter(|p| p.0 >= from).map(|p| p.1))
+        .collect();
+    if after.is_empty() {
+        lines
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .collect()
+    } else {
+        after
+    }
+}
+
+/// `s` with its leading points beyond the y axis' `edges` replaced by the point where the
+/// line to the next point crosses the edge (interpolated in the axis' scale), so that a start
+/// above the axis is drawn from the edge. A one-point series beyond the edges is left out.
+fn clip_start(mut s: Series, edges: &Range<f64>, scale: Scale) -> Series {
+    let map = |y: f64| match scale {
+        Scale::Linear => y,
+        Scale::Log => y.log10(),
+    };
+    let unmap = |v: f64| match scale {
+        Scale::Linear => v,
+        Scale::Log => 10f64.powf(v),
+    };
+    let (lo, hi) = (map(edges.start), map(edges.end));
+    let inside = |y: f64| (lo..=hi).contains(&map(y));
+    let first_inside = s.points.iter().position(|p| inside(p.1));
+    match first_inside {
+        None => s.points.clear(),
+        Some(0) => {}
+        Some(k) => {
+            let (x0, y0) = s.points[k - 1];
+            let (x1, y1) = s.points[k];
+            let (v0, v1) = (map(y0), map(y1));
+            let edge = if v0 > hi { hi } else { lo };
+            let f = (edge - v0) / (v1 - v0);
+            let crossing = (x0 + f * (x1 - x0), unmap(edge));
+            s.points.splice(..k, [crossing]);
+        }
+    }
+    s
 }
 
 /// `series` with every x multiplied by `x_factor` and every y by `y_factor` (as is when both

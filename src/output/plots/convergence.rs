@@ -2,15 +2,21 @@
 //! and 10: e and η per iteration, one series per α) and `error_all.svg` (Figure 11: e of every
 //! LATIN solver at the largest α). A figure without any point (e with `reference = "none"`)
 //! is not drawn.
+//!
+//! The x axis stops at `output.max_plot_iterations` (100 by default, as the paper's), and the
+//! y axis spans the values from iteration 1 on: the start (iteration 0) of a solve may lie
+//! decades above the rest and is drawn from the axis' edge. A solve of a single iteration
+//! (the direct mono-latin of a linear case, α = 0) is a dot whose value the legend gives; it
+//! does not stretch the axis.
 
-use super::chart::{LineChart, Scale, Series};
+use super::chart::{Frame, LineChart, Scale, Series};
 use super::palette::{ordered_colour, solver_colour};
-use super::{alpha_text, History};
+use super::{alpha_text, FigureSettings, History};
 use crate::solvers::IterationRecord;
 use std::io;
 
 #[derive(Debug, Clone, Copy)]
-enum Measure {
+pub(super) enum Measure {
     /// Energy error e against the reference.
     Error,
     /// LATIN indicator η.
@@ -48,7 +54,14 @@ impl Measure {
 }
 
 /// (file name, SVG) of every convergence figure the histories give.
-pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
+pub fn figures(
+    histories: &[History],
+    settings: &FigureSettings,
+) -> io::Result<Vec<(String, String)>> {
+    let frame = Frame {
+        x_max: Some(settings.max_plot_iterations as f64),
+        y_from_x: Some(1.0),
+    };
     let mut solvers: Vec<&str> = Vec::new();
     for h in histories {
         if !solvers.contains(&h.solver.as_str()) {
@@ -62,7 +75,7 @@ pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
         for measure in [Measure::Error, Measure::Eta] {
             if let Some(chart) = per_alpha_chart(solver, measure, &own) {
                 let name = format!("{}_{solver}.svg", measure.file_stem());
-                figures.push((name, chart.to_svg()?));
+                figures.push((name, chart.to_svg_framed(&frame)?));
             }
         }
     }
@@ -76,7 +89,7 @@ pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
         })
         .collect();
     if let Some(chart) = solvers_chart(&at_largest) {
-        figures.push(("error_all.svg".into(), chart.to_svg()?));
+        figures.push(("error_all.svg".into(), chart.to_svg_framed(&frame)?));
     }
     Ok(figures)
 }
@@ -108,6 +121,51 @@ fn per_alpha_chart(solver: &str, measure: Measure, histories: &[&History]) -> Op
     )
 }
 
+/// Figure 12: e of every (module kind, solver) history on one chart, as an SVG; None when no
+/// record has e.
+pub fn modules_chart(
+    histories: &[(&str, History)],
+    settings: &FigureSettings,
+) -> io::Result<Option<String>> {
+    let frame = Frame {
+        x_max: Some(settings.max_plot_iterations as f64),
+        y_from_x: Some(1.0),
+    };
+    let n = histories.len();
+    let series: Vec<Series> = histories
+        .iter()
+        .enumerate()
+        .map(|(i, (module, h))| Series {
+            label: format!("{module}, {}", h.solver),
+            colour: module_colour(i, n),
+            points: points(h, Measure::Error),
+        })
+        .collect();
+    let alphas: Vec<String> = histories.iter().map(|(_, h)| alpha_text(h.alpha)).collect();
+    let title = match alphas.first() {
+        Some(alpha) => format!("Energy error e per iteration by module kind at α = {alpha}"),
+        None => "Energy error e per iteration by module kind".to_string(),
+    };
+    match convergence_chart(title, Measure::Error, "module, solver", series) {
+        Some(chart) => Ok(Some(chart.to_svg_framed(&frame)?)),
+        None => Ok(None),
+    }
+}
+
+/// Series `i` of `n` in Figure 12: well apart colours (tab10's blue, red, green, purple…).
+fn module_colour(i: usize, _n: usize) -> plotters::style::RGBColor {
+    use plotters::style::RGBColor;
+    const COLOURS: [RGBColor; 6] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+        RGBColor(255, 127, 14),
+        RGBColor(140, 86, 75),
+    ];
+    COLOURS[i % COLOURS.len()]
+}
+
 /// e of every solver's history; None when no record has e.
 fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
     let alphas: Vec<String> = histories.iter().map(|h| alpha_text(h.alpha)).collect();
@@ -132,7 +190,19 @@ fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
     convergence_chart(title, Measure::Error, "solver", series)
 }
 
-fn convergence_chart(
+/// The label of a series of a single point says its value (it is drawn as a dot).
+fn single_point_label(mut s: Series, measure: Measure) -> Series {
+    if let [(x, y)] = s.points.as_slice() {
+        let symbol = match measure {
+            Measure::Error => "e",
+            Measure::Eta => "η",
+        };
+        s.label = format!("{}: {symbol} = {y:.1e} at iteration {x}", s.label);
+    }
+    s
+}
+
+pub(super) fn convergence_chart(
     title: String,
     measure: Measure,
     legend_title: &str,
@@ -141,6 +211,10 @@ fn convergence_chart(
     if series.iter().all(|s| s.points.is_empty()) {
         return None;
     }
+    let series = series
+        .into_iter()
+        .map(|s| single_point_label(s, measure))
+        .collect();
     Some(LineChart {
         title,
         x_label: "iteration (–)".into(),
