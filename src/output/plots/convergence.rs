@@ -131,13 +131,30 @@ pub fn modules_chart(
         x_max: Some(settings.max_plot_iterations as f64),
         y_from_x: Some(1.0),
     };
-    let n = histories.len();
+    let mut modules: Vec<&str> = Vec::new();
+    let mut solvers: Vec<&str> = Vec::new();
+    for (module, h) in histories {
+        if !modules.contains(module) {
+            modules.push(module);
+        }
+        if !solvers.contains(&h.solver.as_str()) {
+            solvers.push(&h.solver);
+        }
+    }
+    // Solvers whose curves are lines take the full hues; one-point ones (a direct solve) the
+    // lighter shades.
+    let is_line = |solver: &str| {
+        histories
+            .iter()
+            .any(|(_, h)| h.solver == solver && h.records.len() > 1)
+    };
+    solvers.sort_by_key(|solver| !is_line(solver));
+    let index = |list: &[&str], name: &str| list.iter().position(|x| *x == name).unwrap_or(0);
     let series: Vec<Series> = histories
         .iter()
-        .enumerate()
-        .map(|(i, (module, h))| Series {
+        .map(|(module, h)| Series {
             label: format!("{module}, {}", h.solver),
-            colour: module_colour(i, n),
+            colour: module_colour(index(&modules, module), index(&solvers, &h.solver)),
             points: points(h, Measure::Error),
         })
         .collect();
@@ -152,18 +169,15 @@ pub fn modules_chart(
     }
 }
 
-/// Series `i` of `n` in Figure 12: well apart colours (tab10's blue, red, green, purple…).
-fn module_colour(i: usize, _n: usize) -> plotters::style::RGBColor {
+/// Figure 12's colour of module kind `module` and solver `solver` (indices in order of
+/// appearance): one hue per module kind (blue, red, green), lighter for each further solver.
+fn module_colour(module: usize, solver: usize) -> plotters::style::RGBColor {
     use plotters::style::RGBColor;
-    const COLOURS: [RGBColor; 6] = [
-        RGBColor(31, 119, 180),
-        RGBColor(214, 39, 40),
-        RGBColor(44, 160, 44),
-        RGBColor(148, 103, 189),
-        RGBColor(255, 127, 14),
-        RGBColor(140, 86, 75),
-    ];
-    COLOURS[i % COLOURS.len()]
+    const HUES: [(f64, f64, f64); 3] = [(31.0, 119.0, 180.0), (214.0, 39.0, 40.0), (44.0, 160.0, 44.0)];
+    let (r, g, b) = HUES[module % HUES.len()];
+    let light = 1.0 - 0.55f64.powi(solver as i32);
+    let mix = |c: f64| (c + light * (235.0 - c)).round() as u8;
+    RGBColor(mix(r), mix(g), mix(b))
 }
 
 /// e of every solver's history; None when no record has e.

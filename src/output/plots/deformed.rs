@@ -44,7 +44,7 @@ pub const BAR: RGBColor = RGBColor(25, 25, 25);
 const BAR_WIDTH: u32 = 1;
 const CABLE_WIDTH: u32 = 2;
 /// Slack cables: thin dashed grey.
-pub const SLACK: RGBColor = RGBColor(150, 150, 150);
+pub const SLACK: RGBColor = RGBColor(120, 120, 120);
 const OUTLINE: RGBColor = RGBColor(150, 150, 150);
 
 /// The drawn position of every node: its position plus the amplified displacement.
@@ -425,14 +425,14 @@ fn draw_panel<DB: DrawingBackend>(
     let mut y = 30 + draw_line_legend(area, 30, "links", &entries)?;
     let note = ("sans-serif", 13).into_font().color(&BLACK);
     area.draw_text("■ clamped node", &note, (8, y))?;
-    y += 24;
+    y += 18;
+    if scale.lo < 0.0 {
+        area.draw_text("blue: compressed cable", &note, (8, y))?;
+        y += 18;
+    }
+    y += 6;
     let (_, rest) = area.split_vertically(y);
     let (bar, _) = rest.split_vertically(380.min(rest.dim_in_pixel().1));
-    let caption = if scale.lo < 0.0 {
-        "cable τ (N), < 0: compressed"
-    } else {
-        "cable tension τ (N)"
-    };
-    draw_colour_bar(&bar, caption, (scale.lo, scale.hi), &|t| scale.at(t))?;
+    draw_colour_bar(&bar, "cable τ (N)", (scale.lo, scale.hi), &|t| scale.at(t))?;
     Ok(())
 }
