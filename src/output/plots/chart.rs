@@ -138,6 +138,7 @@ impl LineChart {
                 Scale::Linear => y.clone(),
                 Scale::Log => y.start / y_factor..y.end / y_factor,
             };
+            let notes = single_point_notes(&series, &y_edges);
             let series: Vec<Series> = series
                 .into_iter()
                 .map(|s| clip_start(s, &y_edges, self.y_scale))
@@ -174,7 +175,13 @@ impl LineChart {
                     marker: self.markers.then(|| Marker::nth(i)),
                 })
                 .collect();
-            draw_line_legend(&legend, 60, &self.legend_title, &entries).map_err(plot_error)?;
+            let used =
+                draw_line_legend(&legend, 60, &self.legend_title, &entries).map_err(plot_error)?;
+            let note_font = ("sans-serif", 13).into_font().color(&BLACK);
+            for (k, line) in notes.iter().enumerate() {
+                let at = (8, 60 + used + 6 + 17 * k as i32);
+                legend.draw_text(line, &note_font, at).map_err(plot_error)?;
+            }
             root.present().map_err(plot_error)?;
         }
         Ok(svg)
@@ -321,6 +328,26 @@ fn log_axis(range: Range<f64>) -> (Range<f64>, f64) {
     (range.start * factor..range.end * factor, factor)
 }
 
+/// Two lines under the legend for every series of a single point (drawn as a dot, on the
+/// axis' edge when its value is beyond it): what it is, and its value.
+fn single_point_notes(series: &[Series], edges: &Range<f64>) -> Vec<String> {
+    let mut notes = Vec::new();
+    for s in series {
+        if let [(x, y)] = s.points.as_slice() {
+            let side = if *y < edges.start {
+                ", below the axis"
+            } else if *y > edges.end {
+                ", above the axis"
+            } else {
+                ""
+            };
+            notes.push(format!("{}: a single point,", s.label));
+            notes.push(format!("({}, {y:.1e}){side}", tick_label(*x)));
+        }
+    }
+    notes
+}
+
 /// The y values the y axis spans: those of the series of two points or more (of all series
 /// when none has two), at x ≥ `frame.y_from_x` when some are.
 fn y_span_values(series: &[Series], frame: &Frame) -> Vec<f64> {
@@ -347,8 +374,18 @@ fn y_span_values(series: &[Series], frame: &Frame) -> Vec<f64> {
 
 /// `s` with its leading points beyond the y axis' `edges` replaced by the point where the
 /// line to the next point crosses the edge (interpolated in the axis' scale), so that a start
-/// above the axis is drawn from the edge. A one-point series beyond the edges is left out.
+/// above the axis is drawn from the edge. A one-point series beyond the edges is drawn on the
+/// nearer edge (the note under the legend gives its value).
 fn clip_start(mut s: Series, edges: &Range<f64>, scale: Scale) -> Series {
+    if let [(x, y)] = s.points.as_slice() {
+        let (x, y) = (*x, *y);
+        if y < edges.start {
+            s.points = vec![(x, edges.start)];
+        } else if y > edges.end {
+            s.points = vec![(x, edges.end)];
+        }
+        return s;
+    }
     let map = |y: f64| match scale {
         Scale::Linear => y,
         Scale::Log => y.log10(),

@@ -6,8 +6,8 @@
 //! The x axis stops at `output.max_plot_iterations` (100 by default, as the paper's), and the
 //! y axis spans the values from iteration 1 on: the start (iteration 0) of a solve may lie
 //! decades above the rest and is drawn from the axis' edge. A solve of a single iteration
-//! (the direct mono-latin of a linear case, α = 0) is a dot whose value the legend gives; it
-//! does not stretch the axis.
+//! (the direct mono-latin of a linear case, α = 0) is a dot, on the axis' edge when beyond it,
+//! whose value a note under the legend gives; it does not stretch the axis.
 
 use super::chart::{Frame, LineChart, Scale, Series};
 use super::palette::{ordered_colour, solver_colour};
@@ -204,18 +204,6 @@ fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
     convergence_chart(title, Measure::Error, "solver", series)
 }
 
-/// The label of a series of a single point says its value (it is drawn as a dot).
-fn single_point_label(mut s: Series, measure: Measure) -> Series {
-    if let [(x, y)] = s.points.as_slice() {
-        let symbol = match measure {
-            Measure::Error => "e",
-            Measure::Eta => "η",
-        };
-        s.label = format!("{}: {symbol} = {y:.1e} at iteration {x}", s.label);
-    }
-    s
-}
-
 pub(super) fn convergence_chart(
     title: String,
     measure: Measure,
@@ -225,10 +213,6 @@ pub(super) fn convergence_chart(
     if series.iter().all(|s| s.points.is_empty()) {
         return None;
     }
-    let series = series
-        .into_iter()
-        .map(|s| single_point_label(s, measure))
-        .collect();
     Some(LineChart {
         title,
         x_label: "iteration (–)".into(),
