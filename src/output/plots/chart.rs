@@ -629,6 +629,47 @@ mod tests {
     }
 
     #[test]
+    fn frame_cuts_x_and_keeps_iteration_0_and_single_points_off_the_y_range() {
+        let decay: Vec<(f64, f64)> = (0..200)
+            .map(|i| (i as f64, if i == 0 { 1e3 } else { 0.5f64.powi(i / 10) }))
+            .collect();
+        let chart = LineChart {
+            title: String::new(),
+            x_label: "iteration (–)".into(),
+            y_label: "error (–)".into(),
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+            legend_title: "load factor".into(),
+            markers: false,
+            series: vec![
+                Series::of_solver("micro-macro", Some(1.0), decay),
+                Series::of_solver("mono-latin", Some(1.0), vec![(0.0, 1e-14)]),
+            ],
+        };
+        let frame = Frame {
+            x_max: Some(100.0),
+            y_from_x: Some(1.0),
+        };
+        let svg = chart.to_svg_framed(&frame).expect("an SVG");
+        let texts = texts(&svg);
+        // y from the values after iteration 0 (1 down to 0.5⁹ ≈ 2e-3): 10⁻³ to 10⁰, neither
+        // the start (1e3) nor the single point (1e-14) stretching it.
+        for tick in ["10⁻³", "10⁰", "100"] {
+            assert!(texts.contains(&tick), "{tick}: {texts:?}");
+        }
+        for tick in ["10³", "10⁻¹⁴", "120"] {
+            assert!(!texts.contains(&tick), "{tick}: {texts:?}");
+        }
+        assert!(texts.contains(&"(0, 1.0e-14), below the axis"), "{texts:?}");
+        let lines = series_polylines(&svg);
+        // Iterations 0 to 100, the first drawn where its segment crosses the top edge.
+        assert_eq!(lines[0].len(), 101);
+        assert!(lines[0][0].1 <= lines[0][1].1 && lines[0][0].0 > 85);
+        // The single point, on the lower edge.
+        assert_eq!(lines[1].len(), 1);
+    }
+
+    #[test]
     fn legend_widens_for_long_labels_only() {
         let series = |label: &str| Series {
             label: label.into(),
