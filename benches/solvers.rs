@@ -1,6 +1,8 @@
 //! Solver timings on two cases: the paper's 16 x 16 grid at α = 1 and a 64 x 64 grid at
 //! α = 0.15. Per case: the shared set-up (structure + taut stiffness factor) alone, then for
-//! each solver its set-up + solve (the headline figure) and its solve alone.
+//! each solver its set-up + solve (the headline figure) and its solve alone. Then a 41-α
+//! sweep of the paper case, cold and warm-started (`paper_sweep41`). The larger grids are in
+//! `benches/scale.rs`.
 //!
 //! Run with `cargo bench --bench solvers`. Solver settings are the defaults, which is what
 //! `tensolve run` uses for these cases (neither sets `solver.tolerance` or `max_iterations`).
@@ -11,7 +13,7 @@ use std::path::Path;
 use std::time::Duration;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{AnySolver, Silent, TautStiffness};
+use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
 use tensolve::structure::Structure;
 
 /// Sets a solver up on a structure and its taut stiffness (both borrowed).
@@ -73,6 +75,20 @@ fn bench_case(
     bench_solver(&mut group, "newton", &structure, &load, |s, t| {
         Box::new(Newton::new(s, t, NewtonSettings::default()).expect("newton set-up"))
     });
+    // The method before factor reuse (a factorization at every step that is not all-taut).
+    bench_solver(
+        &mut group,
+        "newton-refactorise",
+        &structure,
+        &load,
+        |s, t| {
+            let settings = NewtonSettings {
+                reuse_factor: false,
+                ..NewtonSettings::default()
+            };
+            Box::new(Newton::new(s, t, settings).expect("newton set-up"))
+        },
+    );
     bench_solver(&mut group, "pcg-lcp", &structure, &load, |s, t| {
         Box::new(PcgLcp::new(s, t, PcgLcpSettings::default()))
     });
@@ -107,5 +123,101 @@ fn solvers(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, solvers);
+/// α = 0, 0.03, …, 1.2: the 41-α sweep of the paper case.
+fn sweep_alphas() -> Vec<f64> {
+    (0..41).map(|i| 1.2 * i as f64 / 40.0).collect()
+}
+
+/// One sweep of `solver` over `alphas`, each α warm-started from the previous answer when
+/// `warm`; returns the summed iterations.
+fn run_sweep(
+    solver: &mut dyn AnySolver,
+    structure: &Structure,
+    alphas: &[f64],
+    warm: bool,
+) -> usize {
+    let mut previous: Option<Equilibrium> = None;
+    let mut iterations = 0;
+    for &alpha in alphas {
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let start = if warm { previous.as_ref() } else { None };
+        let solution = solver.solve_from(&load, start, None, &mut Silent);
+        assert!(
+            solution.info.status.converged(),
+            "alpha {alpha}: {:?}",
+            solution.info
+        );
+        iterations += solution.info.iterations;
+        previous = Some(solution.equilibrium);
+    }
+    iterations
+}
+
+/// The 41-α sweep of the paper case, solvers set up once (outside the timing): `cold` starts
+/// every α from scratch, `warm` from the previous α's answer (what `tensolve run` does);
+/// newton `cold-refactorise` also refactorises at every step (no factor reuse: the method
+/// before warm starts). Prints the iterations and factorizations per α of each variant once.
+fn sweep(c: &mut Criterion) {
+    let case = tensolve::case::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/paper.toml"
+    )))
+    .expect("case loads");
+    let structure = case.structure();
+    let taut = taut_stiffness(&structure);
+    let alphas = sweep_alphas();
+    let refactorise = NewtonSettings {
+        reuse_factor: false,
+        ..NewtonSettings::default()
+    };
+    let newton_variants = [
+        ("newton/cold-refactorise", refactorise, false),
+        ("newton/cold", NewtonSettings::default(), false),
+        ("newton/warm", NewtonSettings::default(), true),
+    ];
+    for (name, settings, warm) in newton_variants {
+        let mut newton = Newton::new(&structure, &taut, settings).expect("newton set-up");
+        let iterations = run_sweep(&mut newton, &structure, &alphas, warm);
+        let work = newton.work();
+        println!(
+            "paper_sweep41/{name}: {:.2} iterations, {:.2} factorizations, {:.2} CG-reused steps per alpha ({work:?})",
+            iterations as f64 / alphas.len() as f64,
+            work.factorizations as f64 / alphas.len() as f64,
+            work.reused_steps as f64 / alphas.len() as f64,
+        );
+    }
+    for warm in [false, true] {
+        let mut pcg = PcgLcp::new(&structure, &taut, PcgLcpSettings::default());
+        let iterations = run_sweep(&mut pcg, &structure, &alphas, warm);
+        println!(
+            "paper_sweep41/pcg-lcp/{}: {:.2} iterations per alpha",
+            if warm { "warm" } else { "cold" },
+            iterations as f64 / alphas.len() as f64
+        );
+    }
+    let mut group = c.benchmark_group("paper_sweep41");
+    group.warm_up_time(Duration::from_secs(1));
+    group.measurement_time(Duration::from_secs(5));
+    group.sample_size(20);
+    for (name, settings, warm) in newton_variants {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                // A fresh solver per sweep: no factor carried over from the previous sample.
+                let mut newton = Newton::new(&structure, &taut, settings).expect("set-up");
+                run_sweep(&mut newton, &structure, &alphas, warm)
+            })
+        });
+    }
+    for (name, warm) in [("pcg-lcp/cold", false), ("pcg-lcp/warm", true)] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let mut pcg = PcgLcp::new(&structure, &taut, PcgLcpSettings::default());
+                run_sweep(&mut pcg, &structure, &alphas, warm)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, solvers, sweep);
 criterion_main!(benches);

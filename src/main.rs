@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tensolve::app::bench::{self, BenchError, Progress};
 use tensolve::app::check::check;
+use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
 use tensolve::case;
 use tensolve::output::{alpha_label, SummaryRow};
@@ -45,19 +46,27 @@ enum Command {
         /// Print nothing but errors.
         #[arg(long)]
         quiet: bool,
+        /// Override a case key, in TOML syntax: `--set solver.dm=2e6`, `--set
+        /// 'load.alpha=[0.5, 1.0]'`. Repeatable; validated like the file.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Validate a case and print the model it describes: nodes, dofs, links, self-stress
     /// balance and whether the stiffness with every cable taut is regular.
     Check {
         /// The case file (TOML).
         case: PathBuf,
+        /// Override a case key, in TOML syntax: `--set solver.dm=2e6`, `--set
+        /// 'load.alpha=[0.5, 1.0]'`. Repeatable; validated like the file.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Time every solver of a case at every α against a newton reference: the energy error e
     /// of every iterate against wall time (set-up included).
     ///
     /// Writes `bench.csv` (solver, alpha, iteration, seconds, error_e) and `bench.svg` (e
     /// against wall time, log-log) and prints, per solver and α, the wall time to reach
-    /// e <= 1e-2, 1e-4, 1e-6 and 1e-8. Exit status as for `run`: 2 on bad input, 1 when a
+    /// e <= 1e-2, 1e-3, 1e-4, 1e-6 and 1e-8. Exit status as for `run`: 2 on bad input, 1 when a
     /// solver or the reference did not converge or a file could not be written.
     Bench {
         /// The case file (TOML).
@@ -68,6 +77,33 @@ enum Command {
         /// No progress on stderr (the table still goes to stdout).
         #[arg(long)]
         quiet: bool,
+        /// Override a case key, in TOML syntax: `--set solver.dm=2e6`, `--set
+        /// 'load.alpha=[0.5, 1.0]'`. Repeatable; validated like the file.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Compare a run's output directory with a stored (golden) one, for CI regression.
+    ///
+    /// Every CSV of GOLDEN (summary, tensions, displacements, histories) must be in RUN with
+    /// the same columns; numbers must agree within `atol + rtol · max(|a|, |b|)`, other values
+    /// exactly; timing columns (`*seconds`) are left out; slack counts and slack sets must
+    /// match exactly unless `--slack-tolerance` says otherwise. Prints what differs and by how
+    /// much. Exit status: 0 when the runs agree, 1 when they differ, 2 on bad input (a
+    /// directory or a golden file missing, different columns).
+    Compare {
+        /// The run's output directory.
+        run: PathBuf,
+        /// The stored run to compare against.
+        golden: PathBuf,
+        /// Relative tolerance on numbers.
+        #[arg(long, default_value_t = CompareSettings::default().rtol)]
+        rtol: f64,
+        /// Absolute tolerance on numbers.
+        #[arg(long, default_value_t = CompareSettings::default().atol)]
+        atol: f64,
+        /// How many cables a slack count or a slack set may differ by.
+        #[arg(long, default_value_t = CompareSettings::default().slack_tolerance)]
+        slack_tolerance: u64,
     },
 }
 
@@ -110,11 +146,30 @@ fn main() -> ExitCode {
             out,
             solvers,
             quiet,
-        } => run_command(case, out, solvers, quiet).map_err(Failure::from),
-        Command::Check { case } => check_command(case).map_err(Failure::from),
-        Command::Bench { case, out, quiet } => {
-            bench_command(&case, out, quiet).map_err(Failure::from)
-        }
+            set,
+        } => run_command(case, out, solvers, quiet, &set).map_err(Failure::from),
+        Command::Check { case, set } => check_command(case, &set).map_err(Failure::from),
+        Command::Bench {
+            case,
+            out,
+            quiet,
+            set,
+        } => bench_command(&case, out, quiet, &set).map_err(Failure::from),
+        Command::Compare {
+            run,
+            golden,
+            rtol,
+            atol,
+            slack_tolerance,
+        } => compare_command(
+            &run,
+            &golden,
+            CompareSettings {
+                rtol,
+                atol,
+                slack_tolerance,
+            },
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -202,8 +257,9 @@ fn run_command(
     out: Option<PathBuf>,
     solvers: Vec<Method>,
     quiet: bool,
+    set: &[String],
 ) -> Result<(), RunError> {
-    let case = case::load(&path)?;
+    let case = case::load_with(&path, set)?;
     let options = RunOptions {
         out_dir: out,
         methods: (!solvers.is_empty()).then_some(solvers),
@@ -230,8 +286,13 @@ fn run_command(
     result.map(|_| ())
 }
 
-fn bench_command(path: &Path, out: Option<PathBuf>, quiet: bool) -> Result<(), BenchError> {
-    let case = case::load(path)?;
+fn bench_command(
+    path: &Path,
+    out: Option<PathBuf>,
+    quiet: bool,
+    set: &[String],
+) -> Result<(), BenchError> {
+    let case = case::load_with(path, set)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let prepared = tensolve::app::setup::prepare(&case)?;
     bench::ensure_writable(&dir)?;
@@ -281,8 +342,8 @@ fn report_bench(reporter: &Reporter, progress: Progress) {
     }
 }
 
-fn check_command(path: PathBuf) -> Result<(), RunError> {
-    let case = case::load(&path)?;
+fn check_command(path: PathBuf, set: &[String]) -> Result<(), RunError> {
+    let case = case::load_with(&path, set)?;
     let report = check(&case, path);
     print_ignoring_closed_pipe(&report.to_string());
     match report.error {
@@ -295,4 +356,39 @@ fn check_command(path: PathBuf) -> Result<(), RunError> {
 fn print_ignoring_closed_pipe(text: &str) {
     use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+/// `compare`: the report on stdout; exit 1 when the runs differ, 2 when they cannot be compared.
+fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Result<(), Failure> {
+    let bad = |message: String| Failure {
+        message,
+        exit_code: 2,
+    };
+    if !(settings.rtol.is_finite() && settings.rtol >= 0.0) {
+        return Err(bad(format!(
+            "--rtol {}: give a relative tolerance >= 0, e.g. 1e-6",
+            settings.rtol
+        )));
+    }
+    if !(settings.atol.is_finite() && settings.atol >= 0.0) {
+        return Err(bad(format!(
+            "--atol {}: give an absolute tolerance >= 0, e.g. 1e-12",
+            settings.atol
+        )));
+    }
+    let report = compare(run, golden, &settings).map_err(|e| bad(e.to_string()))?;
+    print!("{report}");
+    if report.agree() {
+        Ok(())
+    } else {
+        Err(Failure {
+            message: format!(
+                "{} column(s) differ between {} and {}",
+                report.differences.len(),
+                run.display(),
+                golden.display()
+            ),
+            exit_code: 1,
+        })
+    }
 }

@@ -242,7 +242,7 @@ fn column(header: &[String], name: &str) -> usize {
 }
 
 fn run_paper(out: &Temp) {
-    let case = manifest_path("cases/paper.toml");
+    let case = manifest_path("cases/paper-exact.toml");
     let o = tensolve(&["run", case.to_str().unwrap(), "--out", out.arg(), "--quiet"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
@@ -370,7 +370,7 @@ fn per_solve_files_exist_and_parse() {
 
 #[test]
 fn check_prints_the_model() {
-    let case = manifest_path("cases/paper.toml");
+    let case = manifest_path("cases/paper-exact.toml");
     let o = tensolve(&["check", case.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);

@@ -12,7 +12,8 @@ use crate::output::{
 };
 use crate::results;
 use crate::solvers::{
-    IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent, Solution,
+    Equilibrium, IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent,
+    Solution,
 };
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -120,12 +121,14 @@ pub fn run(
             })?;
         }
     }
-    // 6. Every α, every solver.
+    // 6. Every α, every solver, each warm-started from its converged answer at the previous α
+    //    (newton and pcg-lcp use it; they stop on the same criterion as from a cold start).
     let mut rows = Vec::new();
     let mut failures = Vec::new();
+    let mut previous: Vec<Option<Equilibrium>> = vec![None; solvers.len()];
     for &alpha in &case.load.alphas {
         let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
-        let reference_solution = reference.solve(&load, &mut solvers);
+        let reference_solution = reference.solve(&load, &mut solvers, &previous);
         let reference_errors = reference_solution
             .as_ref()
             .map(|r| Reference::new(structure, &r.equilibrium.displacements));
@@ -138,10 +141,15 @@ pub fn run(
             sinks.start(&key)?;
             let solution = match (reference.shared_index(), &reference_solution) {
                 (Some(i), Some(r)) if i == index => r.clone(),
-                _ => set_up
-                    .solver
-                    .solve(&load, reference_errors.as_ref(), &mut sinks),
+                _ => set_up.solver.solve_from(
+                    &load,
+                    previous[index].as_ref(),
+                    reference_errors.as_ref(),
+                    &mut sinks,
+                ),
             };
+            previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
+                .then(|| solution.equilibrium.clone());
             // 7. A non-finite answer is reported, never written.
             if !results::is_finite(&solution) {
                 sinks.end(&key, SolveEnd::NonFinite)?;
@@ -235,7 +243,8 @@ fn write_module_comparison(case: &Case, methods: &[Method], dir: &Path) -> Resul
         let structure = &prepared.structure;
         let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
         let mut reference = ReferenceSource::new(&grid_case, &solvers, &prepared)?;
-        let reference_solution = reference.solve(&load, &mut solvers);
+        let cold = vec![None; solvers.len()];
+        let reference_solution = reference.solve(&load, &mut solvers, &cold);
         let errors = reference_solution
             .as_ref()
             .map(|r| Reference::new(structure, &r.equilibrium.displacements));
@@ -330,11 +339,22 @@ impl<'s> ReferenceSource<'s> {
         })
     }
 
-    /// The reference solution at `load`, if one is needed.
-    fn solve(&mut self, load: &[f64], solvers: &mut [SetUpSolver<'_>]) -> Option<Solution> {
+    /// The reference solution at `load`, if one is needed; a shared solver starts from its
+    /// `previous` answer.
+    fn solve(
+        &mut self,
+        load: &[f64],
+        solvers: &mut [SetUpSolver<'_>],
+        previous: &[Option<Equilibrium>],
+    ) -> Option<Solution> {
         match self {
             ReferenceSource::Unneeded => None,
-            ReferenceSource::Shared(i) => Some(solvers[*i].solver.solve(load, None, &mut Silent)),
+            ReferenceSource::Shared(i) => Some(solvers[*i].solver.solve_from(
+                load,
+                previous[*i].as_ref(),
+                None,
+                &mut Silent,
+            )),
             ReferenceSource::Own(own) => Some(own.solver.solve(load, None, &mut Silent)),
         }
     }

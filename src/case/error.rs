@@ -18,6 +18,14 @@ pub enum CaseError {
     /// column).
     #[error("case file is not valid: {0}")]
     Syntax(String),
+    /// A command-line override (`--set key=value`) that cannot be applied or is not valid.
+    #[error("--set {set}: {reason}")]
+    Override {
+        /// The override as given.
+        set: String,
+        /// What is wrong with it, and the fix.
+        reason: String,
+    },
     /// A value out of its range.
     #[error("`{key}` = {value} is not valid: {fix}")]
     Invalid {

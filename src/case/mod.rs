@@ -11,16 +11,28 @@ mod typed;
 pub use error::CaseError;
 pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
 
+use serde::Deserialize;
 use std::path::Path;
 
 /// Read, parse and validate a case file; the output directory defaults to
 /// `out/<case file stem>`.
 pub fn load(path: &Path) -> Result<Case, CaseError> {
+    load_with(path, &[])
+}
+
+/// As [`load`], with `key=value` overrides (the command line's `--set`) applied to the file's
+/// keys before validation: the key is dotted (`solver.dm`), the value TOML (`2e6`, `[0.5]`,
+/// `"newton"`). An override that does not fit is named in the error.
+pub fn load_with(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
     let text = std::fs::read_to_string(path).map_err(|e| CaseError::Io {
         path: path.display().to_string(),
         reason: e.to_string(),
     })?;
-    let mut case = parse(&text)?;
+    let mut case = if overrides.is_empty() {
+        parse(&text)?
+    } else {
+        parse_with(&text, overrides)?
+    };
     if case.output.dir.is_none() {
         let stem = path
             .file_stem()
@@ -35,4 +47,74 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
 pub fn parse(text: &str) -> Result<Case, CaseError> {
     let raw: raw::RawCase = toml::from_str(text).map_err(CaseError::from_toml)?;
     convert::convert(raw)
+}
+
+/// Parse case text, apply `key=value` overrides, and validate.
+pub fn parse_with(text: &str, overrides: &[String]) -> Result<Case, CaseError> {
+    let mut table: toml::Table = toml::from_str(text).map_err(CaseError::from_toml)?;
+    for set in overrides {
+        apply_override(&mut table, set)?;
+    }
+    let raw =
+        raw::RawCase::deserialize(toml::Value::Table(table)).map_err(|e| CaseError::Override {
+            set: overrides.join(" "),
+            reason: e.to_string().trim_end().to_string(),
+        })?;
+    convert::convert(raw).map_err(|e| match e {
+        // A value an override set: say so.
+        CaseError::Invalid { key, value, fix } => {
+            match overrides.iter().find(|s| s.split('=').next() == Some(key)) {
+                Some(set) => CaseError::Override {
+                    set: set.clone(),
+                    reason: format!("`{key}` = {value} is not valid: {fix}"),
+                },
+                None => CaseError::Invalid { key, value, fix },
+            }
+        }
+        other => other,
+    })
+}
+
+/// Set one `key=value` (dotted key, TOML value) in the case's table, creating tables on the way.
+fn apply_override(table: &mut toml::Table, set: &str) -> Result<(), CaseError> {
+    let error = |reason: String| CaseError::Override {
+        set: set.to_string(),
+        reason,
+    };
+    let Some((key, value)) = set.split_once('=') else {
+        return Err(error(
+            "write it as key=value with a dotted key and a TOML value, e.g. solver.dm=2e6 or \
+             load.alpha=[0.5,1.0]"
+                .into(),
+        ));
+    };
+    let path: Vec<&str> = key.trim().split('.').map(str::trim).collect();
+    if path.iter().any(|p| p.is_empty()) {
+        return Err(error(format!(
+            "`{key}` is not a dotted key such as solver.dm"
+        )));
+    }
+    let value: toml::Value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .ok_or_else(|| {
+            error(format!(
+                "`{value}` is not a TOML value; quote strings (solver.methods=[\"newton\"]), \
+                 write lists in brackets ([0.5, 1.0])"
+            ))
+        })?;
+    let (last, parents) = path.split_last().expect("a key has at least one part");
+    let mut node = table;
+    for part in parents {
+        let entry = node
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        node = entry.as_table_mut().ok_or_else(|| {
+            error(format!(
+                "`{part}` is a value, not a table, so `{key}` cannot be set"
+            ))
+        })?;
+    }
+    node.insert(last.to_string(), value);
+    Ok(())
 }

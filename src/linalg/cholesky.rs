@@ -3,7 +3,7 @@
 //! Solves take `&self` (a solve's small workspace is allocated per call) so that one factor can
 //! be shared.
 
-use super::StiffnessPattern;
+use super::{nested_dissection, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::perm::PermRef;
@@ -45,20 +45,26 @@ impl std::fmt::Debug for SparseCholesky {
     }
 }
 
-/// Fill-reducing ordering: AMD on the node graph (dofs taken three by three, as every pattern
-/// here numbers a node's three components consecutively), expanded to the dofs. Nine times
-/// fewer entries than AMD on the dofs, with the same fill on these grids; any permutation is
-/// correct, so a pattern that is not node-major only loses fill quality.
-fn node_ordering(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
-    let n = p.n;
-    if n % 3 != 0 || n == 0 {
-        return ((0..n).collect(), (0..n).collect());
-    }
-    let nodes = n / 3;
+/// Fill-reducing ordering of the node graph (dofs taken three by three, as every pattern here
+/// numbers a node's three components consecutively), expanded to the dofs. Any permutation
+/// is correct, so a pattern that is not node-major only loses fill quality.
+#[derive(Debug, Clone, Copy)]
+pub enum NodeOrdering<'a> {
+    /// Approximate minimum degree on the node graph: nine times fewer entries than AMD on the
+    /// dofs, with the same fill on these grids.
+    Amd,
+    /// Nested dissection from each node's plane coordinates (one per node of the pattern,
+    /// i.e. per three dofs), [`nested_dissection`]; falls back to AMD if the count differs.
+    NestedDissection(&'a [[f64; 2]]),
+}
+
+/// The node graph of a node-major pattern, as CSR (offsets, neighbours), symmetric.
+fn node_graph(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
+    let nodes = p.n / 3;
     // A link couples all three components of its two nodes, so the first component of each
     // node carries the whole node graph.
     let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); nodes];
-    for c in (0..n).step_by(3) {
+    for c in (0..p.n).step_by(3) {
         for &r in &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]] {
             if r % 3 == 0 && r != c {
                 adjacency[r / 3].push(c / 3);
@@ -66,27 +72,52 @@ fn node_ordering(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
             }
         }
     }
-    let mut col_ptr = Vec::with_capacity(nodes + 1);
-    let mut row_idx = Vec::new();
-    col_ptr.push(0);
+    let mut offsets = Vec::with_capacity(nodes + 1);
+    let mut neighbours = Vec::new();
+    offsets.push(0);
     for list in &mut adjacency {
         list.sort_unstable();
         list.dedup();
-        row_idx.extend_from_slice(list);
-        col_ptr.push(row_idx.len());
+        neighbours.extend_from_slice(list);
+        offsets.push(neighbours.len());
     }
-    let graph = SymbolicSparseColMatRef::new_checked(nodes, nodes, &col_ptr, None, &row_idx);
-    let (mut perm, mut perm_inv) = (vec![0usize; nodes], vec![0usize; nodes]);
-    let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(nodes, row_idx.len()));
-    let ordered = amd::order(
-        &mut perm,
-        &mut perm_inv,
-        graph,
-        Default::default(),
-        MemStack::new(&mut scratch),
-    );
-    if ordered.is_err() {
-        return ((0..n).collect(), (0..n).collect());
+    (offsets, neighbours)
+}
+
+/// The dof permutation (forward, inverse) of `ordering` on `p`'s node graph.
+fn node_ordering(p: &StiffnessPattern, ordering: NodeOrdering<'_>) -> (Vec<usize>, Vec<usize>) {
+    let n = p.n;
+    let identity = || ((0..n).collect(), (0..n).collect());
+    if n % 3 != 0 || n == 0 {
+        return identity();
+    }
+    let nodes = n / 3;
+    let (offsets, neighbours) = node_graph(p);
+    let perm = match ordering {
+        NodeOrdering::NestedDissection(xy) if xy.len() == nodes => {
+            nested_dissection(&offsets, &neighbours, xy)
+        }
+        _ => {
+            let graph =
+                SymbolicSparseColMatRef::new_checked(nodes, nodes, &offsets, None, &neighbours);
+            let (mut perm, mut perm_inv) = (vec![0usize; nodes], vec![0usize; nodes]);
+            let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(nodes, neighbours.len()));
+            let ordered = amd::order(
+                &mut perm,
+                &mut perm_inv,
+                graph,
+                Default::default(),
+                MemStack::new(&mut scratch),
+            );
+            if ordered.is_err() {
+                return identity();
+            }
+            perm
+        }
+    };
+    let mut perm_inv = vec![0usize; nodes];
+    for (k, &v) in perm.iter().enumerate() {
+        perm_inv[v] = k;
     }
     let expand = |p: &[usize]| -> Vec<usize> {
         p.iter()
@@ -104,6 +135,15 @@ impl SparseCholesky {
     /// Symbolic analysis of `pattern` (lower triangle). `par`: faer's parallelism inside one
     /// factorization (use `Par::Seq` when factorizations already run in parallel).
     pub fn analyse(pattern: &StiffnessPattern, par: Par) -> SparseCholesky {
+        Self::analyse_ordered(pattern, par, NodeOrdering::Amd)
+    }
+
+    /// [`SparseCholesky::analyse`] with the fill-reducing `ordering` of the caller's choice.
+    pub fn analyse_ordered(
+        pattern: &StiffnessPattern,
+        par: Par,
+        ordering: NodeOrdering<'_>,
+    ) -> SparseCholesky {
         // faer picks simplicial or supernodal from the flop count: on the 195-dof
         // substructures of a 64 × 64 grid simplicial solves were 10–20 % faster per LATIN
         // iteration than forced supernodal ones.
@@ -111,7 +151,7 @@ impl SparseCholesky {
             supernodal_flop_ratio_threshold: SupernodalThreshold::AUTO,
             ..Default::default()
         };
-        let (forward, inverse) = node_ordering(pattern);
+        let (forward, inverse) = node_ordering(pattern, ordering);
         let ordering =
             SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, pattern.n));
         let symbolic =

@@ -1,18 +1,23 @@
 //! Sparse linear algebra on top of faer, free of any structural notion: short sparse rows, the
 //! pattern of `Σ w_i rowᵢᵀ rowᵢ`, a Cholesky
-//! factorization whose symbolic part is computed once, and the smallest eigenvalues of a
+//! factorization whose symbolic part is computed once, conjugate gradients preconditioned by a
+//! factor, and the smallest eigenvalues of a
 //! stiffness (mechanism detection).
 
 mod cholesky;
 mod dense;
+mod nested_dissection;
 mod pattern;
+mod pcg;
 mod sparse_row;
 mod spd_solver;
 mod spectrum;
 
-pub use cholesky::{NotPositiveDefinite, SparseCholesky};
+pub use cholesky::{NodeOrdering, NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
+pub use nested_dissection::nested_dissection;
 pub use pattern::StiffnessPattern;
+pub use pcg::{preconditioned_cg, CgOutcome};
 pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{

@@ -136,11 +136,17 @@ impl StiffnessPattern {
     /// `y = A x` for a symmetric A stored as this lower triangle.
     pub fn sym_matvec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
-        for (r, c, s) in self.entries() {
-            y[r] += values[s] * x[c];
-            if r != c {
-                y[c] += values[s] * x[r];
+        for c in 0..self.n {
+            let (start, end) = (self.col_ptr[c], self.col_ptr[c + 1]);
+            // The diagonal is the first entry of its column; the others are below it.
+            let mut below = 0.0;
+            for (&r, &v) in self.row_idx[start..end].iter().zip(&values[start..end]) {
+                y[r] += v * x[c];
+                if r != c {
+                    below += v * x[r];
+                }
             }
+            y[c] += below;
         }
     }
 

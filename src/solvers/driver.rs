@@ -2,7 +2,7 @@
 //! calls to the observer.
 //!
 //! ```text
-//! state ← init(load)
+//! state ← init(load), or warm_init(load, previous answer)
 //! loop:
 //!     report the iterate (with e when a reference is given) to the observer
 //!     stop when the solver says so (converged or stalled), or at max_iterations
@@ -43,8 +43,23 @@ pub fn drive<S: Solver + ?Sized>(
     reference: Option<&Reference>,
     observer: &mut dyn Observer,
 ) -> Solution {
+    drive_from(solver, load, None, reference, observer)
+}
+
+/// [`drive`], started from `warm` (a previous answer of the same solver on the same
+/// structure, [`Solver::warm_init`]) when given.
+pub fn drive_from<S: Solver + ?Sized>(
+    solver: &mut S,
+    load: &[f64],
+    warm: Option<&Equilibrium>,
+    reference: Option<&Reference>,
+    observer: &mut dyn Observer,
+) -> Solution {
     let mut clock = Stopwatch::default();
-    let mut state = clock.time(|| solver.init(load));
+    let mut state = clock.time(|| match warm {
+        Some(previous) => solver.warm_init(load, previous),
+        None => solver.init(load),
+    });
     let (status, progress) = loop {
         let progress = solver.progress(&state);
         if progress.iteration > 0 || S::INIT_IS_ITERATE {
@@ -91,6 +106,15 @@ pub trait AnySolver {
         observer: &mut dyn Observer,
     ) -> Solution;
 
+    /// [`AnySolver::solve`] warm-started from `warm` when given (see [`drive_from`]).
+    fn solve_from(
+        &mut self,
+        load: &[f64],
+        warm: Option<&Equilibrium>,
+        reference: Option<&Reference>,
+        observer: &mut dyn Observer,
+    ) -> Solution;
+
     /// What the solver's stopping measure measures.
     fn stopping_measure(&self) -> Measure;
 
@@ -106,6 +130,16 @@ impl<S: Solver> AnySolver for S {
         observer: &mut dyn Observer,
     ) -> Solution {
         drive(self, load, reference, observer)
+    }
+
+    fn solve_from(
+        &mut self,
+        load: &[f64],
+        warm: Option<&Equilibrium>,
+        reference: Option<&Reference>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        drive_from(self, load, warm, reference, observer)
     }
 
     fn stopping_measure(&self) -> Measure {

@@ -16,7 +16,7 @@ mod solver;
 mod status;
 mod taut;
 
-pub use driver::{drive, AnySolver};
+pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
 pub use observer::{IterationRecord, Observer, Silent, Tee};

@@ -163,6 +163,44 @@ impl<'s> PcgLcp<'s> {
         self.factor.solve_in_place(&mut u);
         u
     }
+
+    /// The first MPRGP state for `load` at the scaled slack gaps `x` (`None`: λ = 0).
+    fn state_from(&mut self, load: &[f64], x: Option<Vec<f64>>) -> PcgLcpState {
+        let s = self.structure;
+        let m = self.cables.len();
+        // U_F = K⁻¹ F; q̃ = k^{-1/2}(k_c B_c U_F + t0_c) = k^{1/2} B_c U_F + k^{-1/2} t0_c.
+        let mut u_load = load.to_vec();
+        self.factor.solve_in_place(&mut u_load);
+        let q: Vec<f64> = self
+            .cables
+            .iter()
+            .zip(&self.sqrt_k)
+            .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
+            .collect();
+        let cold = x.is_none();
+        let x = x.unwrap_or_else(|| vec![0.0; m]);
+        let g = q.clone();
+        let p = free_part(&x, &g);
+        let mut state = PcgLcpState {
+            load: load.to_vec(),
+            q,
+            x,
+            g,
+            p,
+            wp: vec![0.0; m],
+            since_refresh: 0,
+            residual: f64::INFINITY,
+            iteration: 0,
+            stalled: false,
+        };
+        if !cold {
+            // g = W̃ x + q̃, p on its free face.
+            self.refresh_gradient(&mut state);
+            state.p = free_part(&state.x, &state.g);
+        }
+        self.measure_state(&mut state);
+        state
+    }
 }
 
 impl Solver for PcgLcp<'_> {
@@ -179,34 +217,36 @@ impl Solver for PcgLcp<'_> {
 
     /// λ = 0: every cable taut.
     fn init(&mut self, load: &[f64]) -> PcgLcpState {
+        self.state_from(load, None)
+    }
+
+    /// λ = the previous answer's slack gaps: on each cable it says is slack,
+    /// `λ = −(t0 + k B U)/k ≥ 0` at its displacements U (0 elsewhere). A previous answer of
+    /// another size, or not finite, is ignored (λ = 0).
+    fn warm_init(&mut self, load: &[f64], previous: &Equilibrium) -> PcgLcpState {
         let s = self.structure;
-        let m = self.cables.len();
-        // U_F = K⁻¹ F; q̃ = k^{-1/2}(k_c B_c U_F + t0_c) = k^{1/2} B_c U_F + k^{-1/2} t0_c.
-        let mut u_load = load.to_vec();
-        self.factor.solve_in_place(&mut u_load);
-        let q: Vec<f64> = self
+        let usable = previous.displacements.len() == s.n_free
+            && previous.slack.len() == s.links.len()
+            && previous.displacements.iter().all(|x| x.is_finite());
+        if !usable {
+            return self.init(load);
+        }
+        // x = k^{1/2} λ = ⟨−(t0 + k e)⟩₊ / k^{1/2}.
+        let x: Vec<f64> = self
             .cables
             .iter()
             .zip(&self.sqrt_k)
-            .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
+            .map(|(&i, &sk)| {
+                if previous.slack[i] {
+                    let trial = s.links[i].prestress
+                        + s.links[i].stiffness * s.link_dofs[i].elongation(&previous.displacements);
+                    (-trial).max(0.0) / sk
+                } else {
+                    0.0
+                }
+            })
             .collect();
-        let x = vec![0.0; m];
-        let g = q.clone();
-        let p = free_part(&x, &g);
-        let mut state = PcgLcpState {
-            load: load.to_vec(),
-            q,
-            x,
-            g,
-            p,
-            wp: vec![0.0; m],
-            since_refresh: 0,
-            residual: f64::INFINITY,
-            iteration: 0,
-            stalled: false,
-        };
-        self.measure_state(&mut state);
-        state
+        self.state_from(load, Some(x))
     }
 
     /// One MPRGP step: conjugate gradient on the free face, expansion, or proportioning.
@@ -305,7 +345,6 @@ impl Solver for PcgLcp<'_> {
     fn iterate(&self, state: &PcgLcpState) -> Equilibrium {
         let s = self.structure;
         let u = self.displacements(state);
-        let mut slack = vec![false; s.links.len()];
         let mut tensions: Vec<f64> = s
             .links
             .iter()
@@ -314,16 +353,11 @@ impl Solver for PcgLcp<'_> {
             .collect();
         for (j, &i) in self.cables.iter().enumerate() {
             if state.x[j] > 0.0 {
-                // τ = t0 + k(e + λ) = 0 up to the tolerance: a slack cable carries nothing.
-                slack[i] = true;
+                // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing.
                 tensions[i] = 0.0;
             }
         }
-        Equilibrium {
-            displacements: u,
-            tensions,
-            slack,
-        }
+        Equilibrium::classified(s, u, tensions)
     }
 }
 

@@ -1,5 +1,5 @@
 //! The solver interface, in the spirit of argmin: a solver is a state machine. [`Solver::init`]
-//! gives the first state for a load, [`Solver::next_iter`] advances it by one iteration, and
+//! gives the first state for a load ([`Solver::warm_init`] from a previous answer), [`Solver::next_iter`] advances it by one iteration, and
 //! [`Solver::progress`] and [`Solver::iterate`] let the driver (and, through it, the observers)
 //! see where it stands. A solver never loops, times or prints: the driver
 //! ([`super::driver::drive`]) does.
@@ -55,6 +55,16 @@ pub trait Solver {
 
     /// The first state for `load` (on the free dofs, N).
     fn init(&mut self, load: &[f64]) -> Self::State;
+
+    /// The first state for `load` started from `previous`, an answer of this solver for
+    /// another load on the same structure (a sweep's previous α): a warm start. The solve
+    /// stops on the same criterion as from [`Solver::init`], so it ends at the same
+    /// equilibrium; only the way there may be shorter. By default the warm start is ignored
+    /// (the LATIN solvers do so).
+    fn warm_init(&mut self, load: &[f64], previous: &Equilibrium) -> Self::State {
+        let _ = previous;
+        self.init(load)
+    }
 
     /// One iteration.
     fn next_iter(&mut self, state: &mut Self::State);

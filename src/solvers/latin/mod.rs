@@ -696,28 +696,22 @@ impl Solver for Latin<'_> {
 
     /// U of the linear stage (interface nodes averaged over the substructures holding them),
     /// tensions of the local stage on it (which satisfy the cable law exactly; slack cables
-    /// carry exactly 0).
+    /// carry exactly 0), the slack set by the shared classification of U.
     fn iterate(&self, state: &LatinState) -> Equilibrium {
         let s = self.structure;
         let mut subs = state.subs.clone();
         self.local_stage(&mut subs);
         let u = self.displacements(&state.subs);
         let mut tensions = vec![0.0; s.links.len()];
-        let mut slack = vec![false; s.links.len()];
         for (sub, st) in self.substructures.iter().zip(&subs) {
             for (j, &i) in sub.links.iter().enumerate() {
-                slack[i] = st.slack_hat[j];
-                tensions[i] = if slack[i] {
+                tensions[i] = if st.slack_hat[j] {
                     0.0
                 } else {
                     st.t_hat[j] + s.links[i].prestress
                 };
             }
         }
-        Equilibrium {
-            displacements: u,
-            tensions,
-            slack,
-        }
+        Equilibrium::classified(s, u, tensions)
     }
 }

@@ -1,0 +1,155 @@
+//! `tensolve compare`: the README's CI recipe on the stored run `tests/golden/small/` (its case
+//! is `tests/golden/small.toml`), and every exit status: 0 when the runs agree, 1 when a value,
+//! a slack count or a slack set differs (named in the report), 2 on bad input.
+//!
+//! `TENSOLVE_BLESS=1 cargo test --test compare` rewrites the stored run from the current binary.
+
+mod common;
+
+use common::{manifest_path, stderr, tensolve, Temp};
+use std::path::Path;
+
+/// Run the stored case into `out`, as the CI recipe does.
+fn run_small(out: &Temp) {
+    let case = manifest_path("tests/golden/small.toml");
+    let o = tensolve(&["run", case.to_str().unwrap(), "--out", out.arg(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+fn compare(run: &Path, golden: &Path, extra: &[&str]) -> (Option<i32>, String) {
+    let mut args = vec!["compare", run.to_str().unwrap(), golden.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = tensolve(&args);
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    (o.status.code(), text)
+}
+
+/// Copy a directory tree.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}
+
+/// Rewrite one cell (row `row` after the header, column `column`) of a CSV.
+fn edit_cell(path: &Path, row: usize, column: &str, value: &str) -> String {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let c = lines[0].split(',').position(|h| h == column).unwrap();
+    let mut cells: Vec<String> = lines[row].split(',').map(str::to_string).collect();
+    let old = std::mem::replace(&mut cells[c], value.to_string());
+    lines[row] = cells.join(",");
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
+    old
+}
+
+#[test]
+fn a_fresh_run_agrees_with_the_stored_one() {
+    let golden = manifest_path("tests/golden/small");
+    let out = Temp::dir("compare-fresh");
+    run_small(&out);
+    if std::env::var_os("TENSOLVE_BLESS").is_some() {
+        let _ = std::fs::remove_dir_all(&golden);
+        copy_dir(&out.0, &golden);
+    }
+    let (code, text) = compare(&out.0, &golden, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("the runs agree"), "{text}");
+    // Summary, 8 tensions, 8 displacements and 4 histories.
+    assert!(text.contains("in 21 files"), "{text}");
+}
+
+#[test]
+fn a_perturbed_tension_differs_and_is_named() {
+    let golden = manifest_path("tests/golden/small");
+    let run = Temp::dir("compare-tension");
+    copy_dir(&golden, &run.0);
+    let file = run.0.join("tensions/newton_alpha12.csv");
+    let old: f64 = edit_cell(&file, 5, "tension", "0").parse().unwrap();
+    assert!(old != 0.0, "row 5 must be a taut cable");
+    // Put a different, non-zero value back: a tension differs, the slack set does not.
+    edit_cell(&file, 5, "tension", &format!("{}", old * (1.0 + 1e-4)));
+    let (code, text) = compare(&run.0, &golden, &[]);
+    assert_eq!(code, Some(1), "{text}");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("tensions/newton_alpha12.csv"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        line.contains("tension") && !line.contains("slack set"),
+        "{line}"
+    );
+    // Within a looser relative tolerance the runs agree.
+    let (code, text) = compare(&run.0, &golden, &["--rtol", "1e-3"]);
+    assert_eq!(code, Some(0), "{text}");
+}
+
+#[test]
+fn a_changed_slack_set_differs_unless_tolerated() {
+    let golden = manifest_path("tests/golden/small");
+    let run = Temp::dir("compare-slack");
+    copy_dir(&golden, &run.0);
+    // A taut cable made slack (tension 0).
+    edit_cell(
+        &run.0.join("tensions/pcg-lcp_alpha12.csv"),
+        5,
+        "tension",
+        "0",
+    );
+    let (code, text) = compare(&run.0, &golden, &["--rtol", "1"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("tensions/pcg-lcp_alpha12.csv") && l.contains("slack set")),
+        "{text}"
+    );
+    let (code, text) = compare(&run.0, &golden, &["--rtol", "1", "--slack-tolerance", "1"]);
+    assert_eq!(code, Some(0), "{text}");
+    // A slack count in the summary is exact too.
+    let summary = run.0.join("summary.csv");
+    let count: u64 = edit_cell(&summary, 2, "slack_cables", "0").parse().unwrap();
+    edit_cell(&summary, 2, "slack_cables", &(count + 1).to_string());
+    let (code, text) = compare(&run.0, &golden, &["--rtol", "1", "--slack-tolerance", "1"]);
+    assert_eq!(code, Some(0), "{text}");
+    let (code, text) = compare(&run.0, &golden, &["--rtol", "1"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("summary.csv") && l.contains("slack_cables")),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_input_exits_2() {
+    let golden = manifest_path("tests/golden/small");
+    // A golden file missing from the run.
+    let run = Temp::dir("compare-missing");
+    copy_dir(&golden, &run.0);
+    std::fs::remove_file(run.0.join("history/micro-macro_alpha6.csv")).unwrap();
+    let (code, text) = compare(&run.0, &golden, &[]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("history/micro-macro_alpha6.csv"), "{text}");
+    // Different columns.
+    let run = Temp::dir("compare-columns");
+    copy_dir(&golden, &run.0);
+    let summary = run.0.join("summary.csv");
+    let text = std::fs::read_to_string(&summary).unwrap();
+    std::fs::write(&summary, text.replacen("slack_cables", "slack_count", 1)).unwrap();
+    let (code, text) = compare(&run.0, &golden, &[]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("columns differ"), "{text}");
+    // No such directory; a bad tolerance.
+    let (code, _) = compare(Path::new("/nonexistent/tensolve-run"), &golden, &[]);
+    assert_eq!(code, Some(2));
+    let (code, text) = compare(&golden, &golden, &["--rtol=-1"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("--rtol"), "{text}");
+}
