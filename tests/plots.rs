@@ -326,13 +326,15 @@ fn figure_8_draws_every_bar_and_cable_in_both_views_and_amplifies_the_displaceme
 
 #[test]
 fn compressed_cables_of_a_bilateral_case_are_drawn_in_the_compression_colours() {
-    let case = small_case(30.0, "\"newton\"", "").replace(
-        "[solver]",
-        "[cables]\nunilateral = false\n[solver]",
-    );
+    let case = small_case(30.0, "\"newton\"", "")
+        .replace("[solver]", "[cables]\nunilateral = false\n[solver]");
     let run = Run::of_case("deformed-linear", &case);
     let svg = read_svg(&run.0.join("plots/deformed_alpha30.svg"));
-    assert_texts(&svg, "deformed linear", &["blue: compressed cable", "slack cable (0)"]);
+    assert_texts(
+        &svg,
+        "deformed linear",
+        &["blue: compressed cable", "slack cable (0)"],
+    );
     // Blue cables: blue the largest channel, well above red.
     let blue = svg
         .polylines
@@ -392,7 +394,10 @@ fn figure_12_draws_both_module_kinds_on_one_chart() {
         ],
     );
     let names = file_names(&run.0.join("plots"));
-    assert!(names.contains(&"error_modules.svg".to_string()), "{names:?}");
+    assert!(
+        names.contains(&"error_modules.svg".to_string()),
+        "{names:?}"
+    );
 }
 
 #[test]

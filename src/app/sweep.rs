@@ -6,8 +6,8 @@ use super::setup::{prepare, set_up, Prepared, SetUpSolver};
 use crate::case::{Case, CaseError};
 use crate::output::{
     self, alpha_label,
-    sinks::{HistorySink, PerSolveSink, PlotsSink, StabilitySink, SummarySink},
     plots::{self, History},
+    sinks::{HistorySink, PerSolveSink, PlotsSink, StabilitySink, SummarySink},
     FigureSettings, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;

@@ -148,7 +148,9 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
         stability: o.stability.unwrap_or(defaults.stability),
         homogenised: o.homogenised.unwrap_or(defaults.homogenised),
         amplification: o.amplification.unwrap_or(defaults.amplification),
-        max_plot_iterations: o.max_plot_iterations.unwrap_or(defaults.max_plot_iterations),
+        max_plot_iterations: o
+            .max_plot_iterations
+            .unwrap_or(defaults.max_plot_iterations),
         compare_modules: o.compare_modules.unwrap_or(defaults.compare_modules),
     };
     positive(

@@ -173,7 +173,11 @@ pub fn modules_chart(
 /// appearance): one hue per module kind (blue, red, green), lighter for each further solver.
 fn module_colour(module: usize, solver: usize) -> plotters::style::RGBColor {
     use plotters::style::RGBColor;
-    const HUES: [(f64, f64, f64); 3] = [(31.0, 119.0, 180.0), (214.0, 39.0, 40.0), (44.0, 160.0, 44.0)];
+    const HUES: [(f64, f64, f64); 3] = [
+        (31.0, 119.0, 180.0),
+        (214.0, 39.0, 40.0),
+        (44.0, 160.0, 44.0),
+    ];
     let (r, g, b) = HUES[module % HUES.len()];
     let light = 1.0 - 0.55f64.powi(solver as i32);
     let mix = |c: f64| (c + light * (235.0 - c)).round() as u8;

@@ -200,12 +200,7 @@ pub fn to_svg(
     // The oblique view: pixels per metre from the width, at most MAX_VIEW_HEIGHT tall.
     let projected: Vec<(f64, f64, f64)> = deformed.iter().map(|&p| oblique(p)).collect();
     let at_rest: Vec<(f64, f64, f64)> = s.nodes.iter().map(|&p| oblique(p)).collect();
-    let (ox, oy) = bounds(
-        projected
-            .iter()
-            .chain(&at_rest)
-            .map(|&(r, u, _)| (r, u)),
-    );
+    let (ox, oy) = bounds(projected.iter().chain(&at_rest).map(|&(r, u, _)| (r, u)));
     let inner = view_width - 2.0 * MARGIN as f64;
     let oblique_scale = (inner / (ox.end - ox.start)).min(MAX_VIEW_HEIGHT / (oy.end - oy.start));
     let oblique_height = ((oy.end - oy.start) * oblique_scale).ceil() as u32 + CAPTION + MARGIN;
@@ -315,7 +310,10 @@ fn draw_oblique<DB: DrawingBackend>(
     for node in (0..s.n_nodes()).filter(|&n| s.clamped[n]) {
         let (x, y) = drawing.pixel(drawing.projected[node]);
         let (x, y) = (x.round() as i32, y.round() as i32);
-        area.draw(&Rectangle::new([(x - 2, y - 2), (x + 2, y + 2)], BLACK.filled()))?;
+        area.draw(&Rectangle::new(
+            [(x - 2, y - 2), (x + 2, y + 2)],
+            BLACK.filled(),
+        ))?;
     }
     Ok(())
 }

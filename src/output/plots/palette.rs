@@ -43,7 +43,10 @@ pub fn viridis(t: f64) -> RGBColor {
 
 /// Cable tension ramp at `t` ∈ [0, 1] of the largest tension: yellow to dark red.
 pub fn tension_colour(t: f64) -> RGBColor {
-    interpolate(&[(254, 204, 92), (253, 141, 60), (227, 26, 28), (128, 0, 38)], t)
+    interpolate(
+        &[(254, 204, 92), (253, 141, 60), (227, 26, 28), (128, 0, 38)],
+        t,
+    )
 }
 
 /// Cable compression ramp at `t` ∈ [0, 1] of the largest compression: light to dark blue.
