@@ -67,9 +67,12 @@ struct Svg {
     series: usize,
     texts: Vec<String>,
     polylines_by_stroke: Vec<String>,
-    /// Every polyline: (stroke colour, stroke width, points).
-    polylines: Vec<(String, String, Vec<(f64, f64)>)>,
+    /// Every polyline.
+    polylines: Vec<Polyline>,
 }
+
+/// A polyline: (stroke colour in upper case, stroke width, points).
+type Polyline = (String, String, Vec<(f64, f64)>);
 
 impl Svg {
     /// The points of every series polyline (stroke width [`SERIES_STROKE_WIDTH`]).

@@ -174,7 +174,7 @@ fn bounds(points: impl Iterator<Item = (f64, f64)>) -> (Range<f64>, Range<f64>) 
         x = x.start.min(px)..x.end.max(px);
         y = y.start.min(py)..y.end.max(py);
     }
-    if !(x.start <= x.end) {
+    if !(x.start.is_finite() && x.end.is_finite() && y.start.is_finite() && y.end.is_finite()) {
         return (0.0..1.0, 0.0..1.0);
     }
     let pad = |r: Range<f64>| {
