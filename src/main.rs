@@ -1,6 +1,6 @@
 //! `tensolve`: the command line. Parses arguments, loads the case, hands it to the library and
-//! turns errors into messages and exit codes (0 success, 2 bad input, 1 run could not produce
-//! what was asked).
+//! turns errors into messages and exit codes (0 success, 2 bad input, 3 output directory in
+//! use by another run, 1 run could not produce what was asked).
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,8 +31,9 @@ enum Command {
     /// Solve every load factor α of a case with every solver asked for, and write the results.
     ///
     /// Exit status: 0 when every solve converged and every file was written; 2 on bad input
-    /// (invalid case, a structure that is a mechanism, an unwritable output directory); 1 when
-    /// a solve did not converge (its row says converged = false) or a file could not be written.
+    /// (invalid case, a structure that is a mechanism, an unwritable output directory); 3 when
+    /// another run holds the output directory; 1 when a solve did not converge (its row says
+    /// converged = false) or a file could not be written.
     Run {
         /// The case file (TOML).
         case: PathBuf,
@@ -279,7 +280,10 @@ fn run_command(
     reporter.finish();
     if !matches!(
         result,
-        Err(RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. })
+        Err(RunError::Case(_)
+            | RunError::Setup(_)
+            | RunError::OutputDir { .. }
+            | RunError::Busy(_))
     ) {
         reporter.line(&format!("results in {}", dir.display()));
     }

@@ -55,7 +55,8 @@ pub fn constitutive_residual(s: &Structure, eq: &Equilibrium) -> f64 {
 pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
     let full = s.full_displacements(&eq.displacements);
     full.chunks(3)
-        .map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt())
+        // hypot: no overflow to inf for a large but finite displacement.
+        .map(|u| u[0].hypot(u[1]).hypot(u[2]))
         .fold(0.0, f64::max)
 }
 

@@ -57,6 +57,8 @@ fn file_names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        // The run's lock and manifest (issue 13) are bookkeeping, not results.
+        .filter(|n| !n.starts_with(".tensolve"))
         .collect();
     names.sort();
     names

@@ -7,14 +7,15 @@ use crate::case::{Case, CaseError};
 use crate::output::{
     self, alpha_label,
     plots::{self, History},
-    sinks::{HistorySink, PerSolveSink, PlotsSink, StabilitySink, SummarySink},
-    FigureSettings, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
+    sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
+    FigureSettings, OpenError, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent,
     Solution,
 };
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -47,12 +48,15 @@ pub enum RunError {
         /// Why.
         reason: String,
     },
+    /// Another run holds the output directory's lock.
+    #[error("{0}")]
+    Busy(OpenError),
     /// A file could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
     /// Some solves did not meet their stopping criterion (their rows say so) or had no finite
-    /// answer (no row, no files).
-    #[error("{count} solve(s) did not converge: {list}; their rows say converged = false")]
+    /// answer (no row, no files); each item of the list says which.
+    #[error("{count} solve(s) did not converge: {list}")]
     NotConverged {
         /// How many.
         count: usize,
@@ -62,14 +66,40 @@ pub enum RunError {
 }
 
 impl RunError {
-    /// 2 for bad input (the case, the structure it describes, the output directory); 1 when
-    /// the run could not produce what was asked.
+    /// 2 for bad input (the case, the structure it describes, the output directory); 3 when
+    /// another run holds the output directory; 1 when the run could not produce what was
+    /// asked.
     pub fn exit_code(&self) -> i32 {
         match self {
             RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. } => 2,
+            RunError::Busy(_) => 3,
             RunError::Write { .. } | RunError::NotConverged { .. } => 1,
         }
     }
+}
+
+impl From<OpenError> for RunError {
+    fn from(e: OpenError) -> Self {
+        match e {
+            OpenError::Busy { .. } => RunError::Busy(e),
+            OpenError::Io { dir, source } => RunError::OutputDir {
+                dir: dir.display().to_string(),
+                reason: source.to_string(),
+            },
+        }
+    }
+}
+
+/// At most this many failed solves are listed in a message; the rest are counted.
+const LISTED_FAILURES: usize = 10;
+
+/// `list` joined, its first [`LISTED_FAILURES`] items in full and the rest counted.
+fn failure_list(list: &[String]) -> String {
+    let mut text = list[..list.len().min(LISTED_FAILURES)].join("; ");
+    if list.len() > LISTED_FAILURES {
+        text.push_str(&format!("; and {} more", list.len() - LISTED_FAILURES));
+    }
+    text
 }
 
 /// The output directory: `--out`, else `output.dir`, else `out/case`.
@@ -92,6 +122,7 @@ pub fn run(
         .methods
         .clone()
         .unwrap_or_else(|| case.solver.methods.clone());
+    crate::case::check_distinct_methods("--solver", &methods)?;
 
     // 1. The structure and its mechanism check (K with every cable taut, factorized).
     let prepared = prepare(case)?;
@@ -103,22 +134,24 @@ pub fn run(
         .collect::<Result<Vec<_>, _>>()?;
     // 3. Where LATIN's error e is measured from.
     let mut reference = ReferenceSource::new(case, &solvers, &prepared)?;
-    // 4. The sinks of the files asked for; their directory, once the case is known solvable.
-    let mut sinks = sinks(case, &dir, &prepared, &solvers);
-    if !sinks.is_empty() || case.output.homogenised {
-        output::ensure_writable(&dir).map_err(|e| RunError::OutputDir {
-            dir: dir.display().to_string(),
-            reason: e.to_string(),
-        })?;
-    }
+    // 4. The output directory, once the case is known solvable: locked for this run, with a
+    //    private staging directory; then the sinks of the files asked for.
+    let out = match writes_files(case) {
+        true => Some(RefCell::new(OutputDir::open(&dir)?)),
+        false => None,
+    };
+    let mut sinks = sinks(case, &dir, out.as_ref(), &prepared, &solvers);
     // 5. The homogenised substructure operators, when asked (set-up products, written once).
-    if case.output.homogenised {
+    if let Some(out) = out.as_ref().filter(|_| case.output.homogenised) {
         for set_up in &mut solvers {
             let operators = set_up.solver.homogenised_operators();
-            output::write_homogenised(&dir, &operators).map_err(|source| WriteError {
-                path: dir.join("homogenised"),
-                source,
-            })?;
+            let staging = out.borrow().staging().to_path_buf();
+            output::write_homogenised(&staging, &operators)
+                .and_then(|_| out.borrow_mut().commit())
+                .map_err(|source| WriteError {
+                    path: dir.join("homogenised"),
+                    source,
+                })?;
         }
     }
     // 6. Every α, every solver, each warm-started from its converged answer at the previous α
@@ -150,29 +183,32 @@ pub fn run(
             };
             previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
                 .then(|| solution.equilibrium.clone());
-            // 7. A non-finite answer is reported, never written.
-            if !results::is_finite(&solution) {
+            // 7. A non-finite answer (or a row it would give) is reported, never written.
+            let row = results::is_finite(&solution).then(|| {
+                SummaryRow::new(
+                    key.solver,
+                    alpha,
+                    &load,
+                    structure,
+                    &solution,
+                    set_up.setup_seconds,
+                )
+            });
+            let Some(row) = row.filter(SummaryRow::is_finite) else {
                 sinks.end(&key, SolveEnd::NonFinite)?;
                 failures.push(format!(
-                    "{} at alpha = {}: produced non-finite values after {} iterations ({:?}); no files written for it",
+                    "{} at alpha = {}: produced non-finite values after {} iterations; no row \
+                     and no files written for it",
                     key.solver,
                     alpha_label(alpha),
                     solution.info.iterations,
-                    solution.info.status
                 ));
                 continue;
-            }
-            let row = SummaryRow::new(
-                key.solver,
-                alpha,
-                &load,
-                structure,
-                &solution,
-                set_up.setup_seconds,
-            );
+            };
             if !row.converged {
                 failures.push(format!(
-                    "{} at alpha = {}: not converged after {} iterations ({:?}), {} = {:e}",
+                    "{} at alpha = {}: not converged after {} iterations ({:?}), {} = {:e}; its \
+                     row says converged = false",
                     row.solver,
                     alpha_label(alpha),
                     row.iterations,
@@ -193,18 +229,31 @@ pub fn run(
             rows.push(row);
         }
     }
-    // 9. The files of the whole sweep.
+    // 9. The files of the whole sweep; the directory released.
     sinks.close()?;
+    drop(sinks);
     // 10. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
-    if case.output.plots && !case.output.compare_modules.is_empty() {
-        write_module_comparison(case, &methods, &dir)?;
+    let compare = case.output.plots && !case.output.compare_modules.is_empty();
+    if let Some(out) = out.as_ref().filter(|_| compare) {
+        let staging = out.borrow().staging().to_path_buf();
+        write_module_comparison(case, &methods, &staging, &dir)?;
+        out.borrow_mut().commit().map_err(|source| WriteError {
+            path: dir.join("plots"),
+            source,
+        })?;
+    }
+    if let Some(out) = out {
+        out.into_inner().finish().map_err(|source| WriteError {
+            path: dir.clone(),
+            source,
+        })?;
     }
     if failures.is_empty() {
         Ok(rows)
     } else {
         Err(RunError::NotConverged {
             count: failures.len(),
-            list: failures.join("; "),
+            list: failure_list(&failures),
         })
     }
 }
@@ -221,7 +270,12 @@ impl Observer for Recorder {
 
 /// `plots/error_modules.svg`: every LATIN solver of `methods` at the case's largest α, on the
 /// case's grid made of each module kind of `output.compare_modules` (the paper's Figure 12).
-fn write_module_comparison(case: &Case, methods: &[Method], dir: &Path) -> Result<(), RunError> {
+fn write_module_comparison(
+    case: &Case,
+    methods: &[Method],
+    staging: &Path,
+    root: &Path,
+) -> Result<(), RunError> {
     let alpha = case
         .load
         .alphas
@@ -265,34 +319,59 @@ fn write_module_comparison(case: &Case, methods: &[Method], dir: &Path) -> Resul
         amplification: case.output.amplification,
         max_plot_iterations: case.output.max_plot_iterations,
     };
-    let path = dir.join("plots").join("error_modules.svg");
+    let path = staging.join("plots").join("error_modules.svg");
     let written = plots::write_module_comparison(&path, &histories, &settings);
-    written.map_err(|source| RunError::Write(WriteError { path, source }))
+    written.map_err(|source| {
+        RunError::Write(WriteError {
+            path: root.join("plots").join("error_modules.svg"),
+            source,
+        })
+    })
 }
 
-/// The sinks of the files `case` asks for, in the order they write.
+/// Whether `case` asks for any file.
+fn writes_files(case: &Case) -> bool {
+    let o = &case.output;
+    o.history
+        || o.tensions
+        || o.displacements
+        || o.vtk
+        || o.plots
+        || o.stability
+        || o.summary
+        || o.homogenised
+}
+
+/// The sinks of the files `case` asks for, in the order they write: the per-solve files into
+/// the staging directory of `output`, published together, then the rows of the ledgers.
 fn sinks<'s>(
     case: &Case,
-    dir: &Path,
+    root: &Path,
+    output: Option<&'s RefCell<OutputDir>>,
     prepared: &'s Prepared,
     solvers: &[SetUpSolver<'_>],
 ) -> Sinks<'s> {
+    let mut sinks = Sinks::default();
+    let Some(output) = output else {
+        return sinks;
+    };
+    let staging = output.borrow().staging().to_path_buf();
+    let dir = staging.as_path();
     let (structure, taut) = (&prepared.structure, &prepared.taut);
     let out = &case.output;
     let has_history = solvers
         .iter()
         .any(|s| s.solver.stopping_measure() == Measure::Indicator);
-    let mut sinks = Sinks::default();
     sinks.add(
         out.history && has_history,
-        HistorySink::new(dir, structure.n_cables()),
+        HistorySink::new(root, dir, structure.n_cables()),
     );
-    sinks.add(out.tensions, PerSolveSink::tensions(dir, structure));
+    sinks.add(out.tensions, PerSolveSink::tensions(root, dir, structure));
     sinks.add(
         out.displacements,
-        PerSolveSink::displacements(dir, structure),
+        PerSolveSink::displacements(root, dir, structure),
     );
-    sinks.add(out.vtk, PerSolveSink::vtk(dir, structure));
+    sinks.add(out.vtk, PerSolveSink::vtk(root, dir, structure));
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {
             amplification: out.amplification,
@@ -300,11 +379,12 @@ fn sinks<'s>(
         };
         sinks.add(
             true,
-            PlotsSink::new(dir, structure, first.method.name(), settings),
+            PlotsSink::new(root, dir, structure, first.method.name(), settings),
         );
     }
-    sinks.add(out.stability, StabilitySink::new(dir, structure, taut));
-    sinks.add(out.summary, SummarySink::new(dir));
+    sinks.add(true, PublishSink::new(output));
+    sinks.add(out.stability, StabilitySink::new(output, structure, taut));
+    sinks.add(out.summary, SummarySink::new(output));
     sinks
 }
 

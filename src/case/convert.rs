@@ -24,15 +24,22 @@ pub(crate) fn number(x: f64) -> String {
 /// from f64's range (1e308) that stiffnesses, loads and their products cannot overflow.
 const PHYSICAL_MAX: f64 = 1e15;
 
-/// A physical quantity: finite, strictly positive, at most [`PHYSICAL_MAX`].
+/// Smallest magnitude accepted for a positive physical number: products of a few of them
+/// (k = EA/L, k², the stiffness's pivots) stay far from f64's underflow (1e-308), so a tiny
+/// modulus is refused here by name rather than as a "mechanism" (issue 13, E4).
+const PHYSICAL_MIN: f64 = 1e-15;
+
+/// A physical quantity: finite, between [`PHYSICAL_MIN`] and [`PHYSICAL_MAX`].
 fn positive(key: &'static str, value: f64, what: &str) -> Result<(), CaseError> {
-    if value.is_finite() && value > 0.0 && value <= PHYSICAL_MAX {
+    if value.is_finite() && (PHYSICAL_MIN..=PHYSICAL_MAX).contains(&value) {
         Ok(())
     } else {
         Err(CaseError::invalid(
             key,
             number(value),
-            format!("give {what} as a number > 0 and ≤ {PHYSICAL_MAX:e}"),
+            format!(
+                "give {what} as a number > 0, at least {PHYSICAL_MIN:e} and ≤ {PHYSICAL_MAX:e}"
+            ),
         ))
     }
 }
@@ -56,7 +63,7 @@ const ALPHA_MAX: f64 = 1e6;
 /// The typed case of a raw one, checked in file order.
 pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
     let paper = GridSpec::default();
-    let [nx, ny] = raw.grid.modules;
+    let [nx, ny] = raw.grid.modules.0;
     if nx == 0 || ny == 0 {
         return Err(CaseError::invalid(
             "grid.modules",
@@ -123,7 +130,7 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
     };
 
     let pattern = LoadPattern {
-        nodal: raw.load.nodal.unwrap_or(LoadPattern::default().nodal),
+        nodal: raw.load.nodal.map_or(LoadPattern::default().nodal, |n| n.0),
     };
     for (c, &f) in pattern.nodal.iter().enumerate() {
         let key = ["load.nodal[0]", "load.nodal[1]", "load.nodal[2]"][c];
@@ -137,6 +144,13 @@ pub(super) fn convert(raw: RawCase) -> Result<Case, CaseError> {
     let solver = solver_choice(raw.solver, [nx, ny])?;
     let defaults = OutputChoice::default();
     let o = raw.output;
+    if o.dir.as_ref().is_some_and(|d| d.as_os_str().is_empty()) {
+        return Err(CaseError::invalid(
+            "output.dir",
+            "\"\"",
+            "give a directory (\".\" for the current one), or remove the key for out/<case file name>",
+        ));
+    }
     let output = OutputChoice {
         dir: o.dir,
         summary: o.summary.unwrap_or(defaults.summary),
@@ -204,6 +218,7 @@ fn solver_choice(
                 "name at least one solver, e.g. [\"newton\"]",
             ));
         }
+        check_distinct_methods("solver.methods", &methods)?;
         choice.methods = methods;
     }
     if let Some(tol) = raw.tolerance {
@@ -220,7 +235,7 @@ fn solver_choice(
     }
     // The paper's partition, limited to the grid.
     let [dx, dy] = choice.latin.subdomains;
-    let [sx, sy] = raw.subdomains.unwrap_or([dx.min(nx), dy.min(ny)]);
+    let [sx, sy] = raw.subdomains.map_or([dx.min(nx), dy.min(ny)], |s| s.0);
     if sx == 0 || sy == 0 || sx > nx || sy > ny {
         return Err(CaseError::invalid(
             "solver.subdomains",
@@ -293,6 +308,35 @@ fn solver_choice(
     Ok(choice)
 }
 
+/// Refuse a solver named twice in `methods` (its files would overwrite each other).
+pub(crate) fn check_distinct_methods(
+    key: &'static str,
+    methods: &[crate::solvers::Method],
+) -> Result<(), CaseError> {
+    for (i, m) in methods.iter().enumerate() {
+        if methods[..i].contains(m) {
+            return Err(CaseError::invalid(
+                key,
+                format!(
+                    "{} solvers naming `{}` more than once",
+                    methods.len(),
+                    m.name()
+                ),
+                "name each solver once (its files would overwrite each other)",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A TOML value as the user wrote it (a date as a date, not toml's internal form).
+fn shown(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Datetime(d) => d.to_string(),
+        other => other.to_string(),
+    }
+}
+
 /// `solver.l`: `"stiffness"` or a number of N/m.
 fn search_direction(l: &toml::Value) -> Result<SearchDirection, CaseError> {
     let uniform = |v: f64| {
@@ -305,7 +349,7 @@ fn search_direction(l: &toml::Value) -> Result<SearchDirection, CaseError> {
         toml::Value::Integer(v) => uniform(*v as f64),
         other => Err(CaseError::invalid(
             "solver.l",
-            other,
+            shown(other),
             "give \"stiffness\" (l = k on every link) or a number of N/m",
         )),
     }
@@ -333,7 +377,7 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
                 .iter()
                 .map(|v| {
                     as_number(v).ok_or_else(|| {
-                        CaseError::invalid(KEY, v, "every load factor must be a number")
+                        CaseError::invalid(KEY, shown(v), "every load factor must be a number")
                     })
                 })
                 .collect::<Result<Vec<_>, _>>()?
@@ -380,13 +424,28 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
         other => {
             return Err(CaseError::invalid(
                 KEY,
-                other,
+                shown(other),
                 "give a list such as [0.5, 1.0] or a range such as { from = 0.0, to = 1.0, steps = 41 }",
             ))
         }
     };
     for &a in &alphas {
         bounded(KEY, a, ALPHA_MAX, "every load factor")?;
+    }
+    // Two load factors with one label would write to the same files and repeat a row.
+    let mut labels = std::collections::HashMap::new();
+    for (i, &a) in alphas.iter().enumerate() {
+        if let Some(j) = labels.insert(crate::output::alpha_label(a), i) {
+            return Err(CaseError::invalid(
+                KEY,
+                format!(
+                    "a list whose values {j} and {i} are both {}",
+                    crate::output::alpha_label(a)
+                ),
+                "give distinct load factors (a range needs `to` - `from` large enough for its \
+                 steps to differ in 12 significant digits)",
+            ));
+        }
     }
     Ok(alphas)
 }

@@ -42,14 +42,29 @@ impl CaseError {
     pub(crate) fn from_toml(e: toml::de::Error) -> Self {
         // toml's message already has the line, the column, the offending text and, for
         // unknown keys or variants, the allowed names; keep it on one line per fact.
-        CaseError::Syntax(e.to_string().trim_end().to_string())
+        let text = e.to_string();
+        let lines: Vec<String> = text.trim_end().lines().map(shorten).collect();
+        CaseError::Syntax(lines.join("\n"))
     }
 
     pub(super) fn invalid(key: &'static str, value: impl ToString, fix: impl Into<String>) -> Self {
         CaseError::Invalid {
             key,
-            value: value.to_string(),
+            value: shorten(&value.to_string()),
             fix: fix.into(),
         }
     }
+}
+
+/// Longest text of a value (or of a line of toml's message) echoed in a message.
+const ECHO_MAX_CHARS: usize = 120;
+
+/// `text`, cut to [`ECHO_MAX_CHARS`] characters with a note of its length.
+fn shorten(text: &str) -> String {
+    let count = text.chars().count();
+    if count <= ECHO_MAX_CHARS {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(ECHO_MAX_CHARS).collect();
+    format!("{head}… ({count} characters)")
 }

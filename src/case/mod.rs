@@ -24,23 +24,58 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
 /// keys before validation: the key is dotted (`solver.dm`), the value TOML (`2e6`, `[0.5]`,
 /// `"newton"`). An override that does not fit is named in the error.
 pub fn load_with(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
-    let text = std::fs::read_to_string(path).map_err(|e| CaseError::Io {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    let text = read_bounded(path)?;
     let mut case = if overrides.is_empty() {
         parse(&text)?
     } else {
         parse_with(&text, overrides)?
     };
     if case.output.dir.is_none() {
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "case".into());
+        // The stem as the file system gave it: a name that is not UTF-8 stays that name.
+        let stem = path.file_stem().unwrap_or("case".as_ref());
         case.output.dir = Some(Path::new("out").join(stem));
     }
     Ok(case)
+}
+
+/// The largest case file read: far above any hand-written case (the paper's is 1 kB) and a
+/// list of 100,000 load factors, far below what parsing could exhaust memory with.
+pub const CASE_MAX_BYTES: u64 = 4 << 20;
+
+/// The text of the case file at `path`, refused beyond [`CASE_MAX_BYTES`] (a device such as
+/// `/dev/zero` is never read to its end).
+fn read_bounded(path: &Path) -> Result<String, CaseError> {
+    use std::io::Read;
+    let io = |reason: String| CaseError::Io {
+        path: path.display().to_string(),
+        reason,
+    };
+    let file = std::fs::File::open(path).map_err(|e| io(e.to_string()))?;
+    let mut bytes = Vec::new();
+    file.take(CASE_MAX_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| io(e.to_string()))?;
+    if bytes.len() as u64 > CASE_MAX_BYTES {
+        return Err(io(format!(
+            "it is larger than {} MiB; a case file is a few lines of TOML (give long α lists \
+             as a range {{ from, to, steps }})",
+            CASE_MAX_BYTES >> 20
+        )));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        io(format!(
+            "it is not UTF-8 text (invalid byte at offset {})",
+            e.utf8_error().valid_up_to()
+        ))
+    })
+}
+
+/// Refuse a solver named twice (in `solver.methods` or on the command line, `key`).
+pub fn check_distinct_methods(
+    key: &'static str,
+    methods: &[crate::solvers::Method],
+) -> Result<(), CaseError> {
+    convert::check_distinct_methods(key, methods)
 }
 
 /// Parse and validate case text (no output directory default is applied here).

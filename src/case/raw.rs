@@ -11,6 +11,21 @@ use std::path::PathBuf;
 
 use super::ReferenceChoice;
 
+/// A list of exactly `N` values: TOML arrays of any other length are refused (serde's own
+/// arrays accept and drop extra elements).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Exact<T, const N: usize>(pub [T; N]);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let items = Vec::<T>::deserialize(d)?;
+        let found = items.len();
+        <[T; N]>::try_from(items).map(Exact).map_err(|_| {
+            serde::de::Error::invalid_length(found, &format!("exactly {N} values").as_str())
+        })
+    }
+}
+
 /// A whole case file.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -35,7 +50,7 @@ pub(super) struct RawCase {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawGrid {
-    pub modules: [usize; 2],
+    pub modules: Exact<usize, 2>,
     pub length: Option<f64>,
     pub height: Option<f64>,
     pub module: Option<ModuleKind>,
@@ -77,7 +92,7 @@ pub(super) struct RawSupports {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawLoad {
-    pub nodal: Option<[f64; 3]>,
+    pub nodal: Option<Exact<f64, 3>>,
     pub alpha: toml::Value,
 }
 
@@ -88,7 +103,7 @@ pub(super) struct RawSolver {
     pub methods: Option<Vec<Method>>,
     pub tolerance: Option<f64>,
     pub max_iterations: Option<usize>,
-    pub subdomains: Option<[usize; 2]>,
+    pub subdomains: Option<Exact<usize, 2>>,
     pub dm: Option<f64>,
     pub l: Option<toml::Value>,
     pub weak_interfaces: Option<WeakInterfaces>,

@@ -88,7 +88,7 @@ fn node_graph(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
 fn node_ordering(p: &StiffnessPattern, ordering: NodeOrdering<'_>) -> (Vec<usize>, Vec<usize>) {
     let n = p.n;
     let identity = || ((0..n).collect(), (0..n).collect());
-    if n % 3 != 0 || n == 0 {
+    if !n.is_multiple_of(3) || n == 0 {
         return identity();
     }
     let nodes = n / 3;

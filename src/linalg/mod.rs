@@ -22,7 +22,7 @@ pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
     smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, SmallestEigenvalues,
-    ZERO_MODE_RELATIVE,
+    ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
 };
 
 /// Euclidean norm.

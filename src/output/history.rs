@@ -1,6 +1,7 @@
 //! `history/{solver}_alpha{α}.csv`: one row per LATIN iteration, written as the iterations go
-//! to a `.partial` file that is renamed to its final name only when the solve ends (a file
-//! under the final name is complete).
+//! to a `.partial` file (created exclusively: never through a planted link) that is renamed to
+//! its final name only when the solve ends (a file under the final name is complete). The
+//! sweep writes it inside its private staging directory and publishes it with the solve.
 
 use super::tables::result_path;
 use crate::solvers::{IterationRecord, Observer};
@@ -36,7 +37,11 @@ impl HistoryWriter {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
         let partial = path.with_file_name(format!(".{name}.partial"));
-        let mut out = BufWriter::new(File::create(&partial)?);
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&partial)?;
+        let mut out = BufWriter::new(file);
         writeln!(out, "{HISTORY_HEADER}")?;
         Ok(HistoryWriter {
             path,

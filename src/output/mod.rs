@@ -1,11 +1,13 @@
-//! Output files. Every file is written whole to a temporary name and then renamed, so a file
-//! that exists under its final name is complete. [`sinks`] decides what is written when along
+//! Output files. Every file is written whole into a private staging directory and published by
+//! a rename ([`publish`]), so a file that exists under its final name is complete, and a solve's
+//! files appear together, before its `summary.csv` row. [`sinks`] decides what is written when along
 //! a sweep; the other modules write one kind of file each.
 
 mod atomic;
 mod history;
 mod homogenised;
 pub mod plots;
+pub mod publish;
 pub mod sinks;
 mod tables;
 mod vtk;
@@ -14,9 +16,10 @@ pub use atomic::{ensure_writable, write_atomic};
 pub use history::{HistoryWriter, HISTORY_HEADER};
 pub use homogenised::{homogenised_path, write_homogenised};
 pub use plots::{FigureData, FigureSettings};
+pub use publish::{OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
-    alpha_label, result_path, write_displacements, write_stability, write_summary, write_tensions,
-    StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
+    alpha_label, result_path, stability_line, summary_line, write_displacements, write_stability,
+    write_summary, write_tensions, StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
 };
 pub use vtk::{kind_code, vtu_path, write_vtu, VTK_LINE};

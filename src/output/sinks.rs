@@ -7,16 +7,22 @@
 //! | [`HistorySink`] | `history/{solver}_alpha{α}.csv`, as the iterations go |
 //! | [`PerSolveSink`] | `tensions/{solver}_alpha{α}.csv`, `displacements/…`, `vtk/…vtu` |
 //! | [`PlotsSink`] | `plots/*.svg`, at the end of the sweep |
-//! | [`StabilitySink`] | `stability.csv`, rewritten after every solve |
-//! | [`SummarySink`] | `summary.csv`, rewritten after every solve |
+//! | [`PublishSink`] | publishes what the sinks above staged: the solve's commit point |
+//! | [`StabilitySink`] | `stability.csv`, one row appended after every solve |
+//! | [`SummarySink`] | `summary.csv`, one row appended after every solve |
+//!
+//! The sinks above [`PublishSink`] write into the run's private staging directory; nothing of
+//! a solve is visible before it publishes, and a solve without a finite answer is discarded.
 
 use super::{
-    vtu_path, write_displacements, write_stability, write_summary, write_tensions, write_vtu,
-    FigureData, FigureSettings, HistoryWriter, StabilityRow, SummaryRow,
+    result_path, stability_line, summary_line, vtu_path, write_displacements, write_tensions,
+    write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow, SummaryRow,
+    STABILITY_HEADER, SUMMARY_HEADER,
 };
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
 use crate::structure::Structure;
+use std::cell::RefCell;
 use std::io;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -25,7 +31,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[error("could not write `{}`: {source}", path.display())]
 pub struct WriteError {
-    /// The file, or the directory of a family of files.
+    /// The file (or, for the figures, their directory), under its final name.
     pub path: PathBuf,
     /// Why.
     pub source: io::Error,
@@ -84,15 +90,18 @@ pub trait Sink {
 
 /// `history/{solver}_alpha{α}.csv` of the solvers whose stopping measure is the indicator η.
 pub struct HistorySink {
+    root: PathBuf,
     dir: PathBuf,
     cables: usize,
     writer: Option<HistoryWriter>,
 }
 
 impl HistorySink {
-    /// Histories under `dir/history` of a structure of `cables` cables.
-    pub fn new(dir: &Path, cables: usize) -> Self {
+    /// Histories written under `dir/history` (the staging directory) of a structure of
+    /// `cables` cables; errors name the file under `root/history`.
+    pub fn new(root: &Path, dir: &Path, cables: usize) -> Self {
         HistorySink {
+            root: root.to_path_buf(),
             dir: dir.to_path_buf(),
             cables,
             writer: None,
@@ -104,7 +113,9 @@ impl Sink for HistorySink {
     fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
         if key.measure == Measure::Indicator {
             let writer = HistoryWriter::create(&self.dir, key.solver, key.alpha, self.cables)
-                .map_err(WriteError::at(self.dir.join("history")))?;
+                .map_err(WriteError::at(result_path(
+                    &self.root, "history", key.solver, key.alpha,
+                )))?;
             self.writer = Some(writer);
         }
         Ok(())
@@ -116,12 +127,14 @@ impl Sink for HistorySink {
         }
     }
 
-    fn end(&mut self, _key: &SolveKey, _end: SolveEnd) -> Result<(), WriteError> {
+    fn end(&mut self, key: &SolveKey, _end: SolveEnd) -> Result<(), WriteError> {
         match self.writer.take() {
             Some(writer) => writer
                 .finish()
                 .map(|_| ())
-                .map_err(WriteError::at(self.dir.join("history"))),
+                .map_err(WriteError::at(result_path(
+                    &self.root, "history", key.solver, key.alpha,
+                ))),
             None => Ok(()),
         }
     }
@@ -133,40 +146,54 @@ type WriteSolve = fn(&Path, &str, f64, &Structure, &Equilibrium) -> io::Result<P
 /// One file per solve, written when the solve ends with a finite answer:
 /// `tensions/…`, `displacements/…`, `vtk/…`.
 pub struct PerSolveSink<'s> {
+    root: PathBuf,
     dir: PathBuf,
     structure: &'s Structure,
     write: WriteSolve,
-    /// What a write error names: the family's directory, or the file itself.
+    /// The file a write error names, under `root`.
     error_path: fn(&Path, &str, f64) -> PathBuf,
 }
 
 impl<'s> PerSolveSink<'s> {
-    /// `tensions/{solver}_alpha{α}.csv` of `structure` under `dir`.
-    pub fn tensions(dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(dir, structure, write_tensions, |dir, _, _| {
-            dir.join("tensions")
-        })
+    /// `tensions/{solver}_alpha{α}.csv` of `structure`, written under `dir` (the staging
+    /// directory); errors name the file under `root`.
+    pub fn tensions(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(
+            root,
+            dir,
+            structure,
+            write_tensions,
+            |dir, solver, alpha| result_path(dir, "tensions", solver, alpha),
+        )
     }
 
-    /// `displacements/{solver}_alpha{α}.csv` of `structure` under `dir`.
-    pub fn displacements(dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(dir, structure, write_displacements, |dir, _, _| {
-            dir.join("displacements")
-        })
+    /// `displacements/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name
+    /// the file under `root`.
+    pub fn displacements(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(
+            root,
+            dir,
+            structure,
+            write_displacements,
+            |dir, solver, alpha| result_path(dir, "displacements", solver, alpha),
+        )
     }
 
-    /// `vtk/{solver}_alpha{α}.vtu` of `structure` under `dir`.
-    pub fn vtk(dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(dir, structure, write_vtu, vtu_path)
+    /// `vtk/{solver}_alpha{α}.vtu` of `structure`, written under `dir`; errors name the file
+    /// under `root`.
+    pub fn vtk(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(root, dir, structure, write_vtu, vtu_path)
     }
 
     fn new(
+        root: &Path,
         dir: &Path,
         structure: &'s Structure,
         write: WriteSolve,
         error_path: fn(&Path, &str, f64) -> PathBuf,
     ) -> Self {
         PerSolveSink {
+            root: root.to_path_buf(),
             dir: dir.to_path_buf(),
             structure,
             write,
@@ -189,7 +216,7 @@ impl Sink for PerSolveSink<'_> {
         )
         .map(|_| ())
         .map_err(WriteError::at((self.error_path)(
-            &self.dir, key.solver, key.alpha,
+            &self.root, key.solver, key.alpha,
         )))
     }
 }
@@ -197,6 +224,7 @@ impl Sink for PerSolveSink<'_> {
 /// `plots/*.svg`: gathers what the figures need along the sweep (the convergence figures from
 /// the iteration records of the solvers whose stopping measure is η) and draws them at its end.
 pub struct PlotsSink<'s> {
+    root: PathBuf,
     dir: PathBuf,
     structure: &'s Structure,
     figures: FigureData,
@@ -205,14 +233,17 @@ pub struct PlotsSink<'s> {
 }
 
 impl<'s> PlotsSink<'s> {
-    /// Figures of `structure` under `dir/plots`; Figures 6 and 8 show `first_solver`.
+    /// Figures of `structure` written under `dir/plots` (the staging directory); Figures 6
+    /// and 8 show `first_solver`; errors name `root/plots`.
     pub fn new(
+        root: &Path,
         dir: &Path,
         structure: &'s Structure,
         first_solver: &str,
         settings: FigureSettings,
     ) -> Self {
         PlotsSink {
+            root: root.to_path_buf(),
             dir: dir.to_path_buf(),
             structure,
             figures: FigureData::new(first_solver, settings),
@@ -249,26 +280,65 @@ impl Sink for PlotsSink<'_> {
         self.figures
             .write(&self.dir, self.structure)
             .map(|_| ())
-            .map_err(WriteError::at(self.dir.join("plots")))
+            .map_err(WriteError::at(self.root.join("plots")))
     }
 }
 
-/// `stability.csv`: the smallest tangent eigenvalue of every solution.
+/// The commit point of a solve: publishes every file the sinks before it staged (and, at the
+/// end of the sweep, the figures); a solve without a finite answer is discarded unseen.
+pub struct PublishSink<'s> {
+    out: &'s RefCell<OutputDir>,
+}
+
+impl<'s> PublishSink<'s> {
+    /// Publishes into `out`.
+    pub fn new(out: &'s RefCell<OutputDir>) -> Self {
+        PublishSink { out }
+    }
+
+    fn publish(&self) -> Result<(), WriteError> {
+        let mut out = self.out.borrow_mut();
+        let root = out.root().to_path_buf();
+        out.commit().map_err(WriteError::at(root))
+    }
+}
+
+impl Sink for PublishSink<'_> {
+    fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        match end {
+            SolveEnd::Solved { .. } => self.publish(),
+            SolveEnd::NonFinite => {
+                let mut out = self.out.borrow_mut();
+                let root = out.root().to_path_buf();
+                out.discard().map_err(WriteError::at(root))
+            }
+        }
+    }
+
+    fn close(&mut self) -> Result<(), WriteError> {
+        self.publish()
+    }
+}
+
+/// `stability.csv`: the smallest tangent eigenvalue of every solution, one row appended per
+/// solve.
 pub struct StabilitySink<'s> {
-    path: PathBuf,
+    out: &'s RefCell<OutputDir>,
     structure: &'s Structure,
     taut: &'s TautStiffness,
-    rows: Vec<StabilityRow>,
 }
 
 impl<'s> StabilitySink<'s> {
-    /// `dir/stability.csv`; the eigenvalues reuse the symbolic factorization of `taut`.
-    pub fn new(dir: &Path, structure: &'s Structure, taut: &'s TautStiffness) -> Self {
+    /// `stability.csv` in `out`; the eigenvalues reuse the symbolic factorization of `taut`.
+    pub fn new(
+        out: &'s RefCell<OutputDir>,
+        structure: &'s Structure,
+        taut: &'s TautStiffness,
+    ) -> Self {
         StabilitySink {
-            path: dir.join("stability.csv"),
+            out,
             structure,
             taut,
-            rows: Vec::new(),
         }
     }
 }
@@ -278,7 +348,7 @@ impl Sink for StabilitySink<'_> {
         let SolveEnd::Solved { solution, row } = end else {
             return Ok(());
         };
-        self.rows.push(StabilityRow {
+        let row = StabilityRow {
             solver: row.solver.clone(),
             alpha: row.alpha,
             slack_cables: row.slack_cables,
@@ -287,36 +357,48 @@ impl Sink for StabilitySink<'_> {
                 &solution.equilibrium,
                 self.taut,
             ),
-        });
-        write_stability(&self.path, &self.rows).map_err(WriteError::at(&self.path))
+        };
+        append(
+            self.out,
+            "stability.csv",
+            STABILITY_HEADER,
+            &stability_line(&row),
+        )
     }
 }
 
-/// `summary.csv`, rewritten whole after every solve: an interrupted sweep leaves a complete
-/// file.
-pub struct SummarySink {
-    path: PathBuf,
-    rows: Vec<SummaryRow>,
+/// `summary.csv`, one row appended after every solve, once its files are published: the row
+/// says the solve is complete. A row is one write, so the file always ends with a whole row.
+pub struct SummarySink<'s> {
+    out: &'s RefCell<OutputDir>,
 }
 
-impl SummarySink {
-    /// `dir/summary.csv`.
-    pub fn new(dir: &Path) -> Self {
-        SummarySink {
-            path: dir.join("summary.csv"),
-            rows: Vec::new(),
-        }
+impl<'s> SummarySink<'s> {
+    /// `summary.csv` in `out`.
+    pub fn new(out: &'s RefCell<OutputDir>) -> Self {
+        SummarySink { out }
     }
 }
 
-impl Sink for SummarySink {
+impl Sink for SummarySink<'_> {
     fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
         let SolveEnd::Solved { row, .. } = end else {
             return Ok(());
         };
-        self.rows.push(row.clone());
-        write_summary(&self.path, &self.rows).map_err(WriteError::at(&self.path))
+        append(self.out, "summary.csv", SUMMARY_HEADER, &summary_line(row))
     }
+}
+
+/// Append `line` to the ledger `name` of `out`.
+fn append(
+    out: &RefCell<OutputDir>,
+    name: &str,
+    header: &str,
+    line: &str,
+) -> Result<(), WriteError> {
+    let mut out = out.borrow_mut();
+    let path = out.root().join(name);
+    out.append(name, header, line).map_err(WriteError::at(path))
 }
 
 /// Every sink of a sweep behind one: the solve's observer and its ending, in order.

@@ -7,9 +7,19 @@ use crate::solvers::{displacement_residual, Equilibrium, Solution};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
-/// α as it appears in file names: Rust's `{}` for f64 (1 → `1`, 0.05 → `0.05`).
+/// Longest α label written out in full; a longer one (1e-250 is 252 characters in full, too
+/// long for a file name) is written in exponent form.
+const ALPHA_LABEL_MAX: usize = 24;
+
+/// α as it appears in file names: Rust's `{}` for f64 (1 → `1`, 0.05 → `0.05`), or its
+/// exponent form (`1e-250`) when that would be longer than 24 characters.
 pub fn alpha_label(alpha: f64) -> String {
-    format!("{alpha}")
+    let full = format!("{alpha}");
+    if full.len() > ALPHA_LABEL_MAX {
+        format!("{alpha:e}")
+    } else {
+        full
+    }
 }
 
 /// One row of `summary.csv` (the README describes each column).
@@ -73,6 +83,20 @@ impl SummaryRow {
     }
 }
 
+impl SummaryRow {
+    /// Whether every number of the row is finite (a row with inf or NaN is never written).
+    pub fn is_finite(&self) -> bool {
+        [
+            self.max_tension,
+            self.max_deflection,
+            self.residual,
+            self.equilibrium_residual,
+        ]
+        .iter()
+        .all(|x| x.is_finite())
+    }
+}
+
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
 pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,setup_seconds,solve_seconds";
 
@@ -85,32 +109,36 @@ pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
     write_atomic(path, |w| {
         writeln!(w, "{SUMMARY_HEADER}")?;
         for r in rows {
-            let fraction = if r.cables > 0 {
-                r.slack_cables as f64 / r.cables as f64
-            } else {
-                0.0
-            };
-            writeln!(
-                w,
-                "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{}",
-                r.solver,
-                alpha_label(r.alpha),
-                r.converged,
-                r.iterations,
-                r.slack_cables,
-                r.cables,
-                fraction,
-                r.max_tension,
-                r.max_deflection,
-                r.residual,
-                r.equilibrium_residual,
-                r.search_updates,
-                r.setup_seconds,
-                r.solve_seconds
-            )?;
+            writeln!(w, "{}", summary_line(r))?;
         }
         Ok(())
     })
+}
+
+/// The line of `summary.csv` of `r` (no newline).
+pub fn summary_line(r: &SummaryRow) -> String {
+    let fraction = if r.cables > 0 {
+        r.slack_cables as f64 / r.cables as f64
+    } else {
+        0.0
+    };
+    format!(
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{}",
+        r.solver,
+        alpha_label(r.alpha),
+        r.converged,
+        r.iterations,
+        r.slack_cables,
+        r.cables,
+        fraction,
+        r.max_tension,
+        r.max_deflection,
+        r.residual,
+        r.equilibrium_residual,
+        r.search_updates,
+        r.setup_seconds,
+        r.solve_seconds
+    )
 }
 
 /// Path `dir/{kind}/{solver}_alpha{α}.csv` of a per-solve CSV file.
@@ -215,15 +243,19 @@ pub fn write_stability(path: &Path, rows: &[StabilityRow]) -> std::io::Result<()
     write_atomic(path, |w| {
         writeln!(w, "{STABILITY_HEADER}")?;
         for r in rows {
-            writeln!(
-                w,
-                "{},{},{},{}",
-                r.solver,
-                alpha_label(r.alpha),
-                r.slack_cables,
-                r.min_tangent_eigenvalue
-            )?;
+            writeln!(w, "{}", stability_line(r))?;
         }
         Ok(())
     })
+}
+
+/// The line of `stability.csv` of `r` (no newline).
+pub fn stability_line(r: &StabilityRow) -> String {
+    format!(
+        "{},{},{},{}",
+        r.solver,
+        alpha_label(r.alpha),
+        r.slack_cables,
+        r.min_tangent_eigenvalue
+    )
 }

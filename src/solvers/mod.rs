@@ -20,7 +20,7 @@ pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
 pub use observer::{IterationRecord, Observer, Silent, Tee};
-pub use residual::{displacement_residual, relative_unbalance};
+pub use residual::{displacement_residual, load_relative_unbalance, relative_unbalance};
 pub use solution::{Equilibrium, Solution};
 pub use solver::{stop_when, Progress, Solver};
 pub use status::{Measure, SolveInfo, Status};
@@ -34,9 +34,10 @@ use thiserror::Error;
 pub enum SetupError {
     /// The stiffness with every cable taut is singular.
     #[error(
-        "the structure is a mechanism: its stiffness with every cable taut has {zero_modes} \
+        "the structure is a mechanism: its stiffness with every cable taut has {} \
          zero-stiffness mode(s), so no load that works on them can be carried; clamp more \
-         nodes (`supports.clamp`) or use a stiffer module (`grid.module = \"braced\"`)"
+         nodes (`supports.clamp`) or use a stiffer module (`grid.module = \"braced\"`)",
+        mode_count(*zero_modes)
     )]
     Mechanism {
         /// Number of zero-stiffness modes.
@@ -45,11 +46,30 @@ pub enum SetupError {
     /// A LATIN substructure operator could not be factorized or pseudo-inverted.
     #[error(
         "substructure {index} has a singular operator (K_E or K*_E + QQᵀ): change \
-         `solver.subdomains` or `solver.dm`"
+         `solver.subdomains`, `solver.dm` or `solver.l`"
     )]
     SingularSubstructure {
         /// The substructure, numbered row by row of the partition.
         index: usize,
+    },
+    /// A uniform LATIN search direction `solver.l` too far from the links' stiffness for the
+    /// stages to be resolved in f64.
+    #[error(
+        "`solver.l` = {l:e} N/m is out of range for this structure: its links' stiffness k is \
+         between {k_min:e} and {k_max:e} N/m; give l between {min:e} and {max:e} N/m, or \
+         \"stiffness\" (l = k on every link)"
+    )]
+    SearchDirectionOutOfRange {
+        /// The value given.
+        l: f64,
+        /// The smallest link stiffness, N/m.
+        k_min: f64,
+        /// The largest link stiffness, N/m.
+        k_max: f64,
+        /// The smallest l accepted.
+        min: f64,
+        /// The largest l accepted.
+        max: f64,
     },
     /// The LATIN macro problem is singular.
     #[error(
@@ -57,4 +77,13 @@ pub enum SetupError {
          try `solver.weak_interfaces = \"macro\"` or another `solver.subdomains`"
     )]
     SingularMacroProblem,
+}
+
+/// `N`, or `at least N` when N is the most [`crate::linalg::zero_mode_count`] counts.
+fn mode_count(zero_modes: usize) -> String {
+    if zero_modes >= crate::linalg::ZERO_MODES_COUNTED {
+        format!("at least {zero_modes}")
+    } else {
+        zero_modes.to_string()
+    }
 }

@@ -48,7 +48,7 @@ pub struct PcgLcp<'s> {
     cables: Vec<usize>,
     /// `k^{1/2}` of each of them.
     sqrt_k: Vec<f64>,
-    /// `‖t0_c‖`, the scale of the complementarity residual.
+    /// `‖t0_c‖`, the prestress part of the complementarity residual's scale.
     prestress_norm: f64,
     /// Scratch on the free dofs.
     nodal: Vec<f64>,
@@ -67,6 +67,9 @@ pub struct PcgLcpState {
     /// Scratch `W̃ p`.
     wp: Vec<f64>,
     since_refresh: usize,
+    /// `‖t0_c‖ + ‖k_c B_c K⁻¹ F‖`: the scale of the complementarity residual, so that it is
+    /// relative both at zero prestress (homogeneous in α) and at zero load.
+    scale: f64,
     residual: f64,
     iteration: usize,
     /// `pᵀ W̃ p ≤ 0`: no further progress is possible.
@@ -124,8 +127,10 @@ impl<'s> PcgLcp<'s> {
         state.since_refresh = 0;
     }
 
-    /// `‖min(k λ, τ)‖ / ‖t0_c‖`, with `k λ = k^{1/2} x` and `τ = k^{1/2} g`.
-    fn residual_of(&self, x: &[f64], g: &[f64]) -> f64 {
+    /// `‖min(k λ, τ)‖ / (‖t0_c‖ + ‖k_c B_c K⁻¹ F‖)`, with `k λ = k^{1/2} x` and
+    /// `τ = k^{1/2} g` (absolute only when both prestress and load vanish, where λ = 0 is
+    /// exact).
+    fn residual_of(&self, x: &[f64], g: &[f64], scale: f64) -> f64 {
         let r: f64 = x
             .iter()
             .zip(g)
@@ -133,8 +138,8 @@ impl<'s> PcgLcp<'s> {
             .map(|((xi, gi), sk)| (sk * xi.min(*gi)).powi(2))
             .sum::<f64>()
             .sqrt();
-        if self.prestress_norm > 0.0 {
-            r / self.prestress_norm
+        if scale > 0.0 {
+            r / scale
         } else {
             r
         }
@@ -143,10 +148,10 @@ impl<'s> PcgLcp<'s> {
     /// The residual of `state`; when it meets the tolerance, confirmed on an exact gradient
     /// (the updated one drifts by round-off), the search direction restarting if it does not.
     fn measure_state(&mut self, state: &mut PcgLcpState) {
-        state.residual = self.residual_of(&state.x, &state.g);
+        state.residual = self.residual_of(&state.x, &state.g, state.scale);
         if state.residual <= self.settings.tolerance {
             self.refresh_gradient(state);
-            state.residual = self.residual_of(&state.x, &state.g);
+            state.residual = self.residual_of(&state.x, &state.g, state.scale);
             if state.residual > self.settings.tolerance {
                 state.p = free_part(&state.x, &state.g);
             }
@@ -177,12 +182,22 @@ impl<'s> PcgLcp<'s> {
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
             .collect();
+        // The residual's scale: the prestress and the load's tensions (scale-free in α, sound
+        // at zero prestress).
+        let load_tensions: Vec<f64> = self
+            .cables
+            .iter()
+            .zip(&self.sqrt_k)
+            .map(|(&i, &sk)| sk * sk * s.link_dofs[i].elongation(&u_load))
+            .collect();
+        let scale = self.prestress_norm + norm(&load_tensions);
         let cold = x.is_none();
         let x = x.unwrap_or_else(|| vec![0.0; m]);
         let g = q.clone();
         let p = free_part(&x, &g);
         let mut state = PcgLcpState {
             load: load.to_vec(),
+            scale,
             q,
             x,
             g,
@@ -352,8 +367,9 @@ impl Solver for PcgLcp<'_> {
             .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(&u))
             .collect();
         for (j, &i) in self.cables.iter().enumerate() {
-            if state.x[j] > 0.0 {
-                // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing.
+            // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing, nor does
+            // a cable at the switch point (λ = 0, τ = t0 + k e ≤ 0).
+            if state.x[j] > 0.0 || tensions[i] <= 0.0 {
                 tensions[i] = 0.0;
             }
         }

@@ -25,6 +25,37 @@ pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut
     }
 }
 
+/// `r ← Bᵀτ − F` and its size relative to the forces the load brings into play,
+/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` (newton's stopping measure).
+///
+/// The prestress t0 is left out of the scale: it is self-balanced, and counted in the scale it
+/// let `U = 0` pass as converged at `lower_cable = 1e12` (issue 13, D5a). When load and
+/// deformation both vanish exactly (U = 0 under F = 0), the prestress forces are the scale.
+pub fn load_relative_unbalance(
+    s: &Structure,
+    tensions: &[f64],
+    load: &[f64],
+    r: &mut [f64],
+) -> f64 {
+    s.nodal_forces(tensions, r);
+    let mut added = vec![0.0; s.n_free];
+    let mut all = vec![0.0; s.n_free];
+    for ((t, ld), link) in tensions.iter().zip(&s.link_dofs).zip(&s.links) {
+        for (d, c) in ld.iter() {
+            added[d] += (c * (t - link.prestress)).abs();
+            all[d] += (c * t).abs();
+        }
+    }
+    r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
+    let scale = norm(load) + norm(&added);
+    let scale = if scale > 0.0 { scale } else { norm(&all) };
+    if scale > 0.0 {
+        norm(r) / scale
+    } else {
+        norm(r)
+    }
+}
+
 /// r(U): the relative equilibrium residual of displacements U under the exact law,
 /// `τ(U) = t0 + k B U`, clipped at 0 for unilateral cables. Zero exactly at the solution.
 pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {

@@ -36,9 +36,11 @@ impl fmt::Display for Status {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Measure {
     /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs
-    /// (`newton`).
+    /// (`newton`, which stops when `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)`, the stricter, meets
+    /// the tolerance too).
     EquilibriumResidual,
-    /// Relative complementarity residual `‖min(kλ, τ)‖ / ‖t0_c‖` of the cable LCP (`pcg-lcp`).
+    /// Relative complementarity residual `‖min(kλ, τ)‖ / (‖t0_c‖ + ‖k_c B_c K⁻¹ F‖)` of the
+    /// cable LCP (`pcg-lcp`).
     ComplementarityResidual,
     /// The LATIN indicator η between the two half-steps (paper §5.3).
     Indicator,

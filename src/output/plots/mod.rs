@@ -106,7 +106,7 @@ impl FigureData {
         if self
             .deformed
             .as_ref()
-            .map_or(true, |(largest, _)| alpha >= *largest)
+            .is_none_or(|(largest, _)| alpha >= *largest)
         {
             self.deformed = Some((alpha, eq.clone()));
         }

@@ -19,8 +19,8 @@
 mod line_search;
 
 use super::{
-    relative_unbalance, stop_when, Equilibrium, Measure, Progress, SetupError, Solver,
-    TautStiffness,
+    load_relative_unbalance, relative_unbalance, stop_when, Equilibrium, Measure, Progress,
+    SetupError, Solver, TautStiffness,
 };
 use crate::linalg::{dot, norm, preconditioned_cg, SparseCholesky};
 use crate::structure::Structure;
@@ -93,6 +93,12 @@ struct Factored {
     taut: Vec<bool>,
 }
 
+/// Stall: for this many iterations the residual has not fallen below half its best value and
+/// the slack set has not changed. Newton converges quadratically on a fixed taut set, so ten
+/// such steps mean it sits at round-off (issue 13, C7: `tolerance = 1e-15` ran all
+/// iterations).
+const STALL_ITERATIONS: usize = 10;
+
 /// The newton solver, set up for one structure.
 pub struct Newton<'s> {
     structure: &'s Structure,
@@ -116,9 +122,15 @@ pub struct NewtonState {
     tensions: Vec<f64>,
     /// `Bᵀτ − F`, the energy's gradient.
     gradient: Vec<f64>,
+    /// r(U), the relative equilibrium residual every solver reports.
     residual: f64,
+    /// The unbalance relative to `‖F‖ + ‖|B|ᵀ|τ − t0|‖`: the stop needs it ≤ tol too.
+    load_residual: f64,
     iteration: usize,
-    /// The last step was not a descent direction: no further progress is possible.
+    /// The smallest load-relative residual so far that halved the one before it, and its iteration.
+    best: (f64, usize),
+    /// The last step was not a descent direction, or the residual stopped falling for
+    /// [`STALL_ITERATIONS`] iterations: no further progress is possible.
     stalled: bool,
 }
 
@@ -154,7 +166,10 @@ impl<'s> Newton<'s> {
             state.trial[i] = trial;
             state.tensions[i] = if l.unilateral { trial.max(0.0) } else { trial };
         }
-        state.residual = relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
+        let mut scratch = vec![0.0; s.n_free];
+        state.residual = relative_unbalance(s, &state.tensions, &state.load, &mut scratch);
+        state.load_residual =
+            load_relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
     }
 
     /// `step ← H⁻¹ step` with H the Hessian on the taut set of `state` (SPEC §3) plus the
@@ -259,10 +274,13 @@ impl<'s> Newton<'s> {
             trial: vec![0.0; m],
             tensions: vec![0.0; m],
             residual: f64::INFINITY,
+            load_residual: f64::INFINITY,
             iteration: 0,
+            best: (f64::INFINITY, 0),
             stalled: false,
         };
         self.evaluate(&mut state);
+        state.best = (state.load_residual, 0);
         state
     }
 }
@@ -300,6 +318,7 @@ impl Solver for Newton<'_> {
     fn next_iter(&mut self, state: &mut NewtonState) {
         let s = self.structure;
         state.iteration += 1;
+        let slack_before: Vec<bool> = state.tensions.iter().map(|&t| t == 0.0).collect();
         let mut step: Vec<f64> = state.gradient.iter().map(|g| -g).collect();
         self.newton_step(state, &mut step);
         let mut step_elongation = vec![0.0; s.links.len()];
@@ -316,10 +335,26 @@ impl Solver for Newton<'_> {
             .zip(&step)
             .for_each(|(u, d)| *u += length * d);
         self.evaluate(state);
+        let slack_changed = state
+            .tensions
+            .iter()
+            .zip(&slack_before)
+            .any(|(&t, &was)| (t == 0.0) != was);
+        if state.load_residual <= 0.5 * state.best.0 || slack_changed {
+            state.best = (state.load_residual.min(state.best.0), state.iteration);
+        } else if state.iteration - state.best.1 >= STALL_ITERATIONS {
+            state.stalled = true;
+        }
     }
 
     fn progress(&self, state: &NewtonState) -> Progress {
-        let stop = stop_when(state.residual <= self.settings.tolerance, state.stalled);
+        // r(U) ≤ tol, and the same unbalance relative to the forces the load brings into play
+        // (the prestress left out): the second is the stricter, and keeps U = 0 from passing
+        // at a huge prestress (issue 13, D5a).
+        let stop = stop_when(
+            state.load_residual <= self.settings.tolerance,
+            state.stalled,
+        );
         Progress {
             iteration: state.iteration,
             residual: state.residual,

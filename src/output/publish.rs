@@ -1,0 +1,328 @@
+//! The commit protocol of an output directory. One run at a time writes into a directory (a
+//! lock); a solve's files are written into a private staging directory and published together
+//! at one commit point, before its `summary.csv` row; a manifest lists what the run wrote, so
+//! the next run removes exactly that and leaves every other file alone.
+//!
+//! | file | what |
+//! |---|---|
+//! | `.tensolve.lock` | locked (`flock`) while a run writes; released when the process ends, even killed |
+//! | `.tensolve-manifest` | one relative path per line: the files the last run published |
+//! | `.tensolve-staging-*` | the current solve's files until they are published; removed after |
+
+use std::collections::BTreeSet;
+use std::fs::{File, OpenOptions, TryLockError};
+use std::io::{self, Read, Write};
+use std::path::{Component, Path, PathBuf};
+
+/// The lock file's name.
+pub const LOCK_FILE: &str = ".tensolve.lock";
+/// The manifest's name.
+pub const MANIFEST_FILE: &str = ".tensolve-manifest";
+/// The prefix of the staging directories' names.
+const STAGING_PREFIX: &str = ".tensolve-staging-";
+/// The largest manifest read back (a longer one is not ours, and is left alone).
+const MANIFEST_MAX_BYTES: u64 = 64 << 20;
+
+/// Why an output directory cannot be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum OpenError {
+    /// Another run holds the directory's lock.
+    #[error(
+        "output directory `{}` is in use by another tensolve run (it holds `{LOCK_FILE}`): wait \
+         for that run to end, or pass `--out` with another directory",
+        dir.display()
+    )]
+    Busy {
+        /// The directory.
+        dir: PathBuf,
+    },
+    /// The directory cannot be created, locked or written.
+    #[error("output directory `{}` is not writable ({source})", dir.display())]
+    Io {
+        /// The directory.
+        dir: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+}
+
+/// A line-per-solve file (`summary.csv`, `stability.csv`): created whole at its first row,
+/// then appended to through the handle it was created with (never reopened by name).
+struct Ledger {
+    file: File,
+    /// Its length after the last whole row: a failed append is cut back to it.
+    len: u64,
+}
+
+/// An output directory opened for one run: locked, with a private staging directory.
+pub struct OutputDir {
+    root: PathBuf,
+    /// Held for the run's life; the OS releases it when the process ends.
+    _lock: File,
+    staging: Option<tempfile::TempDir>,
+    /// What the previous run published, removed at this run's first commit.
+    previous: Option<Vec<PathBuf>>,
+    manifest: Option<File>,
+    ledgers: std::collections::BTreeMap<PathBuf, Ledger>,
+    published: BTreeSet<PathBuf>,
+}
+
+impl OutputDir {
+    /// Create `root` if needed, lock it (refused when another run holds it), remove the
+    /// staging directories of a killed run, and create this run's staging directory.
+    pub fn open(root: &Path) -> Result<OutputDir, OpenError> {
+        let io_err = |source| OpenError::Io {
+            dir: root.to_path_buf(),
+            source,
+        };
+        std::fs::create_dir_all(root).map_err(io_err)?;
+        let lock = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(root.join(LOCK_FILE))
+            .map_err(io_err)?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(TryLockError::WouldBlock) => {
+                return Err(OpenError::Busy {
+                    dir: root.to_path_buf(),
+                })
+            }
+            Err(TryLockError::Error(e)) => return Err(io_err(e)),
+        }
+        remove_stale_staging(root).map_err(io_err)?;
+        let staging = tempfile::Builder::new()
+            .prefix(STAGING_PREFIX)
+            .tempdir_in(root)
+            .map_err(io_err)?;
+        Ok(OutputDir {
+            root: root.to_path_buf(),
+            _lock: lock,
+            staging: Some(staging),
+            previous: Some(read_manifest(&root.join(MANIFEST_FILE))),
+            manifest: None,
+            ledgers: Default::default(),
+            published: BTreeSet::new(),
+        })
+    }
+
+    /// The directory the results go to.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// Where the current solve's files are written (same relative paths as under
+    /// [`root`](Self::root)); nothing there is visible until [`commit`](Self::commit).
+    pub fn staging(&self) -> &Path {
+        self.staging.as_ref().expect("staging until finish").path()
+    }
+
+    /// Publish every staged file under its final name. On error, the files this commit had
+    /// already published are removed again: a solve is published whole or not at all.
+    pub fn commit(&mut self) -> io::Result<()> {
+        let staged = staged_files(self.staging())?;
+        if staged.is_empty() {
+            return Ok(());
+        }
+        self.begin()?;
+        self.record(&staged)?;
+        let mut done: Vec<PathBuf> = Vec::new();
+        let result = staged.iter().try_for_each(|rel| {
+            let to = self.root.join(rel);
+            ensure_real_dir(&self.root, rel)?;
+            std::fs::rename(self.staging().join(rel), &to)
+                .map_err(|e| io::Error::new(e.kind(), format!("`{}`: {e}", to.display())))?;
+            done.push(to);
+            Ok(())
+        });
+        if result.is_err() {
+            for path in &done {
+                let _ = std::fs::remove_file(path);
+            }
+            let _ = self.discard();
+        }
+        result
+    }
+
+    /// Drop every staged file unpublished (a solve with no finite answer).
+    pub fn discard(&mut self) -> io::Result<()> {
+        for rel in staged_files(self.staging())? {
+            std::fs::remove_file(self.staging().join(rel))?;
+        }
+        Ok(())
+    }
+
+    /// Append `line` to the ledger `rel` (created with `header` at its first row). The row is
+    /// one write; a failed write is cut back, so the file always ends with a whole row.
+    pub fn append(&mut self, rel: &str, header: &str, line: &str) -> io::Result<()> {
+        let rel = PathBuf::from(rel);
+        if !self.ledgers.contains_key(&rel) {
+            let staged = self.staging().join(&rel);
+            let mut file = OpenOptions::new()
+                .read(true)
+                .append(true)
+                .create_new(true)
+                .open(&staged)?;
+            let text = format!("{header}\n{line}\n");
+            file.write_all(text.as_bytes())?;
+            file.sync_data()?;
+            self.begin()?;
+            self.record(std::slice::from_ref(&rel))?;
+            std::fs::rename(&staged, self.root.join(&rel))?;
+            let len = text.len() as u64;
+            self.ledgers.insert(rel, Ledger { file, len });
+            return Ok(());
+        }
+        let ledger = self.ledgers.get_mut(&rel).expect("checked");
+        let text = format!("{line}\n");
+        match ledger.file.write_all(text.as_bytes()) {
+            Ok(()) => {
+                ledger.len += text.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                let _ = ledger.file.set_len(ledger.len);
+                Err(e)
+            }
+        }
+    }
+
+    /// The run ended: sync the ledgers, remove the previous run's files if nothing was
+    /// published (a run that wrote nothing leaves nothing of another), remove the staging
+    /// directory. The lock is released when `self` is dropped.
+    pub fn finish(mut self) -> io::Result<()> {
+        for ledger in self.ledgers.values() {
+            ledger.file.sync_data()?;
+        }
+        self.begin()?;
+        if let Some(staging) = self.staging.take() {
+            staging.close()?;
+        }
+        Ok(())
+    }
+
+    /// At the first publication: remove what the previous run published and start a new
+    /// manifest.
+    fn begin(&mut self) -> io::Result<()> {
+        let Some(previous) = self.previous.take() else {
+            return Ok(());
+        };
+        for rel in previous {
+            match std::fs::remove_file(self.root.join(&rel)) {
+                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+                _ => {}
+            }
+        }
+        let manifest = self.staging().join(MANIFEST_FILE);
+        let file = OpenOptions::new()
+            .append(true)
+            .create_new(true)
+            .open(&manifest)?;
+        std::fs::rename(&manifest, self.root.join(MANIFEST_FILE))?;
+        self.manifest = Some(file);
+        Ok(())
+    }
+
+    /// Write ahead: the manifest names a file before it is published.
+    fn record(&mut self, rels: &[PathBuf]) -> io::Result<()> {
+        let mut text = String::new();
+        for rel in rels {
+            if self.published.insert(rel.clone()) {
+                text.push_str(&rel.to_string_lossy());
+                text.push('\n');
+            }
+        }
+        if text.is_empty() {
+            return Ok(());
+        }
+        let manifest = self.manifest.as_mut().expect("begun");
+        manifest.write_all(text.as_bytes())?;
+        manifest.sync_data()
+    }
+}
+
+/// The relative paths of the files under `dir`.
+fn staged_files(dir: &Path) -> io::Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let mut stack = vec![PathBuf::new()];
+    while let Some(rel) = stack.pop() {
+        for entry in std::fs::read_dir(dir.join(&rel))? {
+            let entry = entry?;
+            let path = rel.join(entry.file_name());
+            if entry.file_type()?.is_dir() {
+                stack.push(path);
+            } else {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// Create the directories of `rel` under `root`, refusing a link in their place (a planted
+/// link would send the results elsewhere).
+fn ensure_real_dir(root: &Path, rel: &Path) -> io::Result<()> {
+    let mut dir = root.to_path_buf();
+    let Some(parent) = rel.parent() else {
+        return Ok(());
+    };
+    for part in parent.components() {
+        dir.push(part);
+        match std::fs::symlink_metadata(&dir) {
+            Ok(m) if m.is_dir() => {}
+            Ok(_) => {
+                return Err(io::Error::new(
+                    io::ErrorKind::AlreadyExists,
+                    format!(
+                        "`{}` is not a directory (a link or a file): remove it",
+                        dir.display()
+                    ),
+                ))
+            }
+            Err(e) if e.kind() == io::ErrorKind::NotFound => std::fs::create_dir(&dir)?,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
+}
+
+/// The relative paths a manifest lists; a path that could leave the directory (absolute,
+/// `..`) is ignored, as is a manifest too large or unreadable.
+fn read_manifest(path: &Path) -> Vec<PathBuf> {
+    let Ok(file) = File::open(path) else {
+        return Vec::new();
+    };
+    let mut text = String::new();
+    if file
+        .take(MANIFEST_MAX_BYTES)
+        .read_to_string(&mut text)
+        .is_err()
+    {
+        return Vec::new();
+    }
+    text.lines()
+        .map(PathBuf::from)
+        .filter(|p| {
+            !p.as_os_str().is_empty() && p.components().all(|c| matches!(c, Component::Normal(_)))
+        })
+        .collect()
+}
+
+/// Remove the staging directories a killed run left (only directories: a link of that name is
+/// left alone).
+fn remove_stale_staging(root: &Path) -> io::Result<()> {
+    for entry in std::fs::read_dir(root)? {
+        let entry = entry?;
+        let stale = entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with(STAGING_PREFIX);
+        if stale && entry.file_type()?.is_dir() {
+            std::fs::remove_dir_all(entry.path())?;
+        }
+    }
+    Ok(())
+}
