@@ -189,7 +189,7 @@ impl LineChart {
 
     fn drawable(&self, s: &Series, frame: &Frame) -> Series {
         let on_axis = |v: f64, scale: Scale| v.is_finite() && (scale == Scale::Linear || v > 0.0);
-        let in_frame = |x: f64| frame.x_max.map_or(true, |max| x <= max);
+        let in_frame = |x: f64| frame.x_max.is_none_or(|max| x <= max);
         let keep = |&(x, y): &(f64, f64)| {
             on_axis(x, self.x_scale) && on_axis(y, self.y_scale) && in_frame(x)
         };
