@@ -30,7 +30,9 @@ trap 'rm -rf "$scratch"' EXIT
 with_plots() {
     local case="$1" copy
     copy="$scratch/$(basename "$case")"
-    if grep -q '^\[output\]' "$case"; then
+    if grep -q '^plots *= *true' "$case"; then
+        cp "$case" "$copy"
+    elif grep -q '^\[output\]' "$case"; then
         sed 's/^\[output\].*/&\nplots = true/' "$case" >"$copy"
     else
         printf '%s\n\n[output]\nplots = true\n' "$(cat "$case")" >"$copy"

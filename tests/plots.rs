@@ -9,6 +9,13 @@ use std::path::{Path, PathBuf};
 use tensolve::app::sweep::{run, RunOptions};
 use tensolve::output::plots::SERIES_STROKE_WIDTH;
 
+/// Stroke colours of Figure 8's bars and slack cables.
+const BAR: &str = "#191919";
+const SLACK: &str = "#787878";
+/// Bars and cables of the 4 × 4 standard grid.
+const BARS: usize = 4 * 16;
+const CABLES: usize = 12 * 16;
+
 const SOLVERS: [&str; 3] = ["newton", "mono-latin", "micro-macro"];
 const ALPHAS: [&str; 3] = ["1", "10", "30"];
 
@@ -25,8 +32,12 @@ struct Run(PathBuf);
 
 impl Run {
     fn new(tag: &str, output: &str) -> Run {
+        Run::of_case(tag, &case_text(output))
+    }
+
+    fn of_case(tag: &str, text: &str) -> Run {
         let dir = temp_path(tag);
-        let case = tensolve::case::parse(&case_text(output)).expect("valid case");
+        let case = tensolve::case::parse(text).expect("valid case");
         let options = RunOptions {
             out_dir: Some(dir.clone()),
             methods: None,
@@ -58,6 +69,32 @@ struct Svg {
     series: usize,
     texts: Vec<String>,
     polylines_by_stroke: Vec<String>,
+    /// Every polyline.
+    polylines: Vec<Polyline>,
+}
+
+/// A polyline: (stroke colour in upper case, stroke width, points).
+type Polyline = (String, String, Vec<(f64, f64)>);
+
+impl Svg {
+    /// The points of every series polyline (stroke width [`SERIES_STROKE_WIDTH`]).
+    fn series_points(&self) -> Vec<&[(f64, f64)]> {
+        let width = SERIES_STROKE_WIDTH.to_string();
+        self.polylines
+            .iter()
+            .filter(|(_, w, _)| *w == width)
+            .map(|(_, _, points)| points.as_slice())
+            .collect()
+    }
+}
+
+fn parse_points(list: &str) -> Vec<(f64, f64)> {
+    list.split_whitespace()
+        .map(|pair| {
+            let (x, y) = pair.split_once(',').expect("x,y");
+            (x.parse().expect("x"), y.parse().expect("y"))
+        })
+        .collect()
 }
 
 fn read_svg(path: &Path) -> Svg {
@@ -88,6 +125,16 @@ fn read_svg(path: &Path) -> Svg {
             .iter()
             .filter_map(|n| n.attribute("stroke"))
             .map(str::to_string)
+            .collect(),
+        polylines: polylines
+            .iter()
+            .map(|n| {
+                (
+                    n.attribute("stroke").unwrap_or("").to_uppercase(),
+                    n.attribute("stroke-width").unwrap_or("").to_string(),
+                    parse_points(n.attribute("points").unwrap_or("")),
+                )
+            })
             .collect(),
     }
 }
@@ -129,8 +176,14 @@ fn every_figure_is_well_formed_with_one_series_per_alpha_or_solver() {
     let alpha_labels: Vec<&str> = alpha_labels.iter().map(String::as_str).collect();
 
     let tensions = read_svg(&plots.join("tensions.svg"));
-    assert_eq!(tensions.series, ALPHAS.len(), "tensions: one series per α");
+    // One series per α, and α = 0 (the prestress) although the case does not solve it.
+    assert_eq!(
+        tensions.series,
+        ALPHAS.len() + 1,
+        "tensions: one series per α and α = 0"
+    );
     assert_texts(&tensions, "tensions", &alpha_labels);
+    assert_texts(&tensions, "tensions", &["α = 0"]);
     assert_texts(
         &tensions,
         "tensions",
@@ -182,18 +235,20 @@ fn every_figure_is_well_formed_with_one_series_per_alpha_or_solver() {
         &[
             "x (m)",
             "y (m)",
-            "nodes: uz (m)",
-            "taut cables: τ (N)",
-            "slack cable (τ = 0)",
+            "cable τ (N)",
+            "bar",
+            "slack cable (40)",
+            "Deformed structure at α = 30 (newton), displacements × 10",
         ],
     );
-    // 40 of the 192 cables are slack at α = 30: their dashes are drawn in the slack colour.
+    // 40 of the 192 cables are slack at α = 30: their dashes are drawn in the slack colour,
+    // in each of the two views.
     let slack_dashes = deformed
         .polylines_by_stroke
         .iter()
-        .filter(|s| s.eq_ignore_ascii_case("#E41A1C"))
+        .filter(|s| s.eq_ignore_ascii_case(SLACK))
         .count();
-    assert!(slack_dashes >= 40, "{slack_dashes} slack dashes");
+    assert!(slack_dashes >= 2 * 40, "{slack_dashes} slack dashes");
 }
 
 #[test]
@@ -211,4 +266,159 @@ fn figures_need_no_history_file_and_nothing_is_drawn_unless_asked() {
     assert_eq!(file_names(&only_plots.0), ["plots"]);
     let eta = read_svg(&only_plots.0.join("plots/eta_micro-macro.svg"));
     assert_eq!(eta.series, ALPHAS.len());
+}
+
+/// The case of [`case_text`] with one α and only the solvers named.
+fn small_case(alpha: f64, methods: &str, output: &str) -> String {
+    format!(
+        "[grid]\nmodules = [4, 4]\n[load]\nalpha = [{alpha:?}]\n\
+         [solver]\nmethods = [{methods}]\nsubdomains = [2, 2]\n\
+         [output]\nplots = true\nhistory = false\nsummary = false\ntensions = false\n\
+         displacements = false\n{output}\n"
+    )
+}
+
+/// Bar polylines of Figure 8 (both views), in drawing order.
+fn bar_lines(svg: &Svg) -> Vec<&[(f64, f64)]> {
+    svg.polylines
+        .iter()
+        .filter(|(stroke, _, _)| stroke == BAR)
+        .map(|(_, _, points)| points.as_slice())
+        .collect()
+}
+
+#[test]
+fn figure_8_draws_every_bar_and_cable_in_both_views_and_amplifies_the_displacements() {
+    let at = |amplification: f64| {
+        let output = format!("amplification = {amplification:?}");
+        let run = Run::of_case(
+            &format!("deformed-{amplification}"),
+            &small_case(30.0, "\"newton\"", &output),
+        );
+        let svg = read_svg(&run.0.join("plots/deformed_alpha30.svg"));
+        (run, svg)
+    };
+    let (_ten, ten) = at(10.0);
+    // Every bar in each of the two views, as a straight segment.
+    let bars = bar_lines(&ten);
+    assert_eq!(bars.len(), 2 * BARS, "bar segments");
+    assert!(bars.iter().all(|points| points.len() == 2));
+    // Every taut cable in each view, in colour (stroke width 2); the 40 slack ones dashed.
+    let taut = ten
+        .polylines
+        .iter()
+        .filter(|(stroke, width, _)| width == "2" && stroke != BAR && stroke != SLACK)
+        .count();
+    assert_eq!(taut, 2 * (CABLES - 40), "taut cable segments");
+    assert_texts(&ten, "deformed ×10", &["cable τ (N)", "x (m)", "y (m)"]);
+
+    // Another amplification draws other geometry: the same bars, elsewhere.
+    let (_forty, forty) = at(40.0);
+    assert_texts(
+        &forty,
+        "deformed ×40",
+        &["Deformed structure at α = 30 (newton), displacements × 40"],
+    );
+    let moved = bar_lines(&forty);
+    assert_eq!(moved.len(), bars.len());
+    let changed = bars.iter().zip(&moved).filter(|(a, b)| a != b).count();
+    assert!(
+        changed > BARS,
+        "{changed} of {} bar segments moved with the amplification",
+        bars.len()
+    );
+}
+
+#[test]
+fn compressed_cables_of_a_bilateral_case_are_drawn_in_the_compression_colours() {
+    let case = small_case(30.0, "\"newton\"", "")
+        .replace("[solver]", "[cables]\nunilateral = false\n[solver]");
+    let run = Run::of_case("deformed-linear", &case);
+    let svg = read_svg(&run.0.join("plots/deformed_alpha30.svg"));
+    assert_texts(
+        &svg,
+        "deformed linear",
+        &["blue: compressed cable", "slack cable (0)"],
+    );
+    // Blue cables: blue the largest channel, well above red.
+    let blue = svg
+        .polylines
+        .iter()
+        .filter(|(stroke, width, _)| {
+            let channel = |k: usize| u8::from_str_radix(&stroke[1 + 2 * k..3 + 2 * k], 16).ok();
+            width == "2"
+                && stroke.len() == 7
+                && matches!((channel(0), channel(2)), (Some(r), Some(b)) if b as i32 > r as i32 + 60)
+        })
+        .count();
+    assert!(blue >= 2, "{blue} compressed cable segments");
+}
+
+#[test]
+fn convergence_axes_stop_at_max_plot_iterations() {
+    let run = Run::of_case(
+        "max-iterations",
+        &small_case(30.0, "\"micro-macro\"", "max_plot_iterations = 5"),
+    );
+    for name in ["error_micro-macro.svg", "eta_micro-macro.svg"] {
+        let svg = read_svg(&run.0.join("plots").join(name));
+        let series = svg.series_points();
+        assert_eq!(series.len(), 1, "{name}");
+        // Iterations 0 to 5 (micro-macro takes more than 5 iterations at α = 30).
+        assert_eq!(series[0].len(), 6, "{name}: {:?}", series[0]);
+        // The x axis is labelled up to 5, no further.
+        let ticks: Vec<f64> = svg
+            .texts
+            .iter()
+            .filter_map(|t| t.parse::<f64>().ok())
+            .collect();
+        assert!(ticks.contains(&5.0), "{name}: {ticks:?}");
+        assert!(ticks.iter().all(|&t| t <= 5.0), "{name}: {ticks:?}");
+    }
+}
+
+#[test]
+fn figure_12_draws_both_module_kinds_on_one_chart() {
+    let run = Run::of_case(
+        "modules",
+        &small_case(
+            30.0,
+            "\"newton\", \"micro-macro\"",
+            "compare_modules = [\"standard\", \"braced\"]",
+        ),
+    );
+    let svg = read_svg(&run.0.join("plots/error_modules.svg"));
+    assert_eq!(svg.series, 2, "one series per module kind and LATIN solver");
+    assert_texts(
+        &svg,
+        "error_modules",
+        &[
+            "standard, micro-macro",
+            "braced, micro-macro",
+            "Energy error e per iteration by module kind at α = 30",
+        ],
+    );
+    let names = file_names(&run.0.join("plots"));
+    assert!(
+        names.contains(&"error_modules.svg".to_string()),
+        "{names:?}"
+    );
+}
+
+#[test]
+fn bad_figure_keys_are_rejected_by_name() {
+    for (output, key) in [
+        ("amplification = 0.0", "output.amplification"),
+        ("amplification = -10.0", "output.amplification"),
+        ("max_plot_iterations = 0", "output.max_plot_iterations"),
+        (
+            "compare_modules = [\"braced\", \"braced\"]",
+            "output.compare_modules",
+        ),
+    ] {
+        let error = tensolve::case::parse(&small_case(1.0, "\"newton\"", output))
+            .expect_err(output)
+            .to_string();
+        assert!(error.contains(key), "{output}: {error}");
+    }
 }

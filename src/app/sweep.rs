@@ -6,11 +6,15 @@ use super::setup::{prepare, set_up, Prepared, SetUpSolver};
 use crate::case::{Case, CaseError};
 use crate::output::{
     self, alpha_label,
+    plots::{self, History},
     sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
-    OpenError, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
+    FigureSettings, OpenError, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
-use crate::solvers::{Equilibrium, Measure, Method, Reference, SetupError, Silent, Solution};
+use crate::solvers::{
+    Equilibrium, IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent,
+    Solution,
+};
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -228,6 +232,16 @@ pub fn run(
     // 9. The files of the whole sweep; the directory released.
     sinks.close()?;
     drop(sinks);
+    // 10. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
+    let compare = case.output.plots && !case.output.compare_modules.is_empty();
+    if let Some(out) = out.as_ref().filter(|_| compare) {
+        let staging = out.borrow().staging().to_path_buf();
+        write_module_comparison(case, &methods, &staging, &dir)?;
+        out.borrow_mut().commit().map_err(|source| WriteError {
+            path: dir.join("plots"),
+            source,
+        })?;
+    }
     if let Some(out) = out {
         out.into_inner().finish().map_err(|source| WriteError {
             path: dir.clone(),
@@ -242,6 +256,81 @@ pub fn run(
             list: failure_list(&failures),
         })
     }
+}
+
+/// Keeps every iteration record of a solve.
+#[derive(Default)]
+struct Recorder(Vec<IterationRecord>);
+
+impl Observer for Recorder {
+    fn iteration(&mut self, record: &IterationRecord) {
+        self.0.push(*record);
+    }
+}
+
+/// `plots/error_modules.svg`: every LATIN solver of `methods` at the case's largest α, on the
+/// case's grid made of each module kind of `output.compare_modules` (the paper's Figure 12).
+fn write_module_comparison(
+    case: &Case,
+    methods: &[Method],
+    staging: &Path,
+    root: &Path,
+) -> Result<(), RunError> {
+    let alpha = case
+        .load
+        .alphas
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut histories = Vec::new();
+    for &module in &case.output.compare_modules {
+        let mut grid_case = case.clone();
+        // Case validation refuses compare_modules without a [grid].
+        let Some(grid) = grid_case.grid.as_mut() else {
+            return Ok(());
+        };
+        grid.module = module;
+        let prepared = prepare(&grid_case)?;
+        let mut solvers = Vec::new();
+        for &method in methods {
+            let set_up = set_up(method, &case.solver, &prepared)?;
+            if set_up.solver.stopping_measure() == Measure::Indicator {
+                solvers.push(set_up);
+            }
+        }
+        let structure = &prepared.structure;
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let mut reference = ReferenceSource::new(&grid_case, &solvers, &prepared)?;
+        let cold = vec![None; solvers.len()];
+        let reference_solution = reference.solve(&load, &mut solvers, &cold);
+        let errors = reference_solution
+            .as_ref()
+            .map(|r| Reference::new(structure, &r.equilibrium.displacements));
+        for set_up in &mut solvers {
+            let mut recorder = Recorder::default();
+            set_up.solver.solve(&load, errors.as_ref(), &mut recorder);
+            histories.push((
+                module.name(),
+                History {
+                    solver: set_up.method.name().to_string(),
+                    alpha,
+                    records: recorder.0,
+                },
+            ));
+        }
+    }
+    let settings = FigureSettings {
+        amplification: case.output.amplification,
+        max_plot_iterations: case.output.max_plot_iterations,
+    };
+    let path = staging.join("plots").join("error_modules.svg");
+    let written = plots::write_module_comparison(&path, &histories, &settings);
+    written.map_err(|source| {
+        RunError::Write(WriteError {
+            path: root.join("plots").join("error_modules.svg"),
+            source,
+        })
+    })
 }
 
 /// Whether `case` asks for any file.
@@ -288,9 +377,13 @@ fn sinks<'s>(
     );
     sinks.add(out.vtk, PerSolveSink::vtk(root, dir, structure));
     if let Some(first) = solvers.first().filter(|_| out.plots) {
+        let settings = FigureSettings {
+            amplification: out.amplification,
+            max_plot_iterations: out.max_plot_iterations,
+        };
         sinks.add(
             true,
-            PlotsSink::new(root, dir, structure, first.method.name()),
+            PlotsSink::new(root, dir, structure, first.method.name(), settings),
         );
     }
     sinks.add(true, PublishSink::new(output));

@@ -298,6 +298,18 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             general_only("bars.young", raw.bars.young.is_some())?;
             general_only("bars.section", raw.bars.section.is_some())?;
             general_only("prestress.lower_cable", raw.prestress.lower_cable.is_some())?;
+            if raw
+                .output
+                .compare_modules
+                .as_ref()
+                .is_some_and(|kinds| !kinds.is_empty())
+            {
+                return Err(CaseError::invalid(
+                    "output.compare_modules".to_string(),
+                    "given",
+                    "it compares the module kinds of a [grid]; a [structure] has none: remove this key",
+                ));
+            }
             general_only("supports.clamp", raw.supports.clamp.is_some())?;
             let geometry = super::tables::load_geometry(
                 &base.join(&st.nodes),
@@ -414,7 +426,39 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         vtk: o.vtk.unwrap_or(defaults.vtk),
         stability: o.stability.unwrap_or(defaults.stability),
         homogenised: o.homogenised.unwrap_or(defaults.homogenised),
+        amplification: o.amplification.unwrap_or(defaults.amplification),
+        max_plot_iterations: o
+            .max_plot_iterations
+            .unwrap_or(defaults.max_plot_iterations),
+        compare_modules: o.compare_modules.unwrap_or(defaults.compare_modules),
     };
+    positive(
+        "output.amplification",
+        output.amplification,
+        "the factor the displacements are drawn multiplied by (the paper's is 10)",
+    )?;
+    let kinds = &output.compare_modules;
+    if let Some(twice) = kinds
+        .iter()
+        .enumerate()
+        .find(|(i, k)| kinds[..*i].contains(k))
+    {
+        return Err(CaseError::invalid(
+            "output.compare_modules",
+            format!("{:?}", kinds.iter().map(|k| k.name()).collect::<Vec<_>>()),
+            format!(
+                "list each module kind once (`{}` is listed twice), e.g. [\"standard\", \"braced\"]",
+                twice.1.name()
+            ),
+        ));
+    }
+    if output.max_plot_iterations == 0 {
+        return Err(CaseError::invalid(
+            "output.max_plot_iterations",
+            "0",
+            "give the last iteration the convergence figures show as an integer ≥ 1 (the paper's is 100)",
+        ));
+    }
     Ok(Case {
         grid,
         geometry,

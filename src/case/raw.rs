@@ -185,4 +185,7 @@ pub(super) struct RawOutput {
     pub vtk: Option<bool>,
     pub stability: Option<bool>,
     pub homogenised: Option<bool>,
+    pub amplification: Option<f64>,
+    pub max_plot_iterations: Option<usize>,
+    pub compare_modules: Option<Vec<crate::structure::ModuleKind>>,
 }

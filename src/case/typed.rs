@@ -159,6 +159,16 @@ pub struct OutputChoice {
     /// `homogenised/substructure_{E}.csv`: micro-macro's homogenised flexibility of every
     /// substructure and its macro basis. Default false.
     pub homogenised: bool,
+    /// Factor the displacements are multiplied by in `plots/deformed_alpha{α}.svg` (Figure 8).
+    /// Default 10, as in the paper; > 0.
+    pub amplification: f64,
+    /// Last iteration the convergence figures (`plots/error_*.svg`, `plots/eta_*.svg`) show.
+    /// Default 100, as in the paper's Figures 9–11; ≥ 1.
+    pub max_plot_iterations: usize,
+    /// Module kinds drawn on the same axes in `plots/error_modules.svg` (Figure 12): the
+    /// case's LATIN solvers at its largest α on the same grid of each kind. Default none
+    /// (no figure); drawn only with `plots = true`.
+    pub compare_modules: Vec<crate::structure::ModuleKind>,
 }
 
 impl Default for OutputChoice {
@@ -173,6 +183,9 @@ impl Default for OutputChoice {
             vtk: false,
             stability: false,
             homogenised: false,
+            amplification: 10.0,
+            max_plot_iterations: 100,
+            compare_modules: Vec::new(),
         }
     }
 }

@@ -15,7 +15,7 @@ mod vtk;
 pub use atomic::{ensure_writable, write_atomic};
 pub use history::{HistoryWriter, HISTORY_HEADER};
 pub use homogenised::{homogenised_path, write_homogenised};
-pub use plots::FigureData;
+pub use plots::{FigureData, FigureSettings};
 pub use publish::{OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{

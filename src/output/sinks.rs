@@ -16,8 +16,8 @@
 
 use super::{
     result_path, stability_line, summary_line, vtu_path, write_displacements, write_tensions,
-    write_vtu, FigureData, HistoryWriter, OutputDir, StabilityRow, SummaryRow, STABILITY_HEADER,
-    SUMMARY_HEADER,
+    write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow, SummaryRow,
+    STABILITY_HEADER, SUMMARY_HEADER,
 };
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
@@ -235,12 +235,18 @@ pub struct PlotsSink<'s> {
 impl<'s> PlotsSink<'s> {
     /// Figures of `structure` written under `dir/plots` (the staging directory); Figures 6
     /// and 8 show `first_solver`; errors name `root/plots`.
-    pub fn new(root: &Path, dir: &Path, structure: &'s Structure, first_solver: &str) -> Self {
+    pub fn new(
+        root: &Path,
+        dir: &Path,
+        structure: &'s Structure,
+        first_solver: &str,
+        settings: FigureSettings,
+    ) -> Self {
         PlotsSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
             structure,
-            figures: FigureData::new(first_solver),
+            figures: FigureData::new(first_solver, settings),
             records: None,
         }
     }

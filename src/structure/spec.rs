@@ -15,6 +15,16 @@ pub enum ModuleKind {
     Braced,
 }
 
+impl ModuleKind {
+    /// The name a case file gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModuleKind::Standard => "standard",
+            ModuleKind::Braced => "braced",
+        }
+    }
+}
+
 /// Which lower (z = 0) nodes are clamped (all three displacements zero).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "kebab-case")]

@@ -86,11 +86,36 @@ pub struct LineChart {
     pub series: Vec<Series>,
 }
 
+/// Which part of the data a [`LineChart`] shows (by default, all of it).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Frame {
+    /// Points with a larger x are left out (the convergence figures stop at
+    /// `output.max_plot_iterations`).
+    pub x_max: Option<f64>,
+    /// The y axis spans only the points with at least this x (the convergence figures leave
+    /// iteration 0 out, whose start value may lie decades above the rest); a series starting
+    /// beyond that span is drawn from where its first segment crosses the axis' edge.
+    pub y_from_x: Option<f64>,
+}
+
 impl LineChart {
     /// The chart as an SVG document. Non-finite points, and points with a value ≤ 0 on a log
     /// axis, are left out.
     pub fn to_svg(&self) -> io::Result<String> {
-        let series: Vec<Series> = self.series.iter().map(|s| self.drawable(s)).collect();
+        self.to_svg_framed(&Frame::default())
+    }
+
+    /// The chart as an SVG document showing the part of the data `frame` says. Non-finite
+    /// points, and points with a value ≤ 0 on a log axis, are left out. A series of a single
+    /// point is drawn as a dot (markers or not), and its value does not set the y axis when
+    /// another series has two points or more: a solve that stopped at its first iteration
+    /// must not stretch the axis of the others.
+    pub fn to_svg_framed(&self, frame: &Frame) -> io::Result<String> {
+        let series: Vec<Series> = self
+            .series
+            .iter()
+            .map(|s| self.drawable(s, frame))
+            .collect();
         let legend_width = legend_width(&self.legend_title, &self.series);
         let mut svg = String::new();
         {
@@ -99,7 +124,8 @@ impl LineChart {
             root.fill(&WHITE).map_err(plot_error)?;
             let (plot, legend) = root.split_horizontally(PLOT_WIDTH);
             let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-            let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+            let ys = y_span_values(&series, frame);
+            let ys = ys.into_iter();
             let (x, x_factor) = match self.x_scale {
                 Scale::Linear => (x_range(&series, self.markers), 1.0),
                 Scale::Log => log_axis(log_x_range(xs, self.markers)),
@@ -108,6 +134,15 @@ impl LineChart {
                 Scale::Linear => (linear_range(ys), 1.0),
                 Scale::Log => log_axis(log_range(ys)),
             };
+            let y_edges = match self.y_scale {
+                Scale::Linear => y.clone(),
+                Scale::Log => y.start / y_factor..y.end / y_factor,
+            };
+            let notes = single_point_notes(&series, &y_edges);
+            let series: Vec<Series> = series
+                .into_iter()
+                .map(|s| clip_start(s, &y_edges, self.y_scale))
+                .collect();
             let series = scaled(series, x_factor, y_factor);
             let tick = |scale: Scale, factor: f64| {
                 move |v: f64| match scale {
@@ -140,15 +175,24 @@ impl LineChart {
                     marker: self.markers.then(|| Marker::nth(i)),
                 })
                 .collect();
-            draw_line_legend(&legend, 60, &self.legend_title, &entries).map_err(plot_error)?;
+            let used =
+                draw_line_legend(&legend, 60, &self.legend_title, &entries).map_err(plot_error)?;
+            let note_font = ("sans-serif", 13).into_font().color(&BLACK);
+            for (k, line) in notes.iter().enumerate() {
+                let at = (8, 60 + used + 6 + 17 * k as i32);
+                legend.draw_text(line, &note_font, at).map_err(plot_error)?;
+            }
             root.present().map_err(plot_error)?;
         }
         Ok(svg)
     }
 
-    fn drawable(&self, s: &Series) -> Series {
+    fn drawable(&self, s: &Series, frame: &Frame) -> Series {
         let on_axis = |v: f64, scale: Scale| v.is_finite() && (scale == Scale::Linear || v > 0.0);
-        let keep = |&(x, y): &(f64, f64)| on_axis(x, self.x_scale) && on_axis(y, self.y_scale);
+        let in_frame = |x: f64| frame.x_max.is_none_or(|max| x <= max);
+        let keep = |&(x, y): &(f64, f64)| {
+            on_axis(x, self.x_scale) && on_axis(y, self.y_scale) && in_frame(x)
+        };
         let points: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
         Series {
             label: s.label.clone(),
@@ -195,6 +239,11 @@ impl LineChart {
         for (i, s) in series.iter().enumerate() {
             let style = s.colour.stroke_width(SERIES_STROKE_WIDTH);
             chart.draw_series(LineSeries::new(s.points.iter().copied(), style))?;
+            if let [only] = s.points.as_slice() {
+                if !self.markers {
+                    chart.draw_series([Circle::new(*only, 4, s.colour.filled())])?;
+                }
+            }
             if self.markers {
                 Marker::nth(i).draw_on_chart(&mut chart, &s.points, s.colour)?;
             }
@@ -277,6 +326,91 @@ fn log_axis(range: Range<f64>) -> (Range<f64>, f64) {
     }
     let factor = 10f64.powi(-(range.start.log10().floor() as i32));
     (range.start * factor..range.end * factor, factor)
+}
+
+/// Two lines under the legend for every series of a single point (drawn as a dot, on the
+/// axis' edge when its value is beyond it): what it is, and its value.
+fn single_point_notes(series: &[Series], edges: &Range<f64>) -> Vec<String> {
+    let mut notes = Vec::new();
+    for s in series {
+        if let [(x, y)] = s.points.as_slice() {
+            let side = if *y < edges.start {
+                ", below the axis"
+            } else if *y > edges.end {
+                ", above the axis"
+            } else {
+                ""
+            };
+            notes.push(format!("{}: a single point,", s.label));
+            notes.push(format!("({}, {y:.1e}){side}", tick_label(*x)));
+        }
+    }
+    notes
+}
+
+/// The y values the y axis spans: those of the series of two points or more (of all series
+/// when none has two), at x ≥ `frame.y_from_x` when some are.
+fn y_span_values(series: &[Series], frame: &Frame) -> Vec<f64> {
+    let lines: Vec<&Series> = series.iter().filter(|s| s.points.len() >= 2).collect();
+    let lines = if lines.is_empty() {
+        series.iter().collect()
+    } else {
+        lines
+    };
+    let from = frame.y_from_x.unwrap_or(f64::NEG_INFINITY);
+    let after: Vec<f64> = lines
+        .iter()
+        .flat_map(|s| s.points.iter().filter(|p| p.0 >= from).map(|p| p.1))
+        .collect();
+    if after.is_empty() {
+        lines
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .collect()
+    } else {
+        after
+    }
+}
+
+/// `s` with its leading points beyond the y axis' `edges` replaced by the point where the
+/// line to the next point crosses the edge (interpolated in the axis' scale), so that a start
+/// above the axis is drawn from the edge. A one-point series beyond the edges is drawn on the
+/// nearer edge (the note under the legend gives its value).
+fn clip_start(mut s: Series, edges: &Range<f64>, scale: Scale) -> Series {
+    if let [(x, y)] = s.points.as_slice() {
+        let (x, y) = (*x, *y);
+        if y < edges.start {
+            s.points = vec![(x, edges.start)];
+        } else if y > edges.end {
+            s.points = vec![(x, edges.end)];
+        }
+        return s;
+    }
+    let map = |y: f64| match scale {
+        Scale::Linear => y,
+        Scale::Log => y.log10(),
+    };
+    let unmap = |v: f64| match scale {
+        Scale::Linear => v,
+        Scale::Log => 10f64.powf(v),
+    };
+    let (lo, hi) = (map(edges.start), map(edges.end));
+    let inside = |y: f64| (lo..=hi).contains(&map(y));
+    let first_inside = s.points.iter().position(|p| inside(p.1));
+    match first_inside {
+        None => s.points.clear(),
+        Some(0) => {}
+        Some(k) => {
+            let (x0, y0) = s.points[k - 1];
+            let (x1, y1) = s.points[k];
+            let (v0, v1) = (map(y0), map(y1));
+            let edge = if v0 > hi { hi } else { lo };
+            let f = (edge - v0) / (v1 - v0);
+            let crossing = (x0 + f * (x1 - x0), unmap(edge));
+            s.points.splice(..k, [crossing]);
+        }
+    }
+    s
 }
 
 /// `series` with every x multiplied by `x_factor` and every y by `y_factor` (as is when both
@@ -492,6 +626,47 @@ mod tests {
                 Some(body[..body.find("</text>")?].trim())
             })
             .collect()
+    }
+
+    #[test]
+    fn frame_cuts_x_and_keeps_iteration_0_and_single_points_off_the_y_range() {
+        let decay: Vec<(f64, f64)> = (0..200)
+            .map(|i| (i as f64, if i == 0 { 1e3 } else { 0.5f64.powi(i / 10) }))
+            .collect();
+        let chart = LineChart {
+            title: String::new(),
+            x_label: "iteration (–)".into(),
+            y_label: "error (–)".into(),
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+            legend_title: "load factor".into(),
+            markers: false,
+            series: vec![
+                Series::of_solver("micro-macro", Some(1.0), decay),
+                Series::of_solver("mono-latin", Some(1.0), vec![(0.0, 1e-14)]),
+            ],
+        };
+        let frame = Frame {
+            x_max: Some(100.0),
+            y_from_x: Some(1.0),
+        };
+        let svg = chart.to_svg_framed(&frame).expect("an SVG");
+        let texts = texts(&svg);
+        // y from the values after iteration 0 (1 down to 0.5⁹ ≈ 2e-3): 10⁻³ to 10⁰, neither
+        // the start (1e3) nor the single point (1e-14) stretching it.
+        for tick in ["10⁻³", "10⁰", "100"] {
+            assert!(texts.contains(&tick), "{tick}: {texts:?}");
+        }
+        for tick in ["10³", "10⁻¹⁴", "120"] {
+            assert!(!texts.contains(&tick), "{tick}: {texts:?}");
+        }
+        assert!(texts.contains(&"(0, 1.0e-14), below the axis"), "{texts:?}");
+        let lines = series_polylines(&svg);
+        // Iterations 0 to 100, the first drawn where its segment crosses the top edge.
+        assert_eq!(lines[0].len(), 101);
+        assert!(lines[0][0].1 <= lines[0][1].1 && lines[0][0].0 > 85);
+        // The single point, on the lower edge.
+        assert_eq!(lines[1].len(), 1);
     }
 
     #[test]

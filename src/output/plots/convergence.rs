@@ -2,15 +2,21 @@
 //! and 10: e and η per iteration, one series per α) and `error_all.svg` (Figure 11: e of every
 //! LATIN solver at the largest α). A figure without any point (e with `reference = "none"`)
 //! is not drawn.
+//!
+//! The x axis stops at `output.max_plot_iterations` (100 by default, as the paper's), and the
+//! y axis spans the values from iteration 1 on: the start (iteration 0) of a solve may lie
+//! decades above the rest and is drawn from the axis' edge. A solve of a single iteration
+//! (the direct mono-latin of a linear case, α = 0) is a dot, on the axis' edge when beyond it,
+//! whose value a note under the legend gives; it does not stretch the axis.
 
-use super::chart::{LineChart, Scale, Series};
+use super::chart::{Frame, LineChart, Scale, Series};
 use super::palette::{ordered_colour, solver_colour};
-use super::{alpha_text, History};
+use super::{alpha_text, FigureSettings, History};
 use crate::solvers::IterationRecord;
 use std::io;
 
 #[derive(Debug, Clone, Copy)]
-enum Measure {
+pub(super) enum Measure {
     /// Energy error e against the reference.
     Error,
     /// LATIN indicator η.
@@ -48,7 +54,14 @@ impl Measure {
 }
 
 /// (file name, SVG) of every convergence figure the histories give.
-pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
+pub fn figures(
+    histories: &[History],
+    settings: &FigureSettings,
+) -> io::Result<Vec<(String, String)>> {
+    let frame = Frame {
+        x_max: Some(settings.max_plot_iterations as f64),
+        y_from_x: Some(1.0),
+    };
     let mut solvers: Vec<&str> = Vec::new();
     for h in histories {
         if !solvers.contains(&h.solver.as_str()) {
@@ -62,7 +75,7 @@ pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
         for measure in [Measure::Error, Measure::Eta] {
             if let Some(chart) = per_alpha_chart(solver, measure, &own) {
                 let name = format!("{}_{solver}.svg", measure.file_stem());
-                figures.push((name, chart.to_svg()?));
+                figures.push((name, chart.to_svg_framed(&frame)?));
             }
         }
     }
@@ -76,7 +89,7 @@ pub fn figures(histories: &[History]) -> io::Result<Vec<(String, String)>> {
         })
         .collect();
     if let Some(chart) = solvers_chart(&at_largest) {
-        figures.push(("error_all.svg".into(), chart.to_svg()?));
+        figures.push(("error_all.svg".into(), chart.to_svg_framed(&frame)?));
     }
     Ok(figures)
 }
@@ -108,6 +121,69 @@ fn per_alpha_chart(solver: &str, measure: Measure, histories: &[&History]) -> Op
     )
 }
 
+/// Figure 12: e of every (module kind, solver) history on one chart, as an SVG; None when no
+/// record has e.
+pub fn modules_chart(
+    histories: &[(&str, History)],
+    settings: &FigureSettings,
+) -> io::Result<Option<String>> {
+    let frame = Frame {
+        x_max: Some(settings.max_plot_iterations as f64),
+        y_from_x: Some(1.0),
+    };
+    let mut modules: Vec<&str> = Vec::new();
+    let mut solvers: Vec<&str> = Vec::new();
+    for (module, h) in histories {
+        if !modules.contains(module) {
+            modules.push(module);
+        }
+        if !solvers.contains(&h.solver.as_str()) {
+            solvers.push(&h.solver);
+        }
+    }
+    // Solvers whose curves are lines take the full hues; one-point ones (a direct solve) the
+    // lighter shades.
+    let is_line = |solver: &str| {
+        histories
+            .iter()
+            .any(|(_, h)| h.solver == solver && h.records.len() > 1)
+    };
+    solvers.sort_by_key(|solver| !is_line(solver));
+    let index = |list: &[&str], name: &str| list.iter().position(|x| *x == name).unwrap_or(0);
+    let series: Vec<Series> = histories
+        .iter()
+        .map(|(module, h)| Series {
+            label: format!("{module}, {}", h.solver),
+            colour: module_colour(index(&modules, module), index(&solvers, &h.solver)),
+            points: points(h, Measure::Error),
+        })
+        .collect();
+    let alphas: Vec<String> = histories.iter().map(|(_, h)| alpha_text(h.alpha)).collect();
+    let title = match alphas.first() {
+        Some(alpha) => format!("Energy error e per iteration by module kind at α = {alpha}"),
+        None => "Energy error e per iteration by module kind".to_string(),
+    };
+    match convergence_chart(title, Measure::Error, "module, solver", series) {
+        Some(chart) => Ok(Some(chart.to_svg_framed(&frame)?)),
+        None => Ok(None),
+    }
+}
+
+/// Figure 12's colour of module kind `module` and solver `solver` (indices in order of
+/// appearance): one hue per module kind (blue, red, green), lighter for each further solver.
+fn module_colour(module: usize, solver: usize) -> plotters::style::RGBColor {
+    use plotters::style::RGBColor;
+    const HUES: [(f64, f64, f64); 3] = [
+        (31.0, 119.0, 180.0),
+        (214.0, 39.0, 40.0),
+        (44.0, 160.0, 44.0),
+    ];
+    let (r, g, b) = HUES[module % HUES.len()];
+    let light = 1.0 - 0.55f64.powi(solver as i32);
+    let mix = |c: f64| (c + light * (235.0 - c)).round() as u8;
+    RGBColor(mix(r), mix(g), mix(b))
+}
+
 /// e of every solver's history; None when no record has e.
 fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
     let alphas: Vec<String> = histories.iter().map(|h| alpha_text(h.alpha)).collect();
@@ -132,7 +208,7 @@ fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
     convergence_chart(title, Measure::Error, "solver", series)
 }
 
-fn convergence_chart(
+pub(super) fn convergence_chart(
     title: String,
     measure: Measure,
     legend_title: &str,

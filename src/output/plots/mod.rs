@@ -4,11 +4,12 @@
 //!
 //! | file | figure |
 //! |---|---|
-//! | `tensions.svg` | sorted cable tensions, one series per α (first solver) — Figure 6 |
+//! | `tensions.svg` | sorted cable tensions, one series per α (first solver), α = 0 always among them — Figure 6 |
 //! | `slack_fraction.svg` | slack fraction against α, one series per solver — Figure 7 |
-//! | `deformed_alpha{α}.svg` | top view at the largest α: uz on nodes, τ on cables — Figure 8 |
-//! | `error_{solver}.svg`, `eta_{solver}.svg` | e and η per iteration, one series per α — Figures 9, 10 |
+//! | `deformed_alpha{α}.svg` | the deformed grid at the largest α, displacements × `output.amplification`, oblique view and top view, τ in colour — Figure 8 |
+//! | `error_{solver}.svg`, `eta_{solver}.svg` | e and η per iteration up to `output.max_plot_iterations`, one series per α — Figures 9, 10 |
 //! | `error_all.svg` | e per iteration of every LATIN solver at the largest α — Figure 11 |
+//! | `error_modules.svg` | e per iteration at the largest α, one series per module kind of `output.compare_modules` and LATIN solver — Figure 12 |
 //!
 //! In the line charts each series is one `<polyline>` of stroke width [`SERIES_STROKE_WIDTH`],
 //! and nothing else has that width.
@@ -22,7 +23,7 @@ mod palette;
 mod slack;
 mod tensions;
 
-pub use chart::{LineChart, Scale, Series};
+pub use chart::{Frame, LineChart, Scale, Series};
 
 use super::{alpha_label, write_atomic};
 use crate::solvers::{Equilibrium, IterationRecord};
@@ -44,6 +45,16 @@ pub struct History {
     pub records: Vec<IterationRecord>,
 }
 
+/// How the figures are drawn: the case's `output.amplification` and
+/// `output.max_plot_iterations`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FigureSettings {
+    /// Factor the displacements are drawn multiplied by in Figure 8.
+    pub amplification: f64,
+    /// Last iteration the convergence figures show.
+    pub max_plot_iterations: usize,
+}
+
 /// Slack fraction of one solver at each α, in solve order.
 #[derive(Debug, Clone)]
 struct SlackSeries {
@@ -54,6 +65,7 @@ struct SlackSeries {
 /// What the figures are drawn from, gathered along the sweep.
 #[derive(Debug, Clone)]
 pub struct FigureData {
+    settings: FigureSettings,
     /// The solver whose results Figures 6 and 8 show.
     first_solver: String,
     /// Per α: the first solver's cable tensions, sorted increasingly.
@@ -66,8 +78,9 @@ pub struct FigureData {
 
 impl FigureData {
     /// No data yet; `first_solver`'s solves are the ones Figures 6 and 8 show.
-    pub fn new(first_solver: &str) -> Self {
+    pub fn new(first_solver: &str, settings: FigureSettings) -> Self {
         FigureData {
+            settings,
             first_solver: first_solver.to_string(),
             tensions: Vec::new(),
             slack: Vec::new(),
@@ -112,7 +125,11 @@ impl FigureData {
     pub fn write(&self, dir: &Path, s: &Structure) -> io::Result<Vec<PathBuf>> {
         let mut figures: Vec<(String, String)> = Vec::new();
         if !self.tensions.is_empty() {
-            let chart = tensions::chart(&self.first_solver, &self.tensions);
+            let mut sets = self.tensions.clone();
+            if !sets.iter().any(|(alpha, _)| *alpha == 0.0) {
+                sets.extend(tensions::at_rest(s));
+            }
+            let chart = tensions::chart(&self.first_solver, &sets);
             figures.push(("tensions.svg".into(), chart.to_svg()?));
         }
         if !self.slack.is_empty() {
@@ -123,9 +140,10 @@ impl FigureData {
                 .collect();
             figures.push(("slack_fraction.svg".into(), slack::chart(&series).to_svg()?));
         }
-        figures.extend(convergence::figures(&self.histories)?);
+        figures.extend(convergence::figures(&self.histories, &self.settings)?);
         if let Some((alpha, eq)) = &self.deformed {
-            let svg = deformed::to_svg(&self.first_solver, *alpha, s, eq)?;
+            let amplification = self.settings.amplification;
+            let svg = deformed::to_svg(&self.first_solver, *alpha, amplification, s, eq)?;
             figures.push((format!("deformed_alpha{}.svg", alpha_label(*alpha)), svg));
         }
         let plots = dir.join("plots");
@@ -137,6 +155,20 @@ impl FigureData {
                 Ok(path)
             })
             .collect()
+    }
+}
+
+/// Write `plots/error_modules.svg` (paper Figure 12) at `path`: e per iteration of every
+/// (module kind, LATIN solver) history on the same axes, framed as the other convergence
+/// figures. Nothing is written when no history has e.
+pub fn write_module_comparison(
+    path: &Path,
+    histories: &[(&str, History)],
+    settings: &FigureSettings,
+) -> io::Result<()> {
+    match convergence::modules_chart(histories, settings)? {
+        Some(svg) => write_atomic(path, |w| w.write_all(svg.as_bytes())),
+        None => Ok(()),
     }
 }
 

@@ -1,10 +1,7 @@
 //! Colours of the figures: a fixed colour per solver (the same in every figure), viridis for
-//! ordered series (α) and for the vertical displacement, a grey ramp for cable tensions.
+//! ordered series (α), yellow to dark red for cable tensions, blues for compressions.
 
 use plotters::style::RGBColor;
-
-/// Slack cables in the deformed grid.
-pub const SLACK: RGBColor = RGBColor(228, 26, 28);
 
 /// The colour of a solver, the same in every figure.
 pub fn solver_colour(name: &str) -> RGBColor {
@@ -44,9 +41,17 @@ pub fn viridis(t: f64) -> RGBColor {
     interpolate(&STOPS, t)
 }
 
-/// Cable tension ramp at `t` ∈ [0, 1]: light grey (no tension) to black (the largest).
-pub fn tension_grey(t: f64) -> RGBColor {
-    interpolate(&[(205, 205, 205), (0, 0, 0)], t)
+/// Cable tension ramp at `t` ∈ [0, 1] of the largest tension: yellow to dark red.
+pub fn tension_colour(t: f64) -> RGBColor {
+    interpolate(
+        &[(254, 204, 92), (253, 141, 60), (227, 26, 28), (128, 0, 38)],
+        t,
+    )
+}
+
+/// Cable compression ramp at `t` ∈ [0, 1] of the largest compression: light to dark blue.
+pub fn compression_colour(t: f64) -> RGBColor {
+    interpolate(&[(158, 202, 225), (33, 113, 181), (8, 48, 107)], t)
 }
 
 fn interpolate(stops: &[(u8, u8, u8)], t: f64) -> RGBColor {

@@ -1,9 +1,28 @@
 //! `tensions.svg` (paper Figure 6): every cable's tension τ sorted increasingly, one series per
-//! α, from the first solver of the case.
+//! α, from the first solver of the case. α = 0 is always shown: when the case does not solve
+//! it, its curve is the prestress τ₀ itself, the exact solution at zero load (u = 0) of a
+//! self-balanced prestress.
 
 use super::alpha_text;
 use super::chart::{LineChart, Scale, Series};
 use super::palette::ordered_colour;
+use crate::structure::Structure;
+
+/// The cable tensions at α = 0 when the prestress balances itself (`max |Bᵀτ₀|` below 1e-9 of
+/// its scale): τ₀, sorted; None otherwise.
+pub fn at_rest(s: &Structure) -> Option<(f64, Vec<f64>)> {
+    if s.prestress_imbalance() > 1e-9 * s.prestress_scale.abs().max(f64::MIN_POSITIVE) {
+        return None;
+    }
+    let mut tensions: Vec<f64> = s
+        .links
+        .iter()
+        .filter(|l| l.kind.is_cable())
+        .map(|l| l.prestress)
+        .collect();
+    tensions.sort_by(f64::total_cmp);
+    Some((0.0, tensions))
+}
 
 /// `sets`: per α, the sorted cable tensions (N).
 pub fn chart(solver: &str, sets: &[(f64, Vec<f64>)]) -> LineChart {
