@@ -598,3 +598,22 @@ fn c4_a_long_strip_mechanism_is_refused_without_counting_every_mode() {
         stderr(&out)
     );
 }
+
+#[test]
+fn e3_stiff_cables_set_up_a_regular_macro_problem() {
+    // repro e3_macro_stiff: cables 100 times stiffer than the paper's made the pivoting LU's
+    // absolute round-trip check call the macro problem singular. The quasi-definite LDLᵀ of
+    // the augmented, scaled macro matrix sets it up and the solve converges.
+    let case = Temp::file(
+        "e3-stiff",
+        "[grid]\nmodules = [16, 16]\n[cables]\nyoung = 1e13\n[load]\nalpha = [1.0]\n\
+         [solver]\nmethods = [\"micro-macro\"]\nreference = \"none\"\n[output]\n\
+         tensions = false\ndisplacements = false\nhistory = false\n",
+    );
+    let out = Temp::dir("e3-stiff-out");
+    let o = run(&case, &out.0);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let rows = summary(&out.0);
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0][2], "true", "{rows:?}");
+}
