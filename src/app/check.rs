@@ -2,10 +2,7 @@
 //! a report struct (tests read it directly; the command line prints its `Display`).
 
 use crate::case::Case;
-use crate::linalg::{
-    smallest_eigenvalue_bound, zero_mode_count, SparseCholesky, StiffnessPattern,
-    ZERO_MODE_RELATIVE,
-};
+use crate::linalg::{factorize_counting_zero_modes, SparseCholesky, StiffnessPattern};
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
@@ -79,19 +76,7 @@ pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
         let mut values = vec![0.0; pattern.nnz()];
         pattern.assemble(&structure.link_dofs, |_| 1.0, &mut values);
         let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
-        let singular = match factor.factorize(&pattern, &values) {
-            Err(_) => true,
-            Ok(()) => {
-                smallest_eigenvalue_bound(&pattern, &values, &factor, 3)
-                    < ZERO_MODE_RELATIVE * pattern.mean_diagonal(&values)
-            }
-        };
-        if singular {
-            let mut probe = factor.share_symbolic();
-            zero_mode_count(&pattern, &values, &mut probe).max(1)
-        } else {
-            0
-        }
+        factorize_counting_zero_modes(&pattern, &values, &mut factor)
     };
     let rank = n - mechanisms;
     EquilibriumCounts {

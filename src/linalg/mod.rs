@@ -21,8 +21,8 @@ pub use pcg::{preconditioned_cg, CgOutcome};
 pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
-    smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, SmallestEigenvalues,
-    ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
+    factorize_counting_zero_modes, smallest_eigenvalue_bound, smallest_eigenvalues,
+    zero_mode_count, SmallestEigenvalues, ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
 };
 
 /// Euclidean norm.

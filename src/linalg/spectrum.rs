@@ -182,6 +182,30 @@ pub fn smallest_eigenvalue_bound(
 /// Rayleigh–Ritz on ever larger blocks, issue 13 C4); a refusal needs only the fact.
 pub const ZERO_MODES_COUNTED: usize = 64;
 
+/// Factorise `values` with `factor` (analysed on `pattern`) and count the zero-stiffness modes:
+/// 0 when the matrix is regular, else [`zero_mode_count`] (at least 1). A positive
+/// factorization may still hide a zero mode behind round-off pivots: a few inverse iterations
+/// tell. On 0 the factor holds the matrix's Cholesky factor.
+pub fn factorize_counting_zero_modes(
+    pattern: &StiffnessPattern,
+    values: &[f64],
+    factor: &mut SparseCholesky,
+) -> usize {
+    let singular = match factor.factorize(pattern, values) {
+        Err(_) => true,
+        Ok(()) => {
+            smallest_eigenvalue_bound(pattern, values, factor, 3)
+                < ZERO_MODE_RELATIVE * pattern.mean_diagonal(values)
+        }
+    };
+    if singular {
+        let mut probe = factor.share_symbolic();
+        zero_mode_count(pattern, values, &mut probe).max(1)
+    } else {
+        0
+    }
+}
+
 /// Number of zero-stiffness modes of the stiffness (eigenvalues below
 /// [`ZERO_MODE_RELATIVE`] × mean diagonal), found with blocks that grow until one Ritz value is
 /// clearly non-zero, or [`ZERO_MODES_COUNTED`] (a lower bound) when that many are all zero.

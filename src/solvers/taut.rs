@@ -3,8 +3,7 @@
 
 use super::SetupError;
 use crate::linalg::{
-    smallest_eigenvalue_bound, zero_mode_count, NodeOrdering, SparseCholesky, StiffnessPattern,
-    ZERO_MODE_RELATIVE,
+    factorize_counting_zero_modes, NodeOrdering, SparseCholesky, StiffnessPattern,
 };
 use crate::structure::Structure;
 use faer::Par;
@@ -50,18 +49,8 @@ impl TautStiffness {
             NodeOrdering::Amd
         };
         let mut factor = SparseCholesky::analyse_ordered(&pattern, Par::Seq, ordering);
-        let singular = match factor.factorize(&pattern, &values) {
-            Err(_) => true,
-            Ok(()) => {
-                // A positive factorization may still hide a zero mode behind round-off
-                // pivots: a few inverse iterations tell.
-                smallest_eigenvalue_bound(&pattern, &values, &factor, 3)
-                    < ZERO_MODE_RELATIVE * pattern.mean_diagonal(&values)
-            }
-        };
-        if singular {
-            let mut probe = factor.share_symbolic();
-            let zero_modes = zero_mode_count(&pattern, &values, &mut probe).max(1);
+        let zero_modes = factorize_counting_zero_modes(&pattern, &values, &mut factor);
+        if zero_modes > 0 {
             return Err(SetupError::Mechanism { zero_modes });
         }
         Ok(TautStiffness {
