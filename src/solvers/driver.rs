@@ -98,13 +98,15 @@ pub fn drive_from<S: Solver + ?Sized>(
 /// A solver of any kind behind one object-safe interface: what the application holds in a
 /// list. Every [`Solver`] is one, solved through [`drive`].
 pub trait AnySolver {
-    /// Solve for `load` through the driver (see [`drive`]).
+    /// Solve for `load` through the driver from a cold start (see [`drive`]).
     fn solve(
         &mut self,
         load: &[f64],
         reference: Option<&Reference>,
         observer: &mut dyn Observer,
-    ) -> Solution;
+    ) -> Solution {
+        self.solve_from(load, None, reference, observer)
+    }
 
     /// [`AnySolver::solve`] warm-started from `warm` when given (see [`drive_from`]).
     fn solve_from(
@@ -123,15 +125,6 @@ pub trait AnySolver {
 }
 
 impl<S: Solver> AnySolver for S {
-    fn solve(
-        &mut self,
-        load: &[f64],
-        reference: Option<&Reference>,
-        observer: &mut dyn Observer,
-    ) -> Solution {
-        drive(self, load, reference, observer)
-    }
-
     fn solve_from(
         &mut self,
         load: &[f64],

@@ -367,12 +367,7 @@ impl Solver for PcgLcp<'_> {
     fn iterate(&self, state: &PcgLcpState) -> Equilibrium {
         let s = self.structure;
         let u = self.displacements(state);
-        let mut tensions: Vec<f64> = s
-            .links
-            .iter()
-            .zip(&s.link_dofs)
-            .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(&u))
-            .collect();
+        let mut tensions = super::residual::trial_tensions(s, &u);
         for (j, &i) in self.cables.iter().enumerate() {
             // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing, nor does
             // a cable at the switch point (λ = 0, τ = t0 + k e ≤ 0).

@@ -59,19 +59,22 @@ pub fn load_relative_unbalance(
 /// r(U): the relative equilibrium residual of displacements U under the exact law,
 /// `τ(U) = t0 + k B U`, clipped at 0 for unilateral cables. Zero exactly at the solution.
 pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
-    let tensions: Vec<f64> = s
-        .links
-        .iter()
-        .zip(&s.link_dofs)
-        .map(|(l, ld)| {
-            let trial = l.prestress + l.stiffness * ld.elongation(u);
-            if l.unilateral {
-                trial.max(0.0)
-            } else {
-                trial
-            }
-        })
-        .collect();
+    let mut tensions = trial_tensions(s, u);
+    for (t, l) in tensions.iter_mut().zip(&s.links) {
+        if l.unilateral {
+            *t = t.max(0.0);
+        }
+    }
     let mut r = vec![0.0; s.n_free];
     relative_unbalance(s, &tensions, load, &mut r)
+}
+
+/// The trial tension of every link at displacements U, `t0 + k B U` (docs/method.md §1): a
+/// bar's tension, a taut cable's, and for a cable whose gap is open, minus k times the gap.
+pub fn trial_tensions(s: &Structure, u: &[f64]) -> Vec<f64> {
+    s.links
+        .iter()
+        .zip(&s.link_dofs)
+        .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(u))
+        .collect()
 }

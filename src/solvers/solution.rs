@@ -27,12 +27,7 @@ impl Equilibrium {
     /// classification every solver shares ([`SLACK_GAP_TOLERANCE`]); a slack cable's tension
     /// is set to exactly 0.
     pub fn classified(s: &Structure, displacements: Vec<f64>, mut tensions: Vec<f64>) -> Self {
-        let trial: Vec<f64> = s
-            .links
-            .iter()
-            .zip(&s.link_dofs)
-            .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(&displacements))
-            .collect();
+        let trial = super::residual::trial_tensions(s, &displacements);
         let scale = s
             .links
             .iter()

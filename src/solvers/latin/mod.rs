@@ -479,33 +479,12 @@ fn operators(
     dm: f64,
     dense: bool,
 ) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
-    let all: Vec<usize> = (0..partition.substructures.len()).collect();
-    let substructures = substructures(
-        structure, partition, &all, interfaces, holders, search, dm, dense,
-    )?;
-    let macro_problem = MacroProblem::new(&substructures, interfaces, dm)
-        .map_err(|_| SetupError::SingularMacroProblem)?;
-    Ok((substructures, macro_problem))
-}
-
-/// The operators of the substructures `which` for the search direction `search`, in
-/// parallel, in the order of `which`.
-#[allow(clippy::too_many_arguments)]
-fn substructures(
-    structure: &Structure,
-    partition: &Partition,
-    which: &[usize],
-    interfaces: &[Interface],
-    holders: &[u8],
-    search: &[f64],
-    dm: f64,
-    dense: bool,
-) -> Result<Vec<Substructure>, SetupError> {
-    which
-        .par_iter()
+    // Every substructure's operators, in parallel (a scratch dof map per task).
+    let substructures = (0..partition.substructures.len())
+        .into_par_iter()
         .map_init(
             || vec![CLAMPED; 3 * structure.n_nodes()],
-            |scratch, &e| {
+            |scratch, e| {
                 let topo = &partition.substructures[e];
                 Substructure::new(
                     e, topo, structure, interfaces, holders, search, dm, dense, scratch,
@@ -513,7 +492,10 @@ fn substructures(
                 .map_err(|_| SetupError::SingularSubstructure { index: e })
             },
         )
-        .collect()
+        .collect::<Result<Vec<_>, _>>()?;
+    let macro_problem = MacroProblem::new(&substructures, interfaces, dm)
+        .map_err(|_| SetupError::SingularMacroProblem)?;
+    Ok((substructures, macro_problem))
 }
 
 /// The two ways to iterate: on s with relaxation (the paper's order: local stage, then linear
