@@ -12,6 +12,7 @@ use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
 use tensolve::case;
+use tensolve::case::memory::{self, MemoryEstimate, Size, Workload};
 use tensolve::output::{alpha_label, SummaryRow};
 use tensolve::solvers::Method;
 
@@ -311,6 +312,8 @@ fn bench_command(
     set: &[String],
 ) -> Result<(), BenchError> {
     let case = case::load_with(path, set)?;
+    let estimate = MemoryEstimate::new(Size::of(&case), &Workload::bench(&case));
+    memory::ensure_fits(&estimate, "bench").map_err(BenchError::Case)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let prepared = tensolve::app::setup::prepare(&case)?;
     bench::ensure_writable(&dir)?;
@@ -362,11 +365,15 @@ fn report_bench(reporter: &Reporter, progress: Progress) {
 
 fn check_command(path: PathBuf, set: &[String]) -> Result<(), RunError> {
     let case = case::load_with(&path, set)?;
+    // What check itself allocates (a rank factorization, the LATIN set-ups) must fit first.
+    let own = MemoryEstimate::new(Size::of(&case), &Workload::check(&case));
+    memory::ensure_fits(&own, "check")?;
     let report = check(&case, path);
     print_ignoring_closed_pipe(&report.to_string());
     match report.error {
         Some(e) => Err(e.into()),
-        None => Ok(()),
+        // A case `run` would refuse for its memory is not valid here either.
+        None => memory::ensure_fits(&report.memory, "run").map_err(RunError::from),
     }
 }
 

@@ -1,6 +1,7 @@
 //! `tensolve check`: what a case describes, and whether every solver can be set up for it, as
 //! a report struct (tests read it directly; the command line prints its `Display`).
 
+use crate::case::memory::{self, Available, MemoryEstimate, Size, Workload};
 use crate::case::Case;
 use crate::linalg::{factorize_counting_zero_modes, SparseCholesky, StiffnessPattern};
 use crate::output::alpha_label;
@@ -110,6 +111,10 @@ pub struct CheckReport {
     pub latin: Vec<LatinReport>,
     /// Why a solver cannot be set up: a mechanism, or a LATIN partition that cannot be.
     pub error: Option<SetupError>,
+    /// The memory `tensolve run` of the case is estimated to need.
+    pub memory: MemoryEstimate,
+    /// The memory available, and which limit says so (`None` when none can be read).
+    pub available: Option<Available>,
 }
 
 /// Check `case` (read from `path`).
@@ -152,6 +157,8 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         stiffness_regular: false,
         latin: Vec::new(),
         error: None,
+        memory: MemoryEstimate::new(Size::of(case), &Workload::run(case, &case.solver.methods)),
+        available: memory::available(),
     };
     if let Err(e) = TautStiffness::new(&s) {
         report.error = Some(e);
@@ -239,6 +246,16 @@ impl fmt::Display for CheckReport {
         writeln!(f, "load factors    {}", alphas.join(", "))?;
         let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();
         writeln!(f, "solvers         {}", methods.join(", "))?;
+        writeln!(f, "memory (run)    {}", self.memory)?;
+        match &self.available {
+            Some(a) => writeln!(
+                f,
+                "  available     {} ({})",
+                memory::bytes_text(a.bytes),
+                a.source
+            )?,
+            None => writeln!(f, "  available     unknown (no limit readable)")?,
+        }
         if !self.stiffness_regular {
             return Ok(());
         }

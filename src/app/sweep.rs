@@ -3,6 +3,7 @@
 //! for is computed and written.
 
 use super::setup::{prepare, set_up, Prepared, SetUpSolver};
+use crate::case::memory::{self, MemoryEstimate, Size, Workload};
 use crate::case::{Case, CaseError};
 use crate::output::{
     self, alpha_label,
@@ -123,6 +124,9 @@ pub fn run(
         .clone()
         .unwrap_or_else(|| case.solver.methods.clone());
     crate::case::check_distinct_methods("--solver", &methods)?;
+    // 0. The memory the run needs, estimated before anything large is allocated.
+    let estimate = MemoryEstimate::new(Size::of(case), &Workload::run(case, &methods));
+    memory::ensure_fits(&estimate, "run")?;
 
     // 1. The structure and its mechanism check (K with every cable taut, factorized).
     let prepared = prepare(case)?;

@@ -278,6 +278,21 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     let (grid, geometry, mut fixes) = match (&raw.grid, &raw.structure) {
         (Some(g), None) => {
             let spec = grid_spec(&raw, g)?;
+            // Refuse a grid whose structure alone does not fit before generating it.
+            let layout = crate::structure::GridLayout::new(spec.modules[0], spec.modules[1]);
+            let per_module = if spec.module == crate::structure::ModuleKind::Braced {
+                20
+            } else {
+                16
+            };
+            let size = super::memory::Size {
+                nodes: layout.n_nodes(),
+                links: per_module * spec.modules[0] * spec.modules[1],
+            };
+            super::memory::ensure_fits(
+                &super::memory::MemoryEstimate::structure(size),
+                "loading the case",
+            )?;
             let (geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
             (Some(spec), geometry, fixes)
         }

@@ -50,6 +50,21 @@ pub enum CaseError {
         /// What is allowed.
         fix: String,
     },
+    /// The case needs more memory than this process may use (estimated before allocating).
+    #[error(
+        "the case is too large for the memory available: `{command}` needs {estimate}; \
+         {available} is available. Use fewer modules (`grid.modules`), fewer solvers \
+         (`solver.methods` or `--solver`) or fewer outputs (`output.stability`, \
+         `output.compare_modules`), or run where more memory is available"
+    )]
+    TooLarge {
+        /// What would need the memory (`run`, `check`, `bench`, or loading the case).
+        command: String,
+        /// The estimate, by part.
+        estimate: String,
+        /// What is available, and which limit says so.
+        available: String,
+    },
 }
 
 impl CaseError {

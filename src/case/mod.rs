@@ -5,6 +5,7 @@
 
 mod convert;
 mod error;
+pub mod memory;
 mod raw;
 mod tables;
 mod typed;

@@ -1,0 +1,543 @@
+//! The memory a case needs, estimated from its size before anything large is allocated, and
+//! the memory this process may use (issue 13, C1: a 500 × 500 grid passed validation, then
+//! died with "memory allocation failed").
+//!
+//! The estimate is a formula in the structure's size, calibrated against the peak resident
+//! memory of `tensolve run` (`/usr/bin/time -v`) on 16 × 16 to 256 × 256 grids, one solver at
+//! a time (README, "Limits and diagnostics"). It counts the structure and the sparse factors
+//! each solver holds; nothing else grows with the structure.
+
+use crate::solvers::Method;
+
+/// Bytes per link for the structure and everything sized by it: the case's geometry, the
+/// structure's links and compatibility rows, the stiffness pattern and values, a solver's
+/// vectors (fitted: peak RSS of `pcg-lcp` minus one factor, 1.1–1.2 kB per dof on 64 × 64 to
+/// 256 × 256 grids, which have 16/9 links per dof; rounded up).
+pub const BYTES_PER_LINK: u64 = 700;
+
+/// The process before any structure: binary, runtime, small buffers.
+pub const BASE_BYTES: u64 = 32 << 20;
+
+/// Entries of a sparse Cholesky factor per dof and per `log2(dofs)` under nested dissection:
+/// 124 M entries on 256 × 256 modules (592 899 dofs, log2 = 19.2) is 10.9.
+pub const FACTOR_ENTRIES_PER_DOF_LOG2: f64 = 11.0;
+
+/// Bytes per factor entry: the value (8) and the supernodal structure's indices and workspace
+/// (peak RSS of `newton` minus that of `pcg-lcp`, one factor apart, is 9.5 bytes per entry on
+/// 64 × 64 to 256 × 256 grids; rounded up).
+pub const BYTES_PER_FACTOR_ENTRY: f64 = 10.0;
+
+/// Fill of the minimum-degree ordering against nested dissection (194 M against 124 M
+/// entries on 256 × 256 modules), for `check`'s rank factorization. The solvers' factors use
+/// minimum degree only below 10 000 free nodes, where the formula still bounds what was
+/// measured (56 × 56 modules), so they are all counted as nested dissection.
+pub const AMD_FILL_RATIO: f64 = 1.6;
+
+/// Factors (in units of the structure's stiffness factor) a solver holds beyond the taut
+/// stiffness every run factorizes: newton its Hessian's; pcg-lcp none (it solves with K's);
+/// mono-latin its whole-structure operators (measured 3.0–3.4 units on 64 × 64 to 256 × 256,
+/// rounded up to 4); micro-macro its substructure operators and macro problem (2.3–2.7 units
+/// on 64 × 64 to 256 × 256 with 4 × 4 substructures, rounded up to 3).
+pub fn factor_units(method: Method) -> f64 {
+    match method {
+        Method::Newton => 1.0,
+        Method::PcgLcp => 0.0,
+        Method::MonoLatin => 4.0,
+        Method::MicroMacro => 3.0,
+    }
+}
+
+/// The size of a structure, as the estimate needs it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Size {
+    /// Nodes.
+    pub nodes: usize,
+    /// Links (bars and cables).
+    pub links: usize,
+}
+
+impl Size {
+    /// Dofs, held ones included (an upper bound of the free dofs).
+    pub fn dofs(&self) -> usize {
+        3 * self.nodes
+    }
+
+    /// Bytes of the structure and what is sized by it: [`BASE_BYTES`] + [`BYTES_PER_LINK`] ·
+    /// links.
+    pub fn structure_bytes(&self) -> u64 {
+        BASE_BYTES + BYTES_PER_LINK * self.links as u64
+    }
+
+    /// Bytes of one sparse Cholesky factor of the stiffness: `11 · d · log2(d)` entries of
+    /// 10 bytes for `d` dofs (nested dissection), [`AMD_FILL_RATIO`] times that with `amd`.
+    pub fn factor_bytes(&self, amd: bool) -> u64 {
+        let d = self.dofs().max(2) as f64;
+        let entries = FACTOR_ENTRIES_PER_DOF_LOG2 * d * d.log2();
+        let fill = if amd { AMD_FILL_RATIO } else { 1.0 };
+        (fill * entries * BYTES_PER_FACTOR_ENTRY) as u64
+    }
+}
+
+/// What a command will do with the structure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Workload {
+    /// The solvers set up together (the run's solvers, and LATIN's reference solver when it
+    /// is not one of them).
+    pub methods: Vec<Method>,
+    /// `output.stability`: one more factorization of the tangent stiffness per row.
+    pub stability: bool,
+    /// Figure 12: the LATIN solvers set up again on a second grid while the first is held.
+    pub compare_modules: bool,
+    /// `check`: a rank factorization of `BᵀB` (minimum-degree ordering), freed before the
+    /// solvers' set-up.
+    pub rank_factorization: bool,
+}
+
+/// The estimated peak memory of a command on a structure, by part.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemoryEstimate {
+    /// What each part is, and its bytes.
+    pub parts: Vec<(String, u64)>,
+    /// Worker threads that run dense kernels (LATIN's parallel stages), for the address space
+    /// each reserves (see [`Available`]).
+    pub worker_threads: usize,
+}
+
+impl MemoryEstimate {
+    /// The structure of `size` under `work`: the structure, the taut stiffness's factor, and
+    /// every solver's own factors.
+    pub fn new(size: Size, work: &Workload) -> MemoryEstimate {
+        let factor = size.factor_bytes(false);
+        let mut parts = vec![("structure".to_string(), size.structure_bytes())];
+        let mut units = 1.0; // K with every cable taut (the mechanism check), always factorized
+        let mut latin = false;
+        for &m in &work.methods {
+            units += factor_units(m);
+            latin |= matches!(m, Method::MonoLatin | Method::MicroMacro);
+        }
+        if work.stability {
+            units += 1.0;
+        }
+        if work.compare_modules {
+            // A second grid: its structure, its taut factor and its LATIN solvers.
+            units += 1.0;
+            units += work
+                .methods
+                .iter()
+                .filter(|m| matches!(m, Method::MonoLatin | Method::MicroMacro))
+                .map(|&m| factor_units(m))
+                .sum::<f64>();
+            parts.push(("second grid (Figure 12)".into(), size.structure_bytes()));
+        }
+        let names: Vec<&str> = work.methods.iter().map(|m| m.name()).collect();
+        parts.push((
+            format!(
+                "{units} sparse factor(s) of {} ({})",
+                bytes_text(factor),
+                names.join(", ")
+            ),
+            (units * factor as f64) as u64,
+        ));
+        if work.rank_factorization {
+            // Freed before the solvers' set-up: counted when larger than what follows it.
+            let rank = size.factor_bytes(true);
+            let later = (units * factor as f64) as u64;
+            if rank > later {
+                parts.push((
+                    "rank factorization, beyond the solvers'".into(),
+                    rank - later,
+                ));
+            }
+        }
+        let worker_threads = if latin { rayon_threads() } else { 0 };
+        MemoryEstimate {
+            parts,
+            worker_threads,
+        }
+    }
+
+    /// The structure of `size` alone: what loading and checking the case allocates before
+    /// any solver (the geometry and its structure).
+    pub fn structure(size: Size) -> MemoryEstimate {
+        MemoryEstimate {
+            parts: vec![("structure".to_string(), size.structure_bytes())],
+            worker_threads: 0,
+        }
+    }
+
+    /// The sum of the parts, bytes.
+    pub fn total(&self) -> u64 {
+        self.parts.iter().map(|p| p.1).sum()
+    }
+}
+
+impl std::fmt::Display for MemoryEstimate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let parts: Vec<String> = self
+            .parts
+            .iter()
+            .map(|(what, bytes)| format!("{what}: {}", bytes_text(*bytes)))
+            .collect();
+        write!(
+            f,
+            "about {} ({})",
+            bytes_text(self.total()),
+            parts.join("; ")
+        )
+    }
+}
+
+impl Size {
+    /// The size of the structure `case` describes.
+    pub fn of(case: &super::Case) -> Size {
+        Size {
+            nodes: case.geometry.nodes.len(),
+            links: case.geometry.members.len(),
+        }
+    }
+}
+
+impl Workload {
+    /// `tensolve run` of `case` with `methods`: those solvers set up together, LATIN's own
+    /// reference solver when it is not one of them at its default settings, and the outputs
+    /// that factorize again.
+    pub fn run(case: &super::Case, methods: &[Method]) -> Workload {
+        let is_latin = |m: &Method| matches!(m, Method::MonoLatin | Method::MicroMacro);
+        let mut all = methods.to_vec();
+        if let Some(reference) = case.solver.reference.method() {
+            let shared = methods.contains(&reference) && case.solver.is_default(reference);
+            if methods.iter().any(is_latin) && !shared {
+                all.push(reference);
+            }
+        }
+        Workload {
+            methods: all,
+            stability: case.output.stability,
+            compare_modules: case.output.plots && !case.output.compare_modules.is_empty(),
+            rank_factorization: false,
+        }
+    }
+
+    /// `tensolve check` of `case`: the rank factorization, then the taut stiffness and the
+    /// LATIN solvers' set-up.
+    pub fn check(case: &super::Case) -> Workload {
+        let latin = case
+            .solver
+            .methods
+            .iter()
+            .copied()
+            .filter(|m| matches!(m, Method::MonoLatin | Method::MicroMacro))
+            .collect();
+        Workload {
+            methods: latin,
+            stability: false,
+            compare_modules: false,
+            rank_factorization: true,
+        }
+    }
+
+    /// `tensolve bench` of `case`: one solver set up at a time, after a newton reference.
+    pub fn bench(case: &super::Case) -> Workload {
+        let largest = case
+            .solver
+            .methods
+            .iter()
+            .copied()
+            .chain([Method::Newton])
+            .max_by(|a, b| factor_units(*a).total_cmp(&factor_units(*b)))
+            .unwrap_or(Method::Newton);
+        Workload {
+            methods: vec![largest],
+            stability: false,
+            compare_modules: false,
+            rank_factorization: false,
+        }
+    }
+}
+
+/// The threads rayon's global pool will have: `RAYON_NUM_THREADS`, else one per CPU (rayon's
+/// own rule; read without starting the pool).
+fn rayon_threads() -> usize {
+    std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
+/// `1.23 GB` (decimal units, as `free` and `/usr/bin/time` users read them).
+pub fn bytes_text(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= 1e9 {
+        format!("{:.2} GB", b / 1e9)
+    } else {
+        format!("{:.0} MB", (b / 1e6).max(1.0))
+    }
+}
+
+/// The memory this process may still use, and which limit says so.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Available {
+    /// Bytes of memory the estimate may use.
+    pub bytes: u64,
+    /// Bytes of address space each worker thread reserves beyond it, when the limit is one of
+    /// address space (`ulimit -v`): the dense kernel's buffer (twice the L3 cache, reserved by
+    /// the gemm of faer on every thread that runs one) and glibc's 64 MiB malloc arena.
+    pub per_thread: u64,
+    /// The limit, as the user would name it.
+    pub source: String,
+}
+
+/// The smallest of: `MemAvailable` of `/proc/meminfo`; the cgroup's `memory.max` less its
+/// `memory.current`; `RLIMIT_AS` (`ulimit -v`) less the address space in use; `RLIMIT_DATA`
+/// (`ulimit -d`) less the data segment in use. `None` when none can be read.
+pub fn available() -> Option<Available> {
+    let mut best: Option<Available> = None;
+    let mut consider = |bytes: u64, per_thread: u64, source: String| {
+        if best.as_ref().is_none_or(|b| bytes < b.bytes) {
+            best = Some(Available {
+                bytes,
+                per_thread,
+                source,
+            });
+        }
+    };
+    if let Some(kb) = proc_field("/proc/meminfo", "MemAvailable:") {
+        consider(
+            kb << 10,
+            0,
+            format!("MemAvailable {}", bytes_text(kb << 10)),
+        );
+    }
+    if let Some((max, current)) = cgroup_limit() {
+        consider(
+            max.saturating_sub(current),
+            0,
+            format!(
+                "cgroup memory.max {}, {} in use",
+                bytes_text(max),
+                bytes_text(current)
+            ),
+        );
+    }
+    let address_space = proc_field("/proc/self/status", "VmSize:").unwrap_or(0) << 10;
+    if let Some(limit) = rlimit(libc::RLIMIT_AS) {
+        consider(
+            limit.saturating_sub(address_space),
+            2 * l3_cache_bytes() + (64 << 20),
+            format!(
+                "RLIMIT_AS (ulimit -v) {}, {} of address space in use",
+                bytes_text(limit),
+                bytes_text(address_space)
+            ),
+        );
+    }
+    let data = proc_field("/proc/self/status", "VmData:").unwrap_or(0) << 10;
+    if let Some(limit) = rlimit(libc::RLIMIT_DATA) {
+        consider(
+            limit.saturating_sub(data),
+            2 * l3_cache_bytes() + (64 << 20),
+            format!(
+                "RLIMIT_DATA (ulimit -d) {}, {} in use",
+                bytes_text(limit),
+                bytes_text(data)
+            ),
+        );
+    }
+    best
+}
+
+/// The soft limit `resource`, bytes, when one is set. std has no `getrlimit`, hence `libc`.
+fn rlimit(resource: libc::__rlimit_resource_t) -> Option<u64> {
+    let mut limit = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes one `rlimit` through a valid pointer.
+    let ok = unsafe { libc::getrlimit(resource, &mut limit) } == 0;
+    (ok && limit.rlim_cur != libc::RLIM_INFINITY).then_some(limit.rlim_cur)
+}
+
+/// The number after `field` (kB) in a `/proc` file of `key: value kB` lines.
+fn proc_field(path: &str, field: &str) -> Option<u64> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let line = text.lines().find(|l| l.starts_with(field))?;
+    line[field.len()..].split_whitespace().next()?.parse().ok()
+}
+
+/// The cgroup v2 memory limit and usage of this process, when a limit is set.
+fn cgroup_limit() -> Option<(u64, u64)> {
+    let membership = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+    let path = membership
+        .lines()
+        .find_map(|l| l.strip_prefix("0::"))
+        .unwrap_or("/");
+    for dir in [
+        format!("/sys/fs/cgroup{path}"),
+        "/sys/fs/cgroup".to_string(),
+    ] {
+        let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).ok();
+        if let Some(max) = read("memory.max").and_then(|m| m.trim().parse::<u64>().ok()) {
+            let current = read("memory.current")
+                .and_then(|c| c.trim().parse().ok())
+                .unwrap_or(0);
+            return Some((max, current));
+        }
+    }
+    None
+}
+
+/// The L3 cache size the dense kernels size their buffers by (`/sys`; 32 MiB when unknown).
+fn l3_cache_bytes() -> u64 {
+    let unknown = 32 << 20;
+    let Ok(entries) = std::fs::read_dir("/sys/devices/system/cpu/cpu0/cache") else {
+        return unknown;
+    };
+    for e in entries.flatten() {
+        let read = |f: &str| std::fs::read_to_string(e.path().join(f)).ok();
+        if read("level").is_some_and(|l| l.trim() == "3") {
+            if let Some(size) = read("size") {
+                let size = size.trim();
+                let (number, unit) = size.split_at(size.len() - 1);
+                let scale = match unit {
+                    "K" => 1 << 10,
+                    "M" => 1 << 20,
+                    "G" => 1 << 30,
+                    _ => return unknown,
+                };
+                return number.parse::<u64>().map_or(unknown, |n| n * scale);
+            }
+        }
+    }
+    unknown
+}
+
+/// Refuse `estimate` of what `command` needs when it is larger than what is available.
+pub fn ensure_fits(estimate: &MemoryEstimate, command: &str) -> Result<(), super::CaseError> {
+    let Some(available) = available() else {
+        return Ok(());
+    };
+    let needed = estimate.total() + available.per_thread * (estimate.worker_threads as u64 + 1);
+    if needed <= available.bytes {
+        return Ok(());
+    }
+    let threads = if available.per_thread > 0 {
+        format!(
+            ", and {} of address space per thread ({} thread(s): RAYON_NUM_THREADS sets how many)",
+            bytes_text(available.per_thread),
+            estimate.worker_threads + 1
+        )
+    } else {
+        String::new()
+    };
+    Err(super::CaseError::TooLarge {
+        command: command.to_string(),
+        estimate: format!("{estimate}{threads}"),
+        available: format!("{} ({})", bytes_text(available.bytes), available.source),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> Size {
+        let layout = crate::structure::GridLayout::new(n, n);
+        Size {
+            nodes: layout.n_nodes(),
+            links: 16 * n * n,
+        }
+    }
+
+    fn run(methods: &[Method]) -> Workload {
+        Workload {
+            methods: methods.to_vec(),
+            stability: false,
+            compare_modules: false,
+            rank_factorization: false,
+        }
+    }
+
+    /// The stated formula, on 256 × 256 modules (197 633 nodes, 1 048 576 links).
+    #[test]
+    fn the_estimate_is_the_stated_formula() {
+        let size = grid(256);
+        assert_eq!(size.nodes, 197_633);
+        let d = 3.0 * 197_633.0_f64;
+        let factor = 11.0 * d * d.log2() * 10.0;
+        let structure = (32 << 20) as f64 + 700.0 * 1_048_576.0;
+        let newton = MemoryEstimate::new(size, &run(&[Method::Newton])).total() as f64;
+        assert!(
+            (newton - (structure + 2.0 * factor)).abs() < 2.0,
+            "{newton}"
+        );
+        let all = run(&[Method::Newton, Method::PcgLcp, Method::MonoLatin]);
+        let total = MemoryEstimate::new(size, &all).total() as f64;
+        assert!((total - (structure + 6.0 * factor)).abs() < 8.0, "{total}");
+    }
+
+    /// The estimate is above every peak RSS measured (`/usr/bin/time -v tensolve run`, kB, one
+    /// solver, 3 iterations, 2026-11-23) and within 1.5 times it on the grids where the
+    /// structure dominates the process.
+    #[test]
+    fn the_estimate_bounds_the_measured_peaks() {
+        let measured: [(usize, Method, u64); 20] = [
+            (16, Method::Newton, 13_052),
+            (16, Method::PcgLcp, 11_020),
+            (16, Method::MonoLatin, 17_768),
+            (16, Method::MicroMacro, 33_000),
+            (56, Method::Newton, 133_684),
+            (56, Method::PcgLcp, 87_948),
+            (56, Method::MonoLatin, 213_204),
+            (56, Method::MicroMacro, 191_840),
+            (64, Method::Newton, 156_548),
+            (64, Method::PcgLcp, 103_848),
+            (64, Method::MonoLatin, 279_184),
+            (64, Method::MicroMacro, 241_220),
+            (128, Method::Newton, 681_060),
+            (128, Method::PcgLcp, 432_172),
+            (128, Method::MonoLatin, 1_309_900),
+            (128, Method::MicroMacro, 1_087_976),
+            (256, Method::Newton, 3_005_132),
+            (256, Method::PcgLcp, 1_826_340),
+            (256, Method::MonoLatin, 5_818_292),
+            (256, Method::MicroMacro, 4_862_832),
+        ];
+        for (n, method, kb) in measured {
+            let peak = kb * 1024;
+            let estimate = MemoryEstimate::new(grid(n), &run(&[method])).total();
+            assert!(
+                estimate >= peak,
+                "{n} x {n} {method:?}: {estimate} < {peak}"
+            );
+            if n >= 64 {
+                assert!(
+                    (estimate as f64) < 1.5 * peak as f64,
+                    "{n} x {n} {method:?}: {estimate} against {peak}"
+                );
+            }
+        }
+    }
+
+    /// More modules, more solvers or more outputs never need less memory.
+    #[test]
+    fn the_estimate_grows_with_the_case() {
+        let mut previous = 0;
+        for n in [1, 2, 4, 16, 57, 58, 64, 128, 256, 500, 1000] {
+            let e = MemoryEstimate::new(grid(n), &run(&[Method::PcgLcp])).total();
+            assert!(e > previous, "{n}: {e} <= {previous}");
+            previous = e;
+        }
+        let size = grid(64);
+        let mut work = run(&[Method::PcgLcp]);
+        let mut previous = MemoryEstimate::new(size, &work).total();
+        for m in [Method::Newton, Method::MicroMacro, Method::MonoLatin] {
+            work.methods.push(m);
+            let e = MemoryEstimate::new(size, &work).total();
+            assert!(e > previous, "{m:?}");
+            previous = e;
+        }
+        work.stability = true;
+        assert!(MemoryEstimate::new(size, &work).total() > previous);
+    }
+}
