@@ -617,3 +617,174 @@ fn e3_stiff_cables_set_up_a_regular_macro_problem() {
     assert_eq!(rows.len(), 1);
     assert_eq!(rows[0][2], "true", "{rows:?}");
 }
+
+/// `tensolve ARGS` under `ulimit -v KB` (RLIMIT_AS, read back through getrlimit), with `env`;
+/// killed, and the test failed, after `limit` (a hang guard, not a speed measurement).
+fn under_address_limit(kb: u64, args: &[&str], env: &[(&str, &str)], limit: Duration) -> Output {
+    let mut line = format!("ulimit -v {kb}; exec '{}'", env!("CARGO_BIN_EXE_tensolve"));
+    for a in args {
+        line.push_str(&format!(" '{a}'"));
+    }
+    let mut child = Command::new("sh")
+        .args(["-c", &line])
+        .envs(env.iter().copied())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            panic!(
+                "`tensolve {}` under ulimit -v {kb} did not end in {limit:?}",
+                args.join(" ")
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn c1_a_case_larger_than_the_memory_is_refused_with_its_estimate() {
+    // repro c1_big_grid: 500 × 500 modules passed validation, then died with "memory
+    // allocation failed" (SIGABRT) under an 8 GB cap. The cap is set here (ulimit -v), so the
+    // test does not depend on the machine's memory.
+    let case = Temp::file(
+        "c1",
+        "[grid]\nmodules = [500, 500]\n[load]\nalpha = [1.0]\n",
+    );
+    let dir = Temp::dir("c1-out");
+    let cap = 8_000_000; // kB
+    for args in [
+        vec![
+            "run",
+            case.arg(),
+            "--out",
+            dir.0.to_str().unwrap(),
+            "--quiet",
+        ],
+        vec!["check", case.arg()],
+    ] {
+        let out = under_address_limit(cap, &args, &[], Duration::from_secs(120));
+        let message = stderr(&out);
+        assert_eq!(code(&out), 2, "{args:?}: {message}");
+        for part in [
+            "too large for the memory available",
+            "needs about",
+            "GB",
+            "sparse factor(s)",
+            "is available",
+            "RLIMIT_AS (ulimit -v)",
+            "grid.modules",
+            "solver.methods",
+        ] {
+            assert!(message.contains(part), "{args:?}: `{part}` in {message}");
+        }
+        assert!(!dir.0.exists(), "nothing written");
+    }
+    // A grid whose structure alone does not fit is refused before it is generated.
+    let huge = Temp::file(
+        "c1-huge",
+        "[grid]\nmodules = [2000, 2000]\n[load]\nalpha = [1.0]\n",
+    );
+    let out = under_address_limit(cap, &["check", huge.arg()], &[], Duration::from_secs(60));
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("`loading the case` needs about"),
+        "{}",
+        stderr(&out)
+    );
+    // check prints the estimate of a case that fits.
+    let small = Temp::file("c1-small", &small_case("[\"newton\"]", "[1.0]", ""));
+    let out = tensolve(&["check", small.arg()]);
+    assert_eq!(code(&out), 0);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("memory (run)    about"), "{text}");
+    assert!(text.contains("  available     "), "{text}");
+}
+
+#[test]
+fn c2_the_paper_case_runs_under_a_small_address_space_limit() {
+    // Under `ulimit -v` the paper case aborted at 600 MB: every thread that runs a dense
+    // kernel reserves twice the L3 cache (faer's gemm). Now a run either fits, or is refused
+    // with the estimate; it never aborts. Two rayon workers, as on a 2-CPU machine.
+    let env = [("RAYON_NUM_THREADS", "2")];
+    let dir = Temp::dir("c2-out");
+    let paper_exact = common::manifest_path("cases/paper-exact.toml");
+    let paper = common::manifest_path("cases/paper.toml");
+    let args = |case: &Path| {
+        vec![
+            "run".to_string(),
+            case.to_str().unwrap().to_string(),
+            "--out".into(),
+            dir.0.to_str().unwrap().to_string(),
+            "--quiet".into(),
+        ]
+    };
+    let run_under = |kb: u64, case: &Path| {
+        let a = args(case);
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        under_address_limit(kb, &a, &env, Duration::from_secs(120))
+    };
+    // The two exact solvers run on one thread: 1 GB is plenty (84 MB measured).
+    let out = run_under(1_000_000, &paper_exact);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    for kb in [50_000, 100_000, 200_000, 300_000, 400_000, 1_000_000] {
+        let out = run_under(kb, &paper);
+        match code(&out) {
+            0 => {}
+            2 => assert!(
+                stderr(&out).contains("too large for the memory available"),
+                "{kb} kB: {}",
+                stderr(&out)
+            ),
+            other => panic!("{kb} kB: exit {other}: {}", stderr(&out)),
+        }
+    }
+}
+
+#[test]
+fn e3_one_module_per_substructure_sets_up_a_regular_macro_problem() {
+    // repro e3_macro_onemodule: 64 × 64 modules, one per substructure, was refused as "the
+    // macro problem is singular". check sets micro-macro up (its macro problem factorized);
+    // three iterations of a run set it up again and stop on max_iterations, not on set-up.
+    let text = "[grid]\nmodules = [64, 64]\n[supports]\nclamp = \"lower-all-edges\"\n\
+                [load]\nalpha = [0.15]\n[solver]\nmethods = [\"micro-macro\"]\n\
+                subdomains = [64, 64]\nreference = \"none\"\n";
+    let case = Temp::file("e3-one", text);
+    let out = tensolve(&["check", case.arg()]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(report.contains("substructures 4096 (64 x 64)"), "{report}");
+    let short = Temp::file(
+        "e3-one-run",
+        &format!("{text}max_iterations = 3\n[output]\ntensions = false\ndisplacements = false\n"),
+    );
+    let dir = Temp::dir("e3-one-out");
+    let out = run(&short, &dir.0);
+    let message = stderr(&out);
+    assert_eq!(code(&out), 1, "{message}");
+    assert!(message.contains("MaxIterations"), "{message}");
+    assert!(!message.contains("singular"), "{message}");
+}
+
+#[test]
+fn m3_write_errors_name_the_file() {
+    // A directory planted where a result goes makes its write fail: the message names that
+    // file under its final name, not the output directory.
+    for planted in ["tensions/newton_alpha1.csv", "summary.csv"] {
+        let dir = Temp::dir("m3-out");
+        std::fs::create_dir_all(dir.0.join(planted).join("x")).unwrap();
+        let case = Temp::file("m3", &small_case("[\"newton\"]", "[1.0]", ""));
+        let out = run(&case, &dir.0);
+        assert_eq!(code(&out), 1, "{}", stderr(&out));
+        let file = dir.0.join(planted);
+        assert!(
+            stderr(&out).starts_with(&format!("error: could not write `{}`:", file.display())),
+            "{}",
+            stderr(&out)
+        );
+    }
+}

@@ -150,12 +150,11 @@ pub fn run(
         for set_up in &mut solvers {
             let operators = set_up.solver.homogenised_operators();
             let staging = out.borrow().staging().to_path_buf();
-            output::write_homogenised(&staging, &operators)
-                .and_then(|_| out.borrow_mut().commit())
-                .map_err(|source| WriteError {
-                    path: dir.join("homogenised"),
-                    source,
-                })?;
+            output::write_homogenised(&staging, &operators).map_err(|source| WriteError {
+                path: dir.join("homogenised"),
+                source,
+            })?;
+            out.borrow_mut().commit()?;
         }
     }
     // 6. Every α, every solver, each warm-started from its converged answer at the previous α
@@ -241,10 +240,7 @@ pub fn run(
     if let Some(out) = out.as_ref().filter(|_| compare) {
         let staging = out.borrow().staging().to_path_buf();
         write_module_comparison(case, &methods, &staging, &dir)?;
-        out.borrow_mut().commit().map_err(|source| WriteError {
-            path: dir.join("plots"),
-            source,
-        })?;
+        out.borrow_mut().commit()?;
     }
     if let Some(out) = out {
         out.into_inner().finish().map_err(|source| WriteError {

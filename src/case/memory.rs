@@ -98,8 +98,11 @@ pub struct Workload {
 pub struct MemoryEstimate {
     /// What each part is, and its bytes.
     pub parts: Vec<(String, u64)>,
-    /// Worker threads that run dense kernels (LATIN's parallel stages), for the address space
-    /// each reserves (see [`Available`]).
+    /// Threads that run dense kernels (the main thread when a solver is set up, and rayon's
+    /// workers for LATIN's parallel stages), for the address space each reserves (see
+    /// [`Available::dense_buffer`]).
+    pub dense_threads: usize,
+    /// rayon's worker threads, for their malloc arenas (see [`Available::arena`]).
     pub worker_threads: usize,
 }
 
@@ -152,6 +155,7 @@ impl MemoryEstimate {
         let worker_threads = if latin { rayon_threads() } else { 0 };
         MemoryEstimate {
             parts,
+            dense_threads: 1 + worker_threads,
             worker_threads,
         }
     }
@@ -161,6 +165,7 @@ impl MemoryEstimate {
     pub fn structure(size: Size) -> MemoryEstimate {
         MemoryEstimate {
             parts: vec![("structure".to_string(), size.structure_bytes())],
+            dense_threads: 0,
             worker_threads: 0,
         }
     }
@@ -275,15 +280,22 @@ pub fn bytes_text(bytes: u64) -> String {
     }
 }
 
+/// The address space glibc maps for a thread's malloc arena (64 MiB, mapped twice as large
+/// while it is aligned).
+const THREAD_ARENA_BYTES: u64 = 128 << 20;
+
 /// The memory this process may still use, and which limit says so.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Available {
     /// Bytes of memory the estimate may use.
     pub bytes: u64,
-    /// Bytes of address space each worker thread reserves beyond it, when the limit is one of
-    /// address space (`ulimit -v`): the dense kernel's buffer (twice the L3 cache, reserved by
-    /// the gemm of faer on every thread that runs one) and glibc's 64 MiB malloc arena.
-    pub per_thread: u64,
+    /// Bytes of address space each thread running a dense kernel reserves beyond `bytes`,
+    /// when the limit is one of address space (`ulimit -v`, `ulimit -d`): twice the L3 cache,
+    /// which faer's gemm (`private-gemm-x86`) reserves on every such thread, with no setting.
+    pub dense_buffer: u64,
+    /// Bytes of address space each worker thread's malloc arena takes under such a limit:
+    /// glibc's 64 MiB arena, mapped twice as large while it is aligned.
+    pub arena: u64,
     /// The limit, as the user would name it.
     pub source: String,
 }
@@ -293,11 +305,16 @@ pub struct Available {
 /// (`ulimit -d`) less the data segment in use. `None` when none can be read.
 pub fn available() -> Option<Available> {
     let mut best: Option<Available> = None;
-    let mut consider = |bytes: u64, per_thread: u64, source: String| {
+    let mut consider = |bytes: u64, address_space: bool, source: String| {
         if best.as_ref().is_none_or(|b| bytes < b.bytes) {
             best = Some(Available {
                 bytes,
-                per_thread,
+                dense_buffer: if address_space {
+                    2 * l3_cache_bytes()
+                } else {
+                    0
+                },
+                arena: if address_space { THREAD_ARENA_BYTES } else { 0 },
                 source,
             });
         }
@@ -305,14 +322,14 @@ pub fn available() -> Option<Available> {
     if let Some(kb) = proc_field("/proc/meminfo", "MemAvailable:") {
         consider(
             kb << 10,
-            0,
+            false,
             format!("MemAvailable {}", bytes_text(kb << 10)),
         );
     }
     if let Some((max, current)) = cgroup_limit() {
         consider(
             max.saturating_sub(current),
-            0,
+            false,
             format!(
                 "cgroup memory.max {}, {} in use",
                 bytes_text(max),
@@ -324,7 +341,7 @@ pub fn available() -> Option<Available> {
     if let Some(limit) = rlimit(libc::RLIMIT_AS) {
         consider(
             limit.saturating_sub(address_space),
-            2 * l3_cache_bytes() + (64 << 20),
+            true,
             format!(
                 "RLIMIT_AS (ulimit -v) {}, {} of address space in use",
                 bytes_text(limit),
@@ -336,7 +353,7 @@ pub fn available() -> Option<Available> {
     if let Some(limit) = rlimit(libc::RLIMIT_DATA) {
         consider(
             limit.saturating_sub(data),
-            2 * l3_cache_bytes() + (64 << 20),
+            true,
             format!(
                 "RLIMIT_DATA (ulimit -d) {}, {} in use",
                 bytes_text(limit),
@@ -417,15 +434,18 @@ pub fn ensure_fits(estimate: &MemoryEstimate, command: &str) -> Result<(), super
     let Some(available) = available() else {
         return Ok(());
     };
-    let needed = estimate.total() + available.per_thread * (estimate.worker_threads as u64 + 1);
-    if needed <= available.bytes {
+    let threads = available.dense_buffer * estimate.dense_threads as u64
+        + available.arena * estimate.worker_threads as u64;
+    if estimate.total() + threads <= available.bytes {
         return Ok(());
     }
-    let threads = if available.per_thread > 0 {
+    let threads = if threads > 0 {
         format!(
-            ", and {} of address space per thread ({} thread(s): RAYON_NUM_THREADS sets how many)",
-            bytes_text(available.per_thread),
-            estimate.worker_threads + 1
+            ", and {} of address space for {} thread(s) running dense kernels (twice the L3 \
+             cache each, and a malloc arena per rayon worker; RAYON_NUM_THREADS sets how many \
+             workers)",
+            bytes_text(threads),
+            estimate.dense_threads
         )
     } else {
         String::new()

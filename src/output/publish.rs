@@ -14,6 +14,8 @@ use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{self, Read, Write};
 use std::path::{Component, Path, PathBuf};
 
+use super::sinks::WriteError;
+
 /// The lock file's name.
 pub const LOCK_FILE: &str = ".tensolve.lock";
 /// The manifest's name.
@@ -121,19 +123,21 @@ impl OutputDir {
 
     /// Publish every staged file under its final name. On error, the files this commit had
     /// already published are removed again: a solve is published whole or not at all.
-    pub fn commit(&mut self) -> io::Result<()> {
-        let staged = staged_files(self.staging())?;
+    pub fn commit(&mut self) -> Result<(), WriteError> {
+        let staging = self.staging().to_path_buf();
+        let staged = staged_files(&staging).map_err(WriteError::at(&staging))?;
         if staged.is_empty() {
             return Ok(());
         }
-        self.begin()?;
-        self.record(&staged)?;
+        let manifest = self.root.join(MANIFEST_FILE);
+        self.begin().map_err(WriteError::at(&manifest))?;
+        self.record(&staged).map_err(WriteError::at(&manifest))?;
         let mut done: Vec<PathBuf> = Vec::new();
+        // A failure names the file under its final name (issue 13, M3), not the directory.
         let result = staged.iter().try_for_each(|rel| {
             let to = self.root.join(rel);
-            ensure_real_dir(&self.root, rel)?;
-            std::fs::rename(self.staging().join(rel), &to)
-                .map_err(|e| io::Error::new(e.kind(), format!("`{}`: {e}", to.display())))?;
+            ensure_real_dir(&self.root, rel).map_err(WriteError::at(&to))?;
+            std::fs::rename(staging.join(rel), &to).map_err(WriteError::at(&to))?;
             done.push(to);
             Ok(())
         });

@@ -38,7 +38,7 @@ pub struct WriteError {
 }
 
 impl WriteError {
-    fn at(path: impl Into<PathBuf>) -> impl FnOnce(io::Error) -> WriteError {
+    pub(super) fn at(path: impl Into<PathBuf>) -> impl FnOnce(io::Error) -> WriteError {
         let path = path.into();
         move |source| WriteError { path, source }
     }
@@ -298,8 +298,7 @@ impl<'s> PublishSink<'s> {
 
     fn publish(&self) -> Result<(), WriteError> {
         let mut out = self.out.borrow_mut();
-        let root = out.root().to_path_buf();
-        out.commit().map_err(WriteError::at(root))
+        out.commit()
     }
 }
 
