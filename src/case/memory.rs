@@ -132,7 +132,10 @@ impl MemoryEstimate {
                 .sum::<f64>();
             parts.push(("second grid (Figure 12)".into(), size.structure_bytes()));
         }
-        let names: Vec<&str> = work.methods.iter().map(|m| m.name()).collect();
+        let names: Vec<&str> = ["K with every cable taut"]
+            .into_iter()
+            .chain(work.methods.iter().map(|m| m.name()))
+            .collect();
         parts.push((
             format!(
                 "{units} sparse factor(s) of {} ({})",
