@@ -304,7 +304,8 @@ pub struct Available {
 }
 
 /// The smallest of: `MemAvailable` of `/proc/meminfo`; the cgroup's `memory.max` less its
-/// `memory.current`; `RLIMIT_AS` (`ulimit -v`) less the address space in use; `RLIMIT_DATA`
+/// `memory.current` (v1: `memory.limit_in_bytes` less `memory.usage_in_bytes`), inactive page
+/// cache left out; `RLIMIT_AS` (`ulimit -v`) less the address space in use; `RLIMIT_DATA`
 /// (`ulimit -d`) less the data segment in use. `None` when none can be read.
 pub fn available() -> Option<Available> {
     let mut best: Option<Available> = None;
@@ -334,7 +335,7 @@ pub fn available() -> Option<Available> {
             max.saturating_sub(current),
             false,
             format!(
-                "cgroup memory.max {}, {} in use",
+                "cgroup memory limit {}, {} in use",
                 bytes_text(max),
                 bytes_text(current)
             ),
@@ -385,24 +386,69 @@ fn proc_field(path: &str, field: &str) -> Option<u64> {
     line[field.len()..].split_whitespace().next()?.parse().ok()
 }
 
-/// The cgroup v2 memory limit and usage of this process, when a limit is set.
+/// Limits this large mean "none" (cgroup v1 writes 2^63 rounded down to a page).
+const CGROUP_UNLIMITED: u64 = 1 << 62;
+
+/// The cgroup memory limit of this process and what counts against it, when a limit is set:
+/// v2 `memory.max` and `memory.current`, or v1 `memory.limit_in_bytes` and
+/// `memory.usage_in_bytes`; the inactive page cache (`memory.stat`), which the kernel reclaims
+/// before it fails an allocation, is not counted as used.
 fn cgroup_limit() -> Option<(u64, u64)> {
     let membership = std::fs::read_to_string("/proc/self/cgroup").ok()?;
-    let path = membership
+    let v2 = membership.lines().find_map(|l| l.strip_prefix("0::"));
+    let v1 = membership
         .lines()
-        .find_map(|l| l.strip_prefix("0::"))
-        .unwrap_or("/");
-    for dir in [
-        format!("/sys/fs/cgroup{path}"),
-        "/sys/fs/cgroup".to_string(),
-    ] {
+        .find_map(|l| l.split_once(":memory:").map(|(_, p)| p));
+    let candidates = [
+        (
+            v2.map(|p| format!("/sys/fs/cgroup{p}")),
+            "memory.max",
+            "memory.current",
+            "inactive_file",
+        ),
+        (
+            Some("/sys/fs/cgroup".into()),
+            "memory.max",
+            "memory.current",
+            "inactive_file",
+        ),
+        (
+            v1.map(|p| format!("/sys/fs/cgroup/memory{p}")),
+            "memory.limit_in_bytes",
+            "memory.usage_in_bytes",
+            "total_inactive_file",
+        ),
+        (
+            Some("/sys/fs/cgroup/memory".into()),
+            "memory.limit_in_bytes",
+            "memory.usage_in_bytes",
+            "total_inactive_file",
+        ),
+    ];
+    for (dir, limit, usage, inactive) in candidates {
+        let Some(dir) = dir else { continue };
         let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).ok();
-        if let Some(max) = read("memory.max").and_then(|m| m.trim().parse::<u64>().ok()) {
-            let current = read("memory.current")
-                .and_then(|c| c.trim().parse().ok())
-                .unwrap_or(0);
-            return Some((max, current));
+        let Some(max) = read(limit).and_then(|m| m.trim().parse::<u64>().ok()) else {
+            continue;
+        };
+        if max >= CGROUP_UNLIMITED {
+            return None;
         }
+        let used = read(usage)
+            .and_then(|c| c.trim().parse::<u64>().ok())
+            .unwrap_or(0);
+        let reclaimable = read("memory.stat")
+            .and_then(|stat| {
+                stat.lines().find_map(|l| {
+                    l.strip_prefix(inactive)?
+                        .strip_prefix(' ')?
+                        .trim()
+                        .parse()
+                        .ok()
+                })
+            })
+            .unwrap_or(0);
+        return Some((max, used.saturating_sub(reclaimable)));
     }
     None
 }
