@@ -705,6 +705,23 @@ fn c1_a_case_larger_than_the_memory_is_refused_with_its_estimate() {
     assert!(text.contains("  available     "), "{text}");
 }
 
+/// Whether cpu0's L3 cache, as `/sys` lists it, is known and at most 32 MB.
+fn l3_at_most_32_mb() -> bool {
+    let Ok(entries) = std::fs::read_dir("/sys/devices/system/cpu/cpu0/cache") else {
+        return false;
+    };
+    entries.flatten().any(|e| {
+        let read = |f: &str| std::fs::read_to_string(e.path().join(f)).unwrap_or_default();
+        let size = read("size");
+        let size = size.trim();
+        read("level").trim() == "3"
+            && size
+                .strip_suffix('K')
+                .and_then(|k| k.parse::<u64>().ok())
+                .is_some_and(|k| k <= 32 * 1024)
+    })
+}
+
 #[test]
 fn c2_the_paper_case_runs_under_a_small_address_space_limit() {
     // Under `ulimit -v` the paper case aborted at 600 MB: every thread that runs a dense
@@ -731,6 +748,35 @@ fn c2_the_paper_case_runs_under_a_small_address_space_limit() {
     // The two exact solvers run on one thread: 1 GB is plenty (84 MB measured).
     let out = run_under(1_000_000, &paper_exact);
     assert_eq!(code(&out), 0, "{}", stderr(&out));
+    // The four solvers, LATIN's stages on rayon's workers, fit 1 GB too (up to an L3 of
+    // about 200 MB), and give what an unlimited run gives.
+    let out = run_under(1_000_000, &paper);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let free = Temp::dir("c2-free");
+    let out = tensolve(&[
+        "run",
+        paper.to_str().unwrap(),
+        "--out",
+        free.0.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let agree = |limited: &Path| {
+        let out = tensolve(&[
+            "compare",
+            limited.to_str().unwrap(),
+            free.0.to_str().unwrap(),
+        ]);
+        assert_eq!(code(&out), 0, "{}", String::from_utf8_lossy(&out.stdout));
+    };
+    agree(&dir.0);
+    // Where the L3 is at most 32 MB (this machine), 400 MB fits one worker and not two:
+    // rayon's pool is sized to one, and the results are the same.
+    if l3_at_most_32_mb() {
+        let out = run_under(400_000, &paper);
+        assert_eq!(code(&out), 0, "{}", stderr(&out));
+        agree(&dir.0);
+    }
     for kb in [50_000, 100_000, 200_000, 300_000, 400_000, 1_000_000] {
         let out = run_under(kb, &paper);
         match code(&out) {
