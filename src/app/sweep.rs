@@ -359,12 +359,10 @@ fn write_module_comparison(
         .fold(f64::NEG_INFINITY, f64::max);
     let mut histories = Vec::new();
     for &module in &case.output.compare_modules {
-        let mut grid_case = case.clone();
         // Case validation refuses compare_modules without a [grid].
-        let Some(grid) = grid_case.grid.as_mut() else {
+        let Some(grid_case) = case.with_module(module) else {
             return Ok(());
         };
-        grid.module = module;
         let prepared = prepare(&grid_case)?;
         let mut solvers = Vec::new();
         for &method in methods {

@@ -452,6 +452,14 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             ),
         ));
     }
+    if !kinds.is_empty() && !output.plots {
+        return Err(CaseError::invalid(
+            "output.compare_modules",
+            format!("{:?}", kinds.iter().map(|k| k.name()).collect::<Vec<_>>()),
+            "it draws Figure 12 under plots/, which is written only with `output.plots = true`: \
+             set `plots = true` in [output], or remove `compare_modules`",
+        ));
+    }
     if output.max_plot_iterations == 0 {
         return Err(CaseError::invalid(
             "output.max_plot_iterations",
