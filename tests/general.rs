@@ -533,3 +533,109 @@ fn four_solvers_agree_on_a_perturbed_general_structure() {
         assert!(d <= 1e-5 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
     }
 }
+
+/// `cases/skew-grid.toml`: a 6 × 4 general grid held on one lower edge in x, y, z, on the
+/// other in z only, with a 5 mm settlement at a corner (docs/method.md §7).
+fn skew_grid() -> Structure {
+    case::load(&manifest_path("cases/skew-grid.toml"))
+        .unwrap()
+        .structure()
+}
+
+#[test]
+fn latin_solvers_agree_with_newton_on_partial_supports_and_a_settlement() {
+    let s = skew_grid();
+    // The case really has both: nodes held on z only, and a non-zero prescribed displacement.
+    let partial = (0..s.n_nodes())
+        .filter(|&n| {
+            let held = (0..3).filter(|&k| s.dof_of[3 * n + k] == CLAMPED).count();
+            held == 1
+        })
+        .count();
+    assert_eq!(partial, 5);
+    assert!(s.prescribed.iter().any(|&u| u == -0.005));
+    let alpha = 2.0;
+    let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+    let reference = newton(&s, &f);
+    let slack = reference.equilibrium.slack.iter().filter(|&&x| x).count();
+    assert!(
+        slack * 20 >= s.n_cables(),
+        "{slack} slack of {}",
+        s.n_cables()
+    );
+    let scale = max_abs(&reference.equilibrium.displacements);
+    for subdomains in [[1, 1], [2, 2], [3, 2]] {
+        let settings = LatinSettings {
+            subdomains,
+            tolerance: 1e-9,
+            ..LatinSettings::default()
+        };
+        let mut latin = Latin::new(&s, settings).unwrap();
+        let sol = latin.solve(&f, None, &mut Silent);
+        assert!(
+            sol.info.status.converged(),
+            "LATIN {subdomains:?}: {:?}",
+            sol.info
+        );
+        assert_eq!(
+            sol.equilibrium.slack, reference.equilibrium.slack,
+            "LATIN {subdomains:?}"
+        );
+        let d = max_abs_diff(
+            &sol.equilibrium.displacements,
+            &reference.equilibrium.displacements,
+        );
+        println!(
+            "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} of {scale:e}",
+            sol.info.iterations
+        );
+        assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+        // The held components sit at their prescribed values, the settlement included.
+        let full = s.full_displacements(&sol.equilibrium.displacements);
+        for (d, &ud) in s.prescribed.iter().enumerate() {
+            if s.dof_of[d] == CLAMPED {
+                assert_eq!(full[d], ud);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_settled_skew_grid_case_runs_all_four_solvers() {
+    let case = case::load(&manifest_path("cases/skew-grid.toml")).unwrap();
+    let names: Vec<&str> = case.solver.methods.iter().map(|m| m.name()).collect();
+    assert_eq!(names, ["newton", "pcg-lcp", "mono-latin", "micro-macro"]);
+    let out_dir = Temp::dir("skew-grid-four");
+    let out = tensolve(&[
+        "run",
+        manifest_path("cases/skew-grid.toml").to_str().unwrap(),
+        "--out",
+        out_dir.arg(),
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", common::stderr(&out));
+    let summary = std::fs::read_to_string(out_dir.0.join("summary.csv")).unwrap();
+    let mut lines = summary.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|&h| h == name).unwrap();
+    let (solver, alpha, converged, slack) = (
+        column("solver"),
+        column("alpha"),
+        column("converged"),
+        column("slack_cables"),
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // Three load factors, four solvers, every one converged with newton's slack count.
+    assert_eq!(rows.len(), 12, "{summary}");
+    for name in names {
+        assert_eq!(rows.iter().filter(|r| r[solver] == name).count(), 3);
+    }
+    for row in &rows {
+        assert_eq!(row[converged], "true", "{row:?}");
+        let newton = rows
+            .iter()
+            .find(|r| r[solver] == "newton" && r[alpha] == row[alpha])
+            .unwrap();
+        assert_eq!(row[slack], newton[slack], "{row:?}");
+    }
+}
