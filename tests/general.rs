@@ -639,3 +639,167 @@ fn the_settled_skew_grid_case_runs_all_four_solvers() {
         assert_eq!(row[slack], newton[slack], "{row:?}");
     }
 }
+
+/// A node D at the origin held by three cables (members 10, 11, 12, to clamped nodes at
+/// (2, 0, 0), (0, 3, 0), (0, 0, 1)) and a bar (13, to a clamped node at (1, 2, 2)); a node E
+/// at (0, 0, −1) held determinately by members 20, 21 (cables) and 22 (bar), plus `extra`
+/// member rows. s = 7 − 6 = 1, m = 0. Equilibrium of D, `Σ t n = 0` with n = (1, 0, 0),
+/// (0, 1, 0), (0, 0, 1), (1, 2, 2)/3: `t10 = −t13/3`, `t11 = t12 = −2 t13/3`; E carries none.
+fn self_stress_tables(extra: &str, prestress_11: f64) -> (String, String) {
+    let nodes = "node,x,y,z\n0,0,0,0\n1,2,0,0\n2,0,3,0\n3,0,0,1\n4,1,2,2\n5,0,0,-1\n6,-1,0,0\n";
+    let members = format!(
+        "member,a,b,kind,young,section,prestress\n\
+         10,0,1,cable,1e11,1e-4,0\n11,0,2,cable,1e11,1e-4,{prestress_11}\n\
+         12,0,3,cable,1e11,1e-4,0\n13,0,4,bar,2e11,3e-4,0\n\
+         20,5,1,cable,1e11,1e-4,0\n21,5,2,cable,1e11,1e-4,0\n22,5,4,bar,2e11,3e-4,0\n{extra}"
+    );
+    (nodes.to_string(), members)
+}
+
+/// A case on [`self_stress_tables`]: nodes 1, 2, 3, 4 and 6 clamped, `prestress` as the
+/// `[prestress]` section's body, 10 N down on D.
+fn self_stress_case(tag: &str, extra: &str, prestress_11: f64, prestress: &str) -> Temp {
+    let dir = Temp::dir(tag);
+    std::fs::create_dir_all(&dir.0).unwrap();
+    let (nodes, members) = self_stress_tables(extra, prestress_11);
+    std::fs::write(dir.0.join("nodes.csv"), nodes).unwrap();
+    std::fs::write(dir.0.join("members.csv"), members).unwrap();
+    std::fs::write(
+        dir.0.join("case.toml"),
+        format!(
+            "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
+             [[supports.fix]]\nnodes = [1, 2, 3, 4, 6]\n\
+             [prestress]\n{prestress}\n\
+             [[load.point]]\nnodes = [0]\nforce = [0.0, 0.0, -10.0]\n\
+             [load]\nalpha = [1.0]\n"
+        ),
+    )
+    .unwrap();
+    dir
+}
+
+#[test]
+fn prestress_from_the_self_stress_state_matches_statics() {
+    let dir = self_stress_case(
+        "self-stress-ok",
+        "",
+        0.0,
+        "from = \"self-stress\"\nmember = 10\nforce = 1000.0",
+    );
+    let s = case::load(&dir.0.join("case.toml")).unwrap().structure();
+    assert_eq!(equilibrium_counts(&s).self_stress_states, 1);
+    assert_eq!(equilibrium_counts(&s).mechanisms, 0);
+    let t0: Vec<f64> = s.links.iter().map(|l| l.prestress).collect();
+    let want = [1000.0, 2000.0, 2000.0, -3000.0, 0.0, 0.0, 0.0];
+    for ((l, t), w) in s.links.iter().zip(&t0).zip(want) {
+        assert!(
+            (t - w).abs() <= 1e-9 * 3000.0,
+            "member {}: {t} vs {w}",
+            l.id
+        );
+    }
+    // In equilibrium at the free dofs: |B_fᵀ t0| ≤ 1e-10 ‖t0‖.
+    let mut f = vec![0.0; s.n_free];
+    s.nodal_forces(&t0, &mut f);
+    let size = t0.iter().map(|t| t * t).sum::<f64>().sqrt();
+    assert!(max_abs(&f) <= 1e-10 * size, "{f:?}");
+    // Compression sign: the same state through the bar at −3000 N.
+    let dir = self_stress_case(
+        "self-stress-bar",
+        "",
+        0.0,
+        "from = \"self-stress\"\nmember = 13\nforce = -3000.0",
+    );
+    let s = case::load(&dir.0.join("case.toml")).unwrap().structure();
+    for (l, w) in s.links.iter().zip(want) {
+        assert!((l.prestress - w).abs() <= 1e-9 * 3000.0, "member {}", l.id);
+    }
+    // And it solves: newton under 10 N down on D, every cable of D taut.
+    let sol = newton(&s, &s.unit_load);
+    assert!(sol.equilibrium.slack[..3].iter().all(|&x| !x));
+}
+
+#[test]
+fn self_stress_prestress_refusals_exit_2_naming_the_key() {
+    let from = |member: &str, force: &str| {
+        format!("from = \"self-stress\"\nmember = {member}\nforce = {force}")
+    };
+    // (extra members, member 11's prestress in the table, [prestress] body, key, also said)
+    let cases: [(&str, f64, String, &str, &str); 7] = [
+        // A second self-stress state: a cable from D to node 6.
+        (
+            "30,0,6,cable,1e11,1e-4,0\n",
+            0.0,
+            from("10", "1000.0"),
+            "prestress.from",
+            "s = 2",
+        ),
+        ("", 0.0, from("99", "1000.0"), "prestress.member", "99"),
+        // E is determinate: the state is zero on its members.
+        ("", 0.0, from("20", "1000.0"), "prestress.member", "zero"),
+        ("", 5.0, from("10", "1000.0"), "prestress.from", "member 11"),
+        // Tension in the bar compresses the three cables.
+        (
+            "",
+            0.0,
+            from("13", "3000.0"),
+            "prestress.force",
+            "member 10 (-1000 N)",
+        ),
+        (
+            "",
+            0.0,
+            "member = 10".to_string(),
+            "prestress.member",
+            "from = \"self-stress\"",
+        ),
+        ("", 0.0, from("10", "0.0"), "prestress.force", "non-zero"),
+    ];
+    for (i, (extra, p11, prestress, key, said)) in cases.iter().enumerate() {
+        let dir = self_stress_case(&format!("self-stress-bad-{i}"), extra, *p11, prestress);
+        let out = tensolve(&["check", dir.0.join("case.toml").to_str().unwrap()]);
+        let err = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "case {i}: {err}");
+        assert!(err.contains(key), "case {i}: {err}");
+        assert!(err.contains(said), "case {i}: {err}");
+    }
+    // A grid's prestress is `lower_cable`; and `[prestress]` still refuses unknown keys.
+    for (body, key) in [
+        (
+            "from = \"self-stress\"\nmember = 0\nforce = 1.0",
+            "prestress.from",
+        ),
+        ("form = \"self-stress\"", "form"),
+    ] {
+        let text =
+            format!("[grid]\nmodules = [2, 2]\n[prestress]\n{body}\n[load]\nalpha = [1.0]\n");
+        let err = case::parse(&text).expect_err(body).to_string();
+        assert!(err.contains(key), "{err}");
+    }
+    // A mechanism (E held by two members only): refused with m.
+    let dir = Temp::dir("self-stress-mechanism");
+    std::fs::create_dir_all(&dir.0).unwrap();
+    let (nodes, members) = self_stress_tables("", 0.0);
+    let members: String = members
+        .lines()
+        .filter(|l| !l.starts_with("22,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.0.join("nodes.csv"), nodes).unwrap();
+    std::fs::write(dir.0.join("members.csv"), members).unwrap();
+    std::fs::write(
+        dir.0.join("case.toml"),
+        "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
+         [[supports.fix]]\nnodes = [1, 2, 3, 4, 6]\n\
+         [prestress]\nfrom = \"self-stress\"\nmember = 10\nforce = 1000.0\n\
+         [load]\nalpha = [1.0]\n",
+    )
+    .unwrap();
+    let out = tensolve(&["check", dir.0.join("case.toml").to_str().unwrap()]);
+    let err = common::stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("prestress.from") && err.contains("m = 1"),
+        "{err}"
+    );
+}
