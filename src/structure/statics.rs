@@ -97,7 +97,8 @@ pub fn self_stress_through(structure: &Structure, j: usize) -> Result<Vec<f64>, 
         .collect();
     t[j] += 1.0;
     let tj = t[j];
-    if !(tj > ZERO_COMPONENT) {
+    // NaN (a breakdown) counts as zero too.
+    if tj.is_nan() || tj <= ZERO_COMPONENT {
         return Err(SelfStressRefusal::ZeroComponent(tj.max(0.0)));
     }
     t.iter_mut().for_each(|x| *x /= tj);
