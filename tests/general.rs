@@ -436,6 +436,12 @@ proptest! {
 /// the module, the prestress projected onto the self-stress states at the free dofs
 /// (`t0 − Aᵀ (A Aᵀ)⁻¹ A t0`), clamped on the lower x-edges.
 fn perturbed() -> Structure {
+    perturbed_held(false)
+}
+
+/// [`perturbed`]; with `partial`, the lower edge x = 3 is held in z only and its corner
+/// (3, 3) settles by 3 mm (the prestress projected on the free dofs of these supports).
+fn perturbed_held(partial: bool) -> Structure {
     let grid = grid_case([3, 3], "standard", "lower-x-edges");
     let mut nodes = String::from("node,x,y,z\n");
     for (n, p) in grid.nodes.iter().enumerate() {
@@ -459,9 +465,23 @@ fn perturbed() -> Structure {
         }
         members
     };
+    let x_max = grid.nodes.iter().fold(0.0, |m: f64, p| m.max(p[0]));
+    let y_max = grid.nodes.iter().fold(0.0, |m: f64, p| m.max(p[1]));
     let fixes: Vec<NodeFix> = (0..grid.n_nodes())
         .filter(|&n| grid.clamped[n])
-        .map(|n| held(&[n], [0.0; 3])[0])
+        .map(|n| {
+            let p = grid.nodes[n];
+            if partial && p[0] == x_max {
+                let settles = p[1] == y_max;
+                NodeFix {
+                    node: n,
+                    dofs: [false, false, true],
+                    displacement: [0.0, 0.0, if settles { -0.003 } else { 0.0 }],
+                }
+            } else {
+                held(&[n], [0.0; 3])[0]
+            }
+        })
         .collect();
     let t0: Vec<f64> = grid.links.iter().map(|l| l.prestress).collect();
     let raw = read_geometry("n", &nodes, "m", &write(&t0), true).unwrap();
@@ -817,4 +837,51 @@ fn self_stress_prestress_refusals_exit_2_naming_the_key() {
         err.contains("prestress.from") && err.contains("m = 1"),
         "{err}"
     );
+}
+
+#[test]
+fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlement() {
+    let s = perturbed_held(true);
+    assert!(s.prescribed.iter().any(|&u| u == -0.003));
+    // The smallest of these load factors at which at least 5 % of the cables are slack.
+    let (f, reference) = [4.0, 8.0, 16.0, 32.0]
+        .iter()
+        .map(|alpha| {
+            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+            let sol = newton(&s, &f);
+            (f, sol)
+        })
+        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
+        .expect("some load factor slackens 5 % of the cables");
+    let scale = max_abs(&reference.equilibrium.displacements);
+    for subdomains in [[1, 1], [2, 2], [3, 3]] {
+        let settings = LatinSettings {
+            subdomains,
+            tolerance: 1e-9,
+            // micro-macro's r(U) floors near 2.5e-8 on one-module substructures, with or
+            // without partial supports (2.4e-8 on this grid clamped on both edges).
+            residual_tolerance: Some(1e-7),
+            ..LatinSettings::default()
+        };
+        let mut latin = Latin::new(&s, settings).unwrap();
+        let sol = latin.solve(&f, None, &mut Silent);
+        assert!(
+            sol.info.status.converged(),
+            "LATIN {subdomains:?}: {:?}",
+            sol.info
+        );
+        assert_eq!(
+            sol.equilibrium.slack, reference.equilibrium.slack,
+            "LATIN {subdomains:?}"
+        );
+        let d = max_abs_diff(
+            &sol.equilibrium.displacements,
+            &reference.equilibrium.displacements,
+        );
+        println!(
+            "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} of {scale:e}",
+            sol.info.iterations
+        );
+        assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+    }
 }
