@@ -2,12 +2,10 @@
 //! a report struct (tests read it directly; the command line prints its `Display`).
 
 use crate::case::Case;
-use crate::linalg::{factorize_counting_zero_modes, SparseCholesky, StiffnessPattern};
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
 use crate::structure::{ModuleKind, Structure};
-use faer::Par;
 use std::fmt;
 use std::path::PathBuf;
 
@@ -47,46 +45,7 @@ pub struct ModelReport {
     pub methods: Vec<Method>,
 }
 
-/// The Pellegrino–Calladine counts of the equilibrium matrix `A = Bᵀ` (docs/method.md §7).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct EquilibriumCounts {
-    /// Members (columns of A).
-    pub members: usize,
-    /// Free dofs (rows of A).
-    pub free_dofs: usize,
-    /// rank r of A.
-    pub rank: usize,
-    /// s = members − r: independent self-stress states.
-    pub self_stress_states: usize,
-    /// m = free dofs − r: mechanisms, rigid-body motions included.
-    pub mechanisms: usize,
-}
-
-/// The counts of `structure`, from the zero modes of `A Aᵀ = Bᵀ B` (unit member stiffness):
-/// one sparse Cholesky factorization, and when it reveals a singular matrix, block inverse
-/// iterations for the eigenvalues below `ZERO_MODE_RELATIVE` × mean diagonal — no dense
-/// matrix, so it scales like a solve (64 × 64 grids included).
-pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
-    let n = structure.n_free;
-    let members = structure.links.len();
-    let mechanisms = if n == 0 {
-        0
-    } else {
-        let pattern = StiffnessPattern::new(n, &structure.link_dofs);
-        let mut values = vec![0.0; pattern.nnz()];
-        pattern.assemble(&structure.link_dofs, |_| 1.0, &mut values);
-        let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
-        factorize_counting_zero_modes(&pattern, &values, &mut factor)
-    };
-    let rank = n - mechanisms;
-    EquilibriumCounts {
-        members,
-        free_dofs: n,
-        rank,
-        self_stress_states: members - rank.min(members),
-        mechanisms,
-    }
-}
+pub use crate::structure::{equilibrium_counts, EquilibriumCounts};
 
 /// The partition of one LATIN solver.
 #[derive(Debug, Clone)]
@@ -162,10 +121,6 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         let Some(settings) = case.solver.latin_settings(method) else {
             continue;
         };
-        if s.has_partial_or_prescribed_supports() {
-            report.error = Some(SetupError::LatinSupports);
-            break;
-        }
         match Latin::new(&s, settings) {
             Ok(latin) => report.latin.push(LatinReport {
                 method,

@@ -5,6 +5,7 @@
 
 mod convert;
 mod error;
+mod prestress;
 mod raw;
 mod tables;
 mod typed;
