@@ -885,3 +885,21 @@ fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlemen
         assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
     }
 }
+
+#[test]
+fn check_counts_partly_held_nodes_and_settlements() {
+    // skew-grid: 5 nodes held on all three components, 5 vertically only (one of which
+    // settles by 5 mm).
+    let case = common::manifest_path("cases/skew-grid.toml");
+    let o = common::tensolve(&["check", case.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.lines().any(|l| l.starts_with("held nodes")
+            && l.contains(" 5 (all three components), 5 on some components; 1 prescribed")),
+        "{text}"
+    );
+    assert!(text
+        .lines()
+        .any(|l| l.starts_with("free dofs") && l.ends_with(" 259")));
+}

@@ -5,7 +5,7 @@ use crate::case::Case;
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
-use crate::structure::{ModuleKind, Structure};
+use crate::structure::{ModuleKind, Structure, CLAMPED};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -22,8 +22,12 @@ pub struct ModelReport {
     pub nodes: usize,
     /// Free dofs.
     pub free_dofs: usize,
-    /// Clamped nodes.
+    /// Clamped nodes (all three components held).
     pub clamped_nodes: usize,
+    /// Nodes held on one or two components only.
+    pub partly_held_nodes: usize,
+    /// Held components with a non-zero prescribed displacement (settlements).
+    pub prescribed_components: usize,
     /// Cables.
     pub cables: usize,
     /// Whether the cables carry tension only.
@@ -96,6 +100,13 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         nodes: s.n_nodes(),
         free_dofs: s.n_free,
         clamped_nodes: s.clamped.iter().filter(|&&c| c).count(),
+        partly_held_nodes: (0..s.n_nodes())
+            .filter(|&v| {
+                let held = (0..3).filter(|&c| s.dof_of[3 * v + c] == CLAMPED).count();
+                (1..3).contains(&held)
+            })
+            .count(),
+        prescribed_components: s.prescribed.iter().filter(|&&d| d != 0.0).count(),
         cables: s.n_cables(),
         unilateral: case.unilateral(),
         bars: s.n_bars(),
@@ -151,8 +162,9 @@ impl fmt::Display for CheckReport {
         writeln!(f, "free dofs       {}", m.free_dofs)?;
         writeln!(
             f,
-            "held nodes      {} (all three components)",
-            m.clamped_nodes
+            "held nodes      {} (all three components), {} on some components; {} \
+             prescribed non-zero displacement(s)",
+            m.clamped_nodes, m.partly_held_nodes, m.prescribed_components
         )?;
         writeln!(
             f,
