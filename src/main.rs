@@ -7,14 +7,15 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
 use tensolve::app::bench::{self, BenchError, Progress};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
-use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
+use tensolve::app::sweep::{output_dir, run, RunError, RunEvent, RunOptions};
 use tensolve::case;
 use tensolve::case::memory::{self, MemoryEstimate, Size, Workload};
 use tensolve::output::{alpha_label, SummaryRow};
-use tensolve::solvers::Method;
+use tensolve::solvers::{IterationRecord, Measure, Method};
 
 /// Static equilibrium of tensegrity grids whose cables can go slack.
 ///
@@ -182,58 +183,165 @@ fn main() -> ExitCode {
     }
 }
 
-/// Progress on stderr: a bar on a terminal (lines printed above it), plain lines when stderr
-/// is not a terminal, nothing with `--quiet`.
-enum Reporter {
+/// Progress on stderr: a bar on a terminal (lines printed above it, a spinner and what is
+/// running beside it), plain lines when stderr is not a terminal, nothing with `--quiet`.
+enum Display {
     Quiet,
     Lines,
     Bar(ProgressBar),
 }
 
+/// The bar's message is redrawn at most this often.
+const BAR_REFRESH: Duration = Duration::from_millis(100);
+/// Without a terminal, a running solve prints its iterate at most this often.
+const LINE_REFRESH: Duration = Duration::from_secs(10);
+/// Without a terminal, a set-up step longer than this prints what it did and how long it took.
+const LONG_STAGE: Duration = Duration::from_secs(1);
+
+/// What the progress display knows of the run: the set-up step or solve in progress.
+struct Reporter {
+    display: Display,
+    /// The set-up step in progress and when it began.
+    stage: Option<(String, Instant)>,
+    /// When the display last showed an iterate.
+    shown: Instant,
+    /// The last e reported in the solve in progress (LATIN against its reference).
+    last_error: Option<f64>,
+}
+
 impl Reporter {
     fn new(quiet: bool, ticks: usize) -> Reporter {
-        if quiet {
-            Reporter::Quiet
+        let display = if quiet {
+            Display::Quiet
         } else if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(ticks as u64);
             bar.set_style(
-                ProgressStyle::with_template("{bar:30.cyan/blue} {pos}/{len} [{elapsed}] {msg}")
-                    .expect("valid template"),
+                ProgressStyle::with_template(
+                    "{spinner:.green} {bar:30.cyan/blue} {pos}/{len} solves [{elapsed}] {msg}",
+                )
+                .expect("valid template"),
             );
-            // Redrawn on a timer too: a long solve sends nothing for seconds.
-            bar.enable_steady_tick(std::time::Duration::from_millis(200));
-            Reporter::Bar(bar)
+            // Redrawn on a timer too: a long set-up or solve sends nothing for seconds.
+            bar.enable_steady_tick(Duration::from_millis(120));
+            Display::Bar(bar)
         } else {
-            Reporter::Lines
+            Display::Lines
+        };
+        Reporter {
+            display,
+            stage: None,
+            shown: Instant::now(),
+            last_error: None,
         }
     }
 
     fn line(&self, text: &str) {
-        match self {
-            Reporter::Quiet => {}
-            Reporter::Lines => eprintln!("{text}"),
-            Reporter::Bar(bar) => bar.println(text),
+        match &self.display {
+            Display::Quiet => {}
+            Display::Lines => eprintln!("{text}"),
+            Display::Bar(bar) => bar.println(text),
         }
     }
 
     /// What is running now (shown on the bar only).
     fn status(&self, text: String) {
-        if let Reporter::Bar(bar) = self {
+        if let Display::Bar(bar) = &self.display {
             bar.set_message(text);
         }
     }
 
     fn tick(&self) {
-        if let Reporter::Bar(bar) = self {
+        if let Display::Bar(bar) = &self.display {
             bar.inc(1);
         }
     }
 
-    fn finish(&self) {
-        if let Reporter::Bar(bar) = self {
+    fn finish(&mut self) {
+        self.end_stage();
+        if let Display::Bar(bar) = &self.display {
             bar.finish_and_clear();
         }
     }
+
+    /// A set-up step began.
+    fn begin_stage(&mut self, text: &str) {
+        self.end_stage();
+        self.status(format!("{text} ..."));
+        self.stage = Some((text.to_string(), Instant::now()));
+    }
+
+    /// The step in progress ended: without a terminal, a long one is reported with its time.
+    fn end_stage(&mut self) {
+        if let Some((text, start)) = self.stage.take() {
+            let took = start.elapsed();
+            if matches!(self.display, Display::Lines) && took > LONG_STAGE {
+                self.line(&format!("{text}: {:.1} s", took.as_secs_f64()));
+            }
+        }
+    }
+
+    /// One event of `tensolve run`.
+    fn run_event(&mut self, event: RunEvent<'_>) {
+        match event {
+            RunEvent::Stage(text) => self.begin_stage(text),
+            RunEvent::SolveStart { solver, alpha } => {
+                self.end_stage();
+                self.last_error = None;
+                self.shown = Instant::now();
+                self.status(format!("{solver} alpha = {}: starting", alpha_label(alpha)));
+            }
+            RunEvent::Iteration {
+                solver,
+                alpha,
+                measure,
+                record,
+            } => {
+                self.last_error = record.error.or(self.last_error);
+                let refresh = match self.display {
+                    Display::Quiet => return,
+                    Display::Lines => LINE_REFRESH,
+                    Display::Bar(_) => BAR_REFRESH,
+                };
+                if self.shown.elapsed() < refresh {
+                    return;
+                }
+                self.shown = Instant::now();
+                let text = iterate_message(solver, alpha, measure, record);
+                match self.display {
+                    Display::Lines => self.line(&format!("  {text}")),
+                    _ => self.status(text),
+                }
+            }
+            RunEvent::Row(row) => {
+                let mut text = format_row(row);
+                if let Some(e) = self.last_error.take() {
+                    text.push_str(&format!(", e = {e:.1e}"));
+                }
+                self.line(&text);
+                self.tick();
+            }
+        }
+    }
+}
+
+/// `micro-macro alpha = 0.5: iteration 37, eta = 3.2e-4, e = 1.1e-3, 12 slack, 0.84 s`: a
+/// solve in progress, e when the solve is measured against a reference.
+fn iterate_message(solver: &str, alpha: f64, measure: Measure, record: &IterationRecord) -> String {
+    let mut text = format!(
+        "{solver} alpha = {}: iteration {}, {} = {:.1e}",
+        alpha_label(alpha),
+        record.iteration,
+        measure.short_name(),
+        record.residual
+    );
+    if let Some(e) = record.error {
+        text.push_str(&format!(", e = {e:.1e}"));
+    }
+    text.push_str(&format!(
+        ", {} slack, {:.2} s",
+        record.slack_cables, record.elapsed_seconds
+    ));
+    text
 }
 
 fn format_row(r: &SummaryRow) -> String {
@@ -287,11 +395,8 @@ fn run_command(
         .unwrap_or(&case.solver.methods)
         .len()
         * case.load.alphas.len();
-    let reporter = Reporter::new(quiet, solves);
-    let result = run(&case, &options, &mut |r| {
-        reporter.line(&format_row(r));
-        reporter.tick();
-    });
+    let mut reporter = Reporter::new(quiet, solves);
+    let result = run(&case, &options, &mut |event| reporter.run_event(event));
     reporter.finish();
     if !matches!(
         result,
@@ -317,7 +422,7 @@ fn bench_command(
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let prepared = tensolve::app::setup::prepare(&case)?;
     bench::ensure_writable(&dir)?;
-    let reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
+    let mut reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
     let measured = bench::measure(&case, &prepared, &mut |p| report_bench(&reporter, p));
     reporter.finish();
     let measured = measured?;
@@ -415,5 +520,35 @@ fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Resu
             ),
             exit_code: 1,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_iterate_shows_solver_alpha_iteration_measure_error_and_time() {
+        let record = IterationRecord {
+            iteration: 37,
+            residual: 3.2e-4,
+            equilibrium_residual: Some(1e-6),
+            setups: 0,
+            error: Some(1.1e-3),
+            slack_cables: 12,
+            elapsed_seconds: 0.84,
+        };
+        assert_eq!(
+            iterate_message("micro-macro", 0.5, Measure::Indicator, &record),
+            "micro-macro alpha = 0.5: iteration 37, eta = 3.2e-4, e = 1.1e-3, 12 slack, 0.84 s"
+        );
+        let record = IterationRecord {
+            error: None,
+            ..record
+        };
+        assert_eq!(
+            iterate_message("pcg-lcp", 1.0, Measure::ComplementarityResidual, &record),
+            "pcg-lcp alpha = 1: iteration 37, residual = 3.2e-4, 12 slack, 0.84 s"
+        );
     }
 }

@@ -436,6 +436,12 @@ proptest! {
 /// the module, the prestress projected onto the self-stress states at the free dofs
 /// (`t0 − Aᵀ (A Aᵀ)⁻¹ A t0`), clamped on the lower x-edges.
 fn perturbed() -> Structure {
+    perturbed_held(false)
+}
+
+/// [`perturbed`]; with `partial`, the lower edge x = 3 is held in z only and its corner
+/// (3, 3) settles by 3 mm (the prestress projected on the free dofs of these supports).
+fn perturbed_held(partial: bool) -> Structure {
     let grid = grid_case([3, 3], "standard", "lower-x-edges");
     let mut nodes = String::from("node,x,y,z\n");
     for (n, p) in grid.nodes.iter().enumerate() {
@@ -459,9 +465,23 @@ fn perturbed() -> Structure {
         }
         members
     };
+    let x_max = grid.nodes.iter().fold(0.0, |m: f64, p| m.max(p[0]));
+    let y_max = grid.nodes.iter().fold(0.0, |m: f64, p| m.max(p[1]));
     let fixes: Vec<NodeFix> = (0..grid.n_nodes())
         .filter(|&n| grid.clamped[n])
-        .map(|n| held(&[n], [0.0; 3])[0])
+        .map(|n| {
+            let p = grid.nodes[n];
+            if partial && p[0] == x_max {
+                let settles = p[1] == y_max;
+                NodeFix {
+                    node: n,
+                    dofs: [false, false, true],
+                    displacement: [0.0, 0.0, if settles { -0.003 } else { 0.0 }],
+                }
+            } else {
+                held(&[n], [0.0; 3])[0]
+            }
+        })
         .collect();
     let t0: Vec<f64> = grid.links.iter().map(|l| l.prestress).collect();
     let raw = read_geometry("n", &nodes, "m", &write(&t0), true).unwrap();
@@ -532,4 +552,354 @@ fn four_solvers_agree_on_a_perturbed_general_structure() {
         );
         assert!(d <= 1e-5 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
     }
+}
+
+/// `cases/skew-grid.toml`: a 6 × 4 general grid held on one lower edge in x, y, z, on the
+/// other in z only, with a 5 mm settlement at a corner (docs/method.md §7).
+fn skew_grid() -> Structure {
+    case::load(&manifest_path("cases/skew-grid.toml"))
+        .unwrap()
+        .structure()
+}
+
+#[test]
+fn latin_solvers_agree_with_newton_on_partial_supports_and_a_settlement() {
+    let s = skew_grid();
+    // The case really has both: nodes held on z only, and a non-zero prescribed displacement.
+    let partial = (0..s.n_nodes())
+        .filter(|&n| {
+            let held = (0..3).filter(|&k| s.dof_of[3 * n + k] == CLAMPED).count();
+            held == 1
+        })
+        .count();
+    assert_eq!(partial, 5);
+    assert!(s.prescribed.iter().any(|&u| u == -0.005));
+    let alpha = 2.0;
+    let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+    let reference = newton(&s, &f);
+    let slack = reference.equilibrium.slack.iter().filter(|&&x| x).count();
+    assert!(
+        slack * 20 >= s.n_cables(),
+        "{slack} slack of {}",
+        s.n_cables()
+    );
+    let scale = max_abs(&reference.equilibrium.displacements);
+    for subdomains in [[1, 1], [2, 2], [3, 2]] {
+        let settings = LatinSettings {
+            subdomains,
+            tolerance: 1e-9,
+            ..LatinSettings::default()
+        };
+        let mut latin = Latin::new(&s, settings).unwrap();
+        if subdomains != [1, 1] {
+            // The partition does cut through the partly held edge: some interface has a node
+            // held in z, with only its x and y rows.
+            let partly_held = latin
+                .interfaces
+                .iter()
+                .flat_map(|i| &i.free)
+                .filter(|f| **f == [true, true, false])
+                .count();
+            assert!(partly_held >= 1, "LATIN {subdomains:?}");
+            println!(
+                "LATIN {subdomains:?}: {partly_held} partly held interface node(s), kernel columns {:?}",
+                latin.substructures.iter().map(|e| e.kernel.ncols()).collect::<Vec<_>>()
+            );
+        }
+        let sol = latin.solve(&f, None, &mut Silent);
+        assert!(
+            sol.info.status.converged(),
+            "LATIN {subdomains:?}: {:?}",
+            sol.info
+        );
+        assert_eq!(
+            sol.equilibrium.slack, reference.equilibrium.slack,
+            "LATIN {subdomains:?}"
+        );
+        let d = max_abs_diff(
+            &sol.equilibrium.displacements,
+            &reference.equilibrium.displacements,
+        );
+        println!(
+            "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} of {scale:e}",
+            sol.info.iterations
+        );
+        assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+        // The held components sit at their prescribed values, the settlement included.
+        let full = s.full_displacements(&sol.equilibrium.displacements);
+        for (d, &ud) in s.prescribed.iter().enumerate() {
+            if s.dof_of[d] == CLAMPED {
+                assert_eq!(full[d], ud);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_settled_skew_grid_case_runs_all_four_solvers() {
+    let case = case::load(&manifest_path("cases/skew-grid.toml")).unwrap();
+    let names: Vec<&str> = case.solver.methods.iter().map(|m| m.name()).collect();
+    assert_eq!(names, ["newton", "pcg-lcp", "mono-latin", "micro-macro"]);
+    let out_dir = Temp::dir("skew-grid-four");
+    let out = tensolve(&[
+        "run",
+        manifest_path("cases/skew-grid.toml").to_str().unwrap(),
+        "--out",
+        out_dir.arg(),
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", common::stderr(&out));
+    let summary = std::fs::read_to_string(out_dir.0.join("summary.csv")).unwrap();
+    let mut lines = summary.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|&h| h == name).unwrap();
+    let (solver, alpha, converged, slack) = (
+        column("solver"),
+        column("alpha"),
+        column("converged"),
+        column("slack_cables"),
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // Three load factors, four solvers, every one converged with newton's slack count.
+    assert_eq!(rows.len(), 12, "{summary}");
+    for name in names {
+        assert_eq!(rows.iter().filter(|r| r[solver] == name).count(), 3);
+    }
+    for row in &rows {
+        assert_eq!(row[converged], "true", "{row:?}");
+        let newton = rows
+            .iter()
+            .find(|r| r[solver] == "newton" && r[alpha] == row[alpha])
+            .unwrap();
+        assert_eq!(row[slack], newton[slack], "{row:?}");
+    }
+}
+
+/// A node D at the origin held by three cables (members 10, 11, 12, to clamped nodes at
+/// (2, 0, 0), (0, 3, 0), (0, 0, 1)) and a bar (13, to a clamped node at (1, 2, 2)); a node E
+/// at (0, 0, −1) held determinately by members 20, 21 (cables) and 22 (bar), plus `extra`
+/// member rows. s = 7 − 6 = 1, m = 0. Equilibrium of D, `Σ t n = 0` with n = (1, 0, 0),
+/// (0, 1, 0), (0, 0, 1), (1, 2, 2)/3: `t10 = −t13/3`, `t11 = t12 = −2 t13/3`; E carries none.
+fn self_stress_tables(extra: &str, prestress_11: f64) -> (String, String) {
+    let nodes = "node,x,y,z\n0,0,0,0\n1,2,0,0\n2,0,3,0\n3,0,0,1\n4,1,2,2\n5,0,0,-1\n6,-1,0,0\n";
+    let members = format!(
+        "member,a,b,kind,young,section,prestress\n\
+         10,0,1,cable,1e11,1e-4,0\n11,0,2,cable,1e11,1e-4,{prestress_11}\n\
+         12,0,3,cable,1e11,1e-4,0\n13,0,4,bar,2e11,3e-4,0\n\
+         20,5,1,cable,1e11,1e-4,0\n21,5,2,cable,1e11,1e-4,0\n22,5,4,bar,2e11,3e-4,0\n{extra}"
+    );
+    (nodes.to_string(), members)
+}
+
+/// A case on [`self_stress_tables`]: nodes 1, 2, 3, 4 and 6 clamped, `prestress` as the
+/// `[prestress]` section's body, 10 N down on D.
+fn self_stress_case(tag: &str, extra: &str, prestress_11: f64, prestress: &str) -> Temp {
+    let dir = Temp::dir(tag);
+    std::fs::create_dir_all(&dir.0).unwrap();
+    let (nodes, members) = self_stress_tables(extra, prestress_11);
+    std::fs::write(dir.0.join("nodes.csv"), nodes).unwrap();
+    std::fs::write(dir.0.join("members.csv"), members).unwrap();
+    std::fs::write(
+        dir.0.join("case.toml"),
+        format!(
+            "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
+             [[supports.fix]]\nnodes = [1, 2, 3, 4, 6]\n\
+             [prestress]\n{prestress}\n\
+             [[load.point]]\nnodes = [0]\nforce = [0.0, 0.0, -10.0]\n\
+             [load]\nalpha = [1.0]\n"
+        ),
+    )
+    .unwrap();
+    dir
+}
+
+#[test]
+fn prestress_from_the_self_stress_state_matches_statics() {
+    let dir = self_stress_case(
+        "self-stress-ok",
+        "",
+        0.0,
+        "from = \"self-stress\"\nmember = 10\nforce = 1000.0",
+    );
+    let s = case::load(&dir.0.join("case.toml")).unwrap().structure();
+    assert_eq!(equilibrium_counts(&s).self_stress_states, 1);
+    assert_eq!(equilibrium_counts(&s).mechanisms, 0);
+    let t0: Vec<f64> = s.links.iter().map(|l| l.prestress).collect();
+    let want = [1000.0, 2000.0, 2000.0, -3000.0, 0.0, 0.0, 0.0];
+    for ((l, t), w) in s.links.iter().zip(&t0).zip(want) {
+        assert!(
+            (t - w).abs() <= 1e-9 * 3000.0,
+            "member {}: {t} vs {w}",
+            l.id
+        );
+    }
+    // In equilibrium at the free dofs: |B_fᵀ t0| ≤ 1e-10 ‖t0‖.
+    let mut f = vec![0.0; s.n_free];
+    s.nodal_forces(&t0, &mut f);
+    let size = t0.iter().map(|t| t * t).sum::<f64>().sqrt();
+    assert!(max_abs(&f) <= 1e-10 * size, "{f:?}");
+    // Compression sign: the same state through the bar at −3000 N.
+    let dir = self_stress_case(
+        "self-stress-bar",
+        "",
+        0.0,
+        "from = \"self-stress\"\nmember = 13\nforce = -3000.0",
+    );
+    let s = case::load(&dir.0.join("case.toml")).unwrap().structure();
+    for (l, w) in s.links.iter().zip(want) {
+        assert!((l.prestress - w).abs() <= 1e-9 * 3000.0, "member {}", l.id);
+    }
+    // And it solves: newton under 10 N down on D, every cable of D taut.
+    let sol = newton(&s, &s.unit_load);
+    assert!(sol.equilibrium.slack[..3].iter().all(|&x| !x));
+}
+
+#[test]
+fn self_stress_prestress_refusals_exit_2_naming_the_key() {
+    let from = |member: &str, force: &str| {
+        format!("from = \"self-stress\"\nmember = {member}\nforce = {force}")
+    };
+    // (extra members, member 11's prestress in the table, [prestress] body, key, also said)
+    let cases: [(&str, f64, String, &str, &str); 7] = [
+        // A second self-stress state: a cable from D to node 6.
+        (
+            "30,0,6,cable,1e11,1e-4,0\n",
+            0.0,
+            from("10", "1000.0"),
+            "prestress.from",
+            "s = 2",
+        ),
+        ("", 0.0, from("99", "1000.0"), "prestress.member", "99"),
+        // E is determinate: the state is zero on its members.
+        ("", 0.0, from("20", "1000.0"), "prestress.member", "zero"),
+        ("", 5.0, from("10", "1000.0"), "prestress.from", "member 11"),
+        // Tension in the bar compresses the three cables.
+        (
+            "",
+            0.0,
+            from("13", "3000.0"),
+            "prestress.force",
+            "member 10 (-1000 N)",
+        ),
+        (
+            "",
+            0.0,
+            "member = 10".to_string(),
+            "prestress.member",
+            "from = \"self-stress\"",
+        ),
+        ("", 0.0, from("10", "0.0"), "prestress.force", "non-zero"),
+    ];
+    for (i, (extra, p11, prestress, key, said)) in cases.iter().enumerate() {
+        let dir = self_stress_case(&format!("self-stress-bad-{i}"), extra, *p11, prestress);
+        let out = tensolve(&["check", dir.0.join("case.toml").to_str().unwrap()]);
+        let err = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "case {i}: {err}");
+        assert!(err.contains(key), "case {i}: {err}");
+        assert!(err.contains(said), "case {i}: {err}");
+    }
+    // A grid's prestress is `lower_cable`; and `[prestress]` still refuses unknown keys.
+    for (body, key) in [
+        (
+            "from = \"self-stress\"\nmember = 0\nforce = 1.0",
+            "prestress.from",
+        ),
+        ("form = \"self-stress\"", "form"),
+    ] {
+        let text =
+            format!("[grid]\nmodules = [2, 2]\n[prestress]\n{body}\n[load]\nalpha = [1.0]\n");
+        let err = case::parse(&text).expect_err(body).to_string();
+        assert!(err.contains(key), "{err}");
+    }
+    // A mechanism (E held by two members only): refused with m.
+    let dir = Temp::dir("self-stress-mechanism");
+    std::fs::create_dir_all(&dir.0).unwrap();
+    let (nodes, members) = self_stress_tables("", 0.0);
+    let members: String = members
+        .lines()
+        .filter(|l| !l.starts_with("22,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.0.join("nodes.csv"), nodes).unwrap();
+    std::fs::write(dir.0.join("members.csv"), members).unwrap();
+    std::fs::write(
+        dir.0.join("case.toml"),
+        "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
+         [[supports.fix]]\nnodes = [1, 2, 3, 4, 6]\n\
+         [prestress]\nfrom = \"self-stress\"\nmember = 10\nforce = 1000.0\n\
+         [load]\nalpha = [1.0]\n",
+    )
+    .unwrap();
+    let out = tensolve(&["check", dir.0.join("case.toml").to_str().unwrap()]);
+    let err = common::stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("prestress.from") && err.contains("m = 1"),
+        "{err}"
+    );
+}
+
+#[test]
+fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlement() {
+    let s = perturbed_held(true);
+    assert!(s.prescribed.iter().any(|&u| u == -0.003));
+    // The smallest of these load factors at which at least 5 % of the cables are slack.
+    let (f, reference) = [4.0, 8.0, 16.0, 32.0]
+        .iter()
+        .map(|alpha| {
+            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+            let sol = newton(&s, &f);
+            (f, sol)
+        })
+        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
+        .expect("some load factor slackens 5 % of the cables");
+    let scale = max_abs(&reference.equilibrium.displacements);
+    for subdomains in [[1, 1], [2, 2], [3, 3]] {
+        let settings = LatinSettings {
+            subdomains,
+            tolerance: 1e-9,
+            // micro-macro's r(U) floors near 2.5e-8 on one-module substructures, with or
+            // without partial supports (2.4e-8 on this grid clamped on both edges).
+            residual_tolerance: Some(1e-7),
+            ..LatinSettings::default()
+        };
+        let mut latin = Latin::new(&s, settings).unwrap();
+        let sol = latin.solve(&f, None, &mut Silent);
+        assert!(
+            sol.info.status.converged(),
+            "LATIN {subdomains:?}: {:?}",
+            sol.info
+        );
+        assert_eq!(
+            sol.equilibrium.slack, reference.equilibrium.slack,
+            "LATIN {subdomains:?}"
+        );
+        let d = max_abs_diff(
+            &sol.equilibrium.displacements,
+            &reference.equilibrium.displacements,
+        );
+        println!(
+            "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} of {scale:e}",
+            sol.info.iterations
+        );
+        assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+    }
+}
+
+#[test]
+fn check_counts_partly_held_nodes_and_settlements() {
+    // skew-grid: 5 nodes held on all three components, 5 vertically only (one of which
+    // settles by 5 mm).
+    let case = common::manifest_path("cases/skew-grid.toml");
+    let o = common::tensolve(&["check", case.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.lines().any(|l| l.starts_with("held nodes")
+            && l.contains(" 5 (all three components), 5 on some components; 1 prescribed")),
+        "{text}"
+    );
+    assert!(text
+        .lines()
+        .any(|l| l.starts_with("free dofs") && l.ends_with(" 259")));
 }

@@ -398,6 +398,11 @@ fn figure_12_draws_both_module_kinds_on_one_chart() {
             "Energy error e per iteration by module kind at α = 30",
         ],
     );
+    // Two different structures converge differently: the braced grid is not the standard
+    // one drawn twice.
+    let series = svg.series_points();
+    assert_eq!(series.len(), 2);
+    assert_ne!(series[0], series[1], "both series are the same curve");
     let names = file_names(&run.0.join("plots"));
     assert!(
         names.contains(&"error_modules.svg".to_string()),
@@ -421,4 +426,14 @@ fn bad_figure_keys_are_rejected_by_name() {
             .to_string();
         assert!(error.contains(key), "{output}: {error}");
     }
+    // Figure 12 asked for without plots would silently draw nothing.
+    let without_plots = small_case(1.0, "\"newton\"", "compare_modules = [\"braced\"]")
+        .replace("plots = true", "plots = false");
+    let error = tensolve::case::parse(&without_plots)
+        .expect_err("compare_modules without plots")
+        .to_string();
+    assert!(
+        error.contains("output.compare_modules") && error.contains("plots = true"),
+        "{error}"
+    );
 }

@@ -98,6 +98,21 @@ fn vtu_files_hold_the_structure_and_the_solved_tensions() {
             assert_eq!(offsets, (1..=256).map(|i| 2 * i).collect::<Vec<_>>());
             let types: Vec<u8> = numbers(data_array(&doc, "types"));
             assert!(types.iter().all(|&t| t == VTK_LINE));
+            // Vectors state their 3 components; scalars leave NumberOfComponents to its
+            // default of 1, which meshio reads as shape (n,), not (n, 1).
+            for (name, components) in [
+                ("position", Some("3")),
+                ("displacement", Some("3")),
+                ("tension", None),
+                ("slack", None),
+                ("kind", None),
+            ] {
+                assert_eq!(
+                    data_array(&doc, name).attribute("NumberOfComponents"),
+                    components,
+                    "{name}"
+                );
+            }
             let kinds: Vec<i32> = numbers(data_array(&doc, "kind"));
             let expected: Vec<i32> = structure.links.iter().map(|l| kind_code(l.kind)).collect();
             assert_eq!(kinds, expected);

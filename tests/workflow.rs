@@ -206,3 +206,78 @@ fn large_displacements_are_flagged() {
         .skip(1)
         .all(|l| l.split(',').nth(ok) == Some("true")));
 }
+
+#[test]
+fn the_readme_command_reproduces_the_papers_section_5() {
+    // `cargo run --release -- run cases/paper.toml`, the case file as it is.
+    let case = manifest_path("cases/paper.toml");
+    let out = Temp::dir("paper-main");
+    let o = tensolve(&["run", case.to_str().unwrap(), "--out", out.arg()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let summary = std::fs::read_to_string(out.0.join("summary.csv")).unwrap();
+    let mut lines = summary.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let solvers = ["pcg-lcp", "mono-latin", "micro-macro", "newton"];
+    let alphas = ["0", "0.05", "0.25", "0.5", "0.75", "1"];
+    assert_eq!(rows.len(), solvers.len() * alphas.len(), "{summary}");
+    for r in &rows {
+        assert_eq!(r[col("converged")], "true", "{summary}");
+        // The paper's §5: 36 slack cables at α = 0.5 and 408 at α = 1, whatever the solver.
+        let expected = match r[col("alpha")] {
+            "0.5" => Some("36"),
+            "1" => Some("408"),
+            _ => None,
+        };
+        if let Some(expected) = expected {
+            assert_eq!(r[col("slack_cables")], expected, "{summary}");
+        }
+    }
+    // The histories of the paper's three iterative solvers (newton, the exact reference,
+    // writes none), each naming its stopping measure.
+    for solver in solvers {
+        for alpha in alphas {
+            let path = out.0.join(format!("history/{solver}_alpha{alpha}.csv"));
+            if solver == "newton" {
+                assert!(!path.exists(), "{}", path.display());
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            let measure = if solver == "pcg-lcp" {
+                "complementarity_residual"
+            } else {
+                "indicator_eta"
+            };
+            assert!(
+                text.lines().next().unwrap().contains(measure),
+                "{}",
+                path.display()
+            );
+        }
+    }
+    // Figures 6 to 11.
+    for figure in [
+        "slack_fraction",
+        "tensions",
+        "deformed_alpha1",
+        "error_mono-latin",
+        "error_micro-macro",
+        "eta_mono-latin",
+        "eta_micro-macro",
+        "error_all",
+    ] {
+        let path = out.0.join(format!("plots/{figure}.svg"));
+        assert!(path.is_file(), "{}", path.display());
+    }
+    // Progress without a terminal: one line per solve, the LATIN ones with their final e.
+    let row_lines: Vec<&str> = err.lines().filter(|l| l.contains(" alpha = ")).collect();
+    assert_eq!(row_lines.len(), rows.len(), "{err}");
+    for line in row_lines
+        .iter()
+        .filter(|l| l.contains("latin") || l.contains("macro"))
+    {
+        assert!(line.contains(", e = "), "{line}");
+    }
+}

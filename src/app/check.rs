@@ -3,12 +3,10 @@
 
 use crate::case::memory::{self, Available, MemoryEstimate, Size, Workload};
 use crate::case::Case;
-use crate::linalg::{factorize_counting_zero_modes, SparseCholesky, StiffnessPattern};
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
-use crate::structure::{ModuleKind, Structure};
-use faer::Par;
+use crate::structure::{ModuleKind, Structure, CLAMPED};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -25,8 +23,12 @@ pub struct ModelReport {
     pub nodes: usize,
     /// Free dofs.
     pub free_dofs: usize,
-    /// Clamped nodes.
+    /// Clamped nodes (all three components held).
     pub clamped_nodes: usize,
+    /// Nodes held on one or two components only.
+    pub partly_held_nodes: usize,
+    /// Held components with a non-zero prescribed displacement (settlements).
+    pub prescribed_components: usize,
     /// Cables.
     pub cables: usize,
     /// Whether the cables carry tension only.
@@ -48,46 +50,7 @@ pub struct ModelReport {
     pub methods: Vec<Method>,
 }
 
-/// The Pellegrino–Calladine counts of the equilibrium matrix `A = Bᵀ` (docs/method.md §7).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct EquilibriumCounts {
-    /// Members (columns of A).
-    pub members: usize,
-    /// Free dofs (rows of A).
-    pub free_dofs: usize,
-    /// rank r of A.
-    pub rank: usize,
-    /// s = members − r: independent self-stress states.
-    pub self_stress_states: usize,
-    /// m = free dofs − r: mechanisms, rigid-body motions included.
-    pub mechanisms: usize,
-}
-
-/// The counts of `structure`, from the zero modes of `A Aᵀ = Bᵀ B` (unit member stiffness):
-/// one sparse Cholesky factorization, and when it reveals a singular matrix, block inverse
-/// iterations for the eigenvalues below `ZERO_MODE_RELATIVE` × mean diagonal — no dense
-/// matrix, so it scales like a solve (64 × 64 grids included).
-pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
-    let n = structure.n_free;
-    let members = structure.links.len();
-    let mechanisms = if n == 0 {
-        0
-    } else {
-        let pattern = StiffnessPattern::new(n, &structure.link_dofs);
-        let mut values = vec![0.0; pattern.nnz()];
-        pattern.assemble(&structure.link_dofs, |_| 1.0, &mut values);
-        let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
-        factorize_counting_zero_modes(&pattern, &values, &mut factor)
-    };
-    let rank = n - mechanisms;
-    EquilibriumCounts {
-        members,
-        free_dofs: n,
-        rank,
-        self_stress_states: members - rank.min(members),
-        mechanisms,
-    }
-}
+pub use crate::structure::{equilibrium_counts, EquilibriumCounts};
 
 /// The partition of one LATIN solver.
 #[derive(Debug, Clone)]
@@ -142,6 +105,13 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         nodes: s.n_nodes(),
         free_dofs: s.n_free,
         clamped_nodes: s.clamped.iter().filter(|&&c| c).count(),
+        partly_held_nodes: (0..s.n_nodes())
+            .filter(|&v| {
+                let held = (0..3).filter(|&c| s.dof_of[3 * v + c] == CLAMPED).count();
+                (1..3).contains(&held)
+            })
+            .count(),
+        prescribed_components: s.prescribed.iter().filter(|&&d| d != 0.0).count(),
         cables: s.n_cables(),
         unilateral: case.unilateral(),
         bars: s.n_bars(),
@@ -169,10 +139,6 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         let Some(settings) = case.solver.latin_settings(method) else {
             continue;
         };
-        if s.has_partial_or_prescribed_supports() {
-            report.error = Some(SetupError::LatinSupports);
-            break;
-        }
         match Latin::new(&s, settings) {
             Ok(latin) => report.latin.push(LatinReport {
                 method,
@@ -203,8 +169,9 @@ impl fmt::Display for CheckReport {
         writeln!(f, "free dofs       {}", m.free_dofs)?;
         writeln!(
             f,
-            "held nodes      {} (all three components)",
-            m.clamped_nodes
+            "held nodes      {} (all three components), {} on some components; {} \
+             prescribed non-zero displacement(s)",
+            m.clamped_nodes, m.partly_held_nodes, m.prescribed_components
         )?;
         writeln!(
             f,

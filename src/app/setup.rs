@@ -68,9 +68,6 @@ pub fn set_up<'s>(
                 .latin_settings(method)
                 .expect("a LATIN method has LATIN settings");
             check_search_direction(structure, &settings.search)?;
-            if structure.has_partial_or_prescribed_supports() {
-                return Err(SetupError::LatinSupports);
-            }
             (Box::new(Latin::new(structure, settings)?), 0.0)
         }
     };

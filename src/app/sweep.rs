@@ -14,7 +14,7 @@ use crate::output::{
 use crate::results;
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent,
-    Solution,
+    Solution, Tee,
 };
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
@@ -112,11 +112,58 @@ pub fn output_dir(case: &Case, options: &RunOptions) -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("out/case"))
 }
 
-/// Run a validated case. `on_row` sees every summary row as soon as it is written.
+/// What a run is doing, for a progress display: the run reports each as it happens and never
+/// prints.
+#[derive(Debug, Clone, Copy)]
+pub enum RunEvent<'a> {
+    /// A set-up step began (the structure, a solver's factorisations, a reference solve);
+    /// it lasts until the next event.
+    Stage(&'a str),
+    /// A solve began.
+    SolveStart {
+        /// The solver's name.
+        solver: &'a str,
+        /// The load factor.
+        alpha: f64,
+    },
+    /// An iterate of the solve in progress.
+    Iteration {
+        /// The solver's name.
+        solver: &'a str,
+        /// The load factor.
+        alpha: f64,
+        /// What `record.residual` measures.
+        measure: Measure,
+        /// The iterate.
+        record: &'a IterationRecord,
+    },
+    /// A solve ended and its summary row was written.
+    Row(&'a SummaryRow),
+}
+
+/// Passes every iterate of one solve to the run's events as [`RunEvent::Iteration`].
+struct IterationEvents<'e, 'k> {
+    events: &'e mut dyn FnMut(RunEvent<'_>),
+    key: SolveKey<'k>,
+}
+
+impl Observer for IterationEvents<'_, '_> {
+    fn iteration(&mut self, record: &IterationRecord) {
+        (self.events)(RunEvent::Iteration {
+            solver: self.key.solver,
+            alpha: self.key.alpha,
+            measure: self.key.measure,
+            record,
+        });
+    }
+}
+
+/// Run a validated case. `events` sees what the run is doing ([`RunEvent`]), every summary
+/// row as soon as it is written among them.
 pub fn run(
     case: &Case,
     options: &RunOptions,
-    on_row: &mut dyn FnMut(&SummaryRow),
+    events: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<Vec<SummaryRow>, RunError> {
     let dir = output_dir(case, options);
     let methods = options
@@ -129,14 +176,19 @@ pub fn run(
     memory::ensure_fits(&estimate, "run")?;
 
     // 1. The structure and its mechanism check (K with every cable taut, factorized).
+    events(RunEvent::Stage(
+        "building the structure and factorising its taut stiffness",
+    ));
     let prepared = prepare(case)?;
     let structure = &prepared.structure;
     // 2. Every solver asked for, set up once.
-    let mut solvers = methods
-        .iter()
-        .map(|&m| set_up(m, &case.solver, &prepared))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut solvers = Vec::with_capacity(methods.len());
+    for &method in &methods {
+        events(RunEvent::Stage(&format!("setting up {}", method.name())));
+        solvers.push(set_up(method, &case.solver, &prepared)?);
+    }
     // 3. Where LATIN's error e is measured from.
+    events(RunEvent::Stage("setting up the reference solver"));
     let mut reference = ReferenceSource::new(case, &solvers, &prepared)?;
     // 4. The output directory, once the case is known solvable: locked for this run, with a
     //    private staging directory; then the sinks of the files asked for.
@@ -147,6 +199,7 @@ pub fn run(
     let mut sinks = sinks(case, &dir, out.as_ref(), &prepared, &solvers);
     // 5. The homogenised substructure operators, when asked (set-up products, written once).
     if let Some(out) = out.as_ref().filter(|_| case.output.homogenised) {
+        events(RunEvent::Stage("writing the homogenised operators"));
         for set_up in &mut solvers {
             let operators = set_up.solver.homogenised_operators();
             let staging = out.borrow().staging().to_path_buf();
@@ -164,6 +217,12 @@ pub fn run(
     let mut previous: Vec<Option<Equilibrium>> = vec![None; solvers.len()];
     for &alpha in &case.load.alphas {
         let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        if reference.needed() {
+            events(RunEvent::Stage(&format!(
+                "reference solve at alpha = {}",
+                alpha_label(alpha)
+            )));
+        }
         let reference_solution = reference.solve(&load, &mut solvers, &previous);
         let reference_errors = reference_solution
             .as_ref()
@@ -175,14 +234,27 @@ pub fn run(
                 measure: set_up.solver.stopping_measure(),
             };
             sinks.start(&key)?;
+            events(RunEvent::SolveStart {
+                solver: key.solver,
+                alpha,
+            });
             let solution = match (reference.shared_index(), &reference_solution) {
                 (Some(i), Some(r)) if i == index => r.clone(),
-                _ => set_up.solver.solve_from(
-                    &load,
-                    previous[index].as_ref(),
-                    reference_errors.as_ref(),
-                    &mut sinks,
-                ),
+                _ => {
+                    let mut progress = IterationEvents {
+                        events: &mut *events,
+                        key,
+                    };
+                    let mut observers = Tee::default()
+                        .with(Some(&mut sinks))
+                        .with(Some(&mut progress));
+                    set_up.solver.solve_from(
+                        &load,
+                        previous[index].as_ref(),
+                        reference_errors.as_ref(),
+                        &mut observers,
+                    )
+                }
             };
             previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
                 .then(|| solution.equilibrium.clone());
@@ -228,7 +300,7 @@ pub fn run(
                     row: &row,
                 },
             )?;
-            on_row(&row);
+            events(RunEvent::Row(&row));
             rows.push(row);
         }
     }
@@ -238,6 +310,9 @@ pub fn run(
     // 10. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
     let compare = case.output.plots && !case.output.compare_modules.is_empty();
     if let Some(out) = out.as_ref().filter(|_| compare) {
+        events(RunEvent::Stage(
+            "Figure 12: the LATIN solvers on each module of output.compare_modules",
+        ));
         let staging = out.borrow().staging().to_path_buf();
         write_module_comparison(case, &methods, &staging, &dir)?;
         out.borrow_mut().commit()?;
@@ -284,12 +359,10 @@ fn write_module_comparison(
         .fold(f64::NEG_INFINITY, f64::max);
     let mut histories = Vec::new();
     for &module in &case.output.compare_modules {
-        let mut grid_case = case.clone();
         // Case validation refuses compare_modules without a [grid].
-        let Some(grid) = grid_case.grid.as_mut() else {
+        let Some(grid_case) = case.with_module(module) else {
             return Ok(());
         };
-        grid.module = module;
         let prepared = prepare(&grid_case)?;
         let mut solvers = Vec::new();
         for &method in methods {
@@ -365,7 +438,7 @@ fn sinks<'s>(
     let out = &case.output;
     let has_history = solvers
         .iter()
-        .any(|s| s.solver.stopping_measure() == Measure::Indicator);
+        .any(|s| output::history_column(s.solver.stopping_measure()).is_some());
     sinks.add(
         out.history && has_history,
         HistorySink::new(root, dir, structure.n_cables()),
@@ -441,6 +514,11 @@ impl<'s> ReferenceSource<'s> {
             )),
             ReferenceSource::Own(own) => Some(own.solver.solve(load, None, &mut Silent)),
         }
+    }
+
+    /// Whether a reference solve runs at each α.
+    fn needed(&self) -> bool {
+        !matches!(self, ReferenceSource::Unneeded)
     }
 
     /// The solver whose own solve is the reference.

@@ -24,7 +24,7 @@ pub(crate) fn number(x: f64) -> String {
 
 /// Largest magnitude accepted for any physical number: far beyond any structure, far enough
 /// from f64's range (1e308) that stiffnesses, loads and their products cannot overflow.
-const PHYSICAL_MAX: f64 = 1e15;
+pub(super) const PHYSICAL_MAX: f64 = 1e15;
 
 /// Smallest magnitude accepted for a positive physical number: products of a few of them
 /// (k = EA/L, k², the stiffness's pivots) stay far from f64's underflow (1e-308), so a tiny
@@ -47,7 +47,7 @@ fn positive(key: &str, value: f64, what: &str) -> Result<(), CaseError> {
 }
 
 /// A finite number of magnitude at most `max`.
-fn bounded(key: &str, value: f64, max: f64, what: &str) -> Result<(), CaseError> {
+pub(super) fn bounded(key: &str, value: f64, max: f64, what: &str) -> Result<(), CaseError> {
     if value.is_finite() && value.abs() <= max {
         Ok(())
     } else {
@@ -275,7 +275,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         .cables
         .unilateral
         .unwrap_or(GridSpec::default().cables.unilateral);
-    let (grid, geometry, mut fixes) = match (&raw.grid, &raw.structure) {
+    let (grid, mut geometry, mut fixes) = match (&raw.grid, &raw.structure) {
         (Some(g), None) => {
             let spec = grid_spec(&raw, g)?;
             // Refuse a grid whose structure alone does not fit before generating it.
@@ -378,6 +378,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             displacement,
         }));
     }
+    super::prestress::apply(&raw.prestress, grid.is_some(), &mut geometry, &fixes)?;
     check_prestress(&geometry, &fixes)?;
 
     let default_nodal = if grid.is_some() {
@@ -465,6 +466,14 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
                 "list each module kind once (`{}` is listed twice), e.g. [\"standard\", \"braced\"]",
                 twice.1.name()
             ),
+        ));
+    }
+    if !kinds.is_empty() && !output.plots {
+        return Err(CaseError::invalid(
+            "output.compare_modules",
+            format!("{:?}", kinds.iter().map(|k| k.name()).collect::<Vec<_>>()),
+            "it draws Figure 12 under plots/, which is written only with `output.plots = true`: \
+             set `plots = true` in [output], or remove `compare_modules`",
         ));
     }
     if output.max_plot_iterations == 0 {

@@ -6,6 +6,7 @@
 mod convert;
 mod error;
 pub mod memory;
+mod prestress;
 mod raw;
 mod tables;
 mod typed;

@@ -132,6 +132,18 @@ pub(super) struct RawBars {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawPrestress {
     pub lower_cable: Option<f64>,
+    pub from: Option<RawPrestressSource>,
+    pub member: Option<u64>,
+    pub force: Option<f64>,
+}
+
+/// `prestress.from`: where a general structure's prestress comes from instead of the members
+/// table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawPrestressSource {
+    /// The structure's single self-stress state, scaled.
+    SelfStress,
 }
 
 /// `[supports]`.

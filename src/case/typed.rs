@@ -43,6 +43,20 @@ impl Case {
         s
     }
 
+    /// The case with the grid built of `module`s instead (the same nodes, supports and
+    /// loads: only the members change), or `None` for a case without `[grid]`. The geometry
+    /// is generated again: it, not `grid`, is what [`Case::structure`] builds.
+    pub fn with_module(&self, module: crate::structure::ModuleKind) -> Option<Case> {
+        let mut grid = self.grid.clone()?;
+        grid.module = module;
+        let (geometry, _, _) = Structure::grid_parts(&grid);
+        Some(Case {
+            grid: Some(grid),
+            geometry,
+            ..self.clone()
+        })
+    }
+
     /// Whether cables carry tension only.
     pub fn unilateral(&self) -> bool {
         self.geometry.unilateral

@@ -1,18 +1,30 @@
-//! `history/{solver}_alpha{α}.csv`: one row per LATIN iteration, written as the iterations go
+//! `history/{solver}_alpha{α}.csv`: one row per iteration of an iterative solver (the LATIN
+//! solvers and pcg-lcp; newton, the exact reference, writes none), written as the iterations go
 //! to a `.partial` file (created exclusively: never through a planted link) that is renamed to
 //! its final name only when the solve ends (a file under the final name is complete). The
 //! sweep writes it inside its private staging directory and publishes it with the solve.
 
 use super::tables::result_path;
-use crate::solvers::{IterationRecord, Observer};
+use crate::solvers::{IterationRecord, Measure, Observer};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Header line of a history CSV file: per iteration, energy error e (empty without a
-/// reference), stopping measure η, fraction of cables slack, solver time (s).
+/// Header line of a LATIN history CSV file: per iteration, energy error e (empty without a
+/// reference), stopping measure η, r(U), fraction of cables slack, re-set-ups, solver time (s).
+/// pcg-lcp's names its stopping measure `complementarity_residual` instead.
 pub const HISTORY_HEADER: &str =
     "iteration,error_e,indicator_eta,equilibrium_residual,slack_fraction,search_updates,elapsed_seconds";
+
+/// The history column of a solver's stopping measure, or `None` for a solver that writes no
+/// history (newton: the exact reference, a handful of active-set steps).
+pub fn history_column(measure: Measure) -> Option<&'static str> {
+    match measure {
+        Measure::Indicator => Some("indicator_eta"),
+        Measure::ComplementarityResidual => Some("complementarity_residual"),
+        Measure::EquilibriumResidual => None,
+    }
+}
 
 /// An [`Observer`] writing one solve's iteration history CSV, renamed into place by
 /// [`HistoryWriter::finish`] (dropped unfinished, it removes its partial file).
@@ -25,9 +37,16 @@ pub struct HistoryWriter {
 }
 
 impl HistoryWriter {
-    /// Open the `.partial` file of `solver` at `alpha` under `dir/history` and write the header;
-    /// `cables` is the denominator of the slack fraction.
-    pub fn create(dir: &Path, solver: &str, alpha: f64, cables: usize) -> std::io::Result<Self> {
+    /// Open the `.partial` file of `solver` at `alpha` under `dir/history` and write the header,
+    /// whose third column is named `measure_column` ([`history_column`]); `cables` is the
+    /// denominator of the slack fraction.
+    pub fn create(
+        dir: &Path,
+        solver: &str,
+        alpha: f64,
+        measure_column: &str,
+        cables: usize,
+    ) -> std::io::Result<Self> {
         let path = result_path(dir, "history", solver, alpha);
         if let Some(parent) = path.parent() {
             std::fs::create_dir_all(parent)?;
@@ -42,7 +61,11 @@ impl HistoryWriter {
             .create_new(true)
             .open(&partial)?;
         let mut out = BufWriter::new(file);
-        writeln!(out, "{HISTORY_HEADER}")?;
+        writeln!(
+            out,
+            "{}",
+            HISTORY_HEADER.replacen("indicator_eta", measure_column, 1)
+        )?;
         Ok(HistoryWriter {
             path,
             partial,

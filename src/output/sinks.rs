@@ -15,9 +15,9 @@
 //! a solve is visible before it publishes, and a solve without a finite answer is discarded.
 
 use super::{
-    result_path, stability_line, summary_line, vtu_path, write_displacements, write_tensions,
-    write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow, SummaryRow,
-    STABILITY_HEADER, SUMMARY_HEADER,
+    history_column, result_path, stability_line, summary_line, vtu_path, write_displacements,
+    write_tensions, write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow,
+    SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
 };
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
@@ -111,11 +111,12 @@ impl HistorySink {
 
 impl Sink for HistorySink {
     fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
-        if key.measure == Measure::Indicator {
-            let writer = HistoryWriter::create(&self.dir, key.solver, key.alpha, self.cables)
-                .map_err(WriteError::at(result_path(
-                    &self.root, "history", key.solver, key.alpha,
-                )))?;
+        if let Some(column) = history_column(key.measure) {
+            let writer =
+                HistoryWriter::create(&self.dir, key.solver, key.alpha, column, self.cables)
+                    .map_err(WriteError::at(result_path(
+                        &self.root, "history", key.solver, key.alpha,
+                    )))?;
             self.writer = Some(writer);
         }
         Ok(())

@@ -142,7 +142,8 @@ fn float(x: &f64) -> String {
     format!("{x:e}")
 }
 
-/// One ASCII `DataArray`, one tuple per line.
+/// One ASCII `DataArray`, one tuple per line. A scalar array leaves `NumberOfComponents` to
+/// its default of 1: readers such as meshio turn an explicit 1 into an (n, 1) array.
 fn data_array(
     w: &mut dyn Write,
     vtk_type: &str,
@@ -150,9 +151,13 @@ fn data_array(
     components: usize,
     values: impl Iterator<Item = String>,
 ) -> io::Result<()> {
+    let components_attribute = match components {
+        1 => String::new(),
+        n => format!(r#" NumberOfComponents="{n}""#),
+    };
     writeln!(
         w,
-        r#"<DataArray type="{vtk_type}" Name="{name}" NumberOfComponents="{components}" format="ascii">"#
+        r#"<DataArray type="{vtk_type}" Name="{name}"{components_attribute} format="ascii">"#
     )?;
     for (i, v) in values.enumerate() {
         let sep = if (i + 1) % components == 0 { "\n" } else { " " };

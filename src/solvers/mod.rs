@@ -71,13 +71,6 @@ pub enum SetupError {
         /// The largest l accepted.
         max: f64,
     },
-    /// The LATIN solvers hold nodes on all three components at zero only.
-    #[error(
-        "the LATIN solvers need every supported node held on all three components at zero; \
-         this structure has partial supports or prescribed displacements (`supports.fix`): \
-         use `newton` or `pcg-lcp`"
-    )]
-    LatinSupports,
     /// The LATIN macro problem is singular.
     #[error(
         "the macro problem is singular: an interface or a rigid mode is left undetermined; \

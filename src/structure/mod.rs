@@ -7,11 +7,13 @@
 mod geometry;
 mod grid;
 mod spec;
+mod statics;
 mod supports;
 
 pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
+pub use statics::{equilibrium_counts, self_stress_through, EquilibriumCounts, SelfStressRefusal};
 
 use crate::linalg::SparseRow;
 
@@ -256,18 +258,6 @@ impl Structure {
             settlement_force,
             prestress_scale,
         }
-    }
-
-    /// Whether some node is held on some but not all of its components, or some component
-    /// is held at a non-zero displacement (the LATIN solvers need neither).
-    pub fn has_partial_or_prescribed_supports(&self) -> bool {
-        let partial = (0..self.n_nodes()).any(|n| {
-            let fixed = (0..3)
-                .filter(|&k| self.dof_of[3 * n + k] == CLAMPED)
-                .count();
-            fixed != 0 && fixed != 3
-        });
-        partial || self.prescribed.iter().any(|&u| u != 0.0)
     }
 
     /// `Bᵀ t0` per node (free components only, prescribed ones zero), with each node's scale

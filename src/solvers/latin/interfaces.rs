@@ -4,7 +4,7 @@
 use super::macro_basis::labelled_macro_basis;
 use super::partition::{InterfaceTopology, Partition};
 use super::WeakInterfaces;
-use crate::structure::Structure;
+use crate::structure::{Structure, CLAMPED};
 use nalgebra::DMatrix;
 
 /// An interface with its macro basis and where its macro forces sit in the macro problem.
@@ -12,7 +12,11 @@ use nalgebra::DMatrix;
 pub struct Interface {
     /// Its two substructures and shared nodes.
     pub topology: InterfaceTopology,
-    /// R: orthonormal columns, 3·nodes rows.
+    /// Per node of `topology.nodes`: which of its components are free (a node held on some
+    /// components only keeps the others). R and every interface vector have one row per free
+    /// component, node-major, x y z.
+    pub free: Vec<[bool; 3]>,
+    /// R: orthonormal columns, one row per free component of the interface's nodes.
     pub basis: DMatrix<f64>,
     /// First column of its macro forces among the macro problem's unknowns.
     pub macro_offset: usize,
@@ -105,12 +109,18 @@ impl Interfaces {
             .map(|topology| {
                 let positions: Vec<[f64; 3]> =
                     topology.nodes.iter().map(|&n| structure.nodes[n]).collect();
-                let (basis, fields) = labelled_macro_basis(&positions, weak);
+                let free: Vec<[bool; 3]> = topology
+                    .nodes
+                    .iter()
+                    .map(|&n| [0, 1, 2].map(|c| structure.dof_of[3 * n + c] != CLAMPED))
+                    .collect();
+                let (basis, fields) = labelled_macro_basis(&positions, &free, weak);
                 let count = positions.len().max(1) as f64;
                 let centroid =
                     [0, 1, 2].map(|c| positions.iter().map(|p| p[c]).sum::<f64>() / count);
                 let iface = Interface {
                     topology,
+                    free,
                     macro_offset: offset,
                     basis,
                     fields,

@@ -1,5 +1,6 @@
 //! Kernel of a substructure's condensed operator K*_E (docs/method.md §4): the rigid motions ρ of E that
-//! vanish on its clamped nodes and have no micro trace on any of its interfaces; then
+//! vanish on every held component of its nodes (clamped nodes, and the held components of
+//! partly held ones) and have no micro trace on any of its interfaces; then
 //! `Q_E = orth(R_Eᵀ C_E ρ)`.
 
 use super::macro_basis::orthonormal_columns;
@@ -12,7 +13,9 @@ const NULL_THRESHOLD: f64 = 1e-10;
 pub struct InterfaceTrace<'a> {
     /// Positions of the interface's nodes, in its node order.
     pub positions: Vec<[f64; 3]>,
-    /// Its macro basis R (3·nodes rows, orthonormal columns).
+    /// Per node: its free components (the rows of R, node-major).
+    pub free: &'a [[bool; 3]],
+    /// Its macro basis R (one row per free component, orthonormal columns).
     pub basis: &'a DMatrix<f64>,
 }
 
@@ -34,9 +37,11 @@ fn rigid_block(p: &[f64; 3], centre: &Vector3<f64>, length: f64) -> [[f64; 6]; 3
 }
 
 /// `Q_E`: orthonormal columns (rows = E's macro dofs, interfaces in `traces` order).
+///
+/// `held`: the position of every node of E held on some component, and which components.
 pub fn substructure_kernel(
     all_positions: &[[f64; 3]],
-    clamped_positions: &[[f64; 3]],
+    held: &[([f64; 3], [bool; 3])],
     traces: &[InterfaceTrace<'_>],
 ) -> DMatrix<f64> {
     let n = all_positions.len().max(1) as f64;
@@ -51,7 +56,7 @@ pub fn substructure_kernel(
         / n)
         .sqrt()
         .max(f64::MIN_POSITIVE);
-    // Constraints on the 6 amplitudes: ρ = 0 at clamped nodes; (I − R Rᵀ) ρ|Γ = 0.
+    // Constraints on the 6 amplitudes: ρ = 0 on held components; (I − R Rᵀ) ρ|Γ = 0.
     let mut gram = DMatrix::<f64>::zeros(6, 6);
     let mut add_rows = |rows: &[[f64; 6]]| {
         for r in rows {
@@ -62,21 +67,26 @@ pub fn substructure_kernel(
             }
         }
     };
-    for p in clamped_positions {
-        add_rows(&rigid_block(p, &centre, length));
+    for (p, components) in held {
+        let block = rigid_block(p, &centre, length);
+        let rows: Vec<[f64; 6]> = (0..3)
+            .filter(|&c| components[c])
+            .map(|c| block[c])
+            .collect();
+        add_rows(&rows);
     }
+    // ρ on the interface's free components, node-major (the rows of its R).
     let trace_of = |t: &InterfaceTrace<'_>| -> DMatrix<f64> {
-        let rows = 3 * t.positions.len();
-        let mut m = DMatrix::zeros(rows, 6);
-        for (k, p) in t.positions.iter().enumerate() {
-            let b = rigid_block(p, &centre, length);
-            for c in 0..3 {
-                for j in 0..6 {
-                    m[(3 * k + c, j)] = b[c][j];
-                }
-            }
-        }
-        m
+        let rows: Vec<[f64; 6]> = t
+            .positions
+            .iter()
+            .zip(t.free)
+            .flat_map(|(p, free)| {
+                let b = rigid_block(p, &centre, length);
+                (0..3).filter(move |&c| free[c]).map(move |c| b[c])
+            })
+            .collect();
+        DMatrix::from_fn(rows.len(), 6, |i, j| rows[i][j])
     };
     for t in traces {
         let rho = trace_of(t);
@@ -108,4 +118,56 @@ pub fn substructure_kernel(
         })
         .collect();
     orthonormal_columns(&fields, m_e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solvers::latin::macro_basis::labelled_macro_basis;
+    use crate::solvers::latin::WeakInterfaces;
+
+    /// A substructure whose nodes are the unit square's corners at z = 0 and z = 1, with one
+    /// strong interface (the upper corners, all components free: every rigid motion is macro
+    /// there) and the lower corners held as `held` says: the kernel's columns are the rigid
+    /// motions the held components leave.
+    fn kernel_columns(held: &[[bool; 3]; 4]) -> usize {
+        let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let lower: Vec<[f64; 3]> = square.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        let upper: Vec<[f64; 3]> = square.iter().map(|p| [p[0], p[1], 1.0]).collect();
+        let free = vec![[true; 3]; 4];
+        let (basis, _) = labelled_macro_basis(&upper, &free, WeakInterfaces::Macro);
+        let all: Vec<[f64; 3]> = lower.iter().chain(&upper).copied().collect();
+        let held: Vec<([f64; 3], [bool; 3])> = lower
+            .iter()
+            .zip(held)
+            .filter(|(_, h)| h.iter().any(|&x| x))
+            .map(|(p, h)| (*p, *h))
+            .collect();
+        let traces = [InterfaceTrace {
+            positions: upper.clone(),
+            free: &free,
+            basis: &basis,
+        }];
+        substructure_kernel(&all, &held, &traces).ncols()
+    }
+
+    #[test]
+    fn rigid_modes_follow_the_held_components() {
+        let none = [false; 3];
+        let z = [false, false, true];
+        let all = [true; 3];
+        // Floating: six rigid motions.
+        assert_eq!(kernel_columns(&[none; 4]), 6);
+        // Held vertically at the four lower corners: x and y translations, rotation about z.
+        assert_eq!(kernel_columns(&[z; 4]), 3);
+        // ... and in x at the corner (0, 0, 0) too: the y translation and the rotation about
+        // the vertical through that corner.
+        assert_eq!(kernel_columns(&[[true, false, true], z, z, z]), 2);
+        // That corner clamped, the others held vertically: only that rotation.
+        assert_eq!(kernel_columns(&[all, z, z, z]), 1);
+        // Two corners clamped: the rotation about the line through them.
+        assert_eq!(kernel_columns(&[all, all, none, none]), 1);
+        // Three: nothing.
+        assert_eq!(kernel_columns(&[all, all, all, none]), 0);
+    }
 }

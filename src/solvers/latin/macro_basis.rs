@@ -43,24 +43,32 @@ fn orthonormal_columns_kept(fields: &[Vec<f64>], rows: usize) -> (DMatrix<f64>, 
 
 /// The macro basis (3·nodes rows, node-major, x y z) of an interface through `positions`.
 pub fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64> {
-    labelled_macro_basis(positions, weak).0
+    labelled_macro_basis(positions, &vec![[true; 3]; positions.len()], weak).0
 }
 
-/// [`macro_basis`], and what each column is: the field it was made from, with its axes
-/// (`translation along (…)`, `rotation about (…) through G`, …; for an all-macro weak
-/// interface `node k, x` etc., k counting the interface's nodes).
+/// [`macro_basis`] on the free components only: `free[k]` says which components of node k
+/// are free (a held component is known on both sides and carries no continuity), and R has
+/// one row per free component, node-major, x y z. Also says what each column is: the field
+/// it was made from, with its axes (`translation along (…)`, `rotation about (…) through G`,
+/// …; for an all-macro weak interface `node k, x` etc., k counting the interface's nodes).
 pub fn labelled_macro_basis(
     positions: &[[f64; 3]],
+    free: &[[bool; 3]],
     weak: WeakInterfaces,
 ) -> (DMatrix<f64>, Vec<String>) {
     let n = positions.len();
-    let rows = 3 * n;
+    // The free rows: (node k, component c) in node-major order.
+    let free_rows: Vec<(usize, usize)> = (0..n)
+        .flat_map(|k| (0..3).filter(move |&c| free[k][c]).map(move |c| (k, c)))
+        .collect();
+    let rows = free_rows.len();
     if n <= super::partition::WEAK_MAX_NODES {
         return match weak {
             WeakInterfaces::Macro | WeakInterfaces::Drop => (
                 DMatrix::identity(rows, rows),
-                (0..rows)
-                    .map(|r| format!("node {}, {}", r / 3, ["x", "y", "z"][r % 3]))
+                free_rows
+                    .iter()
+                    .map(|&(k, c)| format!("node {k}, {}", ["x", "y", "z"][c]))
                     .collect(),
             ),
             WeakInterfaces::Micro => (DMatrix::zeros(rows, 0), Vec::new()),
@@ -76,13 +84,9 @@ pub fn labelled_macro_basis(
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let axis = |k: usize| -> Vector3<f64> { eig.eigenvectors.column(order[k]).into_owned() };
     let (n1, n2, n3) = (axis(0), axis(1), axis(2));
+    // A first-order field f(X − G) on the free rows.
     let field = |f: &dyn Fn(&Vector3<f64>) -> Vector3<f64>| -> Vec<f64> {
-        x.iter()
-            .flat_map(|p| {
-                let v = f(&(p - g));
-                [v[0], v[1], v[2]]
-            })
-            .collect()
+        free_rows.iter().map(|&(k, c)| f(&(x[k] - g))[c]).collect()
     };
     let fields = vec![
         // Translations along n1, n2, n3.
@@ -314,6 +318,26 @@ mod tests {
             let r = macro_basis(p, WeakInterfaces::Micro);
             assert_eq!((r.nrows(), r.ncols()), (3 * n, 0));
         }
+    }
+
+    #[test]
+    fn held_components_have_no_rows() {
+        // A weak interface of two nodes, the first held in z: all-macro on the 5 free rows.
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0]];
+        let free = [[true, true, false], [true; 3]];
+        let (r, labels) = labelled_macro_basis(&p, &free, WeakInterfaces::Macro);
+        assert_eq!(r, DMatrix::<f64>::identity(5, 5));
+        assert_eq!(labels[..3], ["node 0, x", "node 0, y", "node 1, x"]);
+        // A strong planar interface (the 3 × 3 grid in x = 2.5) held in x everywhere: its
+        // rows are the y and z components; the fields normal to the plane (translation
+        // along x and the two rotations about in-plane axes) vanish there, the six
+        // in-plane first-order fields (2 translations, rotation, 2 extensions, distortion)
+        // remain.
+        let positions = planar_grid();
+        let free = vec![[false, true, true]; positions.len()];
+        let (r, _) = labelled_macro_basis(&positions, &free, WeakInterfaces::Macro);
+        assert_eq!((r.nrows(), r.ncols()), (18, 6));
+        assert!(orthonormality_error(&r) <= 1e-12);
     }
 
     #[test]

@@ -226,7 +226,15 @@ impl<'s> Latin<'s> {
         let dense_bytes: usize = partition
             .substructures
             .iter()
-            .map(|t| 8 * (3 * t.nodes.len()).pow(2))
+            .map(|t| {
+                let dofs = t
+                    .nodes
+                    .iter()
+                    .flat_map(|&n| &structure.dof_of[3 * n..3 * n + 3])
+                    .filter(|&&d| d != CLAMPED)
+                    .count();
+                8 * dofs.pow(2)
+            })
             .sum();
         // (½ Σ t0² / l)^{1/2} with l as set up: the prestress in the units of Δη.
         let prestress_scale = (0.5

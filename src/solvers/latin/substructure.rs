@@ -22,7 +22,7 @@ pub struct Side {
     pub gamma_offset: usize,
     /// First column of this interface in E's macro vector u_E.
     pub macro_offset: usize,
-    /// Rows of this interface in U_EΓ: 3 · its nodes (rows of R).
+    /// Rows of this interface in U_EΓ: its nodes' free components (rows of R).
     pub rows: usize,
     /// Its macro dofs in u_E (columns of R).
     pub cols: usize,
@@ -94,11 +94,16 @@ impl Substructure {
     ) -> Result<Substructure, SingularSubstructure> {
         let mut dof_global = Vec::with_capacity(3 * topology.nodes.len());
         let mut load_share = Vec::with_capacity(3 * topology.nodes.len());
+        // E's local dofs: the free components of its nodes (a node held on some components
+        // only keeps the others; held components stay out of E, like clamped nodes).
         for &node in &topology.nodes {
             for c in 0..3 {
-                local_dof[3 * node + c] = dof_global.len();
-                dof_global.push(structure.dof_of[3 * node + c]);
-                load_share.push(1.0 / holders[node] as f64);
+                let global = structure.dof_of[3 * node + c];
+                if global != CLAMPED {
+                    local_dof[3 * node + c] = dof_global.len();
+                    dof_global.push(global);
+                    load_share.push(1.0 / holders[node] as f64);
+                }
             }
         }
         let link_dofs: Vec<LinkDofs> = topology
@@ -113,7 +118,7 @@ impl Substructure {
             let Some(which) = iface.topology.sides.iter().position(|&e| e == index) else {
                 continue;
             };
-            let rows = 3 * iface.topology.nodes.len();
+            let rows = iface.basis.nrows();
             let cols = iface.basis.ncols();
             sides.push(Side {
                 interface: k,
@@ -124,8 +129,8 @@ impl Substructure {
                 cols,
                 basis: iface.basis.clone(),
             });
-            for &node in &iface.topology.nodes {
-                for c in 0..3 {
+            for (&node, free) in iface.topology.nodes.iter().zip(&iface.free) {
+                for c in (0..3).filter(|&c| free[c]) {
                     gamma_dofs.push(local_dof[3 * node + c]);
                 }
             }
@@ -169,14 +174,18 @@ impl Substructure {
         let traces: Vec<InterfaceTrace<'_>> = sub
             .sides
             .iter()
-            .map(|s| InterfaceTrace {
-                positions: interfaces[s.interface]
-                    .topology
-                    .nodes
-                    .iter()
-                    .map(|&node| structure.nodes[node])
-                    .collect(),
-                basis: &s.basis,
+            .map(|s| {
+                let iface = &interfaces[s.interface];
+                InterfaceTrace {
+                    positions: iface
+                        .topology
+                        .nodes
+                        .iter()
+                        .map(|&node| structure.nodes[node])
+                        .collect(),
+                    free: &iface.free,
+                    basis: &s.basis,
+                }
             })
             .collect();
         let all_positions: Vec<[f64; 3]> = topology
@@ -185,12 +194,18 @@ impl Substructure {
             .chain(&topology.clamped_nodes)
             .map(|&node| structure.nodes[node])
             .collect();
-        let clamped_positions: Vec<[f64; 3]> = topology
-            .clamped_nodes
+        // E's actual constraints: every held component of its nodes, clamped or partly held.
+        let held: Vec<([f64; 3], [bool; 3])> = topology
+            .nodes
             .iter()
-            .map(|&node| structure.nodes[node])
+            .chain(&topology.clamped_nodes)
+            .map(|&node| {
+                let held = [0, 1, 2].map(|c| structure.dof_of[3 * node + c] == CLAMPED);
+                (structure.nodes[node], held)
+            })
+            .filter(|(_, held)| held.iter().any(|&h| h))
             .collect();
-        let rigid = substructure_kernel(&all_positions, &clamped_positions, &traces);
+        let rigid = substructure_kernel(&all_positions, &held, &traces);
         sub.kernel = complete_kernel(&sub.k_star, rigid, dm).ok_or(SingularSubstructure)?;
         sub.invert(dm)?;
         Ok(sub)
@@ -286,7 +301,7 @@ impl Substructure {
         Ok(())
     }
 
-    /// Number of E's free dofs (three per non-clamped node it touches).
+    /// Number of E's free dofs (the free components of the nodes it touches).
     pub fn n_dofs(&self) -> usize {
         self.dof_global.len()
     }
