@@ -503,20 +503,25 @@ fn perturbed_held(partial: bool) -> Structure {
     Structure::new(&g, &fixes, &loading)
 }
 
+/// The load and newton's solution at the smallest of α = 4, 8, 16, 32 at which at least 5 %
+/// of the cables of `s` are slack.
+fn five_percent_slack(s: &Structure) -> (Vec<f64>, Solution) {
+    [4.0, 8.0, 16.0, 32.0]
+        .iter()
+        .map(|alpha| {
+            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
+            let sol = newton(s, &f);
+            (f, sol)
+        })
+        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
+        .expect("some load factor slackens 5 % of the cables")
+}
+
 #[test]
 fn four_solvers_agree_on_a_perturbed_general_structure() {
     let s = perturbed();
     assert!(s.layout.is_none());
-    // The smallest of these load factors at which at least 5 % of the cables are slack.
-    let (f, reference) = [4.0, 8.0, 16.0, 32.0]
-        .iter()
-        .map(|alpha| {
-            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
-            let sol = newton(&s, &f);
-            (f, sol)
-        })
-        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
-        .expect("some load factor slackens 5 % of the cables");
+    let (f, reference) = five_percent_slack(&s);
     println!(
         "slack: {} of {}",
         reference.equilibrium.slack.iter().filter(|&&x| x).count(),
@@ -537,20 +542,7 @@ fn four_solvers_agree_on_a_perturbed_general_structure() {
         };
         let mut latin = Latin::new(&s, settings).unwrap();
         let sol = latin.solve(&f, None, &mut Silent);
-        assert!(
-            sol.info.status.converged(),
-            "LATIN {subdomains:?}: {:?}",
-            sol.info
-        );
-        assert_eq!(
-            sol.equilibrium.slack, reference.equilibrium.slack,
-            "LATIN {subdomains:?}"
-        );
-        let d = max_abs_diff(
-            &sol.equilibrium.displacements,
-            &reference.equilibrium.displacements,
-        );
-        assert!(d <= 1e-5 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+        assert_latin_agrees(&sol, &reference, subdomains, 1e-5 * scale);
     }
 }
 
@@ -607,24 +599,7 @@ fn latin_solvers_agree_with_newton_on_partial_supports_and_a_settlement() {
             );
         }
         let sol = latin.solve(&f, None, &mut Silent);
-        assert!(
-            sol.info.status.converged(),
-            "LATIN {subdomains:?}: {:?}",
-            sol.info
-        );
-        assert_eq!(
-            sol.equilibrium.slack, reference.equilibrium.slack,
-            "LATIN {subdomains:?}"
-        );
-        let d = max_abs_diff(
-            &sol.equilibrium.displacements,
-            &reference.equilibrium.displacements,
-        );
-        println!(
-            "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} of {scale:e}",
-            sol.info.iterations
-        );
-        assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+        assert_latin_agrees(&sol, &reference, subdomains, 1e-6 * scale);
         // The held components sit at their prescribed values, the settlement included.
         let full = s.full_displacements(&sol.equilibrium.displacements);
         for (d, &ud) in s.prescribed.iter().enumerate() {
@@ -843,16 +818,7 @@ fn self_stress_prestress_refusals_exit_2_naming_the_key() {
 fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlement() {
     let s = perturbed_held(true);
     assert!(s.prescribed.iter().any(|&u| u == -0.003));
-    // The smallest of these load factors at which at least 5 % of the cables are slack.
-    let (f, reference) = [4.0, 8.0, 16.0, 32.0]
-        .iter()
-        .map(|alpha| {
-            let f: Vec<f64> = s.unit_load.iter().map(|x| alpha * x).collect();
-            let sol = newton(&s, &f);
-            (f, sol)
-        })
-        .find(|(_, sol)| sol.equilibrium.slack.iter().filter(|&&x| x).count() * 20 >= s.n_cables())
-        .expect("some load factor slackens 5 % of the cables");
+    let (f, reference) = five_percent_slack(&s);
     let scale = max_abs(&reference.equilibrium.displacements);
     for subdomains in [[1, 1], [2, 2], [3, 3]] {
         let settings = LatinSettings {
@@ -865,25 +831,36 @@ fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlemen
         };
         let mut latin = Latin::new(&s, settings).unwrap();
         let sol = latin.solve(&f, None, &mut Silent);
-        assert!(
-            sol.info.status.converged(),
-            "LATIN {subdomains:?}: {:?}",
-            sol.info
-        );
-        assert_eq!(
-            sol.equilibrium.slack, reference.equilibrium.slack,
-            "LATIN {subdomains:?}"
-        );
-        let d = max_abs_diff(
-            &sol.equilibrium.displacements,
-            &reference.equilibrium.displacements,
-        );
-        println!(
-            "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} of {scale:e}",
-            sol.info.iterations
-        );
-        assert!(d <= 1e-6 * scale, "LATIN {subdomains:?}: {d} vs {scale}");
+        assert_latin_agrees(&sol, &reference, subdomains, 1e-6 * scale);
     }
+}
+
+/// A LATIN solve on `subdomains` converged to `reference`'s slack set and displacements, to
+/// `tolerance` (m) in every component.
+fn assert_latin_agrees(
+    sol: &Solution,
+    reference: &Solution,
+    subdomains: [usize; 2],
+    tolerance: f64,
+) {
+    assert!(
+        sol.info.status.converged(),
+        "LATIN {subdomains:?}: {:?}",
+        sol.info
+    );
+    assert_eq!(
+        sol.equilibrium.slack, reference.equilibrium.slack,
+        "LATIN {subdomains:?}"
+    );
+    let d = max_abs_diff(
+        &sol.equilibrium.displacements,
+        &reference.equilibrium.displacements,
+    );
+    println!(
+        "LATIN {subdomains:?}: {} iterations, max |ΔU| = {d:e} (tolerance {tolerance:e})",
+        sol.info.iterations
+    );
+    assert!(d <= tolerance, "LATIN {subdomains:?}: {d} vs {tolerance}");
 }
 
 #[test]
