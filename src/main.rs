@@ -420,9 +420,15 @@ fn bench_command(
     let estimate = MemoryEstimate::new(Size::of(&case), &Workload::bench(&case));
     memory::ensure_fits(&estimate, "bench").map_err(BenchError::Case)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
-    let prepared = tensolve::app::setup::prepare(&case)?;
-    bench::ensure_writable(&dir)?;
     let mut reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
+    reporter.begin_stage("building the structure and factorising its taut stiffness");
+    let prepared = tensolve::app::setup::prepare(&case);
+    reporter.end_stage();
+    if prepared.is_err() {
+        reporter.finish();
+    }
+    let prepared = prepared?;
+    bench::ensure_writable(&dir)?;
     let measured = bench::measure(&case, &prepared, &mut |p| report_bench(&reporter, p));
     reporter.finish();
     let measured = measured?;
