@@ -6,7 +6,7 @@ use crate::case::Case;
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
-use crate::structure::{ModuleKind, Structure, CLAMPED};
+use crate::structure::{ModuleKind, Structure};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -84,14 +84,7 @@ pub struct CheckReport {
 pub fn check(case: &Case, path: PathBuf) -> CheckReport {
     let s = case.structure();
     // The given prestress t0, without the tensions prescribed displacements impose.
-    let unsettled: Vec<_> = case
-        .fixes
-        .iter()
-        .map(|f| crate::structure::NodeFix {
-            displacement: [0.0; 3],
-            ..*f
-        })
-        .collect();
+    let unsettled = crate::structure::NodeFix::unsettled(&case.fixes);
     let given = Structure::new(&case.geometry, &unsettled, &Default::default());
     let free_prestress_imbalance = given
         .free_prestress_imbalance()
@@ -107,7 +100,7 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         clamped_nodes: s.clamped.iter().filter(|&&c| c).count(),
         partly_held_nodes: (0..s.n_nodes())
             .filter(|&v| {
-                let held = (0..3).filter(|&c| s.dof_of[3 * v + c] == CLAMPED).count();
+                let held = s.held_components(v).iter().filter(|&&h| h).count();
                 (1..3).contains(&held)
             })
             .count(),

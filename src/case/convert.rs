@@ -221,18 +221,10 @@ const IMBALANCE_RELATIVE: f64 = 1e-9;
 
 /// Refuse a prestress not in equilibrium at the free dofs (docs/method.md §7), naming the worst nodes.
 fn check_prestress(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(), CaseError> {
-    let s = crate::structure::Structure::new(geometry, fixes, &Default::default());
     // Without settlements the effective prestress is t0 itself; with them, the imposed
     // part is carried by the supports on purpose, so check t0 on the same free dofs.
-    let mut unsettled = fixes.to_vec();
-    for f in &mut unsettled {
-        f.displacement = [0.0; 3];
-    }
-    let s = if s.prescribed.iter().any(|&u| u != 0.0) {
-        crate::structure::Structure::new(geometry, &unsettled, &Default::default())
-    } else {
-        s
-    };
+    let s =
+        crate::structure::Structure::new(geometry, &NodeFix::unsettled(fixes), &Default::default());
     let mut worst: Vec<(f64, usize, f64)> = s
         .free_prestress_imbalance()
         .iter()
@@ -280,14 +272,9 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             let spec = grid_spec(&raw, g)?;
             // Refuse a grid whose structure alone does not fit before generating it.
             let layout = crate::structure::GridLayout::new(spec.modules[0], spec.modules[1]);
-            let per_module = if spec.module == crate::structure::ModuleKind::Braced {
-                20
-            } else {
-                16
-            };
             let size = super::memory::Size {
                 nodes: layout.n_nodes(),
-                links: per_module * spec.modules[0] * spec.modules[1],
+                links: spec.module.links_per_module() * spec.modules[0] * spec.modules[1],
             };
             super::memory::ensure_fits(
                 &super::memory::MemoryEstimate::structure(size),

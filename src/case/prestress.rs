@@ -89,13 +89,7 @@ pub(super) fn apply(
         ));
     }
     // The free dofs are those of the supports; settlements do not change them.
-    let unsettled: Vec<NodeFix> = fixes
-        .iter()
-        .map(|f| NodeFix {
-            displacement: [0.0; 3],
-            ..*f
-        })
-        .collect();
+    let unsettled = NodeFix::unsettled(fixes);
     let structure = Structure::new(geometry, &unsettled, &Default::default());
     let state = match self_stress_through(&structure, j) {
         Ok(state) => state,

@@ -10,11 +10,14 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Header line of a LATIN history CSV file: per iteration, energy error e (empty without a
-/// reference), stopping measure η, r(U), fraction of cables slack, re-set-ups, solver time (s).
-/// pcg-lcp's names its stopping measure `complementarity_residual` instead.
-pub const HISTORY_HEADER: &str =
-    "iteration,error_e,indicator_eta,equilibrium_residual,slack_fraction,search_updates,elapsed_seconds";
+/// Header line of a history CSV file: per iteration, energy error e (empty without a
+/// reference), the stopping measure under `measure_column` ([`history_column`]), r(U),
+/// fraction of cables slack, re-set-ups, solver time (s).
+pub fn history_header(measure_column: &str) -> String {
+    format!(
+        "iteration,error_e,{measure_column},equilibrium_residual,slack_fraction,search_updates,elapsed_seconds"
+    )
+}
 
 /// The history column of a solver's stopping measure, or `None` for a solver that writes no
 /// history (newton: the exact reference, a handful of active-set steps).
@@ -61,11 +64,7 @@ impl HistoryWriter {
             .create_new(true)
             .open(&partial)?;
         let mut out = BufWriter::new(file);
-        writeln!(
-            out,
-            "{}",
-            HISTORY_HEADER.replacen("indicator_eta", measure_column, 1)
-        )?;
+        writeln!(out, "{}", history_header(measure_column))?;
         Ok(HistoryWriter {
             path,
             partial,

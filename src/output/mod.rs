@@ -13,7 +13,7 @@ mod tables;
 mod vtk;
 
 pub use atomic::{ensure_writable, write_atomic};
-pub use history::{history_column, HistoryWriter, HISTORY_HEADER};
+pub use history::{history_column, history_header, HistoryWriter};
 pub use homogenised::{homogenised_path, write_homogenised};
 pub use plots::{FigureData, FigureSettings};
 pub use publish::{OpenError, OutputDir};

@@ -51,6 +51,20 @@ pub struct NodeFix {
     pub displacement: [f64; 3],
 }
 
+impl NodeFix {
+    /// `fixes` holding the same components at zero: the same free dofs, without the tensions
+    /// settlements impose (for the given prestress t0 alone).
+    pub fn unsettled(fixes: &[NodeFix]) -> Vec<NodeFix> {
+        fixes
+            .iter()
+            .map(|f| NodeFix {
+                displacement: [0.0; 3],
+                ..*f
+            })
+            .collect()
+    }
+}
+
 /// What loads the structure at α = 1.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Loading {

@@ -87,8 +87,7 @@ pub(super) fn generate(
             nodes[layout.y_mid(i, j)] = [i as f64 * length, (j as f64 + 0.5) * length, height];
         }
     }
-    let per_module = if module == ModuleKind::Braced { 20 } else { 16 };
-    let mut links = Vec::with_capacity(nx * ny * per_module);
+    let mut links = Vec::with_capacity(nx * ny * module.links_per_module());
     for j in 0..ny {
         for i in 0..nx {
             let m = layout.module_index(i, j);

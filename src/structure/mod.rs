@@ -283,6 +283,11 @@ impl Structure {
         self.nodes.len()
     }
 
+    /// Which of x, y, z of `node` are held (clamped, or held by `supports.fix`).
+    pub fn held_components(&self, node: usize) -> [bool; 3] {
+        [0, 1, 2].map(|c| self.dof_of[3 * node + c] == CLAMPED)
+    }
+
     /// Number of cables (every link but the bars).
     pub fn n_cables(&self) -> usize {
         self.links.iter().filter(|l| l.kind.is_cable()).count()

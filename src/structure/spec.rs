@@ -23,6 +23,14 @@ impl ModuleKind {
             ModuleKind::Braced => "braced",
         }
     }
+
+    /// Links per module: 12 cables and 4 bars, plus 4 diagonal cables when braced.
+    pub fn links_per_module(self) -> usize {
+        match self {
+            ModuleKind::Standard => 16,
+            ModuleKind::Braced => 20,
+        }
+    }
 }
 
 /// Which lower (z = 0) nodes are clamped (all three displacements zero).

@@ -30,12 +30,7 @@ pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
 }
 
 /// The counts, and `A Aᵀ = Bᵀ B` factorized when it is regular (m = 0).
-fn counts_and_factor(
-    structure: &Structure,
-) -> (
-    EquilibriumCounts,
-    Option<(StiffnessPattern, SparseCholesky)>,
-) {
+fn counts_and_factor(structure: &Structure) -> (EquilibriumCounts, Option<SparseCholesky>) {
     let n = structure.n_free;
     let members = structure.links.len();
     let (mechanisms, factor) = if n == 0 {
@@ -46,7 +41,7 @@ fn counts_and_factor(
         pattern.assemble(&structure.link_dofs, |_| 1.0, &mut values);
         let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
         let m = factorize_counting_zero_modes(&pattern, &values, &mut factor);
-        (m, (m == 0).then_some((pattern, factor)))
+        (m, (m == 0).then_some(factor))
     };
     let rank = n - mechanisms;
     let counts = EquilibriumCounts {
@@ -86,7 +81,7 @@ pub fn self_stress_through(structure: &Structure, j: usize) -> Result<Vec<f64>, 
     }
     let mut y = vec![0.0; structure.n_free];
     structure.link_dofs[j].scatter(1.0, &mut y);
-    if let Some((_, factor)) = &factor {
+    if let Some(factor) = &factor {
         factor.solve_in_place(&mut y);
     }
     // t = e_j − B y.

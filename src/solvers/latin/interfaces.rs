@@ -4,7 +4,7 @@
 use super::macro_basis::labelled_macro_basis;
 use super::partition::{InterfaceTopology, Partition};
 use super::WeakInterfaces;
-use crate::structure::{Structure, CLAMPED};
+use crate::structure::Structure;
 use nalgebra::DMatrix;
 
 /// An interface with its macro basis and where its macro forces sit in the macro problem.
@@ -112,7 +112,7 @@ impl Interfaces {
                 let free: Vec<[bool; 3]> = topology
                     .nodes
                     .iter()
-                    .map(|&n| [0, 1, 2].map(|c| structure.dof_of[3 * n + c] != CLAMPED))
+                    .map(|&n| structure.held_components(n).map(|held| !held))
                     .collect();
                 let (basis, fields) = labelled_macro_basis(&positions, &free, weak);
                 let count = positions.len().max(1) as f64;

@@ -230,8 +230,8 @@ impl<'s> Latin<'s> {
                 let dofs = t
                     .nodes
                     .iter()
-                    .flat_map(|&n| &structure.dof_of[3 * n..3 * n + 3])
-                    .filter(|&&d| d != CLAMPED)
+                    .flat_map(|&n| structure.held_components(n))
+                    .filter(|&held| !held)
                     .count();
                 8 * dofs.pow(2)
             })

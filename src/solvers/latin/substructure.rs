@@ -199,10 +199,7 @@ impl Substructure {
             .nodes
             .iter()
             .chain(&topology.clamped_nodes)
-            .map(|&node| {
-                let held = [0, 1, 2].map(|c| structure.dof_of[3 * node + c] == CLAMPED);
-                (structure.nodes[node], held)
-            })
+            .map(|&node| (structure.nodes[node], structure.held_components(node)))
             .filter(|(_, held)| held.iter().any(|&h| h))
             .collect();
         let rigid = substructure_kernel(&all_positions, &held, &traces);

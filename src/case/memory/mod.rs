@@ -9,6 +9,11 @@
 
 use crate::solvers::Method;
 
+mod available;
+
+use available::workers_that_fit;
+pub use available::{available, Available};
+
 /// Bytes per link for the structure and everything sized by it: the case's geometry, the
 /// structure's links and compatibility rows, the stiffness pattern and values, a solver's
 /// vectors (fitted: peak RSS of `pcg-lcp` minus one factor, 1.1–1.2 kB per dof on 64 × 64 to
@@ -283,218 +288,6 @@ pub fn bytes_text(bytes: u64) -> String {
     }
 }
 
-/// The address space glibc maps for a thread's malloc arena (64 MiB, mapped twice as large
-/// while it is aligned).
-const THREAD_ARENA_BYTES: u64 = 128 << 20;
-
-/// The memory this process may still use, and which limit says so.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Available {
-    /// Bytes of memory the estimate may use.
-    pub bytes: u64,
-    /// Bytes of address space each thread running a dense kernel reserves beyond `bytes`,
-    /// when the limit is one of address space (`ulimit -v`, `ulimit -d`): twice the L3 cache,
-    /// which faer's gemm (`private-gemm-x86`) reserves on every such thread, with no setting.
-    pub dense_buffer: u64,
-    /// Bytes of address space each worker thread's malloc arena takes under such a limit:
-    /// glibc's 64 MiB arena, mapped twice as large while it is aligned.
-    pub arena: u64,
-    /// The limit, as the user would name it.
-    pub source: String,
-}
-
-/// The smallest of: `MemAvailable` of `/proc/meminfo`; the cgroup's `memory.max` less its
-/// `memory.current` (v1: `memory.limit_in_bytes` less `memory.usage_in_bytes`), inactive page
-/// cache left out; `RLIMIT_AS` (`ulimit -v`) less the address space in use; `RLIMIT_DATA`
-/// (`ulimit -d`) less the data segment in use. `None` when none can be read.
-pub fn available() -> Option<Available> {
-    let mut best: Option<Available> = None;
-    let mut consider = |bytes: u64, address_space: bool, source: String| {
-        if best.as_ref().is_none_or(|b| bytes < b.bytes) {
-            best = Some(Available {
-                bytes,
-                dense_buffer: if address_space {
-                    2 * l3_cache_bytes()
-                } else {
-                    0
-                },
-                arena: if address_space { THREAD_ARENA_BYTES } else { 0 },
-                source,
-            });
-        }
-    };
-    if let Some(kb) = proc_field("/proc/meminfo", "MemAvailable:") {
-        consider(
-            kb << 10,
-            false,
-            format!("MemAvailable {}", bytes_text(kb << 10)),
-        );
-    }
-    if let Some((max, current)) = cgroup_limit() {
-        consider(
-            max.saturating_sub(current),
-            false,
-            format!(
-                "cgroup memory limit {}, {} in use",
-                bytes_text(max),
-                bytes_text(current)
-            ),
-        );
-    }
-    let address_space = proc_field("/proc/self/status", "VmSize:").unwrap_or(0) << 10;
-    if let Some(limit) = rlimit(libc::RLIMIT_AS) {
-        consider(
-            limit.saturating_sub(address_space),
-            true,
-            format!(
-                "RLIMIT_AS (ulimit -v) {}, {} of address space in use",
-                bytes_text(limit),
-                bytes_text(address_space)
-            ),
-        );
-    }
-    let data = proc_field("/proc/self/status", "VmData:").unwrap_or(0) << 10;
-    if let Some(limit) = rlimit(libc::RLIMIT_DATA) {
-        consider(
-            limit.saturating_sub(data),
-            true,
-            format!(
-                "RLIMIT_DATA (ulimit -d) {}, {} in use",
-                bytes_text(limit),
-                bytes_text(data)
-            ),
-        );
-    }
-    best
-}
-
-/// The soft limit `resource`, bytes, when one is set. std has no `getrlimit`, hence `libc`.
-fn rlimit(resource: libc::__rlimit_resource_t) -> Option<u64> {
-    let mut limit = libc::rlimit {
-        rlim_cur: 0,
-        rlim_max: 0,
-    };
-    // SAFETY: getrlimit writes one `rlimit` through a valid pointer.
-    let ok = unsafe { libc::getrlimit(resource, &mut limit) } == 0;
-    (ok && limit.rlim_cur != libc::RLIM_INFINITY).then_some(limit.rlim_cur)
-}
-
-/// The number after `field` (kB) in a `/proc` file of `key: value kB` lines.
-fn proc_field(path: &str, field: &str) -> Option<u64> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let line = text.lines().find(|l| l.starts_with(field))?;
-    line[field.len()..].split_whitespace().next()?.parse().ok()
-}
-
-/// Limits this large mean "none" (cgroup v1 writes 2^63 rounded down to a page).
-const CGROUP_UNLIMITED: u64 = 1 << 62;
-
-/// The cgroup memory limit of this process and what counts against it, when a limit is set:
-/// v2 `memory.max` and `memory.current`, or v1 `memory.limit_in_bytes` and
-/// `memory.usage_in_bytes`; the inactive page cache (`memory.stat`), which the kernel reclaims
-/// before it fails an allocation, is not counted as used.
-fn cgroup_limit() -> Option<(u64, u64)> {
-    let membership = std::fs::read_to_string("/proc/self/cgroup").ok()?;
-    let v2 = membership.lines().find_map(|l| l.strip_prefix("0::"));
-    let v1 = membership
-        .lines()
-        .find_map(|l| l.split_once(":memory:").map(|(_, p)| p));
-    let candidates = [
-        (
-            v2.map(|p| format!("/sys/fs/cgroup{p}")),
-            "memory.max",
-            "memory.current",
-            "inactive_file",
-        ),
-        (
-            Some("/sys/fs/cgroup".into()),
-            "memory.max",
-            "memory.current",
-            "inactive_file",
-        ),
-        (
-            v1.map(|p| format!("/sys/fs/cgroup/memory{p}")),
-            "memory.limit_in_bytes",
-            "memory.usage_in_bytes",
-            "total_inactive_file",
-        ),
-        (
-            Some("/sys/fs/cgroup/memory".into()),
-            "memory.limit_in_bytes",
-            "memory.usage_in_bytes",
-            "total_inactive_file",
-        ),
-    ];
-    for (dir, limit, usage, inactive) in candidates {
-        let Some(dir) = dir else { continue };
-        let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).ok();
-        let Some(max) = read(limit).and_then(|m| m.trim().parse::<u64>().ok()) else {
-            continue;
-        };
-        if max >= CGROUP_UNLIMITED {
-            return None;
-        }
-        let used = read(usage)
-            .and_then(|c| c.trim().parse::<u64>().ok())
-            .unwrap_or(0);
-        let reclaimable = read("memory.stat")
-            .and_then(|stat| {
-                stat.lines().find_map(|l| {
-                    l.strip_prefix(inactive)?
-                        .strip_prefix(' ')?
-                        .trim()
-                        .parse()
-                        .ok()
-                })
-            })
-            .unwrap_or(0);
-        return Some((max, used.saturating_sub(reclaimable)));
-    }
-    None
-}
-
-/// The L3 cache size the dense kernels size their buffers by (`/sys`; 32 MiB when unknown).
-fn l3_cache_bytes() -> u64 {
-    let unknown = 32 << 20;
-    let Ok(entries) = std::fs::read_dir("/sys/devices/system/cpu/cpu0/cache") else {
-        return unknown;
-    };
-    for e in entries.flatten() {
-        let read = |f: &str| std::fs::read_to_string(e.path().join(f)).ok();
-        if read("level").is_some_and(|l| l.trim() == "3") {
-            if let Some(size) = read("size") {
-                let size = size.trim();
-                let (number, unit) = size.split_at(size.len() - 1);
-                let scale = match unit {
-                    "K" => 1 << 10,
-                    "M" => 1 << 20,
-                    "G" => 1 << 30,
-                    _ => return unknown,
-                };
-                return number.parse::<u64>().map_or(unknown, |n| n * scale);
-            }
-        }
-    }
-    unknown
-}
-
-impl Available {
-    /// Address space of `main` threads and `workers` rayon workers running dense kernels.
-    fn threads_bytes(&self, main: u64, workers: usize) -> u64 {
-        self.dense_buffer * (main + workers as u64) + self.arena * workers as u64
-    }
-}
-
-/// How many of `workers` rayon workers fit beside `total` bytes: all of them, else the most
-/// (at least one) that do, else `None`.
-fn workers_that_fit(total: u64, available: &Available, main: u64, workers: usize) -> Option<usize> {
-    let fits = |w: usize| total + available.threads_bytes(main, w) <= available.bytes;
-    if fits(workers) {
-        return Some(workers);
-    }
-    (1..workers).rev().find(|&w| fits(w))
-}
-
 /// Refuse `estimate` of what `command` needs when it is larger than what is available. Under
 /// an address-space limit whose only excess is rayon's workers (each reserving a dense kernel
 /// buffer and a malloc arena), first size rayon's global pool to as many workers as fit: the
@@ -552,7 +345,7 @@ mod tests {
         let layout = crate::structure::GridLayout::new(n, n);
         Size {
             nodes: layout.n_nodes(),
-            links: 16 * n * n,
+            links: crate::structure::ModuleKind::Standard.links_per_module() * n * n,
         }
     }
 
