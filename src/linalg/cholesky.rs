@@ -6,15 +6,14 @@
 use super::{nested_dissection, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::perm::PermRef;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymmetricOrdering,
+    SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, Mat, MatMut, Par, Side};
 use std::sync::Arc;
 
 /// The matrix handed to [`SparseCholesky::factorize`] is not numerically positive definite.
@@ -29,17 +28,138 @@ pub struct NotPositiveDefinite {
 /// Sparse Cholesky factor `A = L Lᵀ` of a matrix on a [`StiffnessPattern`]: one symbolic
 /// analysis, reused by every numeric [`SparseCholesky::factorize`].
 pub struct SparseCholesky {
-    symbolic: Arc<SymbolicCholesky<usize>>,
+    analysis: Arc<Analysis>,
+    /// A's values scattered into the permuted pattern `P A Pᵀ`.
+    permuted_values: Vec<f64>,
     l_values: Vec<f64>,
     factor_scratch: MemBuffer,
     par: Par,
     factorized: bool,
 }
 
+/// What one symbolic analysis fixes: the fill-reducing order, the pattern of `P A Pᵀ` in that
+/// order, where each entry of A goes in it, and faer's symbolic factor of it. faer is handed
+/// `P A Pᵀ` already permuted (its ordering is the identity), so a numeric factorization does
+/// not re-permute A: the scatter through `permuted_slot` is one pass over A's entries (faer's
+/// own permutation, which rebuilds the permuted pattern every time, was 15 % of a
+/// factorization of the paper case).
+struct Analysis {
+    /// Position i of the factor is dof `order[i]`.
+    order: Vec<usize>,
+    /// The triangle of `P A Pᵀ` handed to faer's numeric factorization.
+    side: Side,
+    /// CSC pattern of that triangle.
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// Slot in `P A Pᵀ` of each slot of A.
+    permuted_slot: Vec<u32>,
+    symbolic: SymbolicCholesky<usize>,
+}
+
+/// A stable counting sort of `entries` (row, column, source slot) by `key` ∈ 0..n: the
+/// bucket starts (length n + 1) and the entries in bucket order.
+fn bucket_by(
+    n: usize,
+    entries: &[(u32, u32, u32)],
+    key: impl Fn(&(u32, u32, u32)) -> u32,
+) -> (Vec<usize>, Vec<(u32, u32, u32)>) {
+    let mut start = vec![0usize; n + 1];
+    for e in entries {
+        start[key(e) as usize + 1] += 1;
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start[..n].to_vec();
+    let mut sorted = vec![(0, 0, 0); entries.len()];
+    for e in entries {
+        let k = key(e) as usize;
+        sorted[fill[k]] = *e;
+        fill[k] += 1;
+    }
+    (start, sorted)
+}
+
+/// CSC pattern of the bucketed entries (rows in the order they come) and the position of each
+/// source slot in it.
+fn csc_with_slots(
+    start: Vec<usize>,
+    sorted: &[(u32, u32, u32)],
+    row: impl Fn(&(u32, u32, u32)) -> u32,
+) -> (Vec<usize>, Vec<usize>, Vec<u32>) {
+    let row_idx = sorted.iter().map(|e| row(e) as usize).collect();
+    let mut slot_in = vec![0u32; sorted.len()];
+    for (k, &(_, _, slot)) in sorted.iter().enumerate() {
+        slot_in[slot as usize] = k as u32;
+    }
+    (start, row_idx, slot_in)
+}
+
+impl Analysis {
+    fn new(pattern: &StiffnessPattern, ordering: NodeOrdering<'_>) -> Analysis {
+        let n = pattern.n;
+        let (order, inverse) = node_ordering(pattern, ordering);
+        // Entry (r, c), r ≥ c, of A is entry (max, min) of (inverse[r], inverse[c]) in P A Pᵀ.
+        let lower: Vec<(u32, u32, u32)> = pattern
+            .entries()
+            .map(|(r, c, slot)| {
+                let (a, b) = (inverse[r], inverse[c]);
+                (a.max(b) as u32, a.min(b) as u32, slot as u32)
+            })
+            .collect();
+        // Stable counting sorts give sorted rows without comparisons: by column, then by row
+        // (the upper triangle, column = row of the lower one), then by column again.
+        let (_, by_column) = bucket_by(n, &lower, |e| e.1);
+        drop(lower);
+        let (upper_start, by_row) = bucket_by(n, &by_column, |e| e.0);
+        drop(by_column);
+        let (lower_start, lower_sorted) = bucket_by(n, &by_row, |e| e.1);
+        // faer analyses the upper triangle when handed the ordering (the identity here).
+        let (col_ptr, row_idx, permuted_slot) = csc_with_slots(upper_start, &by_row, |e| e.1);
+        drop(by_row);
+        // faer picks simplicial or supernodal from the flop count: on the 195-dof
+        // substructures of a 64 × 64 grid simplicial solves were 10–20 % faster per LATIN
+        // iteration than forced supernodal ones.
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::AUTO,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx),
+            Side::Upper,
+            SymmetricOrdering::Identity,
+            params,
+        )
+        .expect("symbolic Cholesky of a valid pattern");
+        // The numeric factorization takes the triangle it works on without a copy: the upper
+        // one for faer's simplicial factor, the lower one for its supernodal factor.
+        let (side, (col_ptr, row_idx, permuted_slot)) = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => (Side::Upper, (col_ptr, row_idx, permuted_slot)),
+            SymbolicCholeskyRaw::Supernodal(_) => (
+                Side::Lower,
+                csc_with_slots(lower_start, &lower_sorted, |e| e.0),
+            ),
+        };
+        Analysis {
+            order,
+            side,
+            col_ptr,
+            row_idx,
+            permuted_slot,
+            symbolic,
+        }
+    }
+
+    fn permuted_pattern(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        let n = self.order.len();
+        SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx)
+    }
+}
+
 impl std::fmt::Debug for SparseCholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SparseCholesky")
-            .field("n", &self.symbolic.nrows())
+            .field("n", &self.analysis.order.len())
             .field("factor_entries", &self.l_values.len())
             .finish()
     }
@@ -62,24 +182,36 @@ pub enum NodeOrdering<'a> {
 fn node_graph(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
     let nodes = p.n / 3;
     // A link couples all three components of its two nodes, so the first component of each
-    // node carries the whole node graph.
-    let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); nodes];
-    for c in (0..p.n).step_by(3) {
-        for &r in &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]] {
-            if r % 3 == 0 && r != c {
-                adjacency[r / 3].push(c / 3);
-                adjacency[c / 3].push(r / 3);
-            }
+    // node carries the whole node graph: its column lists the later neighbours (r > c).
+    let later = |c: usize| {
+        p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]]
+            .iter()
+            .filter(move |&&r| r % 3 == 0 && r / 3 != c / 3)
+            .map(|&r| r / 3)
+    };
+    let mut offsets = vec![0usize; nodes + 1];
+    for v in 0..nodes {
+        for w in later(3 * v) {
+            offsets[v + 1] += 1;
+            offsets[w + 1] += 1;
         }
     }
-    let mut offsets = Vec::with_capacity(nodes + 1);
-    let mut neighbours = Vec::new();
-    offsets.push(0);
-    for list in &mut adjacency {
-        list.sort_unstable();
-        list.dedup();
-        neighbours.extend_from_slice(list);
-        offsets.push(neighbours.len());
+    for v in 0..nodes {
+        offsets[v + 1] += offsets[v];
+    }
+    // Filling node by node puts each list in increasing order: earlier neighbours first (they
+    // are filled while visiting them, in order), then the later ones (rows are sorted).
+    let mut neighbours = vec![0usize; offsets[nodes]];
+    let mut fill = offsets[..nodes].to_vec();
+    for v in 0..nodes {
+        for w in later(3 * v) {
+            neighbours[fill[w]] = v;
+            fill[w] += 1;
+        }
+        for w in later(3 * v) {
+            neighbours[fill[v]] = w;
+            fill[v] += 1;
+        }
     }
     (offsets, neighbours)
 }
@@ -127,10 +259,6 @@ fn node_ordering(p: &StiffnessPattern, ordering: NodeOrdering<'_>) -> (Vec<usize
     (expand(&perm), expand(&perm_inv))
 }
 
-fn symbolic_ref(p: &StiffnessPattern) -> SymbolicSparseColMatRef<'_, usize> {
-    SymbolicSparseColMatRef::new_checked(p.n, p.n, &p.col_ptr, None, &p.row_idx)
-}
-
 impl SparseCholesky {
     /// Symbolic analysis of `pattern` (lower triangle). `par`: faer's parallelism inside one
     /// factorization (use `Par::Seq` when factorizations already run in parallel).
@@ -144,44 +272,27 @@ impl SparseCholesky {
         par: Par,
         ordering: NodeOrdering<'_>,
     ) -> SparseCholesky {
-        // faer picks simplicial or supernodal from the flop count: on the 195-dof
-        // substructures of a 64 × 64 grid simplicial solves were 10–20 % faster per LATIN
-        // iteration than forced supernodal ones.
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::AUTO,
-            ..Default::default()
-        };
-        let (forward, inverse) = node_ordering(pattern, ordering);
-        let ordering =
-            SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, pattern.n));
-        let symbolic =
-            factorize_symbolic_cholesky(symbolic_ref(pattern), Side::Lower, ordering, params)
-                .expect("symbolic Cholesky of a valid pattern");
-        let factor_scratch =
-            MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
-        let l_values = vec![0.0; symbolic.len_val()];
+        Self::with_analysis(Arc::new(Analysis::new(pattern, ordering)), par)
+    }
+
+    fn with_analysis(analysis: Arc<Analysis>, par: Par) -> SparseCholesky {
+        let symbolic = &analysis.symbolic;
         SparseCholesky {
-            symbolic: Arc::new(symbolic),
-            l_values,
-            factor_scratch,
+            permuted_values: vec![0.0; analysis.row_idx.len()],
+            l_values: vec![0.0; symbolic.len_val()],
+            factor_scratch: MemBuffer::new(
+                symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            ),
             par,
             factorized: false,
+            analysis,
         }
     }
 
     /// A second factorization workspace on the same symbolic analysis (no new analysis); it
     /// holds no numeric factor until [`SparseCholesky::factorize`].
     pub fn share_symbolic(&self) -> SparseCholesky {
-        SparseCholesky {
-            symbolic: Arc::clone(&self.symbolic),
-            l_values: vec![0.0; self.l_values.len()],
-            factor_scratch: MemBuffer::new(
-                self.symbolic
-                    .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
-            ),
-            par: self.par,
-            factorized: false,
-        }
+        Self::with_analysis(Arc::clone(&self.analysis), self.par)
     }
 
     /// Numeric factorization of `values` on the analysed pattern.
@@ -190,12 +301,23 @@ impl SparseCholesky {
         pattern: &StiffnessPattern,
         values: &[f64],
     ) -> Result<(), NotPositiveDefinite> {
-        let a = SparseColMatRef::new(symbolic_ref(pattern), values);
+        let analysis = &*self.analysis;
+        assert_eq!(
+            values.len(),
+            analysis.permuted_slot.len(),
+            "values on another pattern"
+        );
+        debug_assert_eq!(pattern.nnz(), values.len());
+        // P A Pᵀ, one scatter.
+        for (&v, &slot) in values.iter().zip(&analysis.permuted_slot) {
+            self.permuted_values[slot as usize] = v;
+        }
+        let a = SparseColMatRef::new(analysis.permuted_pattern(), &self.permuted_values);
         self.factorized = false;
-        let result = self.symbolic.factorize_numeric_llt(
+        let result = analysis.symbolic.factorize_numeric_llt(
             &mut self.l_values,
             a,
-            Side::Lower,
+            analysis.side,
             LltRegularization::default(),
             self.par,
             MemStack::new(&mut self.factor_scratch),
@@ -218,19 +340,27 @@ impl SparseCholesky {
         self.solve_block_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
     }
 
-    /// `X ← A⁻¹ X` for a column-major block of right-hand sides.
-    pub fn solve_block_in_place(&self, x: MatMut<'_, f64>) {
+    /// `X ← A⁻¹ X` for a column-major block of right-hand sides: `X ← Pᵀ (L Lᵀ)⁻¹ P X`.
+    pub fn solve_block_in_place(&self, mut x: MatMut<'_, f64>) {
         assert!(self.factorized, "solve before a successful factorization");
+        let order = &self.analysis.order;
+        let mut permuted = Mat::from_fn(x.nrows(), x.ncols(), |i, j| x[(order[i], j)]);
         let mut scratch = MemBuffer::new(
-            self.symbolic
+            self.analysis
+                .symbolic
                 .solve_in_place_scratch::<f64>(x.ncols(), self.par),
         );
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+        LltRef::new(&self.analysis.symbolic, &self.l_values).solve_in_place_with_conj(
             Conj::No,
-            x,
+            permuted.as_mut(),
             self.par,
             MemStack::new(&mut scratch),
         );
+        for j in 0..x.ncols() {
+            for (i, &dof) in order.iter().enumerate() {
+                x[(dof, j)] = permuted[(i, j)];
+            }
+        }
     }
 }
 
@@ -241,5 +371,109 @@ impl Clone for SparseCholesky {
         copy.l_values.copy_from_slice(&self.l_values);
         copy.factorized = self.factorized;
         copy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::SparseRow;
+
+    /// Bars between the nodes of a `w × h` grid (neighbours and diagonals), three dofs per
+    /// node, with stiffnesses that vary from bar to bar, and a soft spring on every dof so that
+    /// the stiffness is regular.
+    fn grid_stiffness(w: usize, h: usize) -> (StiffnessPattern, Vec<f64>, Vec<[f64; 2]>) {
+        let node = |i: usize, j: usize| i + w * j;
+        let mut rows = Vec::new();
+        let mut add = |a: usize, b: usize, d: [f64; 3]| {
+            let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let n = [d[0] / l, d[1] / l, d[2] / l];
+            rows.push(SparseRow::new((0..3).flat_map(|k| {
+                [(Some(3 * a + k), -n[k]), (Some(3 * b + k), n[k])]
+            })));
+        };
+        for j in 0..h {
+            for i in 0..w {
+                let lift = 0.1 * ((i * 7 + j * 3) % 5) as f64;
+                if i + 1 < w {
+                    add(node(i, j), node(i + 1, j), [1.0, 0.0, lift]);
+                }
+                if j + 1 < h {
+                    add(node(i, j), node(i, j + 1), [0.0, 1.0, -lift]);
+                }
+                if i + 1 < w && j + 1 < h {
+                    add(node(i, j), node(i + 1, j + 1), [1.0, 1.0, 0.5 + lift]);
+                    add(node(i + 1, j), node(i, j + 1), [-1.0, 1.0, 0.3 - lift]);
+                }
+            }
+        }
+        for d in 0..3 * w * h {
+            rows.push(SparseRow::new([(Some(d), 0.1)]));
+        }
+        let pattern = StiffnessPattern::new(3 * w * h, &rows);
+        let mut values = vec![0.0; pattern.nnz()];
+        pattern.assemble(&rows, |i| 1.0 + (i % 7) as f64, &mut values);
+        let xy = (0..w * h).map(|v| [(v % w) as f64, (v / w) as f64]).collect();
+        (pattern, values, xy)
+    }
+
+    fn relative_residual(p: &StiffnessPattern, values: &[f64], x: &[f64], b: &[f64]) -> f64 {
+        let mut ax = vec![0.0; p.n];
+        p.sym_matvec(values, x, &mut ax);
+        let r: f64 = ax.iter().zip(b).map(|(a, b)| (a - b) * (a - b)).sum();
+        r.sqrt() / b.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+
+    /// faer gets `P A Pᵀ` already permuted: the solves must be those of A itself, for both of
+    /// faer's factor kinds (simplicial on the small grid, supernodal on the large one) and
+    /// both orderings, one right-hand side or a block.
+    #[test]
+    fn solves_are_those_of_the_unpermuted_matrix() {
+        let mut sides = Vec::new();
+        for (w, h) in [(3, 2), (40, 40)] {
+            let (p, values, xy) = grid_stiffness(w, h);
+            for ordering in [NodeOrdering::Amd, NodeOrdering::NestedDissection(&xy)] {
+                let mut chol = SparseCholesky::analyse_ordered(&p, Par::Seq, ordering);
+                sides.push(chol.analysis.side);
+                chol.factorize(&p, &values).expect("regular stiffness");
+                let b: Vec<f64> = (0..p.n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+                let mut x = b.clone();
+                chol.solve_in_place(&mut x);
+                let r = relative_residual(&p, &values, &x, &b);
+                assert!(r < 1e-10, "{w} x {h} {ordering:?}: residual {r:e}");
+                // A block of three right-hand sides: column by column the same answers.
+                let mut block = Mat::from_fn(p.n, 3, |i, j| b[(i + 5 * j) % p.n]);
+                chol.solve_block_in_place(block.as_mut());
+                for j in 0..3 {
+                    let bj: Vec<f64> = (0..p.n).map(|i| b[(i + 5 * j) % p.n]).collect();
+                    let mut xj = bj.clone();
+                    chol.solve_in_place(&mut xj);
+                    for i in 0..p.n {
+                        assert!((block[(i, j)] - xj[i]).abs() <= 1e-12 * xj[i].abs().max(1.0));
+                    }
+                }
+                // A second workspace on the same analysis factors another matrix.
+                let mut other = chol.share_symbolic();
+                let doubled: Vec<f64> = values.iter().map(|v| 2.0 * v).collect();
+                other.factorize(&p, &doubled).expect("regular stiffness");
+                let mut half = b.clone();
+                other.solve_in_place(&mut half);
+                for (h, x) in half.iter().zip(&x) {
+                    assert!((2.0 * h - x).abs() <= 1e-9 * x.abs().max(1.0));
+                }
+            }
+        }
+        // Both of faer's factor kinds were exercised.
+        assert_eq!(sides, [Side::Upper, Side::Upper, Side::Lower, Side::Lower]);
+    }
+
+    #[test]
+    fn an_indefinite_matrix_is_refused() {
+        let (p, mut values, _) = grid_stiffness(4, 3);
+        for &d in &p.diag_slot[..6] {
+            values[d] = -1.0;
+        }
+        let mut chol = SparseCholesky::analyse(&p, Par::Seq);
+        assert!(chol.factorize(&p, &values).is_err());
     }
 }

@@ -27,68 +27,76 @@ pub struct StiffnessPattern {
 impl StiffnessPattern {
     /// The pattern of `n` dofs for `sparse_rows`, whatever their weights (zero ones included).
     pub fn new(n: usize, sparse_rows: &[SparseRow]) -> StiffnessPattern {
-        // Bucket the rows of each column (counting sort), then sort and dedup each short column.
-        let mut count = vec![1usize; n]; // the diagonal
-        for ld in sparse_rows {
-            for (p, _) in ld.iter() {
-                for (q, _) in ld.iter() {
-                    if p > q {
-                        count[q] += 1;
-                    }
-                }
-            }
-        }
-        let mut start = vec![0usize; n + 1];
-        for c in 0..n {
-            start[c + 1] = start[c] + count[c];
-        }
-        let mut rows = vec![0usize; start[n]];
-        let mut fill = start[..n].to_vec();
-        for (c, f) in fill.iter_mut().enumerate() {
-            rows[*f] = c;
-            *f += 1;
-        }
-        for ld in sparse_rows {
-            for (p, _) in ld.iter() {
-                for (q, _) in ld.iter() {
-                    if p > q {
-                        rows[fill[q]] = p;
-                        fill[q] += 1;
-                    }
-                }
-            }
-        }
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        col_ptr.push(0);
-        let mut row_idx = Vec::with_capacity(rows.len());
-        for c in 0..n {
-            let column = &mut rows[start[c]..start[c + 1]];
-            column.sort_unstable();
-            let first = row_idx.len();
-            for &r in column.iter() {
-                if row_idx.len() == first || *row_idx.last().expect("non-empty") != r {
-                    row_idx.push(r);
-                }
-            }
-            col_ptr.push(row_idx.len());
-        }
-        let find = |r: usize, c: usize| -> usize {
-            let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-            col_ptr[c] + rows.binary_search(&r).expect("entry in pattern")
-        };
-        let diag_slot = (0..n).map(|d| find(d, d)).collect();
-        let mut slots = Vec::with_capacity(sparse_rows.len() * 21);
+        // Every pair (p, q), p ≥ q, of every row, numbered g in the order of `assemble`'s
+        // double loop: g is its position in `slots`.
         let mut offsets = Vec::with_capacity(sparse_rows.len() + 1);
         offsets.push(0);
+        let mut count = vec![0u32; n];
+        for ld in sparse_rows {
+            let mut pairs = 0;
+            for (p, _) in ld.iter() {
+                for (q, _) in ld.iter() {
+                    if p >= q {
+                        count[q] += 1;
+                        pairs += 1;
+                    }
+                }
+            }
+            offsets.push(offsets.last().copied().unwrap_or(0) + pairs);
+        }
+        let total = offsets.last().copied().unwrap_or(0);
+        assert!(
+            total < u32::MAX as usize && n < u32::MAX as usize,
+            "pattern too large for 32-bit slots"
+        );
+        // Bucket the pairs by column q (counting sort): (row p, pair number g).
+        let mut start = vec![0usize; n + 1];
+        for c in 0..n {
+            start[c + 1] = start[c] + count[c] as usize;
+        }
+        let mut bucket = vec![(0u32, 0u32); total];
+        let mut fill = start[..n].to_vec();
+        let mut g = 0u32;
         for ld in sparse_rows {
             for (p, _) in ld.iter() {
                 for (q, _) in ld.iter() {
                     if p >= q {
-                        slots.push(find(p, q) as u32);
+                        bucket[fill[q]] = (p as u32, g);
+                        fill[q] += 1;
+                        g += 1;
                     }
                 }
             }
-            offsets.push(slots.len());
+        }
+        drop(fill);
+        // Column by column: its distinct rows (the diagonal first), sorted; then each pair's
+        // slot by a dense row → slot map valid for this column (no search per pair).
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let mut row_idx: Vec<usize> = Vec::with_capacity(total / 2 + n);
+        let mut diag_slot = Vec::with_capacity(n);
+        let mut slots = vec![0u32; total];
+        let mut seen_in = vec![u32::MAX; n];
+        let mut slot_of = vec![0u32; n];
+        for c in 0..n {
+            let first = row_idx.len();
+            row_idx.push(c);
+            seen_in[c] = c as u32;
+            for &(p, _) in &bucket[start[c]..start[c + 1]] {
+                if seen_in[p as usize] != c as u32 {
+                    seen_in[p as usize] = c as u32;
+                    row_idx.push(p as usize);
+                }
+            }
+            row_idx[first..].sort_unstable();
+            for (k, &r) in row_idx[first..].iter().enumerate() {
+                slot_of[r] = (first + k) as u32;
+            }
+            diag_slot.push(first);
+            for &(p, g) in &bucket[start[c]..start[c + 1]] {
+                slots[g as usize] = slot_of[p as usize];
+            }
+            col_ptr.push(row_idx.len());
         }
         StiffnessPattern {
             n,

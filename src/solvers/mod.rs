@@ -20,7 +20,7 @@ pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
 pub use observer::{IterationRecord, Observer, Silent, Tee};
-pub use residual::{displacement_residual, load_relative_unbalance, relative_unbalance};
+pub use residual::{displacement_residual, relative_unbalance, unbalances, Unbalances};
 pub use solution::{Equilibrium, Solution};
 pub use solver::{stop_when, Progress, Solver};
 pub use status::{Measure, SolveInfo, Status};

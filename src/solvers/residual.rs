@@ -25,35 +25,47 @@ pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut
     }
 }
 
-/// `r ← Bᵀτ − F` and its size relative to the forces the load brings into play,
-/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` (newton's stopping measure).
+/// `r ← Bᵀτ − F` and two relative sizes of it, in one pass over the links: r(U) as
+/// [`relative_unbalance`] gives it, and its size relative to the forces the load brings into
+/// play, `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` (newton's stopping measure).
 ///
-/// The prestress t0 is left out of the scale: it is self-balanced, and counted in the scale it
-/// let `U = 0` pass as converged at `lower_cable = 1e12` (issue 13, D5a). When load and
-/// deformation both vanish exactly (U = 0 under F = 0), the prestress forces are the scale.
-pub fn load_relative_unbalance(
-    s: &Structure,
-    tensions: &[f64],
-    load: &[f64],
-    r: &mut [f64],
-) -> f64 {
-    s.nodal_forces(tensions, r);
+/// The prestress t0 is left out of the second scale: it is self-balanced, and counted in the
+/// scale it let `U = 0` pass as converged at `lower_cable = 1e12` (issue 13, D5a). When load
+/// and deformation both vanish exactly (U = 0 under F = 0), the prestress forces are the scale.
+pub fn unbalances(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) -> Unbalances {
+    // Summed in the order of `relative_unbalance`, so that r(U) is the same to the last bit.
+    r.iter_mut().for_each(|ri| *ri = 0.0);
     let mut added = vec![0.0; s.n_free];
     let mut all = vec![0.0; s.n_free];
-    for ((t, ld), link) in tensions.iter().zip(&s.link_dofs).zip(&s.links) {
+    for ((&t, ld), link) in tensions.iter().zip(&s.link_dofs).zip(&s.links) {
+        let change = t - link.prestress;
         for (d, c) in ld.iter() {
-            added[d] += (c * (t - link.prestress)).abs();
+            r[d] += c * t;
+            added[d] += (c * change).abs();
             all[d] += (c * t).abs();
         }
     }
     r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
-    let scale = norm(load) + norm(&added);
-    let scale = if scale > 0.0 { scale } else { norm(&all) };
-    if scale > 0.0 {
-        norm(r) / scale
-    } else {
-        norm(r)
+    let (r_norm, load_norm, all_norm) = (norm(r), norm(load), norm(&all));
+    let relative_to = |scale: f64| if scale > 0.0 { r_norm / scale } else { r_norm };
+    let load_scale = load_norm + norm(&added);
+    Unbalances {
+        relative: relative_to(load_norm + all_norm),
+        load_relative: relative_to(if load_scale > 0.0 {
+            load_scale
+        } else {
+            all_norm
+        }),
     }
+}
+
+/// The two sizes of an unbalance [`unbalances`] returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unbalances {
+    /// r(U), `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`.
+    pub relative: f64,
+    /// `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)`.
+    pub load_relative: f64,
 }
 
 /// r(U): the relative equilibrium residual of displacements U under the exact law,

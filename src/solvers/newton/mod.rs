@@ -19,8 +19,7 @@
 mod line_search;
 
 use super::{
-    load_relative_unbalance, relative_unbalance, stop_when, Equilibrium, Measure, Progress,
-    SetupError, Solver, TautStiffness,
+    stop_when, unbalances, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
 };
 use crate::linalg::{dot, norm, preconditioned_cg, SparseCholesky};
 use crate::structure::Structure;
@@ -166,10 +165,9 @@ impl<'s> Newton<'s> {
             state.trial[i] = trial;
             state.tensions[i] = if l.unilateral { trial.max(0.0) } else { trial };
         }
-        let mut scratch = vec![0.0; s.n_free];
-        state.residual = relative_unbalance(s, &state.tensions, &state.load, &mut scratch);
-        state.load_residual =
-            load_relative_unbalance(s, &state.tensions, &state.load, &mut state.gradient);
+        let sizes = unbalances(s, &state.tensions, &state.load, &mut state.gradient);
+        state.residual = sizes.relative;
+        state.load_residual = sizes.load_relative;
     }
 
     /// `step ← H⁻¹ step` with H the Hessian on the taut set of `state` (docs/method.md §3) plus the
