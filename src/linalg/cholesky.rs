@@ -173,9 +173,9 @@ pub enum NodeOrdering<'a> {
     /// Approximate minimum degree on the node graph: nine times fewer entries than AMD on the
     /// dofs, with the same fill on these grids.
     Amd,
-    /// Nested dissection from each node's plane coordinates (one per node of the pattern,
+    /// Nested dissection from each node's coordinates (one per node of the pattern,
     /// i.e. per three dofs), [`nested_dissection`]; falls back to AMD if the count differs.
-    NestedDissection(&'a [[f64; 2]]),
+    NestedDissection(&'a [[f64; 3]]),
 }
 
 /// The node graph of a node-major pattern, as CSR (offsets, neighbours), symmetric.
@@ -382,7 +382,7 @@ mod tests {
     /// Bars between the nodes of a `w × h` grid (neighbours and diagonals), three dofs per
     /// node, with stiffnesses that vary from bar to bar, and a soft spring on every dof so that
     /// the stiffness is regular.
-    fn grid_stiffness(w: usize, h: usize) -> (StiffnessPattern, Vec<f64>, Vec<[f64; 2]>) {
+    fn grid_stiffness(w: usize, h: usize) -> (StiffnessPattern, Vec<f64>, Vec<[f64; 3]>) {
         let node = |i: usize, j: usize| i + w * j;
         let mut rows = Vec::new();
         let mut add = |a: usize, b: usize, d: [f64; 3]| {
@@ -413,7 +413,9 @@ mod tests {
         let pattern = StiffnessPattern::new(3 * w * h, &rows);
         let mut values = vec![0.0; pattern.nnz()];
         pattern.assemble(&rows, |i| 1.0 + (i % 7) as f64, &mut values);
-        let xy = (0..w * h).map(|v| [(v % w) as f64, (v / w) as f64]).collect();
+        let xy = (0..w * h)
+            .map(|v| [(v % w) as f64, (v / w) as f64, 0.0])
+            .collect();
         (pattern, values, xy)
     }
 

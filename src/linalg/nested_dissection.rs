@@ -1,5 +1,5 @@
-//! Nested dissection of a graph whose vertices have plane coordinates: split the vertex set
-//! at the median of its longer extent, take the vertices of one side that touch the other as
+//! Nested dissection of a graph whose vertices have coordinates in space: split the vertex set
+//! at the median of its longest extent, take the vertices of one side that touch the other as
 //! the separator, order both halves recursively, then the separator last. On grid-like graphs
 //! (a tensegrity grid's node graph, the geometry coming with the structure) this is the
 //! ordering whose fill grows like n log n, against AMD's larger fill on big grids.
@@ -15,7 +15,7 @@ const LEAF: usize = 8;
 pub fn nested_dissection(
     offsets: &[usize],
     neighbours: &[usize],
-    coordinates: &[[f64; 2]],
+    coordinates: &[[f64; 3]],
 ) -> Vec<usize> {
     let n = coordinates.len();
     let mut order = Vec::with_capacity(n);
@@ -41,7 +41,7 @@ pub fn nested_dissection(
             order.extend_from_slice(&vertices);
             continue;
         }
-        // The longer extent, and the median along it.
+        // The longest extent (a grid's plan; a tower's height), and the median along it.
         let extent = |axis: usize| {
             let (lo, hi) = vertices
                 .iter()
@@ -50,7 +50,10 @@ pub fn nested_dissection(
                 });
             hi - lo
         };
-        let axis = if extent(0) >= extent(1) { 0 } else { 1 };
+        let extents = [extent(0), extent(1), extent(2)];
+        let axis = (0..3)
+            .max_by(|&a, &b| extents[a].total_cmp(&extents[b]).then(b.cmp(&a)))
+            .expect("three axes");
         let mut along: Vec<f64> = vertices.iter().map(|&v| coordinates[v][axis]).collect();
         let middle = along.len() / 2;
         let (_, &mut median, _) = along.select_nth_unstable_by(middle, f64::total_cmp);
@@ -117,7 +120,7 @@ mod tests {
     use super::*;
 
     /// A 5-point grid graph of `w × h` vertices, row by row.
-    fn grid(w: usize, h: usize) -> (Vec<usize>, Vec<usize>, Vec<[f64; 2]>) {
+    fn grid(w: usize, h: usize) -> (Vec<usize>, Vec<usize>, Vec<[f64; 3]>) {
         let mut offsets = vec![0];
         let mut neighbours = Vec::new();
         let mut coordinates = Vec::new();
@@ -134,7 +137,7 @@ mod tests {
                 push(a, b - 1);
                 push(a, b + 1);
                 offsets.push(neighbours.len());
-                coordinates.push([i as f64, j as f64]);
+                coordinates.push([i as f64, j as f64, 0.0]);
             }
         }
         (offsets, neighbours, coordinates)

@@ -9,11 +9,15 @@ use crate::structure::Structure;
 use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
-/// plane coordinates rather than AMD. Factor entries, AMD against nested dissection: paper
-/// case (799 free nodes) 0.19 M against 0.20 M; 64 × 64 (12 k) 6.5 M against 5.3 M; 128 × 128
+/// coordinates rather than AMD. Factor entries, AMD against nested dissection: paper case
+/// (799 free nodes) 0.19 M against 0.20 M; 64 × 64 (12 k) 6.5 M against 5.3 M; 128 × 128
 /// (49 k) 35.4 M against 26.1 M; 256 × 256 (197 k) 194 M against 124 M, whose numeric
 /// factorization takes 13 s with AMD and 4.4 s with nested dissection (one run, one core).
-const NESTED_DISSECTION_MIN_NODES: usize = 10_000;
+/// Time of newton with set-up, nested dissection against AMD (medians of interleaved
+/// rounds): 0.94 on the paper case at α = 1 (its analysis is cheaper, and its factorization
+/// too despite 5 % more entries), 0.87 on 32 × 32 (3.2 k nodes). Smaller structures keep AMD,
+/// which needs no geometry to do well.
+const NESTED_DISSECTION_MIN_NODES: usize = 512;
 
 /// `K = Bᵀ k B` with every cable taut, its pattern (shared by every stiffness of the structure)
 /// and its factor.
@@ -38,10 +42,10 @@ impl TautStiffness {
             |i| structure.links[i].stiffness,
             &mut values,
         );
-        // Plane coordinates of the free nodes, in free-dof order (three dofs per free node).
-        let free_nodes: Vec<[f64; 2]> = (0..structure.nodes.len())
+        // Coordinates of the free nodes, in free-dof order (three dofs per free node).
+        let free_nodes: Vec<[f64; 3]> = (0..structure.nodes.len())
             .filter(|&v| !structure.clamped[v])
-            .map(|v| [structure.nodes[v][0], structure.nodes[v][1]])
+            .map(|v| structure.nodes[v])
             .collect();
         let ordering = if free_nodes.len() >= NESTED_DISSECTION_MIN_NODES {
             NodeOrdering::NestedDissection(&free_nodes)
