@@ -100,13 +100,14 @@ impl Analysis {
         let n = pattern.n;
         let (order, inverse) = node_ordering(pattern, ordering);
         // Entry (r, c), r ≥ c, of A is entry (max, min) of (inverse[r], inverse[c]) in P A Pᵀ.
-        let lower: Vec<(u32, u32, u32)> = pattern
-            .entries()
-            .map(|(r, c, slot)| {
-                let (a, b) = (inverse[r], inverse[c]);
-                (a.max(b) as u32, a.min(b) as u32, slot as u32)
-            })
-            .collect();
+        let mut lower: Vec<(u32, u32, u32)> = Vec::with_capacity(pattern.nnz());
+        for c in 0..n {
+            let b = inverse[c];
+            for slot in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
+                let a = inverse[pattern.row_idx[slot]];
+                lower.push((a.max(b) as u32, a.min(b) as u32, slot as u32));
+            }
+        }
         // Stable counting sorts give sorted rows without comparisons: by column, then by row
         // (the upper triangle, column = row of the lower one), then by column again.
         let (_, by_column) = bucket_by(n, &lower, |e| e.1);
