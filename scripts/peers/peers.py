@@ -3,6 +3,7 @@
 
     python3 scripts/peers/peers.py cases/paper.toml 1.0
     python3 scripts/peers/peers.py cases/scale-64.toml 0.15 --repeat 3
+    python3 scripts/peers/peers.py cases/paper.toml 1.0 --warm
 
 Peers (not part of CI; `pip install openseespy osqp numpy scipy`, and on Debian
 `apt-get install libblas3 liblapack3 libgfortran5` for OpenSees):
@@ -19,9 +20,17 @@ same structure; the case must keep the paper's materials and prestress (only `gr
 and `supports.clamp` are read). Times are medians over `--repeat` runs of set-up + solve:
 tensolve's from its summary.csv (`setup_seconds + solve_seconds`, in-process), the peers'
 from building their model (nodes, elements / matrices) to the answer, in-process too.
+
+Each tensolve run is a fresh process, whose first touch of every page is part of its time;
+the peers run again and again in one warm Python process. `--warm` times tensolve warm too:
+the criterion median of `newton/setup+solve` (taut stiffness, set-up and solve, repeated in
+one process; the structure itself, about 0.4 ms on the paper case, is built once outside)
+from `cargo bench --bench solvers`, run here for the one benchmark group that is this case
+at this α (the paper case at 1.0, `scale-64.toml` at 0.15).
 """
 
 import argparse
+import json
 import math
 import os
 import statistics
@@ -73,6 +82,23 @@ vtk = true
         times.append(float(row["setup_seconds"]) + float(row["solve_seconds"]))
     vtu = os.path.join(out, "vtk", f"newton_alpha{row['alpha']}.vtu")
     return statistics.median(times), row, (nx, ny, clamp), vtu
+
+
+# Benchmark groups of benches/solvers.rs: (case file name, alpha) -> group.
+CRITERION_GROUPS = {("paper.toml", 1.0): "paper_alpha1", ("scale-64.toml", 0.15): "scale64_alpha0.15"}
+
+
+def tensolve_warm(case_path, alpha):
+    """Criterion median (s) of newton set-up + solve on this case, measured now."""
+    group = CRITERION_GROUPS.get((os.path.basename(case_path), alpha))
+    if group is None:
+        sys.exit(f"--warm: no benchmark group for {case_path} at alpha = {alpha}; "
+                 f"benches/solvers.rs has {sorted(CRITERION_GROUPS)}")
+    name = f"{group}/newton/setup+solve"
+    subprocess.run(["cargo", "bench", "--bench", "solvers", "--", f"^{name.replace('+', '[+]')}$"],
+                   check=True, stdout=subprocess.DEVNULL)
+    path = os.path.join("target", "criterion", group, "newton_setup+solve", "new", "estimates.json")
+    return json.load(open(path))["median"]["point_estimate"] * 1e-9
 
 
 def read_vtu(path):
@@ -207,16 +233,21 @@ def main():
     parser.add_argument("alpha", type=float)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--tensolve", default="target/release/tensolve")
+    parser.add_argument("--warm", action="store_true",
+                        help="time tensolve by its criterion benchmark (warm, in one process)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as out:
         ours, row, (nx, ny, clamp), vtu = tensolve_runs(args.tensolve, args.case, args.alpha, args.repeat, out)
         points, links, kind = read_vtu(vtu)
+    how = "fresh process"
+    if args.warm:
+        ours, how = tensolve_warm(args.case, args.alpha), "criterion median, warm"
     clamped = clamped_nodes(points, nx, ny, clamp)
     direction, length, ea, t0, bar = link_data(points, links, kind)
     print(f"{args.case} at alpha = {args.alpha}: {len(points)} nodes ({int(clamped.sum())} clamped), {len(links)} links")
     ref_slack, ref_defl = int(row["slack_cables"]), float(row["max_deflection"])
     print(f"{'solver':<10} {'median s':>10} {'x tensolve':>10} {'slack':>7} {'max defl. m':>14}  notes")
-    print(f"{'tensolve':<10} {ours:>10.4f} {1.0:>10.1f} {ref_slack:>7} {ref_defl:>14.9f}  newton, r <= 1e-10, {row['iterations']} iterations")
+    print(f"{'tensolve':<10} {ours:>10.4f} {1.0:>10.1f} {ref_slack:>7} {ref_defl:>14.9f}  newton, r <= 1e-10, {row['iterations']} iterations, {how}")
     runs = [opensees(points, links, kind, clamped, args.alpha) for _ in range(args.repeat)]
     t = statistics.median(r[0] for r in runs)
     s, d, steps = runs[-1][1], runs[-1][2], runs[-1][3]
