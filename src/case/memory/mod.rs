@@ -34,8 +34,9 @@ pub const BYTES_PER_FACTOR_ENTRY: f64 = 10.0;
 
 /// Fill of the minimum-degree ordering against nested dissection (194 M against 124 M
 /// entries on 256 × 256 modules), for `check`'s rank factorization. The solvers' factors use
-/// minimum degree only below 10 000 free nodes, where the formula still bounds what was
-/// measured (56 × 56 modules), so they are all counted as nested dissection.
+/// minimum degree only below 512 free nodes (it was 10 000 when the formula was calibrated,
+/// and it still bounded what was measured there, up to 56 × 56 modules), so they are all
+/// counted as nested dissection.
 pub const AMD_FILL_RATIO: f64 = 1.6;
 
 /// Factors (in units of the structure's stiffness factor) a solver holds beyond the taut
