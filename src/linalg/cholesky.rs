@@ -99,6 +99,10 @@ impl Analysis {
     fn new(pattern: &StiffnessPattern, ordering: NodeOrdering<'_>) -> Analysis {
         let n = pattern.n;
         let (order, inverse) = node_ordering(pattern, ordering);
+        assert!(
+            pattern.nnz() < u32::MAX as usize,
+            "pattern too large for 32-bit slots"
+        );
         // Entry (r, c), r ≥ c, of A is entry (max, min) of (inverse[r], inverse[c]) in P A Pᵀ.
         let mut lower: Vec<(u32, u32, u32)> = Vec::with_capacity(pattern.nnz());
         for c in 0..n {
