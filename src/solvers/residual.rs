@@ -7,33 +7,19 @@ use crate::linalg::norm;
 use crate::structure::Structure;
 
 /// `r ← Bᵀτ − F` (the energy's gradient) and its relative size
-/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs.
+/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs: the first of [`unbalances`].
 pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) -> f64 {
-    s.nodal_forces(tensions, r);
-    let mut magnitude = vec![0.0; s.n_free];
-    for (t, ld) in tensions.iter().zip(&s.link_dofs) {
-        for (d, c) in ld.iter() {
-            magnitude[d] += (c * t).abs();
-        }
-    }
-    r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
-    let scale = norm(load) + norm(&magnitude);
-    if scale > 0.0 {
-        norm(r) / scale
-    } else {
-        norm(r)
-    }
+    unbalances(s, tensions, load, r).relative
 }
 
-/// `r ← Bᵀτ − F` and two relative sizes of it, in one pass over the links: r(U) as
-/// [`relative_unbalance`] gives it, and its size relative to the forces the load brings into
-/// play, `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` (newton's stopping measure).
+/// `r ← Bᵀτ − F` and two relative sizes of it, in one pass over the links: r(U),
+/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`, and its size relative to the forces the load brings into play,
+/// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)` (newton's stopping measure).
 ///
 /// The prestress t0 is left out of the second scale: it is self-balanced, and counted in the
 /// scale it let `U = 0` pass as converged at `lower_cable = 1e12` (issue 13, D5a). When load
 /// and deformation both vanish exactly (U = 0 under F = 0), the prestress forces are the scale.
 pub fn unbalances(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) -> Unbalances {
-    // Summed in the order of `relative_unbalance`, so that r(U) is the same to the last bit.
     r.iter_mut().for_each(|ri| *ri = 0.0);
     let mut added = vec![0.0; s.n_free];
     let mut all = vec![0.0; s.n_free];
