@@ -118,10 +118,8 @@ impl Analysis {
         drop(lower);
         let (upper_start, by_row) = bucket_by(n, &by_column, |e| e.0);
         drop(by_column);
-        let (lower_start, lower_sorted) = bucket_by(n, &by_row, |e| e.1);
         // faer analyses the upper triangle when handed the ordering (the identity here).
         let (col_ptr, row_idx, permuted_slot) = csc_with_slots(upper_start, &by_row, |e| e.1);
-        drop(by_row);
         // faer picks simplicial or supernodal from the flop count: on the 195-dof
         // substructures of a 64 × 64 grid simplicial solves were 10–20 % faster per LATIN
         // iteration than forced supernodal ones.
@@ -140,10 +138,14 @@ impl Analysis {
         // one for faer's simplicial factor, the lower one for its supernodal factor.
         let (side, (col_ptr, row_idx, permuted_slot)) = match symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(_) => (Side::Upper, (col_ptr, row_idx, permuted_slot)),
-            SymbolicCholeskyRaw::Supernodal(_) => (
-                Side::Lower,
-                csc_with_slots(lower_start, &lower_sorted, |e| e.0),
-            ),
+            SymbolicCholeskyRaw::Supernodal(_) => {
+                let (lower_start, lower_sorted) = bucket_by(n, &by_row, |e| e.1);
+                drop(by_row);
+                (
+                    Side::Lower,
+                    csc_with_slots(lower_start, &lower_sorted, |e| e.0),
+                )
+            }
         };
         Analysis {
             order,
