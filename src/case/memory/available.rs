@@ -62,29 +62,34 @@ pub fn available() -> Option<Available> {
             ),
         );
     }
-    let address_space = proc_field("/proc/self/status", "VmSize:").unwrap_or(0) << 10;
-    if let Some(limit) = rlimit(libc::RLIMIT_AS) {
-        consider(
-            limit.saturating_sub(address_space),
-            true,
-            format!(
-                "RLIMIT_AS (ulimit -v) {}, {} of address space in use",
-                bytes_text(limit),
-                bytes_text(address_space)
-            ),
-        );
-    }
-    let data = proc_field("/proc/self/status", "VmData:").unwrap_or(0) << 10;
-    if let Some(limit) = rlimit(libc::RLIMIT_DATA) {
-        consider(
-            limit.saturating_sub(data),
-            true,
-            format!(
-                "RLIMIT_DATA (ulimit -d) {}, {} in use",
-                bytes_text(limit),
-                bytes_text(data)
-            ),
-        );
+    // A process limit leaves what the process does not use yet: (limit, its /proc field, how
+    // the limit and the use are named).
+    for (resource, field, limit_name, used_name) in [
+        (
+            libc::RLIMIT_AS,
+            "VmSize:",
+            "RLIMIT_AS (ulimit -v)",
+            "of address space in use",
+        ),
+        (
+            libc::RLIMIT_DATA,
+            "VmData:",
+            "RLIMIT_DATA (ulimit -d)",
+            "in use",
+        ),
+    ] {
+        let used = proc_field("/proc/self/status", field).unwrap_or(0) << 10;
+        if let Some(limit) = rlimit(resource) {
+            consider(
+                limit.saturating_sub(used),
+                true,
+                format!(
+                    "{limit_name} {}, {} {used_name}",
+                    bytes_text(limit),
+                    bytes_text(used)
+                ),
+            );
+        }
     }
     best
 }
