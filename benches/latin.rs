@@ -20,6 +20,7 @@ fn settings(subdomains: [usize; 2]) -> LatinSettings {
 }
 
 fn latin(c: &mut Criterion) {
+    tensolve::app::allocator::retain_freed_memory();
     let case = tensolve::case::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/cases/paper.toml"

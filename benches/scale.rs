@@ -42,6 +42,7 @@ fn bench_case(c: &mut Criterion, id: &str, file: &str) {
 }
 
 fn scale(c: &mut Criterion) {
+    tensolve::app::allocator::retain_freed_memory();
     bench_case(c, "scale128_alpha0.04", "scale-128.toml");
     bench_case(c, "scale256_alpha0.01", "scale-256.toml");
 }

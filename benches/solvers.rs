@@ -96,6 +96,7 @@ fn bench_case(
 }
 
 fn solvers(c: &mut Criterion) {
+    tensolve::app::allocator::retain_freed_memory();
     bench_case(
         c,
         "paper_alpha1",
@@ -158,6 +159,7 @@ fn run_sweep(
 /// newton `cold-refactorise` also refactorises at every step (no factor reuse: the method
 /// before warm starts). Prints the iterations and factorizations per α of each variant once.
 fn sweep(c: &mut Criterion) {
+    tensolve::app::allocator::retain_freed_memory();
     let case = tensolve::case::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/cases/paper.toml"

@@ -142,6 +142,7 @@ impl From<BenchError> for Failure {
 }
 
 fn main() -> ExitCode {
+    tensolve::app::allocator::retain_freed_memory();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {

@@ -2,6 +2,7 @@
 //! of load factors into files ([`sweep`]), measure what accuracy costs in time ([`bench`]) and
 //! report what a case describes ([`check`]).
 
+pub mod allocator;
 pub mod bench;
 pub mod check;
 pub mod compare;
