@@ -6,14 +6,15 @@
 use super::{nested_dissection, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::perm::PermRef;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, simplicial, supernodal, CholeskySymbolicParams, LltRef,
+    SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, Mat, MatMut, Par, Side};
+use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
 /// The matrix handed to [`SparseCholesky::factorize`] is not numerically positive definite.
@@ -37,62 +38,21 @@ pub struct SparseCholesky {
     factorized: bool,
 }
 
-/// What one symbolic analysis fixes: the fill-reducing order, the pattern of `P A Pᵀ` in that
-/// order, where each entry of A goes in it, and faer's symbolic factor of it. faer is handed
-/// `P A Pᵀ` already permuted (its ordering is the identity), so a numeric factorization does
-/// not re-permute A: the scatter through `permuted_slot` is one pass over A's entries (faer's
-/// own permutation, which rebuilds the permuted pattern every time, was 15 % of a
-/// factorization of the paper case).
+/// What one symbolic analysis fixes: the fill-reducing order (faer's symbolic factor holds it
+/// and applies it in the solves), the pattern of one triangle of `P A Pᵀ` in that order, where
+/// each entry of A goes in it, and faer's symbolic factor. A numeric factorization scatters A's
+/// values through `permuted_slot` (one pass) and hands the permuted triangle to faer's numeric
+/// kernel: faer's own path re-permutes A at every factorization (15 % of a factorization of
+/// the paper case).
 struct Analysis {
-    /// Position i of the factor is dof `order[i]`.
-    order: Vec<usize>,
-    /// The triangle of `P A Pᵀ` handed to faer's numeric factorization.
-    side: Side,
-    /// CSC pattern of that triangle.
+    /// CSC pattern of the triangle of `P A Pᵀ` faer's numeric kernel reads (the upper one for
+    /// its simplicial factor, the lower one for its supernodal one) (rows in no particular order within a column: both of
+    /// faer's kernels scatter them).
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
-    /// Slot in `P A Pᵀ` of each slot of A.
+    /// Slot in that triangle of each slot of A.
     permuted_slot: Vec<u32>,
     symbolic: SymbolicCholesky<usize>,
-}
-
-/// A stable counting sort of `entries` (row, column, source slot) by `key` ∈ 0..n: the
-/// bucket starts (length n + 1) and the entries in bucket order.
-fn bucket_by(
-    n: usize,
-    entries: &[(u32, u32, u32)],
-    key: impl Fn(&(u32, u32, u32)) -> u32,
-) -> (Vec<usize>, Vec<(u32, u32, u32)>) {
-    let mut start = vec![0usize; n + 1];
-    for e in entries {
-        start[key(e) as usize + 1] += 1;
-    }
-    for k in 0..n {
-        start[k + 1] += start[k];
-    }
-    let mut fill = start[..n].to_vec();
-    let mut sorted = vec![(0, 0, 0); entries.len()];
-    for e in entries {
-        let k = key(e) as usize;
-        sorted[fill[k]] = *e;
-        fill[k] += 1;
-    }
-    (start, sorted)
-}
-
-/// CSC pattern of the bucketed entries (rows in the order they come) and the position of each
-/// source slot in it.
-fn csc_with_slots(
-    start: Vec<usize>,
-    sorted: &[(u32, u32, u32)],
-    row: impl Fn(&(u32, u32, u32)) -> u32,
-) -> (Vec<usize>, Vec<usize>, Vec<u32>) {
-    let row_idx = sorted.iter().map(|e| row(e) as usize).collect();
-    let mut slot_in = vec![0u32; sorted.len()];
-    for (k, &(_, _, slot)) in sorted.iter().enumerate() {
-        slot_in[slot as usize] = k as u32;
-    }
-    (start, row_idx, slot_in)
 }
 
 impl Analysis {
@@ -103,23 +63,6 @@ impl Analysis {
             pattern.nnz() < u32::MAX as usize,
             "pattern too large for 32-bit slots"
         );
-        // Entry (r, c), r ≥ c, of A is entry (max, min) of (inverse[r], inverse[c]) in P A Pᵀ.
-        let mut lower: Vec<(u32, u32, u32)> = Vec::with_capacity(pattern.nnz());
-        for c in 0..n {
-            let b = inverse[c];
-            for slot in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
-                let a = inverse[pattern.row_idx[slot]];
-                lower.push((a.max(b) as u32, a.min(b) as u32, slot as u32));
-            }
-        }
-        // Stable counting sorts give sorted rows without comparisons: by column, then by row
-        // (the upper triangle, column = row of the lower one), then by column again.
-        let (_, by_column) = bucket_by(n, &lower, |e| e.1);
-        drop(lower);
-        let (upper_start, by_row) = bucket_by(n, &by_column, |e| e.0);
-        drop(by_column);
-        // faer analyses the upper triangle when handed the ordering (the identity here).
-        let (col_ptr, row_idx, permuted_slot) = csc_with_slots(upper_start, &by_row, |e| e.1);
         // faer picks simplicial or supernodal from the flop count: on the 195-dof
         // substructures of a 64 × 64 grid simplicial solves were 10–20 % faster per LATIN
         // iteration than forced supernodal ones.
@@ -128,28 +71,48 @@ impl Analysis {
             ..Default::default()
         };
         let symbolic = factorize_symbolic_cholesky(
-            SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx),
-            Side::Upper,
-            SymmetricOrdering::Identity,
+            SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx),
+            Side::Lower,
+            SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n)),
             params,
         )
         .expect("symbolic Cholesky of a valid pattern");
-        // The numeric factorization takes the triangle it works on without a copy: the upper
-        // one for faer's simplicial factor, the lower one for its supernodal factor.
-        let (side, (col_ptr, row_idx, permuted_slot)) = match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(_) => (Side::Upper, (col_ptr, row_idx, permuted_slot)),
-            SymbolicCholeskyRaw::Supernodal(_) => {
-                let (lower_start, lower_sorted) = bucket_by(n, &by_row, |e| e.1);
-                drop(by_row);
-                (
-                    Side::Lower,
-                    csc_with_slots(lower_start, &lower_sorted, |e| e.0),
-                )
+        let side = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
+            SymbolicCholeskyRaw::Supernodal(_) => Side::Lower,
+        };
+        // Entry (r, c), r ≥ c, of A is entry (max, min) of (inverse[r], inverse[c]) in P A Pᵀ;
+        // its column in the chosen triangle is the min (lower) or the max (upper). One
+        // counting sort by that column.
+        let column_and_row = |slot: usize, c: usize| {
+            let (a, b) = (inverse[pattern.row_idx[slot]], inverse[c]);
+            let (low, high) = (a.min(b), a.max(b));
+            match side {
+                Side::Lower => (low, high),
+                Side::Upper => (high, low),
             }
         };
+        let mut col_ptr = vec![0usize; n + 1];
+        for c in 0..n {
+            for slot in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
+                col_ptr[column_and_row(slot, c).0 + 1] += 1;
+            }
+        }
+        for k in 0..n {
+            col_ptr[k + 1] += col_ptr[k];
+        }
+        let mut fill = col_ptr[..n].to_vec();
+        let mut row_idx = vec![0usize; pattern.nnz()];
+        let mut permuted_slot = vec![0u32; pattern.nnz()];
+        for c in 0..n {
+            for slot in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
+                let (column, row) = column_and_row(slot, c);
+                row_idx[fill[column]] = row;
+                permuted_slot[slot] = fill[column] as u32;
+                fill[column] += 1;
+            }
+        }
         Analysis {
-            order,
-            side,
             col_ptr,
             row_idx,
             permuted_slot,
@@ -158,15 +121,15 @@ impl Analysis {
     }
 
     fn permuted_pattern(&self) -> SymbolicSparseColMatRef<'_, usize> {
-        let n = self.order.len();
-        SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx)
+        let n = self.col_ptr.len() - 1;
+        SymbolicSparseColMatRef::new_unsorted_checked(n, n, &self.col_ptr, None, &self.row_idx)
     }
 }
 
 impl std::fmt::Debug for SparseCholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SparseCholesky")
-            .field("n", &self.analysis.order.len())
+            .field("n", &(self.analysis.col_ptr.len() - 1))
             .field("factor_entries", &self.l_values.len())
             .finish()
     }
@@ -284,12 +247,23 @@ impl SparseCholesky {
 
     fn with_analysis(analysis: Arc<Analysis>, par: Par) -> SparseCholesky {
         let symbolic = &analysis.symbolic;
+        let n = analysis.col_ptr.len() - 1;
+        let scratch = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => {
+                simplicial::factorize_simplicial_numeric_llt_scratch::<usize, f64>(n)
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(
+                    s,
+                    par,
+                    Default::default(),
+                )
+            }
+        };
         SparseCholesky {
             permuted_values: vec![0.0; analysis.row_idx.len()],
             l_values: vec![0.0; symbolic.len_val()],
-            factor_scratch: MemBuffer::new(
-                symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-            ),
+            factor_scratch: MemBuffer::new(scratch),
             par,
             factorized: false,
             analysis,
@@ -321,15 +295,26 @@ impl SparseCholesky {
         }
         let a = SparseColMatRef::new(analysis.permuted_pattern(), &self.permuted_values);
         self.factorized = false;
-        let result = analysis.symbolic.factorize_numeric_llt(
-            &mut self.l_values,
-            a,
-            analysis.side,
-            LltRegularization::default(),
-            self.par,
-            MemStack::new(&mut self.factor_scratch),
-            Default::default(),
-        );
+        let stack = MemStack::new(&mut self.factor_scratch);
+        let regularization = LltRegularization::default();
+        let result = match analysis.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => simplicial::factorize_simplicial_numeric_llt(
+                &mut self.l_values,
+                a,
+                regularization,
+                s,
+                stack,
+            ),
+            SymbolicCholeskyRaw::Supernodal(s) => supernodal::factorize_supernodal_numeric_llt(
+                &mut self.l_values,
+                a,
+                regularization,
+                s,
+                self.par,
+                stack,
+                Default::default(),
+            ),
+        };
         match result {
             Ok(_) => {
                 self.factorized = true;
@@ -347,27 +332,19 @@ impl SparseCholesky {
         self.solve_block_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
     }
 
-    /// `X ← A⁻¹ X` for a column-major block of right-hand sides: `X ← Pᵀ (L Lᵀ)⁻¹ P X`.
-    pub fn solve_block_in_place(&self, mut x: MatMut<'_, f64>) {
+    /// `X ← A⁻¹ X` for a column-major block of right-hand sides: `X ← Pᵀ (L Lᵀ)⁻¹ P X` (faer
+    /// applies the permutation its symbolic factor holds).
+    pub fn solve_block_in_place(&self, x: MatMut<'_, f64>) {
         assert!(self.factorized, "solve before a successful factorization");
-        let order = &self.analysis.order;
-        let mut permuted = Mat::from_fn(x.nrows(), x.ncols(), |i, j| x[(order[i], j)]);
-        let mut scratch = MemBuffer::new(
-            self.analysis
-                .symbolic
-                .solve_in_place_scratch::<f64>(x.ncols(), self.par),
-        );
-        LltRef::new(&self.analysis.symbolic, &self.l_values).solve_in_place_with_conj(
+        let symbolic = &self.analysis.symbolic;
+        let mut scratch =
+            MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(x.ncols(), self.par));
+        LltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
             Conj::No,
-            permuted.as_mut(),
+            x,
             self.par,
             MemStack::new(&mut scratch),
         );
-        for j in 0..x.ncols() {
-            for (i, &dof) in order.iter().enumerate() {
-                x[(dof, j)] = permuted[(i, j)];
-            }
-        }
     }
 }
 
@@ -385,6 +362,7 @@ impl Clone for SparseCholesky {
 mod tests {
     use super::*;
     use crate::linalg::SparseRow;
+    use faer::Mat;
 
     /// Bars between the nodes of a `w × h` grid (neighbours and diagonals), three dofs per
     /// node, with stiffnesses that vary from bar to bar, and a soft spring on every dof so that
@@ -438,12 +416,15 @@ mod tests {
     /// both orderings, one right-hand side or a block.
     #[test]
     fn solves_are_those_of_the_unpermuted_matrix() {
-        let mut sides = Vec::new();
+        let mut supernodal = Vec::new();
         for (w, h) in [(3, 2), (40, 40)] {
             let (p, values, xy) = grid_stiffness(w, h);
             for ordering in [NodeOrdering::Amd, NodeOrdering::NestedDissection(&xy)] {
                 let mut chol = SparseCholesky::analyse_ordered(&p, Par::Seq, ordering);
-                sides.push(chol.analysis.side);
+                supernodal.push(matches!(
+                    chol.analysis.symbolic.raw(),
+                    SymbolicCholeskyRaw::Supernodal(_)
+                ));
                 chol.factorize(&p, &values).expect("regular stiffness");
                 let b: Vec<f64> = (0..p.n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
                 let mut x = b.clone();
@@ -473,7 +454,7 @@ mod tests {
             }
         }
         // Both of faer's factor kinds were exercised.
-        assert_eq!(sides, [Side::Upper, Side::Upper, Side::Lower, Side::Lower]);
+        assert_eq!(supernodal, [false, false, true, true]);
     }
 
     #[test]
