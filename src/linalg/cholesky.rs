@@ -105,10 +105,11 @@ impl Analysis {
         let mut row_idx = vec![0usize; pattern.nnz()];
         let mut permuted_slot = vec![0u32; pattern.nnz()];
         for c in 0..n {
-            for slot in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
+            let slots = pattern.col_ptr[c]..pattern.col_ptr[c + 1];
+            for (slot, target) in slots.clone().zip(&mut permuted_slot[slots]) {
                 let (column, row) = column_and_row(slot, c);
                 row_idx[fill[column]] = row;
-                permuted_slot[slot] = fill[column] as u32;
+                *target = fill[column] as u32;
                 fill[column] += 1;
             }
         }
