@@ -5,9 +5,11 @@
 //! ordering whose fill grows like n log n, against AMD's larger fill on big grids.
 
 /// Parts of at most this many vertices are not split further (kept in their given order).
-/// Factor entries on 128 × 128 modules: 26.1 M with 8, 27.4 M with 24, 32.4 M with 64,
-/// 72.5 M with 200; on 256 × 256: 121.8 M with 4, 124.4 M with 8, 128.8 M with 16.
-const LEAF: usize = 8;
+/// Factor entries with 4 against 8: paper case 0.197 M against 0.202 M (flops −4 %; its
+/// factorization 0.96 of the time and its solves 0.94, medians of 16 interleaved runs),
+/// 64 × 64 5.17 M against 5.31 M, 128 × 128 25.5 M against 26.1 M (27.4 M with 24, 72.5 M with
+/// 200), 256 × 256 121.8 M against 124.4 M (128.8 M with 16).
+const LEAF: usize = 4;
 
 /// A fill-reducing permutation of the graph `adjacency` (CSR: vertex v's neighbours are
 /// `neighbours[offsets[v]..offsets[v + 1]]`, symmetric) from the vertices' `coordinates`:

@@ -10,12 +10,12 @@ use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
 /// coordinates rather than AMD. Factor entries, AMD against nested dissection: paper case
-/// (799 free nodes) 0.19 M against 0.20 M; 64 × 64 (12 k) 6.5 M against 5.3 M; 128 × 128
-/// (49 k) 35.4 M against 26.1 M; 256 × 256 (197 k) 194 M against 124 M, whose numeric
+/// (799 free nodes) 0.193 M against 0.197 M; 64 × 64 (12 k) 6.5 M against 5.2 M; 128 × 128
+/// (49 k) 35.4 M against 25.5 M; 256 × 256 (197 k) 194 M against 122 M, whose numeric
 /// factorization takes 13 s with AMD and 4.4 s with nested dissection (one run, one core).
 /// Time of newton with set-up, nested dissection against AMD (medians of interleaved
-/// rounds): 0.94 on the paper case at α = 1 (its analysis is cheaper, and its factorization
-/// too despite 5 % more entries), 0.87 on 32 × 32 (3.2 k nodes). Smaller structures keep AMD,
+/// rounds, parts of 8 nodes left whole): 0.94 on the paper case at α = 1 (its analysis is
+/// cheaper, and its factorization too despite more entries), 0.87 on 32 × 32 (3.2 k nodes). Smaller structures keep AMD,
 /// which needs no geometry to do well.
 const NESTED_DISSECTION_MIN_NODES: usize = 512;
 
