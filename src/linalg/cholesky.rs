@@ -45,9 +45,9 @@ pub struct SparseCholesky {
 /// kernel: faer's own path re-permutes A at every factorization (15 % of a factorization of
 /// the paper case).
 struct Analysis {
-    /// CSC pattern of the triangle of `P A Pᵀ` faer's numeric kernel reads (the upper one for
-    /// its simplicial factor, the lower one for its supernodal one) (rows in no particular order within a column: both of
-    /// faer's kernels scatter them).
+    /// CSC pattern of the triangle of `P A Pᵀ` faer's numeric kernel reads: the upper one for
+    /// its simplicial factor, the lower one for its supernodal one. Rows come in no particular
+    /// order within a column (both kernels scatter them).
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     /// Slot in that triangle of each slot of A.
