@@ -96,7 +96,6 @@ fn bench_case(
 }
 
 fn solvers(c: &mut Criterion) {
-    tensolve::app::allocator::retain_freed_memory();
     bench_case(
         c,
         "paper_alpha1",
@@ -159,7 +158,6 @@ fn run_sweep(
 /// newton `cold-refactorise` also refactorises at every step (no factor reuse: the method
 /// before warm starts). Prints the iterations and factorizations per α of each variant once.
 fn sweep(c: &mut Criterion) {
-    tensolve::app::allocator::retain_freed_memory();
     let case = tensolve::case::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/cases/paper.toml"
@@ -221,5 +219,16 @@ fn sweep(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, solvers, sweep);
+/// Criterion under the CLI's allocator policy (src/app/allocator.rs), set once for both
+/// groups, so that the benchmarks time what `tensolve` runs.
+fn configured() -> Criterion {
+    tensolve::app::allocator::retain_freed_memory();
+    Criterion::default()
+}
+
+criterion_group! {
+    name = benches;
+    config = configured();
+    targets = solvers, sweep
+}
 criterion_main!(benches);

@@ -15,8 +15,8 @@ use faer::Par;
 /// factorization takes 13 s with AMD and 4.4 s with nested dissection (one run, one core).
 /// Time of newton with set-up, nested dissection against AMD (medians of interleaved
 /// rounds, parts of 8 nodes left whole): 0.94 on the paper case at α = 1 (its analysis is
-/// cheaper, and its factorization too despite more entries), 0.87 on 32 × 32 (3.2 k nodes). Smaller structures keep AMD,
-/// which needs no geometry to do well.
+/// cheaper, and its factorization too despite more entries), 0.87 on 32 × 32 (3.2 k
+/// nodes). Smaller structures keep AMD, which needs no geometry to do well.
 const NESTED_DISSECTION_MIN_NODES: usize = 512;
 
 /// `K = Bᵀ k B` with every cable taut, its pattern (shared by every stiffness of the structure)
