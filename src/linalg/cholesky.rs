@@ -349,6 +349,85 @@ impl SparseCholesky {
     }
 }
 
+impl SparseCholesky {
+    /// `X ← L⁻¹ P X` for a column-major block: the first half of a solve, which leaves X in the
+    /// factor's order. With [`SparseCholesky::backward_in_place`], `A⁻¹ = Pᵀ L⁻ᵀ · L⁻¹ P`.
+    pub fn forward_block_in_place(&self, mut x: MatMut<'_, f64>) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let symbolic = &self.analysis.symbolic;
+        let (n, k) = (x.nrows(), x.ncols());
+        if let Some(perm) = symbolic.perm() {
+            let forward = perm.arrays().0;
+            let mut column = vec![0.0; n];
+            for j in 0..k {
+                for (slot, &from) in column.iter_mut().zip(forward) {
+                    *slot = x[(from, j)];
+                }
+                for (i, &v) in column.iter().enumerate() {
+                    x[(i, j)] = v;
+                }
+            }
+        }
+        let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(k, self.par));
+        let stack = MemStack::new(&mut scratch);
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                faer::sparse::linalg::triangular_solve::solve_lower_triangular_in_place(
+                    l,
+                    Conj::No,
+                    x,
+                    self.par,
+                );
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                supernodal::SupernodalLltRef::new(s, &self.l_values).l_solve_with_conj(
+                    Conj::No,
+                    x,
+                    self.par,
+                    stack,
+                );
+            }
+        }
+    }
+
+    /// `x ← Pᵀ L⁻ᵀ x`: the second half of a solve, from the factor's order back to A's.
+    pub fn backward_in_place(&self, x: &mut [f64]) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let symbolic = &self.analysis.symbolic;
+        let n = x.len();
+        let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, self.par));
+        let stack = MemStack::new(&mut scratch);
+        let block = MatMut::from_column_major_slice_mut(x, n, 1);
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                faer::sparse::linalg::triangular_solve::solve_lower_triangular_transpose_in_place(
+                    l,
+                    Conj::No,
+                    block,
+                    self.par,
+                );
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                supernodal::SupernodalLltRef::new(s, &self.l_values).l_transpose_solve_with_conj(
+                    Conj::No,
+                    block,
+                    self.par,
+                    stack,
+                );
+            }
+        }
+        if let Some(perm) = symbolic.perm() {
+            let inverse = perm.arrays().1;
+            let factor_order = x.to_vec();
+            for (v, &at) in x.iter_mut().zip(inverse) {
+                *v = factor_order[at];
+            }
+        }
+    }
+}
+
 impl Clone for SparseCholesky {
     /// Shares the symbolic analysis, copies the numeric factor, allocates fresh workspaces.
     fn clone(&self) -> Self {
@@ -442,6 +521,17 @@ mod tests {
                     for i in 0..p.n {
                         assert!((block[(i, j)] - xj[i]).abs() <= 1e-12 * xj[i].abs().max(1.0));
                     }
+                }
+                // Its two halves, forward then backward, make the same solve.
+                let mut halves = b.clone();
+                chol.forward_block_in_place(MatMut::from_column_major_slice_mut(
+                    &mut halves,
+                    p.n,
+                    1,
+                ));
+                chol.backward_in_place(&mut halves);
+                for (h, x) in halves.iter().zip(&x) {
+                    assert!((h - x).abs() <= 1e-12 * x.abs().max(1.0));
                 }
                 // A second workspace on the same analysis factors another matrix.
                 let mut other = chol.share_symbolic();

@@ -6,6 +6,7 @@
 
 mod cholesky;
 mod dense;
+mod low_rank;
 mod nested_dissection;
 mod pattern;
 mod pcg;
@@ -15,6 +16,7 @@ mod spectrum;
 
 pub use cholesky::{NodeOrdering, NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
+pub use low_rank::LowRankUpdate;
 pub use nested_dissection::nested_dissection;
 pub use pattern::StiffnessPattern;
 pub use pcg::{preconditioned_cg, CgOutcome};

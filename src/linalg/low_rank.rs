@@ -1,0 +1,243 @@
+//! Solves with `A + U S Uᵀ` from a Cholesky factor of A, for a change U S Uᵀ of low rank made of
+//! sparse rows (a link's compatibility row uᵢ with weight sᵢ: ± its stiffness when it became
+//! taut or slack). Sherman–Morrison–Woodbury in the factor's coordinates: with
+//! `A = Pᵀ L Lᵀ P` and `W = L⁻¹ P U`,
+//! `(A + U S Uᵀ)⁻¹ = Pᵀ L⁻ᵀ (I − W C⁻¹ Wᵀ) L⁻¹ P`, `C = S⁻¹ + Wᵀ W` (r × r, symmetric,
+//! indefinite when a weight is negative).
+//!
+//! A solve then costs one solve with the factor and two products with the n × r block W;
+//! building W costs one forward substitution with r right-hand sides, and a column is kept
+//! from one [`LowRankUpdate::update`] to the next while its row and weight stay the same.
+
+use super::{SparseCholesky, SparseRow};
+use faer::{Mat, MatMut};
+use nalgebra::{DMatrix, DVector};
+
+/// The change `U S Uᵀ` to a factored matrix, ready to solve with.
+#[derive(Debug, Clone)]
+pub struct LowRankUpdate {
+    /// The caller's key and the weight sᵢ of each column of U.
+    columns: Vec<(usize, f64)>,
+    /// `W = L⁻¹ P U`, n × r, in the factor's order.
+    w: Mat<f64>,
+    /// LU factors of the capacitance `C = S⁻¹ + Wᵀ W`, or `None` when it is singular.
+    capacitance: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
+}
+
+impl LowRankUpdate {
+    /// No change (rank 0) on a matrix of order n.
+    pub fn none(n: usize) -> LowRankUpdate {
+        LowRankUpdate {
+            columns: Vec::new(),
+            w: Mat::zeros(n, 0),
+            capacitance: None,
+        }
+    }
+
+    /// The rank r of the change.
+    pub fn rank(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// Make the change `Σ sᵢ uᵢ uᵢᵀ` over `wanted` = (key, uᵢ, sᵢ), on the matrix `factor` holds.
+    /// Columns whose key and weight were already there are kept (the caller keeps a key's row
+    /// the same and `factor` unchanged between calls, or starts from [`LowRankUpdate::none`]);
+    /// the others cost one block forward substitution. Returns the number of new columns.
+    pub fn update(
+        &mut self,
+        factor: &SparseCholesky,
+        wanted: &[(usize, &SparseRow, f64)],
+    ) -> usize {
+        let n = self.w.nrows();
+        let kept: Vec<Option<usize>> = wanted
+            .iter()
+            .map(|&(key, _, weight)| {
+                self.columns
+                    .iter()
+                    .position(|&(k, s)| k == key && s == weight)
+            })
+            .collect();
+        let new: Vec<usize> = (0..wanted.len()).filter(|&i| kept[i].is_none()).collect();
+        // W's new columns: L⁻¹ P uᵢ.
+        let mut fresh = Mat::<f64>::zeros(n, new.len());
+        for (j, &i) in new.iter().enumerate() {
+            for (d, c) in wanted[i].1.iter() {
+                fresh[(d, j)] += c;
+            }
+        }
+        if !new.is_empty() {
+            factor.forward_block_in_place(fresh.as_mut());
+        }
+        let mut fresh_column = 0;
+        let mut w = Mat::<f64>::zeros(n, wanted.len());
+        for (j, slot) in kept.iter().enumerate() {
+            let source = match slot {
+                Some(old) => self.w.col(*old),
+                None => {
+                    fresh_column += 1;
+                    fresh.col(fresh_column - 1)
+                }
+            };
+            w.col_mut(j).copy_from(source);
+        }
+        self.w = w;
+        self.columns = wanted.iter().map(|&(key, _, s)| (key, s)).collect();
+        self.capacitance = self.capacitance_lu();
+        new.len()
+    }
+
+    /// `C = S⁻¹ + Wᵀ W`, LU-factored (partial pivoting: C is indefinite when a link left the
+    /// matrix); `None` if a weight is zero or C is singular.
+    fn capacitance_lu(&self) -> Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> {
+        let r = self.rank();
+        if r == 0
+            || self
+                .columns
+                .iter()
+                .any(|&(_, s)| s == 0.0 || !s.is_finite())
+        {
+            return None;
+        }
+        let mut gram = Mat::<f64>::zeros(r, r);
+        faer::linalg::matmul::matmul(
+            gram.as_mut(),
+            faer::Accum::Replace,
+            self.w.transpose(),
+            self.w.as_ref(),
+            1.0,
+            faer::Par::Seq,
+        );
+        let c = DMatrix::from_fn(r, r, |i, j| {
+            gram[(i, j)] + if i == j { 1.0 / self.columns[i].1 } else { 0.0 }
+        });
+        let lu = c.lu();
+        lu.is_invertible().then_some(lu)
+    }
+
+    /// The capacitance C is regular: [`LowRankUpdate::solve_in_place`] makes the change.
+    pub fn is_solvable(&self) -> bool {
+        self.capacitance.is_some()
+    }
+
+    /// `x ← (A + U S Uᵀ)⁻¹ x`; with no change, or a singular capacitance, `x ← A⁻¹ x`
+    /// (returns `false` in the second case).
+    pub fn solve_in_place(&self, factor: &SparseCholesky, x: &mut [f64]) -> bool {
+        let n = x.len();
+        factor.forward_block_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
+        let applied = match &self.capacitance {
+            Some(lu) => {
+                // y ← y − W C⁻¹ Wᵀ y.
+                let r = self.rank();
+                let wt_y = DVector::from_fn(r, |j, _| {
+                    self.w.col(j).iter().zip(x.iter()).map(|(a, b)| a * b).sum()
+                });
+                match lu.solve(&wt_y) {
+                    Some(t) if t.iter().all(|v| v.is_finite()) => {
+                        for j in 0..r {
+                            let tj = t[j];
+                            for (xi, wi) in x.iter_mut().zip(self.w.col(j).iter()) {
+                                *xi -= wi * tj;
+                            }
+                        }
+                        true
+                    }
+                    _ => false,
+                }
+            }
+            None => self.rank() == 0,
+        };
+        factor.backward_in_place(x);
+        applied
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::StiffnessPattern;
+    use faer::Par;
+
+    /// A chain of springs (three dofs per node) with a soft spring on every dof, and the rows
+    /// of all its links.
+    fn chain(nodes: usize) -> (StiffnessPattern, Vec<SparseRow>) {
+        let mut rows = Vec::new();
+        for v in 0..nodes - 1 {
+            for k in 0..3 {
+                rows.push(SparseRow::new([
+                    (Some(3 * v + k), -1.0),
+                    (Some(3 * (v + 1) + k), 1.0),
+                    (Some(3 * v + (k + 1) % 3), 0.3),
+                ]));
+            }
+            if v + 2 < nodes {
+                rows.push(SparseRow::new([
+                    (Some(3 * v), -0.5),
+                    (Some(3 * (v + 2) + 1), 0.7),
+                ]));
+            }
+        }
+        for d in 0..3 * nodes {
+            rows.push(SparseRow::new([(Some(d), 0.05)]));
+        }
+        (StiffnessPattern::new(3 * nodes, &rows), rows)
+    }
+
+    /// Links taken out of the factored matrix and others put back: the solve is the one of the
+    /// changed matrix factored afresh, and kept columns give the same answer as new ones.
+    #[test]
+    fn solves_with_the_changed_matrix() {
+        let (p, rows) = chain(60);
+        let stiffness = |i: usize| 1.0 + (i % 5) as f64;
+        let base_in = |i: usize| i % 7 != 3;
+        let mut base = vec![0.0; p.nnz()];
+        p.assemble(
+            &rows,
+            |i| if base_in(i) { stiffness(i) } else { 0.0 },
+            &mut base,
+        );
+        let mut factor = SparseCholesky::analyse(&p, Par::Seq);
+        factor.factorize(&p, &base).expect("regular");
+        // Out: 10, 20, 40 (were in); in: 3, 10 + 7 · 5 = 45 (were out).
+        let flip = [10usize, 20, 40, 3, 45];
+        let changed_in = |i: usize| base_in(i) != flip.contains(&i);
+        let mut target = vec![0.0; p.nnz()];
+        p.assemble(
+            &rows,
+            |i| if changed_in(i) { stiffness(i) } else { 0.0 },
+            &mut target,
+        );
+        let mut exact = factor.share_symbolic();
+        exact.factorize(&p, &target).expect("regular");
+        let b: Vec<f64> = (0..p.n).map(|i| ((i * 13) % 7) as f64 - 3.0).collect();
+        let mut expected = b.clone();
+        exact.solve_in_place(&mut expected);
+
+        let weight = |i: usize| {
+            if base_in(i) {
+                -stiffness(i)
+            } else {
+                stiffness(i)
+            }
+        };
+        let wanted: Vec<(usize, &SparseRow, f64)> =
+            flip.iter().map(|&i| (i, &rows[i], weight(i))).collect();
+        let mut update = LowRankUpdate::none(p.n);
+        assert_eq!(update.update(&factor, &wanted[..3]), 3);
+        assert_eq!(update.update(&factor, &wanted), 2, "three columns kept");
+        let mut x = b.clone();
+        assert!(update.solve_in_place(&factor, &mut x));
+        for (x, e) in x.iter().zip(&expected) {
+            assert!((x - e).abs() <= 1e-10 * e.abs().max(1.0), "{x} against {e}");
+        }
+        // Without the change: a plain solve with the factor, different from the changed one.
+        let mut plain = b.clone();
+        assert!(LowRankUpdate::none(p.n).solve_in_place(&factor, &mut plain));
+        let mut by_factor = b.clone();
+        factor.solve_in_place(&mut by_factor);
+        assert_eq!(plain, by_factor);
+        assert!(plain
+            .iter()
+            .zip(&expected)
+            .any(|(a, e)| (a - e).abs() > 1e-6));
+    }
+}
