@@ -8,9 +8,10 @@
 //!
 //! Factor reuse: the solver keeps the last factor of a Hessian it computed (and the taut
 //! stiffness's). When the new taut set differs from a factored one by few links, the Newton
-//! equations are solved by conjugate gradients preconditioned with that factor (a rank-r
-//! change converges in at most r + 1 iterations); when CG needs more than a few iterations,
-//! the Hessian is refactorised. The factor survives from one solve to the next, so a warm
+//! equations are solved by conjugate gradients preconditioned with that factor corrected for
+//! the changed links ([`LowRankUpdate`], Woodbury: exact but for the regularisations' small
+//! difference, so CG stops after one to three iterations); when CG needs more than a few
+//! iterations, the Hessian is refactorised. The factor survives from one solve to the next, so a warm
 //! start ([`Solver::warm_init`], from the previous α's answer) begins on the factor of its
 //! own active set.
 //!
@@ -21,7 +22,7 @@ mod line_search;
 use super::{
     stop_when, unbalances, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
 };
-use crate::linalg::{dot, norm, preconditioned_cg, SparseCholesky};
+use crate::linalg::{dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky};
 use crate::structure::Structure;
 use line_search::exact_line_search;
 
@@ -57,7 +58,8 @@ pub struct NewtonWork {
     pub factorizations: usize,
     /// Steps solved with the taut stiffness's own factor (every cable taut).
     pub taut_steps: usize,
-    /// Steps solved by CG preconditioned with an earlier factor.
+    /// Steps solved by CG preconditioned with an earlier factor (corrected for the links that
+    /// changed state).
     pub reused_steps: usize,
     /// CG iterations, over all steps (successful or not).
     pub cg_iterations: usize,
@@ -70,20 +72,37 @@ pub struct NewtonWork {
 /// α = 0.3 and the 64 × 64 case).
 const REGULARISATION: f64 = 1e-6;
 
-/// CG on a new Hessian, preconditioned by the factor of an earlier one, is tried when their
-/// taut sets differ by at most this many links. A CG iteration costs a solve with the factor
-/// and a product with the Hessian; a factorization costs about 10 of them on every grid
-/// measured (paper case 1.9 ms / 0.2 ms, 64 × 64 130 ms / 15 ms, 256 × 256 4.4 s / 0.36 s).
-/// Measured on a 41-α sweep of the paper case with no cap, CG needed about 2 + 0.45 r
-/// iterations for r changed links up to r ≈ 60, then about 30 whatever r: it pays up to
-/// r ≈ 16, and the sweep took 142 ms with 17 factorizations against 200 ms with 75 without
-/// reuse.
-const REUSE_MAX_CHANGED_LINKS: usize = 16;
-/// CG iterations allowed before giving up and refactorising (the break-even point above).
-const REUSE_MAX_CG_ITERATIONS: usize = 12;
-/// Relative residual `‖H ΔU + ∇Π‖ ≤ tol · ‖∇Π‖` of a Newton step solved by CG: far below
-/// what the outer iteration needs, so that its convergence is that of exact steps.
+/// CG on a new Hessian, preconditioned by the factor of an earlier one corrected for the links
+/// whose state changed ([`LowRankUpdate`]), is tried when their taut sets differ by at most
+/// this many links. The correction costs a forward substitution with one right-hand side per
+/// changed link; measured on the paper case (one run, medians of 400): a factorization 1.68–
+/// 1.91 ms, a solve 0.23–0.25 ms, a forward substitution with 18 right-hand sides 0.55–0.62 ms,
+/// so that r links cost about 0.032 r ms, and CG's two iterations about 0.6 ms: the correction
+/// pays up to r ≈ 32 (at larger sizes a factorization costs more solves, so the cap is on the
+/// safe side). Before the correction, CG preconditioned with the bare factor needed about
+/// 2 + 0.45 r iterations for r changed links and paid up to r ≈ 16.
+const REUSE_MAX_CHANGED_LINKS: usize = 32;
+/// CG iterations allowed before giving up and refactorising (the corrected factor is exact but
+/// for the regularisations' difference: one to three iterations when it works).
+const REUSE_MAX_CG_ITERATIONS: usize = 8;
+/// Relative residual `‖H ΔU + ∇Π‖ ≤ tol · ‖∇Π‖` of a Newton step solved by CG, an inexact
+/// Newton forcing term: `tol = r²` clamped to [`REUSE_CG_TOLERANCE`, `REUSE_CG_LOOSEST`] with r
+/// the relative equilibrium residual of the iterate. A step solved to r² keeps Newton's
+/// quadratic convergence (the next residual is O(r²) either way), and saves a CG iteration
+/// on most steps (paper case at α = 1: 4 iterations in its two CG steps instead of 6, the
+/// same five Newton steps, final residual 2.7e-14).
 const REUSE_CG_TOLERANCE: f64 = 1e-12;
+/// The loosest forcing term (see [`REUSE_CG_TOLERANCE`]).
+const REUSE_CG_LOOSEST: f64 = 1e-8;
+
+/// A factor the CG path can start from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Base {
+    /// The taut stiffness's (every link taut).
+    Taut,
+    /// `chol`'s, the last Hessian factored.
+    Last,
+}
 
 /// Which Hessian `chol` holds a factor of.
 #[derive(Debug, Clone)]
@@ -106,6 +125,9 @@ pub struct Newton<'s> {
     chol: SparseCholesky,
     /// What `chol` holds a factor of, if anything.
     factored: Option<Factored>,
+    /// The change, from the factored Hessian `correction.0` names, to the last Hessian solved
+    /// by CG; its columns are reused while the links and the factor stay the same.
+    correction: (Base, LowRankUpdate),
     hessian: Vec<f64>,
     mean_stiffness: f64,
     work: NewtonWork,
@@ -146,6 +168,7 @@ impl<'s> Newton<'s> {
             settings,
             chol: taut.factor.share_symbolic(),
             factored: None,
+            correction: (Base::Taut, LowRankUpdate::none(structure.n_free)),
             hessian: vec![0.0; taut.values.len()],
             mean_stiffness: taut.pattern.mean_diagonal(&taut.values),
             work: NewtonWork::default(),
@@ -205,7 +228,9 @@ impl<'s> Newton<'s> {
         for &d in &pattern.diag_slot {
             self.hessian[d] += mu;
         }
-        if self.settings.reuse_factor && self.solve_with_nearby_factor(&taut_links, step) {
+        if self.settings.reuse_factor
+            && self.solve_with_nearby_factor(&taut_links, step, state.residual)
+        {
             return;
         }
         let mut added = mu;
@@ -221,35 +246,69 @@ impl<'s> Newton<'s> {
             added = mu;
         }
         self.factored = Some(Factored { taut: taut_links });
+        if self.correction.0 == Base::Last {
+            self.correction.1 = LowRankUpdate::none(self.structure.n_free);
+        }
         self.chol.solve_in_place(step);
     }
 
     /// `step ← H⁻¹ step` by CG on `self.hessian`, preconditioned by whichever factor (the last
-    /// Hessian's, or K's) has the taut set closest to `taut_links`, if it is close enough and CG
-    /// converges within its cap. `false`: nothing was solved, `step` is untouched.
-    fn solve_with_nearby_factor(&mut self, taut_links: &[bool], step: &mut [f64]) -> bool {
+    /// Hessian's, or K's) has the taut set closest to `taut_links`, corrected for the links that
+    /// differ, if they are few enough and CG converges within its cap. `false`: nothing was
+    /// solved, `step` is untouched.
+    fn solve_with_nearby_factor(
+        &mut self,
+        taut_links: &[bool],
+        step: &mut [f64],
+        residual: f64,
+    ) -> bool {
+        let s = self.structure;
         let changed = |other: &[bool]| -> usize {
             other.iter().zip(taut_links).filter(|(a, b)| a != b).count()
         };
         let from_taut = taut_links.iter().filter(|&&t| !t).count();
         let from_last = self.factored.as_ref().map(|f| changed(&f.taut));
-        let factor = match from_last {
-            Some(c) if c <= from_taut => (c, &self.chol),
-            _ => (from_taut, &self.taut.factor),
+        let (changed_links, base) = match from_last {
+            Some(c) if c <= from_taut => (c, Base::Last),
+            _ => (from_taut, Base::Taut),
         };
-        let (changed_links, factor) = factor;
         if changed_links > REUSE_MAX_CHANGED_LINKS {
             return false;
         }
+        let (factor, base_taut): (&SparseCholesky, Option<&[bool]>) = match base {
+            Base::Last => (&self.chol, self.factored.as_ref().map(|f| &f.taut[..])),
+            Base::Taut => (&self.taut.factor, None),
+        };
+        // H = H_base + Σ ± kᵢ uᵢ uᵢᵀ over the links that changed: + taut now, − slack now.
+        let wanted: Vec<(usize, &crate::linalg::SparseRow, f64)> = taut_links
+            .iter()
+            .enumerate()
+            .filter(|&(i, &now)| base_taut.is_none_or(|b| b[i]) != now)
+            .map(|(i, &now)| {
+                let k = s.links[i].stiffness;
+                (i, &s.link_dofs[i], if now { k } else { -k })
+            })
+            .collect();
+        if self.correction.0 != base {
+            self.correction = (base, LowRankUpdate::none(s.n_free));
+        }
+        let correction = &mut self.correction.1;
+        correction.update(factor, &wanted);
+        if correction.rank() > 0 && !correction.is_solvable() {
+            return false;
+        }
+        let correction = &self.correction.1;
         let (pattern, hessian) = (&self.taut.pattern, &self.hessian);
         let rhs = step.to_vec();
         let mut solution = vec![0.0; rhs.len()];
         let outcome = preconditioned_cg(
             |v, out| pattern.sym_matvec(hessian, v, out),
-            |z| factor.solve_in_place(z),
+            |z| {
+                correction.solve_in_place(factor, z);
+            },
             &rhs,
             &mut solution,
-            REUSE_CG_TOLERANCE,
+            (residual * residual).clamp(REUSE_CG_TOLERANCE, REUSE_CG_LOOSEST),
             REUSE_MAX_CG_ITERATIONS,
         );
         self.work.cg_iterations += outcome.iterations;
