@@ -152,3 +152,29 @@ fn factor_reuse_changes_the_work_not_the_answer() {
     // Every step that was neither all-taut nor reused factorized at least once.
     assert!(with.factorizations >= with.steps - with.taut_steps - with.reused_steps);
 }
+
+/// A cold solve of the paper case at α = 1 moves its taut set by 492, then about a hundred,
+/// then 18 and 2 cables. The last two changes are absorbed by the factor of the second
+/// Hessian corrected for the changed cables (Woodbury, src/linalg/low_rank.rs), each in at most
+/// three CG iterations: two factorizations after K's, not three (CG preconditioned with the
+/// bare factor needed a third, for the 18 cables).
+#[test]
+fn small_changes_of_the_taut_set_are_absorbed_without_refactorising() {
+    let s = paper_structure(&[]);
+    let taut = TautStiffness::new(&s).unwrap();
+    let mut newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
+    let solution = newton.solve(&load(&s, 1.0), None, &mut Silent);
+    assert!(solution.info.status.converged());
+    assert!(
+        solution.info.residual <= 1e-10,
+        "{:e}",
+        solution.info.residual
+    );
+    assert_eq!(solution.equilibrium.slack_count(), 408);
+    let work = newton.work();
+    assert_eq!(work.steps, 5, "{work:?}");
+    assert_eq!(work.taut_steps, 1, "{work:?}");
+    assert_eq!(work.factorizations, 2, "{work:?}");
+    assert_eq!(work.reused_steps, 2, "{work:?}");
+    assert!(work.cg_iterations <= 6, "{work:?}");
+}

@@ -49,39 +49,41 @@ impl LowRankUpdate {
         wanted: &[(usize, &SparseRow, f64)],
     ) -> usize {
         let n = self.w.nrows();
-        let kept: Vec<Option<usize>> = wanted
+        let old_column = |&(key, _, weight): &(usize, &SparseRow, f64)| {
+            self.columns
+                .iter()
+                .position(|&(k, s)| k == key && s == weight)
+        };
+        // Kept columns first, then the new ones; one n × r block at a time beyond the old W.
+        let kept: Vec<(usize, usize)> = wanted
             .iter()
-            .map(|&(key, _, weight)| {
-                self.columns
-                    .iter()
-                    .position(|&(k, s)| k == key && s == weight)
-            })
+            .enumerate()
+            .filter_map(|(i, item)| old_column(item).map(|old| (i, old)))
             .collect();
-        let new: Vec<usize> = (0..wanted.len()).filter(|&i| kept[i].is_none()).collect();
+        let new: Vec<usize> = (0..wanted.len())
+            .filter(|&i| old_column(&wanted[i]).is_none())
+            .collect();
+        let mut w = Mat::<f64>::zeros(n, wanted.len());
+        for (j, &(_, old)) in kept.iter().enumerate() {
+            w.col_mut(j).copy_from(self.w.col(old));
+        }
+        self.w = Mat::zeros(n, 0);
         // W's new columns: L⁻¹ P uᵢ.
-        let mut fresh = Mat::<f64>::zeros(n, new.len());
         for (j, &i) in new.iter().enumerate() {
             for (d, c) in wanted[i].1.iter() {
-                fresh[(d, j)] += c;
+                w[(d, kept.len() + j)] += c;
             }
         }
         if !new.is_empty() {
-            factor.forward_block_in_place(fresh.as_mut());
-        }
-        let mut fresh_column = 0;
-        let mut w = Mat::<f64>::zeros(n, wanted.len());
-        for (j, slot) in kept.iter().enumerate() {
-            let source = match slot {
-                Some(old) => self.w.col(*old),
-                None => {
-                    fresh_column += 1;
-                    fresh.col(fresh_column - 1)
-                }
-            };
-            w.col_mut(j).copy_from(source);
+            factor.forward_block_in_place(w.as_mut().subcols_mut(kept.len(), new.len()));
         }
         self.w = w;
-        self.columns = wanted.iter().map(|&(key, _, s)| (key, s)).collect();
+        self.columns = kept
+            .iter()
+            .map(|&(i, _)| i)
+            .chain(new.iter().copied())
+            .map(|i| (wanted[i].0, wanted[i].2))
+            .collect();
         self.capacitance = self.capacitance_lu();
         new.len()
     }
