@@ -11,9 +11,9 @@
 //! equations are solved by conjugate gradients preconditioned with that factor corrected for
 //! the changed links ([`LowRankUpdate`], Woodbury: exact but for the regularisations' small
 //! difference, so CG stops after one to three iterations); when CG needs more than a few
-//! iterations, the Hessian is refactorised. The factor survives from one solve to the next, so a warm
-//! start ([`Solver::warm_init`], from the previous α's answer) begins on the factor of its
-//! own active set.
+//! iterations, the Hessian is refactorised. The factor survives from one solve to the next,
+//! so a warm start ([`Solver::warm_init`], from the previous α's answer) begins on the factor
+//! of its own active set.
 //!
 //! Stopping measure: [`Measure::EquilibriumResidual`], `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`.
 
