@@ -60,8 +60,12 @@ fn assert_complete(dir: &Path) -> usize {
     rows.len()
 }
 
-/// `tensolve run CASE --out DIR --quiet`, not started.
+/// `tensolve run CASE --out DIR --quiet`, not started, with SIGINT at its default action as
+/// under an interactive shell: a test harness started in the background by a non-interactive
+/// shell ignores SIGINT, and an ignored signal stays ignored across `exec`, so the child would
+/// run to its end.
 fn run_into(case: &Path, dir: &Path) -> Command {
+    use std::os::unix::process::CommandExt;
     let mut command = Command::new(env!("CARGO_BIN_EXE_tensolve"));
     command
         .arg("run")
@@ -69,6 +73,15 @@ fn run_into(case: &Path, dir: &Path) -> Command {
         .arg("--out")
         .arg(dir)
         .arg("--quiet");
+    // SAFETY: between fork and exec only `signal`, which is async-signal-safe, is called.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::signal(libc::SIGINT, libc::SIG_DFL) == libc::SIG_ERR {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
     command
 }
 
