@@ -347,9 +347,7 @@ impl SparseCholesky {
             MemStack::new(&mut scratch),
         );
     }
-}
 
-impl SparseCholesky {
     /// `X ← L⁻¹ P X` for a column-major block: the first half of a solve, which leaves X in the
     /// factor's order. With [`SparseCholesky::backward_in_place`], `A⁻¹ = Pᵀ L⁻ᵀ · L⁻¹ P`.
     pub fn forward_block_in_place(&self, mut x: MatMut<'_, f64>) {

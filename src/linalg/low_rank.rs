@@ -20,7 +20,8 @@ pub struct LowRankUpdate {
     columns: Vec<(usize, f64)>,
     /// `W = L⁻¹ P U`, n × r, in the factor's order.
     w: Mat<f64>,
-    /// LU factors of the capacitance `C = S⁻¹ + Wᵀ W`, or `None` when it is singular.
+    /// LU factors of the capacitance `C = S⁻¹ + Wᵀ W`, or `None` when there is no change or C
+    /// is singular.
     capacitance: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
 }
 
@@ -49,20 +50,22 @@ impl LowRankUpdate {
         wanted: &[(usize, &SparseRow, f64)],
     ) -> usize {
         let n = self.w.nrows();
-        let old_column = |&(key, _, weight): &(usize, &SparseRow, f64)| {
-            self.columns
-                .iter()
-                .position(|&(k, s)| k == key && s == weight)
-        };
+        // Each wanted column's place in the old W, if it is there with the same weight.
+        let old: Vec<Option<usize>> = wanted
+            .iter()
+            .map(|&(key, _, weight)| {
+                self.columns
+                    .iter()
+                    .position(|&(k, s)| k == key && s == weight)
+            })
+            .collect();
         // Kept columns first, then the new ones; one n × r block at a time beyond the old W.
-        let kept: Vec<(usize, usize)> = wanted
+        let kept: Vec<(usize, usize)> = old
             .iter()
             .enumerate()
-            .filter_map(|(i, item)| old_column(item).map(|old| (i, old)))
+            .filter_map(|(i, o)| o.map(|o| (i, o)))
             .collect();
-        let new: Vec<usize> = (0..wanted.len())
-            .filter(|&i| old_column(&wanted[i]).is_none())
-            .collect();
+        let new: Vec<usize> = (0..wanted.len()).filter(|&i| old[i].is_none()).collect();
         let mut w = Mat::<f64>::zeros(n, wanted.len());
         for (j, &(_, old)) in kept.iter().enumerate() {
             w.col_mut(j).copy_from(self.w.col(old));
@@ -116,40 +119,32 @@ impl LowRankUpdate {
         lu.is_invertible().then_some(lu)
     }
 
-    /// The capacitance C is regular: [`LowRankUpdate::solve_in_place`] makes the change.
+    /// No change, or a regular capacitance C: [`LowRankUpdate::solve_in_place`] solves with
+    /// the changed matrix.
     pub fn is_solvable(&self) -> bool {
-        self.capacitance.is_some()
+        self.rank() == 0 || self.capacitance.is_some()
     }
 
-    /// `x ← (A + U S Uᵀ)⁻¹ x`; with no change, or a singular capacitance, `x ← A⁻¹ x`
-    /// (returns `false` in the second case).
-    pub fn solve_in_place(&self, factor: &SparseCholesky, x: &mut [f64]) -> bool {
+    /// `x ← (A + U S Uᵀ)⁻¹ x` (with no change, `x ← A⁻¹ x`). Only meaningful when
+    /// [`LowRankUpdate::is_solvable`]; otherwise the correction is skipped.
+    pub fn solve_in_place(&self, factor: &SparseCholesky, x: &mut [f64]) {
         let n = x.len();
         factor.forward_block_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
-        let applied = match &self.capacitance {
-            Some(lu) => {
-                // y ← y − W C⁻¹ Wᵀ y.
-                let r = self.rank();
-                let wt_y = DVector::from_fn(r, |j, _| {
-                    self.w.col(j).iter().zip(x.iter()).map(|(a, b)| a * b).sum()
-                });
-                match lu.solve(&wt_y) {
-                    Some(t) if t.iter().all(|v| v.is_finite()) => {
-                        for j in 0..r {
-                            let tj = t[j];
-                            for (xi, wi) in x.iter_mut().zip(self.w.col(j).iter()) {
-                                *xi -= wi * tj;
-                            }
-                        }
-                        true
+        if let Some(lu) = &self.capacitance {
+            // y ← y − W C⁻¹ Wᵀ y.
+            let wt_y = DVector::from_fn(self.rank(), |j, _| {
+                self.w.col(j).iter().zip(x.iter()).map(|(a, b)| a * b).sum()
+            });
+            let t = lu.solve(&wt_y);
+            if let Some(t) = t.filter(|t| t.iter().all(|v| v.is_finite())) {
+                for (j, &tj) in t.iter().enumerate() {
+                    for (xi, wi) in x.iter_mut().zip(self.w.col(j).iter()) {
+                        *xi -= wi * tj;
                     }
-                    _ => false,
                 }
             }
-            None => self.rank() == 0,
-        };
+        }
         factor.backward_in_place(x);
-        applied
     }
 }
 
@@ -227,13 +222,16 @@ mod tests {
         assert_eq!(update.update(&factor, &wanted[..3]), 3);
         assert_eq!(update.update(&factor, &wanted), 2, "three columns kept");
         let mut x = b.clone();
-        assert!(update.solve_in_place(&factor, &mut x));
+        assert!(update.is_solvable());
+        update.solve_in_place(&factor, &mut x);
         for (x, e) in x.iter().zip(&expected) {
             assert!((x - e).abs() <= 1e-10 * e.abs().max(1.0), "{x} against {e}");
         }
         // Without the change: a plain solve with the factor, different from the changed one.
         let mut plain = b.clone();
-        assert!(LowRankUpdate::none(p.n).solve_in_place(&factor, &mut plain));
+        let none = LowRankUpdate::none(p.n);
+        assert!(none.is_solvable());
+        none.solve_in_place(&factor, &mut plain);
         let mut by_factor = b.clone();
         factor.solve_in_place(&mut by_factor);
         assert_eq!(plain, by_factor);

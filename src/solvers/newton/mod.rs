@@ -22,7 +22,7 @@ mod line_search;
 use super::{
     stop_when, unbalances, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
 };
-use crate::linalg::{dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky};
+use crate::linalg::{dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow};
 use crate::structure::Structure;
 use line_search::exact_line_search;
 
@@ -280,7 +280,7 @@ impl<'s> Newton<'s> {
             Base::Taut => (&self.taut.factor, None),
         };
         // H = H_base + Σ ± kᵢ uᵢ uᵢᵀ over the links that changed: + taut now, − slack now.
-        let wanted: Vec<(usize, &crate::linalg::SparseRow, f64)> = taut_links
+        let wanted: Vec<(usize, &SparseRow, f64)> = taut_links
             .iter()
             .enumerate()
             .filter(|&(i, &now)| base_taut.is_none_or(|b| b[i]) != now)
@@ -294,7 +294,7 @@ impl<'s> Newton<'s> {
         }
         let correction = &mut self.correction.1;
         correction.update(factor, &wanted);
-        if correction.rank() > 0 && !correction.is_solvable() {
+        if !correction.is_solvable() {
             return false;
         }
         let correction = &self.correction.1;
@@ -303,9 +303,7 @@ impl<'s> Newton<'s> {
         let mut solution = vec![0.0; rhs.len()];
         let outcome = preconditioned_cg(
             |v, out| pattern.sym_matvec(hessian, v, out),
-            |z| {
-                correction.solve_in_place(factor, z);
-            },
+            |z| correction.solve_in_place(factor, z),
             &rhs,
             &mut solution,
             (residual * residual).clamp(REUSE_CG_TOLERANCE, REUSE_CG_LOOSEST),
