@@ -221,6 +221,12 @@ impl<'s> Newton<'s> {
             return;
         }
         // H = Σ_taut k Bᵢᵀ Bᵢ + μ I, μ = REGULARISATION · min(1, r)² · mean diagonal.
+        let mut mu = REGULARISATION * state.residual.min(1.0).powi(2) * self.mean_stiffness;
+        if self.settings.reuse_factor
+            && self.solve_with_nearby_factor(&taut_links, mu, step, state.residual)
+        {
+            return;
+        }
         pattern.assemble(
             &s.link_dofs,
             |i| {
@@ -232,14 +238,8 @@ impl<'s> Newton<'s> {
             },
             &mut self.hessian,
         );
-        let mut mu = REGULARISATION * state.residual.min(1.0).powi(2) * self.mean_stiffness;
         for &d in &pattern.diag_slot {
             self.hessian[d] += mu;
-        }
-        if self.settings.reuse_factor
-            && self.solve_with_nearby_factor(&taut_links, step, state.residual)
-        {
-            return;
         }
         let mut added = mu;
         loop {
@@ -260,13 +260,15 @@ impl<'s> Newton<'s> {
         self.chol.solve_in_place(step);
     }
 
-    /// `step ← H⁻¹ step` by CG on `self.hessian`, preconditioned by whichever factor (the last
-    /// Hessian's, or K's) has the taut set closest to `taut_links`, corrected for the links that
-    /// differ, if they are few enough and CG converges within its cap. `false`: nothing was
-    /// solved, `step` is untouched.
+    /// `step ← H⁻¹ step`, `H = Σ_taut k Bᵢᵀ Bᵢ + μ I`, by CG preconditioned by whichever factor
+    /// (the last Hessian's, or K's) has the taut set closest to `taut_links`, corrected for the
+    /// links that differ, if they are few enough and CG converges within its cap. H is applied
+    /// link by link, never assembled (a product costs less than an assembly). `false`: nothing
+    /// was solved, `step` is untouched.
     fn solve_with_nearby_factor(
         &mut self,
         taut_links: &[bool],
+        mu: f64,
         step: &mut [f64],
         residual: f64,
     ) -> bool {
@@ -306,11 +308,10 @@ impl<'s> Newton<'s> {
             return false;
         }
         let correction = &self.correction.1;
-        let (pattern, hessian) = (&self.taut.pattern, &self.hessian);
         let rhs = step.to_vec();
         let mut solution = vec![0.0; rhs.len()];
         let outcome = preconditioned_cg(
-            |v, out| pattern.sym_matvec(hessian, v, out),
+            |v, out| hessian_product(s, taut_links, mu, v, out),
             |z| correction.solve_in_place(factor, z),
             &rhs,
             &mut solution,
@@ -443,6 +444,20 @@ impl Solver for Newton<'_> {
     }
 }
 
+/// `out = H v` with `H = Σ_taut k Bᵢᵀ Bᵢ + μ I` (docs/method.md §3), link by link.
+fn hessian_product(s: &Structure, taut_links: &[bool], mu: f64, v: &[f64], out: &mut [f64]) {
+    out.iter_mut().zip(v).for_each(|(o, vi)| *o = mu * vi);
+    for ((link, row), _) in s
+        .links
+        .iter()
+        .zip(&s.link_dofs)
+        .zip(taut_links)
+        .filter(|(_, &taut)| taut)
+    {
+        row.scatter(link.stiffness * row.elongation(v), out);
+    }
+}
+
 /// Slack cables of the energy's law: unilateral cables whose tension was clipped to 0.
 fn slack_flags(s: &Structure, tensions: &[f64]) -> Vec<bool> {
     s.links
@@ -450,4 +465,62 @@ fn slack_flags(s: &Structure, tensions: &[f64]) -> Vec<bool> {
         .zip(tensions)
         .map(|(l, &t)| l.unilateral && t == 0.0)
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::{GridSpec, LoadPattern};
+
+    /// The link-by-link product CG uses is the assembled Hessian's, for a taut set with slack
+    /// cables and a regularisation; and it changes when a link's state does.
+    #[test]
+    fn hessian_product_is_the_assembled_hessians() {
+        let spec = GridSpec {
+            modules: [3, 2],
+            ..GridSpec::default()
+        };
+        let s = Structure::grid(&spec, &LoadPattern::default());
+        let taut = TautStiffness::new(&s).expect("regular");
+        let taut_links: Vec<bool> = s
+            .links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| !l.unilateral || i % 3 != 0)
+            .collect();
+        assert!(taut_links.iter().any(|t| !t), "some cables slack");
+        let mu = 1e-3 * taut.pattern.mean_diagonal(&taut.values);
+        let mut assembled = vec![0.0; taut.values.len()];
+        taut.pattern.assemble(
+            &s.link_dofs,
+            |i| {
+                if taut_links[i] {
+                    s.links[i].stiffness
+                } else {
+                    0.0
+                }
+            },
+            &mut assembled,
+        );
+        for &d in &taut.pattern.diag_slot {
+            assembled[d] += mu;
+        }
+        let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+        let (mut expected, mut product) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
+        taut.pattern.sym_matvec(&assembled, &v, &mut expected);
+        hessian_product(&s, &taut_links, mu, &v, &mut product);
+        let scale = norm(&expected);
+        for (p, e) in product.iter().zip(&expected) {
+            assert!((p - e).abs() <= 1e-12 * scale, "{p} against {e}");
+        }
+        let mut one_more_taut = taut_links.clone();
+        let flipped = one_more_taut.iter().position(|t| !t).expect("a slack link");
+        one_more_taut[flipped] = true;
+        let mut changed = vec![0.0; s.n_free];
+        hessian_product(&s, &one_more_taut, mu, &v, &mut changed);
+        assert!(changed
+            .iter()
+            .zip(&product)
+            .any(|(a, b)| (a - b).abs() > 1e-9 * scale));
+    }
 }
