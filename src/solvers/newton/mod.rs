@@ -10,7 +10,7 @@
 //! stiffness's). When the new taut set differs from a factored one by few links, the Newton
 //! equations are solved by conjugate gradients preconditioned with that factor corrected for
 //! the changed links ([`LowRankUpdate`], Woodbury: exact but for the regularisations' small
-//! difference, so CG stops after one to three iterations); when CG needs more than a few
+//! difference, so CG usually stops after one or two iterations); when CG needs more than a few
 //! iterations, the Hessian is refactorised. The factor survives from one solve to the next,
 //! so a warm start ([`Solver::warm_init`], from the previous α's answer) begins on the factor
 //! of its own active set.
@@ -22,7 +22,9 @@ mod line_search;
 use super::{
     stop_when, unbalances, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
 };
-use crate::linalg::{dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow};
+use crate::linalg::{
+    dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern,
+};
 use crate::structure::Structure;
 use line_search::exact_line_search;
 
@@ -72,9 +74,11 @@ pub struct NewtonWork {
 /// α = 0.3 and the 64 × 64 case). A factorization that fails raises μ (see `newton_step`).
 /// Why 1e-8 and not the 1e-6 of before: a step solved by CG with an earlier Hessian's
 /// corrected factor differs from it only by the two μ, so a smaller μ lets CG stop after one
-/// iteration instead of two (paper case, 41 α, one process alternating both: cold 92 CG
-/// iterations instead of 147, warm 67 instead of 91, 0.87 and 0.91 of the time, the same
-/// steps within 2 and factorizations, the same slack sets; 1e-10 saved no more).
+/// iteration instead of two (paper case, 41 α, one process alternating μ = 1e-8 with
+/// [`REUSE_CG_LOOSEST`] = 1e-4 against 1e-6 with 1e-8: cold 92 CG iterations instead of 147,
+/// warm 67 instead of 91, 0.87 and 0.91 of the time; the looser forcing term alone gave 107
+/// and 91 iterations, 0.96 and 0.99; 159 steps instead of 161 cold, 81 warm as before, the
+/// same factorizations and slack sets; μ = 1e-10 saved a few more iterations but no time).
 const REGULARISATION: f64 = 1e-8;
 
 /// CG on a new Hessian, preconditioned by the factor of an earlier one corrected for the links
@@ -88,14 +92,14 @@ const REGULARISATION: f64 = 1e-8;
 /// 2 + 0.45 r iterations for r changed links and paid up to r ≈ 16.
 const REUSE_MAX_CHANGED_LINKS: usize = 32;
 /// CG iterations allowed before giving up and refactorising (the corrected factor is exact but
-/// for the regularisations' difference: one to three iterations when it works).
+/// for the regularisations' difference: usually one or two iterations when it works).
 const REUSE_MAX_CG_ITERATIONS: usize = 8;
 /// Relative residual `‖H ΔU + ∇Π‖ ≤ tol · ‖∇Π‖` of a Newton step solved by CG, an inexact
 /// Newton forcing term: `tol = r²` clamped to [`REUSE_CG_TOLERANCE`, `REUSE_CG_LOOSEST`] with r
 /// the relative equilibrium residual of the iterate. A step solved to r² keeps Newton's
 /// quadratic convergence (the next residual is O(r²) either way), and saves a CG iteration
-/// on most steps (paper case at α = 1: 4 iterations in its two CG steps instead of 6, the
-/// same five Newton steps, final residual 2.7e-14).
+/// on most steps (with μ = 1e-6 and a fixed 1e-12 before: paper case at α = 1, 4 iterations
+/// in its two CG steps instead of 6, the same five Newton steps).
 const REUSE_CG_TOLERANCE: f64 = 1e-12;
 /// The loosest forcing term (see [`REUSE_CG_TOLERANCE`]): far from the answer (r ≥ 1e-2) a
 /// step solved to 1e-4 is as good as an exact one. 1e-4 rather than 1e-8: with the smaller
@@ -227,20 +231,7 @@ impl<'s> Newton<'s> {
         {
             return;
         }
-        pattern.assemble(
-            &s.link_dofs,
-            |i| {
-                if taut_links[i] {
-                    s.links[i].stiffness
-                } else {
-                    0.0
-                }
-            },
-            &mut self.hessian,
-        );
-        for &d in &pattern.diag_slot {
-            self.hessian[d] += mu;
-        }
+        assemble_hessian(s, pattern, &taut_links, mu, &mut self.hessian);
         let mut added = mu;
         loop {
             self.work.factorizations += 1;
@@ -444,6 +435,27 @@ impl Solver for Newton<'_> {
     }
 }
 
+/// `values = H = Σ_taut k Bᵢᵀ Bᵢ + μ I` (docs/method.md §3), lower triangle on `pattern`.
+fn assemble_hessian(
+    s: &Structure,
+    pattern: &StiffnessPattern,
+    taut_links: &[bool],
+    mu: f64,
+    values: &mut [f64],
+) {
+    let weight = |i: usize| {
+        if taut_links[i] {
+            s.links[i].stiffness
+        } else {
+            0.0
+        }
+    };
+    pattern.assemble(&s.link_dofs, weight, values);
+    for &d in &pattern.diag_slot {
+        values[d] += mu;
+    }
+}
+
 /// `out = H v` with `H = Σ_taut k Bᵢᵀ Bᵢ + μ I` (docs/method.md §3), link by link.
 fn hessian_product(s: &Structure, taut_links: &[bool], mu: f64, v: &[f64], out: &mut [f64]) {
     out.iter_mut().zip(v).for_each(|(o, vi)| *o = mu * vi);
@@ -472,8 +484,9 @@ mod tests {
     use super::*;
     use crate::structure::{GridSpec, LoadPattern};
 
-    /// The link-by-link product CG uses is the assembled Hessian's, for a taut set with slack
-    /// cables and a regularisation; and it changes when a link's state does.
+    /// The link-by-link product CG uses is the one of the Hessian a factorization gets, for a
+    /// taut set with slack cables and a regularisation; and it changes when a link's state
+    /// does.
     #[test]
     fn hessian_product_is_the_assembled_hessians() {
         let spec = GridSpec {
@@ -491,20 +504,7 @@ mod tests {
         assert!(taut_links.iter().any(|t| !t), "some cables slack");
         let mu = 1e-3 * taut.pattern.mean_diagonal(&taut.values);
         let mut assembled = vec![0.0; taut.values.len()];
-        taut.pattern.assemble(
-            &s.link_dofs,
-            |i| {
-                if taut_links[i] {
-                    s.links[i].stiffness
-                } else {
-                    0.0
-                }
-            },
-            &mut assembled,
-        );
-        for &d in &taut.pattern.diag_slot {
-            assembled[d] += mu;
-        }
+        assemble_hessian(&s, &taut.pattern, &taut_links, mu, &mut assembled);
         let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
         let (mut expected, mut product) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
         taut.pattern.sym_matvec(&assembled, &v, &mut expected);
