@@ -70,7 +70,6 @@ impl LowRankUpdate {
         for (j, &(_, old)) in kept.iter().enumerate() {
             w.col_mut(j).copy_from(self.w.col(old));
         }
-        self.w = Mat::zeros(n, 0);
         // W's new columns: L⁻¹ P uᵢ.
         for (j, &i) in new.iter().enumerate() {
             for (d, c) in wanted[i].1.iter() {
