@@ -2,15 +2,19 @@
 //! α = 0.15. Per case: the shared set-up (structure + taut stiffness factor) alone, then for
 //! each solver its set-up + solve (the headline figure) and its solve alone. Then a 41-α
 //! sweep of the paper case, cold and warm-started (`paper_sweep41`). The larger grids are in
-//! `benches/scale.rs`.
+//! `benches/scale.rs`. `paper_alpha1_floor` times the sparse kernels alone that a cold newton
+//! solve of the paper case runs, beside the whole solve: the floor that set-up + solve cannot
+//! go below without fewer factorizations or faster ones.
 //!
 //! Run with `cargo bench --bench solvers`. Solver settings are the defaults, which is what
 //! `tensolve run` uses for these cases (neither sets `solver.tolerance` or `max_iterations`).
 
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, SamplingMode};
+use faer::{Mat, Par};
 use std::path::Path;
 use std::time::Duration;
+use tensolve::linalg::{NodeOrdering, SparseCholesky, StiffnessPattern, PROBE_ITERATIONS};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
@@ -123,6 +127,80 @@ fn solvers(c: &mut Criterion) {
     );
 }
 
+/// The sparse kernels a cold newton solve of the paper case at α = 1 runs, counted from the
+/// solve itself (printed once), then timed alone on K (a Hessian's factor and solves cost what
+/// K's do: same symbolic factor, same flops): K's pattern, the symbolic analysis, one numeric
+/// factorization for K and one per factorized Hessian, one solve per probe iteration, per
+/// step solved with a factor and per CG iteration (its preconditioner), and one forward
+/// substitution with as many right-hand sides as the correction's columns. Everything else
+/// newton does (assemblies, residuals, line searches, CG's products) is left out, so
+/// `kernels` is a lower bound of `newton/setup+solve`, timed in the same group.
+fn floor(c: &mut Criterion) {
+    let case = tensolve::case::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/paper.toml"
+    )))
+    .expect("case loads");
+    let structure = case.structure();
+    let load = structure.unit_load.clone();
+    let taut = taut_stiffness(&structure);
+    let mut newton = Newton::new(&structure, &taut, NewtonSettings::default()).expect("set-up");
+    let info = newton.solve(&load, None, &mut Silent).info;
+    assert!(info.status.converged(), "{info:?}");
+    let work = newton.work();
+    let factorized_steps = work.steps - work.taut_steps - work.reused_steps;
+    let factorizations = 1 + work.factorizations;
+    let solves = PROBE_ITERATIONS + work.taut_steps + factorized_steps + work.cg_iterations;
+    let columns = work.correction_columns;
+    println!(
+        "paper_alpha1_floor: {factorizations} factorizations, {solves} solves, a forward \
+         substitution with {columns} columns ({work:?})"
+    );
+    let free_nodes: Vec<[f64; 3]> = (0..structure.nodes.len())
+        .filter(|&v| !structure.clamped[v])
+        .map(|v| structure.nodes[v])
+        .collect();
+    let values = taut.values.clone();
+    let n = structure.n_free;
+    let mut group = c.benchmark_group("paper_alpha1_floor");
+    group.warm_up_time(Duration::from_secs(1));
+    group.measurement_time(Duration::from_secs(4));
+    group.bench_function("kernels", |b| {
+        b.iter(|| {
+            let pattern = StiffnessPattern::new(n, &structure.link_dofs);
+            let mut factor = SparseCholesky::analyse_ordered(
+                &pattern,
+                Par::Seq,
+                NodeOrdering::NestedDissection(&free_nodes),
+            );
+            for _ in 0..factorizations {
+                factor
+                    .factorize(&pattern, &values)
+                    .expect("K is positive definite");
+            }
+            let mut x = load.clone();
+            for _ in 0..solves {
+                factor.solve_in_place(&mut x);
+            }
+            let mut w = Mat::<f64>::zeros(n, columns);
+            for j in 0..columns {
+                w[((97 * j) % n, j)] = 1.0;
+            }
+            factor.forward_block_in_place(w.as_mut());
+            (x, w)
+        })
+    });
+    group.bench_function("newton/setup+solve", |b| {
+        b.iter(|| {
+            let taut = taut_stiffness(&structure);
+            let mut newton =
+                Newton::new(&structure, &taut, NewtonSettings::default()).expect("set-up");
+            newton.solve(&load, None, &mut Silent).info
+        })
+    });
+    group.finish();
+}
+
 /// α = 0, 0.03, …, 1.2: the 41-α sweep of the paper case.
 fn sweep_alphas() -> Vec<f64> {
     (0..41).map(|i| 1.2 * i as f64 / 40.0).collect()
@@ -229,6 +307,6 @@ fn configured() -> Criterion {
 criterion_group! {
     name = benches;
     config = configured();
-    targets = solvers, sweep
+    targets = solvers, sweep, floor
 }
 criterion_main!(benches);

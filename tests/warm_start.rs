@@ -144,6 +144,7 @@ fn factor_reuse_changes_the_work_not_the_answer() {
     let (with, without) = (reusing.work(), plain.work());
     assert_eq!(without.reused_steps, 0);
     assert_eq!(without.cg_iterations, 0);
+    assert_eq!(without.correction_columns, 0);
     assert!(with.reused_steps > 0, "{with:?}");
     assert!(
         with.factorizations < without.factorizations,
@@ -177,4 +178,7 @@ fn small_changes_of_the_taut_set_are_absorbed_without_refactorising() {
     assert_eq!(work.factorizations, 2, "{work:?}");
     assert_eq!(work.reused_steps, 2, "{work:?}");
     assert!(work.cg_iterations <= 6, "{work:?}");
+    // 18 columns for the first correction, 2 more for the second: the 18 are kept, not
+    // recomputed (38 if they were).
+    assert_eq!(work.correction_columns, 20, "{work:?}");
 }

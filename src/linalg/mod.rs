@@ -24,7 +24,7 @@ pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
     factorize_counting_zero_modes, smallest_eigenvalue_bound, smallest_eigenvalues,
-    zero_mode_count, SmallestEigenvalues, ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
+    zero_mode_count, SmallestEigenvalues, PROBE_ITERATIONS, ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
 };
 
 /// Euclidean norm.

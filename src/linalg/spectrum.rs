@@ -187,7 +187,7 @@ pub const ZERO_MODES_COUNTED: usize = 64;
 /// threshold by ~1e4: one sufficed on every hidden mechanism of the property tests
 /// (tests/properties.rs; none with zero), the second is the margin. Each is a solve (0.16 ms
 /// on the paper case).
-const PROBE_ITERATIONS: usize = 2;
+pub const PROBE_ITERATIONS: usize = 2;
 
 /// Factorise `values` with `factor` (analysed on `pattern`) and count the zero-stiffness modes:
 /// 0 when the matrix is regular, else [`zero_mode_count`] (at least 1). A positive

@@ -63,8 +63,12 @@ pub struct NewtonWork {
     /// Steps solved by CG preconditioned with an earlier factor (corrected for the links that
     /// changed state).
     pub reused_steps: usize,
-    /// CG iterations, over all steps (successful or not).
+    /// CG iterations, over all steps (successful or not); each applies the preconditioner
+    /// once (a solve with a factor).
     pub cg_iterations: usize,
+    /// Columns of the low-rank correction computed (kept columns are not recomputed): one
+    /// right-hand side of a forward substitution each.
+    pub correction_columns: usize,
 }
 
 /// Regularisation μ = `REGULARISATION · min(1, residual)² · mean diagonal`: enough to step
@@ -294,7 +298,7 @@ impl<'s> Newton<'s> {
             self.correction = (base, LowRankUpdate::none(s.n_free));
         }
         let correction = &mut self.correction.1;
-        correction.update(factor, &wanted);
+        self.work.correction_columns += correction.update(factor, &wanted);
         if !correction.is_solvable() {
             return false;
         }
