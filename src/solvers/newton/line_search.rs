@@ -3,6 +3,34 @@
 //! unilateral cable changes state; the minimiser is found by walking the breakpoints in order.
 
 use crate::structure::Link;
+use std::cmp::{Ordering, Reverse};
+use std::collections::BinaryHeap;
+
+/// A breakpoint of φ': at `position`, the curvature changes by `change`.
+#[derive(Debug, Clone, Copy)]
+struct Breakpoint {
+    position: f64,
+    change: f64,
+}
+
+// Ordered by position alone (`total_cmp`): breakpoints at the same position may come in any
+// order, which does not change the minimiser (φ' is the same there whatever the order).
+impl PartialEq for Breakpoint {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Breakpoint {}
+impl PartialOrd for Breakpoint {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Breakpoint {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.position.total_cmp(&other.position)
+    }
+}
 
 /// Exact minimiser `s > 0` of `φ(s) = Π(U + s ΔU)`, from each link's trial tension at U
 /// (`t0 + k e`, before clipping) and its elongation along the step (`B ΔU`), and the work of
@@ -17,7 +45,10 @@ pub(super) fn exact_line_search(
     // φ'(s) = Σ_taut τ_i(s) Δe_i − Fᵀ ΔU, τ_i(s) = a_i + s b_i.
     let mut slope_value = -load_work;
     let mut curvature = 0.0;
-    let mut events: Vec<(f64, f64)> = Vec::new();
+    let mut events: Vec<Reverse<Breakpoint>> = Vec::new();
+    let mut event = |position: f64, change: f64| {
+        events.push(Reverse(Breakpoint { position, change }));
+    };
     for ((l, &a), &de) in links.iter().zip(trial).zip(step_elongation) {
         let b = l.stiffness * de;
         let c = l.stiffness * de * de;
@@ -32,19 +63,21 @@ pub(super) fn exact_line_search(
             curvature += c;
             if b < 0.0 {
                 // Goes slack at s = −a/b: its curvature leaves.
-                events.push((-a / b, -c));
+                event(-a / b, -c);
             }
         } else if b > 0.0 {
             // Becomes taut at s = −a/b.
-            events.push((-a / b, c));
+            event(-a / b, c);
         }
     }
     if slope_value >= 0.0 {
         return None;
     }
-    events.sort_by(|x, y| x.0.total_cmp(&y.0));
+    // Breakpoints in increasing order, taken from a min-heap only as far as the minimiser:
+    // most lie far beyond it, and heapifying is linear where sorting them all is not.
+    let mut events = BinaryHeap::from(events);
     let mut at = 0.0;
-    for (position, change) in events {
+    while let Some(Reverse(Breakpoint { position, change })) = events.pop() {
         let reached = slope_value + curvature * (position - at);
         if curvature > 0.0 && reached >= 0.0 {
             return Some(at - slope_value / curvature);
