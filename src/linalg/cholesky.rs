@@ -355,15 +355,15 @@ impl SparseCholesky {
         let symbolic = &self.analysis.symbolic;
         let (n, k) = (x.nrows(), x.ncols());
         if let Some(perm) = symbolic.perm() {
+            // X ← P X, column by column through one buffer.
             let forward = perm.arrays().0;
             let mut column = vec![0.0; n];
             for j in 0..k {
+                let mut x_j = x.as_mut().col_mut(j);
                 for (slot, &from) in column.iter_mut().zip(forward) {
-                    *slot = x[(from, j)];
+                    *slot = x_j[from];
                 }
-                for (i, &v) in column.iter().enumerate() {
-                    x[(i, j)] = v;
-                }
+                x_j.copy_from(faer::ColRef::from_slice(&column));
             }
         }
         let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(k, self.par));

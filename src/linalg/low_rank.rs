@@ -10,7 +10,8 @@
 //! from one [`LowRankUpdate::update`] to the next while its row and weight stay the same.
 
 use super::{SparseCholesky, SparseRow};
-use faer::{Mat, MatMut};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use nalgebra::{DMatrix, DVector};
 
 /// The change `U S Uᵀ` to a factored matrix, ready to solve with.
@@ -103,13 +104,13 @@ impl LowRankUpdate {
             return None;
         }
         let mut gram = Mat::<f64>::zeros(r, r);
-        faer::linalg::matmul::matmul(
+        matmul(
             gram.as_mut(),
-            faer::Accum::Replace,
+            Accum::Replace,
             self.w.transpose(),
             self.w.as_ref(),
             1.0,
-            faer::Par::Seq,
+            Par::Seq,
         );
         let c = DMatrix::from_fn(r, r, |i, j| {
             gram[(i, j)] + if i == j { 1.0 / self.columns[i].1 } else { 0.0 }
@@ -130,17 +131,27 @@ impl LowRankUpdate {
         let n = x.len();
         factor.forward_block_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
         if let Some(lu) = &self.capacitance {
-            // y ← y − W C⁻¹ Wᵀ y.
-            let wt_y = DVector::from_fn(self.rank(), |j, _| {
-                self.w.col(j).iter().zip(x.iter()).map(|(a, b)| a * b).sum()
-            });
+            // y ← y − W C⁻¹ Wᵀ y, the two products with W by faer's matrix products.
+            let r = self.rank();
+            let mut wt_y = DVector::zeros(r);
+            matmul(
+                MatMut::from_column_major_slice_mut(wt_y.as_mut_slice(), r, 1),
+                Accum::Replace,
+                self.w.transpose(),
+                MatRef::from_column_major_slice(x, n, 1),
+                1.0,
+                Par::Seq,
+            );
             let t = lu.solve(&wt_y);
             if let Some(t) = t.filter(|t| t.iter().all(|v| v.is_finite())) {
-                for (j, &tj) in t.iter().enumerate() {
-                    for (xi, wi) in x.iter_mut().zip(self.w.col(j).iter()) {
-                        *xi -= wi * tj;
-                    }
-                }
+                matmul(
+                    MatMut::from_column_major_slice_mut(x, n, 1),
+                    Accum::Add,
+                    self.w.as_ref(),
+                    MatRef::from_column_major_slice(t.as_slice(), r, 1),
+                    -1.0,
+                    Par::Seq,
+                );
             }
         }
         factor.backward_in_place(x);
@@ -151,7 +162,6 @@ impl LowRankUpdate {
 mod tests {
     use super::*;
     use crate::linalg::StiffnessPattern;
-    use faer::Par;
 
     /// A chain of springs (three dofs per node) with a soft spring on every dof, and the rows
     /// of all its links.
