@@ -135,6 +135,8 @@ fn solvers(c: &mut Criterion) {
 /// substitution with as many right-hand sides as the correction's columns. Everything else
 /// newton does (assemblies, residuals, line searches, CG's products) is left out, so
 /// `kernels` is a lower bound of `newton/setup+solve`, timed in the same group.
+/// `pattern+analysis` is the part of `kernels` before the first factorization; the rest is
+/// faer's numeric work.
 fn floor(c: &mut Criterion) {
     let case = tensolve::case::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -188,6 +190,19 @@ fn floor(c: &mut Criterion) {
             }
             factor.forward_block_in_place(w.as_mut());
             (x, w)
+        })
+    });
+    // The part of `kernels` that is tensolve's own code and faer's symbolic analysis; the rest
+    // of `kernels` is faer's numeric work.
+    group.bench_function("pattern+analysis", |b| {
+        b.iter(|| {
+            let pattern = StiffnessPattern::new(n, &structure.link_dofs);
+            let factor = SparseCholesky::analyse_ordered(
+                &pattern,
+                Par::Seq,
+                NodeOrdering::NestedDissection(&free_nodes),
+            );
+            (pattern, factor)
         })
     });
     group.bench_function("newton/setup+solve", |b| {
