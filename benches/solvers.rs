@@ -51,6 +51,16 @@ fn bench_solver(
     });
 }
 
+/// The structure of `cases/paper.toml`.
+fn paper_structure() -> Structure {
+    tensolve::case::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/paper.toml"
+    )))
+    .expect("case loads")
+    .structure()
+}
+
 fn taut_stiffness(structure: &Structure) -> TautStiffness {
     TautStiffness::new(structure).expect("taut stiffness is regular")
 }
@@ -138,12 +148,7 @@ fn solvers(c: &mut Criterion) {
 /// `pattern+analysis` is the part of `kernels` before the first factorization; the rest is
 /// faer's numeric work.
 fn floor(c: &mut Criterion) {
-    let case = tensolve::case::load(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/cases/paper.toml"
-    )))
-    .expect("case loads");
-    let structure = case.structure();
+    let structure = paper_structure();
     let load = structure.unit_load.clone();
     let taut = taut_stiffness(&structure);
     let mut newton = Newton::new(&structure, &taut, NewtonSettings::default()).expect("set-up");
@@ -251,12 +256,7 @@ fn run_sweep(
 /// newton `cold-refactorise` also refactorises at every step (no factor reuse: the method
 /// before warm starts). Prints the iterations and factorizations per α of each variant once.
 fn sweep(c: &mut Criterion) {
-    let case = tensolve::case::load(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/cases/paper.toml"
-    )))
-    .expect("case loads");
-    let structure = case.structure();
+    let structure = paper_structure();
     let taut = taut_stiffness(&structure);
     let alphas = sweep_alphas();
     let refactorise = NewtonSettings {
