@@ -11,10 +11,10 @@
 
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, SamplingMode};
-use faer::{Mat, Par};
+use faer::Mat;
 use std::path::Path;
 use std::time::Duration;
-use tensolve::linalg::{NodeOrdering, SparseCholesky, StiffnessPattern, PROBE_ITERATIONS};
+use tensolve::linalg::PROBE_ITERATIONS;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
@@ -163,10 +163,6 @@ fn floor(c: &mut Criterion) {
         "paper_alpha1_floor: {factorizations} factorizations, {solves} solves, a forward \
          substitution with {columns} columns ({work:?})"
     );
-    let free_nodes: Vec<[f64; 3]> = (0..structure.nodes.len())
-        .filter(|&v| !structure.clamped[v])
-        .map(|v| structure.nodes[v])
-        .collect();
     let values = taut.values.clone();
     let n = structure.n_free;
     let mut group = c.benchmark_group("paper_alpha1_floor");
@@ -174,12 +170,7 @@ fn floor(c: &mut Criterion) {
     group.measurement_time(Duration::from_secs(4));
     group.bench_function("kernels", |b| {
         b.iter(|| {
-            let pattern = StiffnessPattern::new(n, &structure.link_dofs);
-            let mut factor = SparseCholesky::analyse_ordered(
-                &pattern,
-                Par::Seq,
-                NodeOrdering::NestedDissection(&free_nodes),
-            );
+            let (pattern, mut factor) = TautStiffness::analyse(&structure);
             for _ in 0..factorizations {
                 factor
                     .factorize(&pattern, &values)
@@ -200,15 +191,7 @@ fn floor(c: &mut Criterion) {
     // The part of `kernels` that is tensolve's own code and faer's symbolic analysis; the rest
     // of `kernels` is faer's numeric work.
     group.bench_function("pattern+analysis", |b| {
-        b.iter(|| {
-            let pattern = StiffnessPattern::new(n, &structure.link_dofs);
-            let factor = SparseCholesky::analyse_ordered(
-                &pattern,
-                Par::Seq,
-                NodeOrdering::NestedDissection(&free_nodes),
-            );
-            (pattern, factor)
-        })
+        b.iter(|| TautStiffness::analyse(&structure))
     });
     group.bench_function("newton/setup+solve", |b| {
         b.iter(|| {

@@ -32,16 +32,10 @@ pub struct TautStiffness {
 }
 
 impl TautStiffness {
-    /// Assemble and factorize K; refuse a structure whose K is singular, with the number of
-    /// its zero-stiffness modes.
-    pub fn new(structure: &Structure) -> Result<TautStiffness, SetupError> {
+    /// K's pattern and its symbolic analysis (the fill-reducing ordering chosen by size: AMD,
+    /// or nested dissection from the free nodes' coordinates), before any numeric work.
+    pub fn analyse(structure: &Structure) -> (StiffnessPattern, SparseCholesky) {
         let pattern = StiffnessPattern::new(structure.n_free, &structure.link_dofs);
-        let mut values = vec![0.0; pattern.nnz()];
-        pattern.assemble(
-            &structure.link_dofs,
-            |i| structure.links[i].stiffness,
-            &mut values,
-        );
         // Coordinates of the free nodes, in free-dof order (three dofs per free node).
         let free_nodes: Vec<[f64; 3]> = (0..structure.nodes.len())
             .filter(|&v| !structure.clamped[v])
@@ -52,7 +46,20 @@ impl TautStiffness {
         } else {
             NodeOrdering::Amd
         };
-        let mut factor = SparseCholesky::analyse_ordered(&pattern, Par::Seq, ordering);
+        let factor = SparseCholesky::analyse_ordered(&pattern, Par::Seq, ordering);
+        (pattern, factor)
+    }
+
+    /// Assemble and factorize K; refuse a structure whose K is singular, with the number of
+    /// its zero-stiffness modes.
+    pub fn new(structure: &Structure) -> Result<TautStiffness, SetupError> {
+        let (pattern, mut factor) = Self::analyse(structure);
+        let mut values = vec![0.0; pattern.nnz()];
+        pattern.assemble(
+            &structure.link_dofs,
+            |i| structure.links[i].stiffness,
+            &mut values,
+        );
         let zero_modes = factorize_counting_zero_modes(&pattern, &values, &mut factor);
         if zero_modes > 0 {
             return Err(SetupError::Mechanism { zero_modes });
