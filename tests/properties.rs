@@ -71,7 +71,7 @@ proptest! {
         let case = case::parse(&case_text(nx, ny, CLAMPS[clamp], [fx, fy, fz], module)).unwrap();
         let s = case.structure();
         let taut = match TautStiffness::new(&s) {
-            Err(SetupError::Mechanism { zero_modes }) => {
+            Err(SetupError::Mechanism { zero_modes, .. }) => {
                 // Refused: K must really have that many zero modes (dense check, independent).
                 prop_assert_eq!(zero_modes, dense_zero_modes(&s));
                 return Ok(());

@@ -160,7 +160,7 @@ fn grid_32_with_x_edges_at_alpha_0_3() {
 fn zero_modes(case: &Case) -> Option<usize> {
     match TautStiffness::new(&case.structure()) {
         Ok(_) => None,
-        Err(SetupError::Mechanism { zero_modes }) => Some(zero_modes),
+        Err(SetupError::Mechanism { zero_modes, .. }) => Some(zero_modes),
         Err(other) => panic!("unexpected {other}"),
     }
 }

@@ -150,7 +150,7 @@ fn zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
     let text = case_text(modules, module, clamp);
     let s = (case::parse(&text).expect("valid case")).structure();
     match TautStiffness::new(&s) {
-        Err(SetupError::Mechanism { zero_modes }) => zero_modes,
+        Err(SetupError::Mechanism { zero_modes, .. }) => zero_modes,
         Err(other) => panic!("not refused as a mechanism: {other}"),
         Ok(_) => panic!("a mechanism was accepted:\n{text}"),
     }

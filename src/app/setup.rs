@@ -3,10 +3,10 @@
 
 use crate::case::{Case, SolverChoice};
 use crate::solvers::latin::Latin;
-use crate::solvers::newton::Newton;
+use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{AnySolver, Method, SetupError, TautStiffness};
-use crate::structure::Structure;
+use crate::structure::{GeometricModel, Structure};
 use std::time::Instant;
 
 /// The structure and its taut stiffness (the mechanism check), built once and timed.
@@ -53,8 +53,18 @@ pub fn set_up<'s>(
     prepared: &'s Prepared,
 ) -> Result<SetUpSolver<'s>, SetupError> {
     let (structure, taut) = (&prepared.structure, &prepared.taut);
+    if !method.supports(structure.model) {
+        return Err(SetupError::ModelNotSupported {
+            solver: method.name(),
+            model: structure.model.name(),
+        });
+    }
     let clock = Instant::now();
     let (solver, shared): (Box<dyn AnySolver + 's>, f64) = match method {
+        Method::Newton if structure.model == GeometricModel::Large => (
+            Box::new(LargeNewton::new(structure, taut, choice.newton)),
+            prepared.taut_seconds,
+        ),
         Method::Newton => (
             Box::new(Newton::new(structure, taut, choice.newton)?),
             prepared.taut_seconds,

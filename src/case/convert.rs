@@ -477,6 +477,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         load,
         solver,
         output,
+        model: raw.model.geometry.unwrap_or_default(),
     })
 }
 

@@ -45,6 +45,15 @@ pub(super) struct RawCase {
     pub solver: RawSolver,
     #[serde(default)]
     pub output: RawOutput,
+    #[serde(default)]
+    pub model: RawModel,
+}
+
+/// `[model]`: the effects modelled.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawModel {
+    pub geometry: Option<crate::structure::GeometricModel>,
 }
 
 /// `[grid]`.

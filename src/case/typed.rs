@@ -25,6 +25,8 @@ pub struct Case {
     pub solver: SolverChoice,
     /// What to write, and where.
     pub output: OutputChoice,
+    /// The geometric effects modelled (`model.geometry`). Default `linear`.
+    pub model: crate::structure::GeometricModel,
 }
 
 impl Case {
@@ -40,7 +42,7 @@ impl Case {
             s.layout = Some(GridLayout::new(grid.modules[0], grid.modules[1]));
             s.prestress_scale = grid.prestress;
         }
-        s
+        s.with_model(self.model)
     }
 
     /// The case with the grid built of `module`s instead (the same nodes, supports and

@@ -134,6 +134,21 @@ impl StiffnessPattern {
         }
     }
 
+    /// `values += w rowᵀ row` for a row on the same dofs, in the same order, as row `i` of the
+    /// rows the pattern was built from (a member's transverse or current-direction row: docs/method.md
+    /// §8): it lands in row i's slots.
+    pub fn add_outer(&self, i: usize, row: &SparseRow, w: f64, values: &mut [f64]) {
+        let mut s = self.offsets[i];
+        for (p, cp) in row.iter() {
+            for (q, cq) in row.iter() {
+                if p >= q {
+                    values[self.slots[s] as usize] += w * cp * cq;
+                    s += 1;
+                }
+            }
+        }
+    }
+
     /// Every stored entry as `(row, column, slot)`, column by column.
     pub fn entries(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
         (0..self.n).flat_map(move |c| {

@@ -1,5 +1,6 @@
 //! The solvers a case may ask for, by name.
 
+use crate::structure::GeometricModel;
 use serde::Deserialize;
 
 /// A solver the case may ask for.
@@ -32,6 +33,16 @@ impl Method {
             Method::PcgLcp => "pcg-lcp",
             Method::MonoLatin => "mono-latin",
             Method::MicroMacro => "micro-macro",
+        }
+    }
+
+    /// Whether the solver takes geometric model `model` (README "Real tensegrities"):
+    /// newton every model, pcg-lcp `linear` and `prestress`, the LATIN solvers `linear`.
+    pub fn supports(self, model: GeometricModel) -> bool {
+        match self {
+            Method::Newton => true,
+            Method::PcgLcp => model != GeometricModel::Large,
+            Method::MonoLatin | Method::MicroMacro => model == GeometricModel::Linear,
         }
     }
 

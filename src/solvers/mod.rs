@@ -20,7 +20,9 @@ pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
 pub use observer::{IterationRecord, Observer, Silent, Tee};
-pub use residual::{displacement_residual, relative_unbalance, unbalances, Unbalances};
+pub use residual::{
+    displacement_residual, relative_unbalance, unbalances, unbalances_on, Unbalances,
+};
 pub use solution::{Equilibrium, Solution};
 pub use solver::{stop_when, Progress, Solver};
 pub use status::{Measure, SolveInfo, Status};
@@ -35,13 +37,28 @@ pub enum SetupError {
     /// The stiffness with every cable taut is singular.
     #[error(
         "the structure is a mechanism: its stiffness with every cable taut has {} \
-         zero-stiffness mode(s), so no load that works on them can be carried; hold more \
-         nodes (`supports.clamp`, `supports.fix`) or use a stiffer module (`grid.module = \"braced\"`)",
+         zero-stiffness mode(s), so no load that works on them can be carried{where_}; {advice}",
         mode_count(*zero_modes)
     )]
     Mechanism {
         /// Number of zero-stiffness modes.
         zero_modes: usize,
+        /// Where the modes are (the nodes they move most), when known; empty otherwise.
+        where_: String,
+        /// What to do: for grids, hold more nodes or brace the modules; for general structures,
+        /// hold more nodes, or model the geometric stiffness when the prestress stiffens them.
+        advice: String,
+    },
+    /// With geometric stiffness, `K + K_G(t0)` is not positive definite: the prestress does not
+    /// stiffen every mechanism (docs/method.md §8).
+    #[error(
+        "the prestress does not stiffen the structure (model.geometry = \"{model}\"): {detail}"
+    )]
+    NotPrestressStable {
+        /// The model asked for.
+        model: &'static str,
+        /// The modes not stiffened, their nodes, and the fix.
+        detail: String,
     },
     /// A LATIN substructure operator could not be factorized or pseudo-inverted.
     #[error(
@@ -70,6 +87,19 @@ pub enum SetupError {
         min: f64,
         /// The largest l accepted.
         max: f64,
+    },
+    /// The solver does not take the case's geometric model.
+    #[error(
+        "`{solver}` does not take `model.geometry = \"{model}\"`: newton takes \"linear\", \
+         \"prestress\" and \"large\"; pcg-lcp \"linear\" and \"prestress\"; mono-latin and \
+         micro-macro \"linear\" only. Remove it from `solver.methods` (or `--solver`), or \
+         change `model.geometry`"
+    )]
+    ModelNotSupported {
+        /// The solver's name.
+        solver: &'static str,
+        /// The model's name.
+        model: &'static str,
     },
     /// The LATIN macro problem is singular.
     #[error(

@@ -11,6 +11,7 @@
 
 use super::{stop_when, Equilibrium, Measure, Progress, Solver, TautStiffness};
 use crate::linalg::{dot, norm, SparseCholesky};
+use crate::structure::law;
 use crate::structure::Structure;
 
 /// Settings, each default written once, at its field.
@@ -260,8 +261,10 @@ impl Solver for PcgLcp<'_> {
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| {
                 if previous.slack[i] {
-                    let trial = s.links[i].prestress
-                        + s.links[i].stiffness * s.link_dofs[i].elongation(&previous.displacements);
+                    let trial = law::trial_tension(
+                        &s.links[i],
+                        s.link_dofs[i].elongation(&previous.displacements),
+                    );
                     (-trial).max(0.0) / sk
                 } else {
                     0.0

@@ -3,7 +3,8 @@
 //! every solver shares: newton stops on it, the LATIN solvers may, and every summary row
 //! reports it.
 
-use crate::linalg::norm;
+use crate::linalg::{norm, SparseRow};
+use crate::structure::law::{self, GeometricModel};
 use crate::structure::Structure;
 
 /// `r ← Bᵀτ − F` (the energy's gradient) and its relative size
@@ -20,15 +21,36 @@ pub fn relative_unbalance(s: &Structure, tensions: &[f64], load: &[f64], r: &mut
 /// scale it let `U = 0` pass as converged at `lower_cable = 1e12` (issue 13, D5a). When load
 /// and deformation both vanish exactly (U = 0 under F = 0), the prestress forces are the scale.
 pub fn unbalances(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) -> Unbalances {
+    unbalances_on(s, &s.link_dofs, tensions, None, load, r)
+}
+
+/// [`unbalances`] with the members' rows given (`B` on the initial geometry, or `∇ℓ` on the
+/// current one: docs/method.md §8) and, when the model has one, a geometric force `K_G U` added
+/// to `Bᵀτ` (counted in both scales as `|K_G U|`).
+pub fn unbalances_on(
+    s: &Structure,
+    rows: &[SparseRow],
+    tensions: &[f64],
+    geometric_force: Option<&[f64]>,
+    load: &[f64],
+    r: &mut [f64],
+) -> Unbalances {
     r.iter_mut().for_each(|ri| *ri = 0.0);
     let mut added = vec![0.0; s.n_free];
     let mut all = vec![0.0; s.n_free];
-    for ((&t, ld), link) in tensions.iter().zip(&s.link_dofs).zip(&s.links) {
+    for ((&t, ld), link) in tensions.iter().zip(rows).zip(&s.links) {
         let change = t - link.prestress;
         for (d, c) in ld.iter() {
             r[d] += c * t;
             added[d] += (c * change).abs();
             all[d] += (c * t).abs();
+        }
+    }
+    if let Some(g) = geometric_force {
+        for (d, &gd) in g.iter().enumerate() {
+            r[d] += gd;
+            added[d] += gd.abs();
+            all[d] += gd.abs();
         }
     }
     r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
@@ -54,25 +76,41 @@ pub struct Unbalances {
     pub load_relative: f64,
 }
 
-/// r(U): the relative equilibrium residual of displacements U under the exact law,
-/// `τ(U) = t0 + k B U`, clipped at 0 for unilateral cables. Zero exactly at the solution.
+/// r(U): the relative equilibrium residual of displacements U under the exact law of the
+/// structure's model (docs/method.md §1, §8): `τ(U) = t0 + k B U` (plus `K_G U` with the
+/// prestress's geometric stiffness), or `t0 + k (ℓ(U) − L)` along the current `∇ℓ` (large
+/// displacements); clipped at 0 for unilateral cables. Zero exactly at the solution.
 pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
-    let mut tensions = trial_tensions(s, u);
-    for (t, l) in tensions.iter_mut().zip(&s.links) {
-        if l.unilateral {
-            *t = t.max(0.0);
+    let mut r = vec![0.0; s.n_free];
+    match s.model {
+        GeometricModel::Large => {
+            let current = law::CurrentGeometry::of(s, u);
+            let tensions: Vec<f64> = s
+                .links
+                .iter()
+                .zip(&current.lengths)
+                .map(|(l, &len)| law::tension(l, law::current_trial_tension(s, l, len)))
+                .collect();
+            unbalances_on(s, &current.rows, &tensions, None, load, &mut r).relative
+        }
+        _ => {
+            let tensions: Vec<f64> = law::trial_tensions(s, u)
+                .iter()
+                .zip(&s.links)
+                .map(|(&t, l)| law::tension(l, t))
+                .collect();
+            let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
+            unbalances_on(
+                s,
+                &s.link_dofs,
+                &tensions,
+                geometric_force.as_deref(),
+                load,
+                &mut r,
+            )
+            .relative
         }
     }
-    let mut r = vec![0.0; s.n_free];
-    relative_unbalance(s, &tensions, load, &mut r)
 }
 
-/// The trial tension of every link at displacements U, `t0 + k B U` (docs/method.md §1): a
-/// bar's tension, a taut cable's, and for a cable whose gap is open, minus k times the gap.
-pub fn trial_tensions(s: &Structure, u: &[f64]) -> Vec<f64> {
-    s.links
-        .iter()
-        .zip(&s.link_dofs)
-        .map(|(l, ld)| l.prestress + l.stiffness * ld.elongation(u))
-        .collect()
-}
+pub use crate::structure::law::trial_tensions;

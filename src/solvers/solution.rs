@@ -1,15 +1,8 @@
 //! A solver's answer: an equilibrium state and the [`SolveInfo`] of how it was reached.
 
 use super::SolveInfo;
+use crate::structure::law::{self, SlackRule};
 use crate::structure::Structure;
-
-/// Relative tolerance of the one slack classification: a unilateral cable is slack when its gap
-/// is open, `λ = −(e + t0/k) > 0`, by more than this fraction of the cables' force scale, i.e.
-/// when its trial tension `t0 + k e < −SLACK_GAP_TOLERANCE · max_cables(|t0|, |t0 + k e|)`.
-/// A cable at zero tension with a closed gap (an unprestressed cable at rest) is taut. 1e-6 lies
-/// well above the round-off of an exact solution (1e-12 of the scale) and well below the trial
-/// tension of any cable that is slack on the paper's grids (> 1e-3 of the scale).
-pub const SLACK_GAP_TOLERANCE: f64 = 1e-6;
 
 /// An equilibrium state (from the prestressed configuration).
 #[derive(Debug, Clone)]
@@ -24,22 +17,11 @@ pub struct Equilibrium {
 
 impl Equilibrium {
     /// The equilibrium of `displacements` with the solver's `tensions`, its slack set by the one
-    /// classification every solver shares ([`SLACK_GAP_TOLERANCE`]); a slack cable's tension
+    /// classification every solver shares ([`SlackRule::Gap`]); a slack cable's tension
     /// is set to exactly 0.
     pub fn classified(s: &Structure, displacements: Vec<f64>, mut tensions: Vec<f64>) -> Self {
-        let trial = super::residual::trial_tensions(s, &displacements);
-        let scale = s
-            .links
-            .iter()
-            .zip(&trial)
-            .filter(|(l, _)| l.unilateral)
-            .fold(0.0f64, |m, (l, t)| m.max(l.prestress.abs()).max(t.abs()));
-        let slack: Vec<bool> = s
-            .links
-            .iter()
-            .zip(&trial)
-            .map(|(l, &t)| l.unilateral && t < -SLACK_GAP_TOLERANCE * scale)
-            .collect();
+        let trial = law::trial_tensions(s, &displacements);
+        let slack = law::slack_flags(s, &trial, SlackRule::Gap);
         for (tension, &is_slack) in tensions.iter_mut().zip(&slack) {
             if is_slack {
                 *tension = 0.0;

@@ -13,12 +13,40 @@ pub enum Status {
     /// No further progress is possible in floating point (descent lost, a non-finite measure)
     /// before the stopping criterion.
     Stalled,
+    /// No equilibrium exists: slack cables leave a mechanism that the load works on, so the
+    /// energy is unbounded below (docs/method.md §8). The displacements are not an answer.
+    NoEquilibrium,
+    /// The load path could not be followed to the load (`large`: the increment fell below its
+    /// minimum): a limit point, or a loss of equilibrium, on the way. Not an answer.
+    LimitPoint,
+    /// The stopping criterion holds, but the tangent stiffness there has a negative eigenvalue:
+    /// an unstable equilibrium (a saddle of the energy), not the answer a load would reach.
+    Unstable,
 }
 
 impl Status {
     /// Whether the stopping criterion was met.
     pub fn converged(self) -> bool {
         self == Status::Converged
+    }
+
+    /// The `status` column's word: `converged`, `max_iterations`, `stalled`,
+    /// `no_equilibrium`, `limit_point`, `unstable`.
+    pub fn code(self) -> &'static str {
+        match self {
+            Status::Converged => "converged",
+            Status::MaxIterations => "max_iterations",
+            Status::Stalled => "stalled",
+            Status::NoEquilibrium => "no_equilibrium",
+            Status::LimitPoint => "limit_point",
+            Status::Unstable => "unstable",
+        }
+    }
+
+    /// Whether the final iterate is no answer at all (no equilibrium, or the load never
+    /// reached): no displacement or tension file is written for it.
+    pub fn no_answer(self) -> bool {
+        matches!(self, Status::NoEquilibrium | Status::LimitPoint)
     }
 }
 
@@ -28,6 +56,9 @@ impl fmt::Display for Status {
             Status::Converged => "converged",
             Status::MaxIterations => "stopped at max_iterations",
             Status::Stalled => "stalled",
+            Status::NoEquilibrium => "no equilibrium",
+            Status::LimitPoint => "limit point",
+            Status::Unstable => "unstable equilibrium",
         })
     }
 }

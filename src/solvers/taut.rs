@@ -5,7 +5,7 @@ use super::SetupError;
 use crate::linalg::{
     factorize_counting_zero_modes, NodeOrdering, SparseCholesky, StiffnessPattern,
 };
-use crate::structure::Structure;
+use crate::structure::{largest_moving_nodes, law, prestress_stability, Mode, Structure};
 use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
@@ -50,19 +50,16 @@ impl TautStiffness {
         (pattern, factor)
     }
 
-    /// Assemble and factorize K; refuse a structure whose K is singular, with the number of
-    /// its zero-stiffness modes.
+    /// Assemble and factorize K (with the prestress's geometric stiffness when the model has
+    /// it: `K + K_G(t0)`, docs/method.md §8); refuse a structure whose K is singular, saying
+    /// where its modes are and whether its prestress would stiffen them.
     pub fn new(structure: &Structure) -> Result<TautStiffness, SetupError> {
         let (pattern, mut factor) = Self::analyse(structure);
         let mut values = vec![0.0; pattern.nnz()];
-        pattern.assemble(
-            &structure.link_dofs,
-            |i| structure.links[i].stiffness,
-            &mut values,
-        );
+        law::assemble_tangent(structure, &pattern, |_| true, &mut values);
         let zero_modes = factorize_counting_zero_modes(&pattern, &values, &mut factor);
         if zero_modes > 0 {
-            return Err(SetupError::Mechanism { zero_modes });
+            return Err(refusal(structure, zero_modes));
         }
         Ok(TautStiffness {
             pattern,
@@ -70,4 +67,90 @@ impl TautStiffness {
             factor,
         })
     }
+}
+
+/// Why a singular (or, with geometric stiffness, indefinite) taut stiffness is refused: the
+/// prestress-stability test of docs/method.md §8 tells whether geometric stiffness would make it
+/// solvable, and names the nodes of the modes that stay unstiffened.
+fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
+    // Grids are refused without the dense test (their mechanisms are too few supports).
+    let stability = (s.layout.is_none() || s.model.has_geometric_stiffness())
+        .then(|| prestress_stability(s))
+        .flatten();
+    let unstiffened = |st: &crate::structure::PrestressStability| {
+        let modes: Vec<String> = st
+            .unstiffened()
+            .take(3)
+            .enumerate()
+            .map(|(k, m)| describe_mode(s, k + 1, m))
+            .collect();
+        modes.join("; ")
+    };
+    if s.model.has_geometric_stiffness() {
+        let detail = match &stability {
+            Some(st) if !st.stable() => format!(
+                "{} of its {} mechanism(s) not stiffened: {}; add members or supports, or \
+                 change the prestress",
+                st.unstiffened().count(),
+                st.mechanisms,
+                unstiffened(st)
+            ),
+            _ => "`K + K_G(t0)` is not positive definite (a mechanism the prestress does not \
+                  stiffen, or a compressed bar that buckles under its own prestress); add \
+                  members or supports, or change the prestress"
+                .to_string(),
+        };
+        return SetupError::NotPrestressStable {
+            model: s.model.name(),
+            detail,
+        };
+    }
+    let grid = s.layout.is_some();
+    match stability {
+        Some(st) if st.mechanisms > 0 && st.stable() => SetupError::Mechanism {
+            zero_modes,
+            where_: String::new(),
+            advice: format!(
+                "it is prestress-stable (its prestress stiffens all {} mechanism(s), the \
+                 smallest by {:.3e} N/m): solvable with `model.geometry = \"prestress\"` or \
+                 `\"large\"`",
+                st.mechanisms,
+                st.smallest().unwrap_or(0.0)
+            ),
+        },
+        stability => SetupError::Mechanism {
+            zero_modes,
+            where_: stability
+                .filter(|st| st.mechanisms > 0)
+                .map(|st| format!(" ({})", unstiffened(&st)))
+                .unwrap_or_default(),
+            advice: if grid {
+                "hold more nodes (`supports.clamp`, `supports.fix`) or use a stiffer module \
+                 (`grid.module = \"braced\"`)"
+                    .to_string()
+            } else {
+                "hold more nodes (`supports.fix`) or add members; its prestress does not \
+                 stiffen it either"
+                    .to_string()
+            },
+        },
+    }
+}
+
+/// `mode 1 (prestress stiffness -2.1e3 N/m) moves nodes 4 (0.57, 0.1, 0), 5 (…), 6 (…)`.
+fn describe_mode(s: &Structure, number: usize, mode: &Mode) -> String {
+    let nodes: Vec<String> = largest_moving_nodes(s, &mode.displacement, 3)
+        .into_iter()
+        .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
+        .collect();
+    format!(
+        "mode {number} (prestress stiffness {:.3e} N/m{}) moves nodes {}",
+        mode.stiffness,
+        if mode.translation {
+            ", a rigid translation: too few supports"
+        } else {
+            ""
+        },
+        nodes.join(", ")
+    )
 }

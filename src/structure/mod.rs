@@ -6,13 +6,17 @@
 
 mod geometry;
 mod grid;
+pub mod law;
 mod spec;
+mod stability;
 mod statics;
 mod supports;
 
 pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout};
+pub use law::{GeometricModel, GeometricStiffness};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
+pub use stability::{largest_moving_nodes, prestress_stability, Mode, PrestressStability};
 pub use statics::{equilibrium_counts, self_stress_through, EquilibriumCounts, SelfStressRefusal};
 
 use crate::linalg::SparseRow;
@@ -90,11 +94,7 @@ impl Link {
     /// Row i of B on the free dofs numbered by `dof_of` (`3·node + c` → free dof or
     /// [`CLAMPED`]): `e = n·(U_b − U_a)`, clamped components left out.
     pub fn compatibility_row(&self, dof_of: &[usize]) -> LinkDofs {
-        let free = |d: usize| (d != CLAMPED).then_some(d);
-        let ends = [(self.a, -1.0), (self.b, 1.0)];
-        SparseRow::new(ends.into_iter().flat_map(|(node, sign)| {
-            (0..3).map(move |k| (free(dof_of[3 * node + k]), sign * self.direction[k]))
-        }))
+        self.row_along(self.direction, dof_of)
     }
 }
 
@@ -129,6 +129,10 @@ pub struct Structure {
     /// The scale of every prestress, N: the grid's lower cable prestress p, else the largest
     /// `|t0|` of a member.
     pub prestress_scale: f64,
+    /// The geometric effects modelled (`model.geometry`; [`Structure::new`] gives `linear`).
+    pub model: GeometricModel,
+    /// `K_G(t0)`, the prestress's geometric stiffness, for the models that have it.
+    pub geometric: Option<GeometricStiffness>,
 }
 
 impl Structure {
@@ -257,6 +261,8 @@ impl Structure {
             unit_load,
             settlement_force,
             prestress_scale,
+            model: GeometricModel::Linear,
+            geometric: None,
         }
     }
 
@@ -286,6 +292,16 @@ impl Structure {
     /// Which of x, y, z of `node` are held (clamped, or held by `supports.fix`).
     pub fn held_components(&self, node: usize) -> [bool; 3] {
         [0, 1, 2].map(|c| self.dof_of[3 * node + c] == CLAMPED)
+    }
+
+    /// The structure under geometric model `model`: with geometric stiffness, `K_G(t0)` is
+    /// built once here (docs/method.md §8).
+    pub fn with_model(mut self, model: GeometricModel) -> Structure {
+        self.model = model;
+        self.geometric = model
+            .has_geometric_stiffness()
+            .then(|| GeometricStiffness::of_prestress(&self));
+        self
     }
 
     /// Number of cables (every link but the bars).

@@ -45,6 +45,7 @@ pub use state::{LatinState, SideState, SubState};
 pub use substructure::Substructure;
 
 use super::{displacement_residual, Equilibrium, Measure, Progress, SetupError, Solver, Status};
+use crate::structure::law;
 use crate::structure::{Structure, CLAMPED};
 use anderson::Anderson;
 use interfaces::Interfaces;
@@ -300,7 +301,7 @@ impl<'s> Latin<'s> {
         let mut trial = vec![0.0; links.len()];
         for (sub, st) in self.substructures.iter().zip(&state.subs) {
             for (j, &i) in sub.links.iter().enumerate() {
-                trial[i] = links[i].prestress + links[i].stiffness * st.e[j];
+                trial[i] = law::trial_tension(&links[i], st.e[j]);
             }
         }
         let (sum2, cables) = links

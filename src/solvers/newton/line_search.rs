@@ -34,17 +34,19 @@ impl Ord for Breakpoint {
 
 /// Exact minimiser `s > 0` of `φ(s) = Π(U + s ΔU)`, from each link's trial tension at U
 /// (`t0 + k e`, before clipping) and its elongation along the step (`B ΔU`), and the work of
-/// the load along the step `Fᵀ ΔU`. `None` when ΔU is not a descent direction (φ'(0) ≥ 0) or
+/// the load along the step `Fᵀ ΔU`, and a quadratic term of the model (docs/method.md §8:
+/// `geometric = (ΔUᵀK_G U, ΔUᵀK_G ΔU)`, zero without geometric stiffness). `None` when ΔU is not a descent direction (φ'(0) ≥ 0) or
 /// φ has no minimiser along it.
 pub(super) fn exact_line_search(
     links: &[Link],
     trial: &[f64],
     step_elongation: &[f64],
     load_work: f64,
+    geometric: (f64, f64),
 ) -> Option<f64> {
-    // φ'(s) = Σ_taut τ_i(s) Δe_i − Fᵀ ΔU, τ_i(s) = a_i + s b_i.
-    let mut slope_value = -load_work;
-    let mut curvature = 0.0;
+    // φ'(s) = Σ_taut τ_i(s) Δe_i + ΔUᵀK_G(U + sΔU) − Fᵀ ΔU, τ_i(s) = a_i + s b_i.
+    let mut slope_value = geometric.0 - load_work;
+    let mut curvature = geometric.1;
     let mut events: Vec<Reverse<Breakpoint>> = Vec::new();
     let mut event = |position: f64, change: f64| {
         events.push(Reverse(Breakpoint { position, change }));
@@ -144,7 +146,8 @@ mod tests {
         let trial = [1.0, 3.0, -2.0, 1.0];
         let de = [-0.2, -1.0, 1.5, 0.5];
         let work = 5.0;
-        let s = exact_line_search(&links, &trial, &de, work).expect("a descent direction");
+        let s =
+            exact_line_search(&links, &trial, &de, work, (0.0, 0.0)).expect("a descent direction");
         // Compare with a fine scan of φ (convex in s).
         let best = (0..=40_000)
             .map(|i| i as f64 * 1e-4)
@@ -163,6 +166,9 @@ mod tests {
     fn no_step_along_an_ascent_direction() {
         let links = [link(1.0, false)];
         // φ'(0) = a·Δe − work = 1·1 − 0 > 0.
-        assert_eq!(exact_line_search(&links, &[1.0], &[1.0], 0.0), None);
+        assert_eq!(
+            exact_line_search(&links, &[1.0], &[1.0], 0.0, (0.0, 0.0)),
+            None
+        );
     }
 }

@@ -17,14 +17,18 @@
 //!
 //! Stopping measure: [`Measure::EquilibriumResidual`], `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`.
 
+mod large;
 mod line_search;
 
+pub use large::{LargeNewton, LargeWork, INCREMENT_MAX_STEPS, MIN_INCREMENT};
+
 use super::{
-    stop_when, unbalances, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
+    stop_when, unbalances_on, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
 };
 use crate::linalg::{
     dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern,
 };
+use crate::structure::law::{self, SlackRule};
 use crate::structure::Structure;
 use line_search::exact_line_search;
 
@@ -196,15 +200,24 @@ impl<'s> Newton<'s> {
         self.work
     }
 
-    /// Trial tensions, tensions, gradient and residual of `state.u`.
+    /// Trial tensions, tensions, gradient and residual of `state.u` (with the prestress's
+    /// geometric force `K_G U` when the model has it: docs/method.md §8).
     fn evaluate(&self, state: &mut NewtonState) {
         let s = self.structure;
         for (i, (l, ld)) in s.links.iter().zip(&s.link_dofs).enumerate() {
-            let trial = l.prestress + l.stiffness * ld.elongation(&state.u);
+            let trial = law::trial_tension(l, ld.elongation(&state.u));
             state.trial[i] = trial;
-            state.tensions[i] = if l.unilateral { trial.max(0.0) } else { trial };
+            state.tensions[i] = law::tension(l, trial);
         }
-        let sizes = unbalances(s, &state.tensions, &state.load, &mut state.gradient);
+        let geometric_force = s.geometric.as_ref().map(|g| g.product(&state.u));
+        let sizes = unbalances_on(
+            s,
+            &s.link_dofs,
+            &state.tensions,
+            geometric_force.as_deref(),
+            &state.load,
+            &mut state.gradient,
+        );
         state.residual = sizes.relative;
         state.load_residual = sizes.load_relative;
     }
@@ -221,7 +234,7 @@ impl<'s> Newton<'s> {
             .links
             .iter()
             .zip(&state.trial)
-            .map(|(l, &trial)| !l.unilateral || trial >= 0.0)
+            .map(|(l, &trial)| law::is_taut(l, trial))
             .collect();
         if taut_links.iter().all(|&t| t) {
             self.work.taut_steps += 1;
@@ -306,7 +319,7 @@ impl<'s> Newton<'s> {
         let rhs = step.to_vec();
         let mut solution = vec![0.0; rhs.len()];
         let outcome = preconditioned_cg(
-            |v, out| hessian_product(s, taut_links, mu, v, out),
+            |v, out| law::tangent_product(s, taut_links, mu, v, out),
             |z| correction.solve_in_place(factor, z),
             &rhs,
             &mut solution,
@@ -383,8 +396,18 @@ impl Solver for Newton<'_> {
         let mut step_elongation = vec![0.0; s.links.len()];
         s.elongations(&step, &mut step_elongation);
         let load_work = dot(&state.load, &step);
-        let Some(length) = exact_line_search(&s.links, &state.trial, &step_elongation, load_work)
-        else {
+        // φ(s) = Π(U + sΔU) gains ½ s² ΔUᵀK_GΔU + s ΔUᵀK_G U with the prestress's geometric
+        // stiffness (docs/method.md §8).
+        let geometric = s.geometric.as_ref().map_or((0.0, 0.0), |g| {
+            (dot(&g.product(&state.u), &step), g.quadratic(&step))
+        });
+        let Some(length) = exact_line_search(
+            &s.links,
+            &state.trial,
+            &step_elongation,
+            load_work,
+            geometric,
+        ) else {
             state.stalled = true;
             return;
         };
@@ -420,7 +443,7 @@ impl Solver for Newton<'_> {
             // newton's own measure is r(U).
             equilibrium_residual: Some(state.residual),
             setups: 0,
-            slack_cables: slack_flags(self.structure, &state.tensions)
+            slack_cables: law::slack_flags(self.structure, &state.trial, SlackRule::Clipped)
                 .iter()
                 .filter(|&&x| x)
                 .count(),
@@ -439,7 +462,8 @@ impl Solver for Newton<'_> {
     }
 }
 
-/// `values = H = Σ_taut k Bᵢᵀ Bᵢ + μ I` (docs/method.md §3), lower triangle on `pattern`.
+/// `values = H = Σ_taut k Bᵢᵀ Bᵢ + K_G + μ I` (docs/method.md §3, §8), lower triangle on
+/// `pattern`.
 fn assemble_hessian(
     s: &Structure,
     pattern: &StiffnessPattern,
@@ -447,40 +471,10 @@ fn assemble_hessian(
     mu: f64,
     values: &mut [f64],
 ) {
-    let weight = |i: usize| {
-        if taut_links[i] {
-            s.links[i].stiffness
-        } else {
-            0.0
-        }
-    };
-    pattern.assemble(&s.link_dofs, weight, values);
+    law::assemble_tangent(s, pattern, |i| taut_links[i], values);
     for &d in &pattern.diag_slot {
         values[d] += mu;
     }
-}
-
-/// `out = H v` with `H = Σ_taut k Bᵢᵀ Bᵢ + μ I` (docs/method.md §3), link by link.
-fn hessian_product(s: &Structure, taut_links: &[bool], mu: f64, v: &[f64], out: &mut [f64]) {
-    out.iter_mut().zip(v).for_each(|(o, vi)| *o = mu * vi);
-    for ((link, row), _) in s
-        .links
-        .iter()
-        .zip(&s.link_dofs)
-        .zip(taut_links)
-        .filter(|(_, &taut)| taut)
-    {
-        row.scatter(link.stiffness * row.elongation(v), out);
-    }
-}
-
-/// Slack cables of the energy's law: unilateral cables whose tension was clipped to 0.
-fn slack_flags(s: &Structure, tensions: &[f64]) -> Vec<bool> {
-    s.links
-        .iter()
-        .zip(tensions)
-        .map(|(l, &t)| l.unilateral && t == 0.0)
-        .collect()
 }
 
 #[cfg(test)]
@@ -512,7 +506,7 @@ mod tests {
         let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
         let (mut expected, mut product) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
         taut.pattern.sym_matvec(&assembled, &v, &mut expected);
-        hessian_product(&s, &taut_links, mu, &v, &mut product);
+        law::tangent_product(&s, &taut_links, mu, &v, &mut product);
         let scale = norm(&expected);
         for (p, e) in product.iter().zip(&expected) {
             assert!((p - e).abs() <= 1e-12 * scale, "{p} against {e}");
@@ -521,7 +515,7 @@ mod tests {
         let flipped = one_more_taut.iter().position(|t| !t).expect("a slack link");
         one_more_taut[flipped] = true;
         let mut changed = vec![0.0; s.n_free];
-        hessian_product(&s, &one_more_taut, mu, &v, &mut changed);
+        law::tangent_product(&s, &one_more_taut, mu, &v, &mut changed);
         assert!(changed
             .iter()
             .zip(&product)

@@ -1,0 +1,400 @@
+//! newton on the exact-length law (docs/method.md §8, `model.geometry = "large"`): large
+//! displacements under dead loads, along the load path.
+//!
+//! Minimises `Π(U) = Σ_bars (t0 e + ½ k e²) + Σ_cables ½ k ⟨e + t0/k⟩₊² − Fᵀ U` with
+//! `e = ℓ(U) − L` on the current geometry. A Newton step solves `H ΔU = −∇Π` with the Hessian
+//! `Σ [[G, −G], [−G, G]]`, `G = k_t n nᵀ + (τ/ℓ)(I − n nᵀ)`; where H is not positive definite
+//! it is shifted, `H + σ diag(H)` with σ raised until the Cholesky factorisation succeeds. The
+//! line search follows the sign of `Π'(s) = ∇Π(U + sΔU)·ΔU` (a search on Π's value stalls at
+//! r ≈ 4e-8: Π is dominated by the prestress energy).
+//!
+//! The load path: a solve starts from the last equilibrium this solver reached (the prestressed
+//! state, U = 0 under no load, at first) and walks to its load in increments, first the whole
+//! way; an increment that does not converge within [`INCREMENT_MAX_STEPS`] steps is halved and
+//! retried from the last equilibrium, down to [`MIN_INCREMENT`] of the path, below which the
+//! solve ends at a limit point ([`Status::LimitPoint`]), never as converged.
+//!
+//! Stopping measure: [`Measure::EquilibriumResidual`] with the current unit vectors, the
+//! stricter load-relative form ≤ tolerance, as for the linear newton.
+
+use super::NewtonSettings;
+use crate::linalg::{dot, SparseCholesky, StiffnessPattern};
+use crate::solvers::{
+    unbalances_on, Equilibrium, Measure, Progress, Solver, Status, TautStiffness,
+};
+use crate::structure::law::{self, CurrentGeometry, SlackRule};
+use crate::structure::Structure;
+
+/// Newton steps one load increment may take before it is halved.
+pub const INCREMENT_MAX_STEPS: usize = 30;
+/// The smallest load increment tried, as a fraction of the path from the last equilibrium to
+/// the solve's load: below it the solve stops at a limit point.
+pub const MIN_INCREMENT: f64 = 1.0 / 1024.0;
+/// The first shift σ of a Hessian that is not positive definite (× its diagonal), raised ×10
+/// until the factorisation succeeds, up to [`MAX_SHIFT`].
+const FIRST_SHIFT: f64 = 1e-8;
+const MAX_SHIFT: f64 = 1e4;
+/// Bisections of the line search at most.
+const LINE_SEARCH_BISECTIONS: usize = 40;
+
+/// What the large-displacement solver's work cost, over its solves.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LargeWork {
+    /// Newton steps.
+    pub steps: usize,
+    /// Steps whose Hessian was not positive definite and was shifted.
+    pub shifted_steps: usize,
+    /// Load increments halved.
+    pub halvings: usize,
+}
+
+/// newton on the exact-length law, set up for one structure.
+pub struct LargeNewton<'s> {
+    structure: &'s Structure,
+    pattern: &'s StiffnessPattern,
+    chol: SparseCholesky,
+    settings: NewtonSettings,
+    hessian: Vec<f64>,
+    /// The last equilibrium reached (its load and displacements): where a solve's path starts.
+    reached: (Vec<f64>, Vec<f64>),
+    work: LargeWork,
+}
+
+/// The law's values at one iterate.
+struct Evaluation {
+    current: CurrentGeometry,
+    trial: Vec<f64>,
+    gradient: Vec<f64>,
+    residual: f64,
+    load_residual: f64,
+}
+
+/// The iterate of a solve along its load path.
+pub struct LargeState {
+    /// The path: from `start` (the last equilibrium's load) to `target`.
+    start: Vec<f64>,
+    target: Vec<f64>,
+    /// Fraction of the path at which an equilibrium was reached, and its displacements.
+    done: f64,
+    u_done: Vec<f64>,
+    /// The increment being solved: the path fraction `done + increment`.
+    increment: f64,
+    load: Vec<f64>,
+    u: Vec<f64>,
+    eval: Evaluation,
+    iteration: usize,
+    increment_steps: usize,
+    stop: Option<Status>,
+}
+
+impl<'s> LargeNewton<'s> {
+    /// Set up on a structure whose `K + K_G(t0)` (the tangent at the prestressed state) is
+    /// known to be positive definite: its pattern and symbolic analysis serve every tangent.
+    pub fn new(
+        structure: &'s Structure,
+        taut: &'s TautStiffness,
+        settings: NewtonSettings,
+    ) -> Self {
+        LargeNewton {
+            structure,
+            pattern: &taut.pattern,
+            chol: taut.factor.share_symbolic(),
+            settings,
+            hessian: vec![0.0; taut.values.len()],
+            reached: (vec![0.0; structure.n_free], vec![0.0; structure.n_free]),
+            work: LargeWork::default(),
+        }
+    }
+
+    /// What the work cost so far.
+    pub fn work(&self) -> LargeWork {
+        self.work
+    }
+
+    fn evaluate(&self, load: &[f64], u: &[f64]) -> Evaluation {
+        let s = self.structure;
+        let current = CurrentGeometry::of(s, u);
+        let trial: Vec<f64> = s
+            .links
+            .iter()
+            .zip(&current.lengths)
+            .map(|(l, &len)| law::current_trial_tension(s, l, len))
+            .collect();
+        let tensions: Vec<f64> = s
+            .links
+            .iter()
+            .zip(&trial)
+            .map(|(l, &t)| law::tension(l, t))
+            .collect();
+        let mut gradient = vec![0.0; s.n_free];
+        // ∇Π = Σ τ ∇ℓ − F.
+        let sizes = unbalances_on(s, &current.rows, &tensions, None, load, &mut gradient);
+        let finite = gradient.iter().all(|g| g.is_finite());
+        Evaluation {
+            current,
+            trial,
+            gradient,
+            residual: if finite {
+                sizes.relative
+            } else {
+                f64::INFINITY
+            },
+            load_residual: if finite {
+                sizes.load_relative
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
+    /// `ΔU = −H⁻¹ ∇Π`, H shifted where it is not positive definite; `None` when no shift up to
+    /// [`MAX_SHIFT`] makes it factorisable.
+    fn newton_step(&mut self, state: &LargeState) -> Option<Vec<f64>> {
+        let s = self.structure;
+        self.work.steps += 1;
+        state
+            .eval
+            .current
+            .assemble_tangent(s, &state.eval.trial, self.pattern, &mut self.hessian);
+        let diagonal: Vec<f64> = self
+            .pattern
+            .diag_slot
+            .iter()
+            .map(|&d| self.hessian[d].abs().max(f64::MIN_POSITIVE))
+            .collect();
+        let mut shift = 0.0;
+        loop {
+            if self.chol.factorize(self.pattern, &self.hessian).is_ok() {
+                break;
+            }
+            // H + σ D, σ raised tenfold: D = |diag H|.
+            let next = if shift == 0.0 {
+                FIRST_SHIFT
+            } else {
+                shift * 10.0
+            };
+            if next > MAX_SHIFT {
+                return None;
+            }
+            for (&d, &w) in self.pattern.diag_slot.iter().zip(&diagonal) {
+                self.hessian[d] += (next - shift) * w;
+            }
+            shift = next;
+        }
+        if shift > 0.0 {
+            self.work.shifted_steps += 1;
+        }
+        let mut step: Vec<f64> = state.eval.gradient.iter().map(|g| -g).collect();
+        self.chol.solve_in_place(&mut step);
+        step.iter().all(|x| x.is_finite()).then_some(step)
+    }
+
+    /// The step length along ΔU by the sign of `Π'(s) = ∇Π(U + sΔU)·ΔU`: the full step when
+    /// `Π'(1) ≤ 0` or `|Π'(1)| ≤ ½ |Π'(0)|`, else bisection of its root on [0, 1]. Returns the
+    /// length and the evaluation there; `None` when ΔU is not a descent direction.
+    fn line_search(&self, state: &LargeState, step: &[f64]) -> Option<(f64, Evaluation)> {
+        let slope0 = dot(&state.eval.gradient, step);
+        if !(slope0 < 0.0) {
+            return None;
+        }
+        let at = |length: f64| {
+            let u: Vec<f64> = state
+                .u
+                .iter()
+                .zip(step)
+                .map(|(u, d)| u + length * d)
+                .collect();
+            let eval = self.evaluate(&state.load, &u);
+            let slope = dot(&eval.gradient, step);
+            (
+                if slope.is_finite() {
+                    slope
+                } else {
+                    f64::INFINITY
+                },
+                eval,
+            )
+        };
+        let (slope, eval) = at(1.0);
+        if slope <= 0.0 || slope.abs() <= 0.5 * slope0.abs() {
+            return Some((1.0, eval));
+        }
+        let (mut low, mut high) = (0.0, 1.0);
+        let mut best = None;
+        for _ in 0..LINE_SEARCH_BISECTIONS {
+            let mid = 0.5 * (low + high);
+            let (slope, eval) = at(mid);
+            if slope.abs() <= 0.1 * slope0.abs() {
+                return Some((mid, eval));
+            }
+            if slope < 0.0 {
+                low = mid;
+                best = Some((mid, eval));
+            } else {
+                high = mid;
+            }
+        }
+        best
+    }
+
+    /// Go on from the equilibrium reached on the path: the next increment, the same size (or
+    /// what is left of the path).
+    fn advance(&self, state: &mut LargeState) {
+        state.done = (state.done + state.increment).min(1.0);
+        state.u_done = state.u.clone();
+        state.increment = state.increment.min(1.0 - state.done);
+        self.begin_increment(state);
+    }
+
+    /// Halve the increment and retry it from the last equilibrium, or stop at a limit point.
+    fn halve(&mut self, state: &mut LargeState) {
+        self.work.halvings += 1;
+        state.increment *= 0.5;
+        if state.increment < MIN_INCREMENT {
+            state.stop = Some(Status::LimitPoint);
+            state.u = state.u_done.clone();
+            state.load = path_load(&state.start, &state.target, state.done);
+            state.eval = self.evaluate(&state.load, &state.u);
+            return;
+        }
+        state.u = state.u_done.clone();
+        self.begin_increment(state);
+    }
+
+    /// The load of `done + increment`, evaluated at the current displacements.
+    fn begin_increment(&self, state: &mut LargeState) {
+        state.increment_steps = 0;
+        state.load = path_load(&state.start, &state.target, state.done + state.increment);
+        state.eval = self.evaluate(&state.load, &state.u);
+    }
+
+    fn converged(&self, eval: &Evaluation) -> bool {
+        eval.load_residual <= self.settings.tolerance
+    }
+
+    /// After a step or a new increment: an equilibrium at the increment's load either ends the
+    /// solve (at the target) or moves the path on.
+    fn settle(&mut self, state: &mut LargeState) {
+        while state.stop.is_none() && self.converged(&state.eval) {
+            if state.done + state.increment >= 1.0 {
+                state.stop = Some(Status::Converged);
+                self.reached = (state.target.clone(), state.u.clone());
+            } else {
+                self.advance(state);
+            }
+        }
+    }
+}
+
+/// The load at fraction θ of the path from `start` to `target`.
+fn path_load(start: &[f64], target: &[f64], theta: f64) -> Vec<f64> {
+    start
+        .iter()
+        .zip(target)
+        .map(|(a, b)| a + theta * (b - a))
+        .collect()
+}
+
+impl Solver for LargeNewton<'_> {
+    type State = LargeState;
+    const INIT_IS_ITERATE: bool = false;
+
+    fn measure(&self) -> Measure {
+        Measure::EquilibriumResidual
+    }
+
+    fn max_iterations(&self) -> usize {
+        self.settings.max_iterations
+    }
+
+    /// From the last equilibrium reached, the whole path in one increment first.
+    fn init(&mut self, load: &[f64]) -> LargeState {
+        let (start, u) = self.reached.clone();
+        let eval = self.evaluate(load, &u);
+        let mut state = LargeState {
+            start,
+            target: load.to_vec(),
+            done: 0.0,
+            u_done: u.clone(),
+            increment: 1.0,
+            load: load.to_vec(),
+            u,
+            eval,
+            iteration: 0,
+            increment_steps: 0,
+            stop: None,
+        };
+        self.settle(&mut state);
+        state
+    }
+
+    /// The path always starts from this solver's own last equilibrium (the previous α's answer
+    /// when the sweep's α increase): `previous` is not needed.
+    fn warm_init(&mut self, load: &[f64], _previous: &Equilibrium) -> LargeState {
+        self.init(load)
+    }
+
+    /// One Newton step at the increment's load; an increment that does not converge within
+    /// [`INCREMENT_MAX_STEPS`] steps (or whose step is no descent) is halved.
+    fn next_iter(&mut self, state: &mut LargeState) {
+        state.iteration += 1;
+        state.increment_steps += 1;
+        let stepped = self
+            .newton_step(state)
+            .and_then(|step| self.line_search(state, &step).map(|found| (step, found)));
+        match stepped {
+            Some((step, (length, eval))) => {
+                state
+                    .u
+                    .iter_mut()
+                    .zip(&step)
+                    .for_each(|(u, d)| *u += length * d);
+                state.eval = eval;
+                self.settle(state);
+                if state.stop.is_none() && state.increment_steps >= INCREMENT_MAX_STEPS {
+                    self.halve(state);
+                    self.settle(state);
+                }
+            }
+            None => {
+                self.halve(state);
+                self.settle(state);
+            }
+        }
+    }
+
+    fn progress(&self, state: &LargeState) -> Progress {
+        Progress {
+            iteration: state.iteration,
+            residual: state.eval.residual,
+            equilibrium_residual: Some(state.eval.residual),
+            setups: 0,
+            slack_cables: law::slack_flags(self.structure, &state.eval.trial, SlackRule::Clipped)
+                .iter()
+                .filter(|&&x| x)
+                .count(),
+            stop: state.stop,
+        }
+    }
+
+    /// `e = ℓ(U) − L`.
+    fn elongations(&self, state: &LargeState) -> Vec<f64> {
+        self.structure
+            .links
+            .iter()
+            .zip(&state.eval.current.lengths)
+            .map(|(l, &len)| len - l.length)
+            .collect()
+    }
+
+    fn iterate(&self, state: &LargeState) -> Equilibrium {
+        let tensions = self
+            .structure
+            .links
+            .iter()
+            .zip(&state.eval.trial)
+            .map(|(l, &t)| law::tension(l, t))
+            .collect();
+        Equilibrium::classified(self.structure, state.u.clone(), tensions)
+    }
+}

@@ -1,0 +1,403 @@
+//! The member law and its tangent, in one place (docs/method.md §1, §8): the trial tension
+//! `t0 + k e`, the tension (clipped at 0 for unilateral cables), the slack classification and
+//! its two policies, the energy, the tangent weight, and the geometric terms the model asks
+//! for (`model.geometry`): none (`linear`), the prestress's geometric stiffness `K_G(t0)`
+//! (`prestress`), or the exact length on the current geometry (`large`). Every solver and
+//! `results` ask here; nothing else writes the law.
+
+use super::{Link, Structure, CLAMPED};
+use crate::linalg::{SparseRow, StiffnessPattern};
+use serde::Deserialize;
+
+/// Which geometric effects the model keeps: the case key `model.geometry`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GeometricModel {
+    /// Equilibrium written on the initial geometry (docs/method.md §1, the paper's model).
+    #[default]
+    Linear,
+    /// §1's model plus the geometric stiffness of the prestress, `K + K_G(t0)` (§8): the
+    /// linearisation about the prestressed state; stiffens prestress-stable mechanisms.
+    Prestress,
+    /// The exact-length law `τ = t0 + k (ℓ − L)` on the current geometry, dead loads (§8),
+    /// solved by `newton` along the load path.
+    Large,
+}
+
+impl GeometricModel {
+    /// The value of `model.geometry`.
+    pub fn name(self) -> &'static str {
+        match self {
+            GeometricModel::Linear => "linear",
+            GeometricModel::Prestress => "prestress",
+            GeometricModel::Large => "large",
+        }
+    }
+
+    /// Whether the model has geometric stiffness (so prestress-stable mechanisms are solvable).
+    pub fn has_geometric_stiffness(self) -> bool {
+        self != GeometricModel::Linear
+    }
+}
+
+/// Relative tolerance of the one slack classification ([`SlackRule::Gap`]): a unilateral cable
+/// is slack when its gap is open, `λ = −(e + t0/k) > 0`, by more than this fraction of the
+/// cables' force scale, i.e. when its trial tension
+/// `t0 + k e < −SLACK_GAP_TOLERANCE · max_cables(|t0|, |t0 + k e|)`. A cable at zero tension
+/// with a closed gap (an unprestressed cable at rest) is taut. 1e-6 lies well above the
+/// round-off of an exact solution (1e-12 of the scale) and well below the trial tension of any
+/// cable that is slack on the paper's grids (> 1e-3 of the scale).
+pub const SLACK_GAP_TOLERANCE: f64 = 1e-6;
+
+/// The trial tension `t0 + k e` of a member at elongation e (before a cable's clipping).
+#[inline]
+pub fn trial_tension(link: &Link, elongation: f64) -> f64 {
+    link.prestress + link.stiffness * elongation
+}
+
+/// τ: the trial tension, clipped at 0 for a unilateral cable (`τ = max(0, t0 + k e)`).
+#[inline]
+pub fn tension(link: &Link, trial: f64) -> f64 {
+    if link.unilateral {
+        trial.max(0.0)
+    } else {
+        trial
+    }
+}
+
+/// Whether the member carries its axial stiffness at this trial tension: bars and bilateral
+/// cables always, unilateral cables when `t0 + k e ≥ 0`.
+#[inline]
+pub fn is_taut(link: &Link, trial: f64) -> bool {
+    !link.unilateral || trial >= 0.0
+}
+
+/// The axial tangent weight: k when taut, 0 when slack.
+#[inline]
+pub fn tangent_weight(link: &Link, trial: f64) -> f64 {
+    if is_taut(link, trial) {
+        link.stiffness
+    } else {
+        0.0
+    }
+}
+
+/// The member's energy at elongation e (docs/method.md §1): `t0 e + ½ k e²` (bilateral),
+/// `½ k ⟨e + t0/k⟩₊²` (unilateral cable).
+pub fn energy(link: &Link, elongation: f64) -> f64 {
+    let k = link.stiffness;
+    if link.unilateral {
+        let stretch = (elongation + link.prestress / k).max(0.0);
+        0.5 * k * stretch * stretch
+    } else {
+        link.prestress * elongation + 0.5 * k * elongation * elongation
+    }
+}
+
+/// Which unilateral cables count as slack.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SlackRule {
+    /// The energy's own clipping: the tension is exactly 0 (`t0 + k e ≤ 0`). What newton
+    /// follows along its steps.
+    Clipped,
+    /// The one classification every reported answer shares: the gap is open by more than
+    /// [`SLACK_GAP_TOLERANCE`] of the cables' force scale.
+    Gap,
+}
+
+/// Per link: a unilateral cable that is slack by `rule`, from the trial tensions.
+pub fn slack_flags(s: &Structure, trial: &[f64], rule: SlackRule) -> Vec<bool> {
+    match rule {
+        SlackRule::Clipped => s
+            .links
+            .iter()
+            .zip(trial)
+            .map(|(l, &t)| l.unilateral && tension(l, t) == 0.0)
+            .collect(),
+        SlackRule::Gap => {
+            let scale = s
+                .links
+                .iter()
+                .zip(trial)
+                .filter(|(l, _)| l.unilateral)
+                .fold(0.0f64, |m, (l, t)| m.max(l.prestress.abs()).max(t.abs()));
+            s.links
+                .iter()
+                .zip(trial)
+                .map(|(l, &t)| l.unilateral && t < -SLACK_GAP_TOLERANCE * scale)
+                .collect()
+        }
+    }
+}
+
+/// The trial tension of every link at displacements U (free dofs) under the structure's model:
+/// `t0 + k B U` on the initial geometry (`linear`, `prestress`), `t0 + k (ℓ(U) − L)` on the
+/// current one (`large`).
+pub fn trial_tensions(s: &Structure, u: &[f64]) -> Vec<f64> {
+    match s.model {
+        GeometricModel::Large => {
+            let current = CurrentGeometry::of(s, u);
+            s.links
+                .iter()
+                .zip(&current.lengths)
+                .map(|(l, &len)| current_trial_tension(s, l, len))
+                .collect()
+        }
+        _ => s
+            .links
+            .iter()
+            .zip(&s.link_dofs)
+            .map(|(l, ld)| trial_tension(l, ld.elongation(u)))
+            .collect(),
+    }
+}
+
+/// The elongation a link's prescribed end displacements impose on the initial geometry,
+/// `e_p = n·(Ud_b − Ud_a)`: [`Link::prestress`] holds `t0 + k e_p`.
+fn imposed_elongation(s: &Structure, l: &Link) -> f64 {
+    (0..3)
+        .map(|k| l.direction[k] * (s.prescribed[3 * l.b + k] - s.prescribed[3 * l.a + k]))
+        .sum()
+}
+
+/// `t0 + k (ℓ − L)` at current length ℓ (docs/method.md §8): the exact length counts the
+/// prescribed displacements itself, so the linear `k e_p` is taken out of the prestress.
+#[inline]
+pub fn current_trial_tension(s: &Structure, l: &Link, length: f64) -> f64 {
+    l.prestress - l.stiffness * imposed_elongation(s, l) + l.stiffness * (length - l.length)
+}
+
+/// Two unit vectors orthogonal to the unit vector n and to each other: `I − n nᵀ = p pᵀ + q qᵀ`.
+pub fn transverse_pair(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    // Cross with the axis n is least aligned with.
+    let axis = (0..3)
+        .min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs()))
+        .unwrap_or(0);
+    let mut e = [0.0; 3];
+    e[axis] = 1.0;
+    let p = normalised(cross(n, e));
+    (p, cross(n, p))
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalised(v: [f64; 3]) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    [v[0] / n, v[1] / n, v[2] / n]
+}
+
+/// The geometric stiffness of the prestress on the initial geometry,
+/// `K_G(t0) = Σ (t0_i / L_i)(I − n nᵀ)` on each member's relative displacement (docs/method.md
+/// §8), kept as two transverse rows per member (`I − n nᵀ = p pᵀ + q qᵀ`), each on the
+/// member's own dofs, so that it assembles into the stiffness's pattern.
+#[derive(Debug, Clone)]
+pub struct GeometricStiffness {
+    /// Per link: its two transverse rows.
+    rows: Vec<[SparseRow; 2]>,
+    /// Per link: `t0 / L`, N/m (negative for a compressed bar).
+    weights: Vec<f64>,
+}
+
+impl GeometricStiffness {
+    /// `K_G(t0)` of `s` (the prestress of its links; a settlement's `k e_p` included, a
+    /// first-order effect).
+    pub fn of_prestress(s: &Structure) -> GeometricStiffness {
+        let rows = s
+            .links
+            .iter()
+            .map(|l| {
+                let (p, q) = transverse_pair(l.direction);
+                [l.row_along(p, &s.dof_of), l.row_along(q, &s.dof_of)]
+            })
+            .collect();
+        let weights = s.links.iter().map(|l| l.prestress / l.length).collect();
+        GeometricStiffness { rows, weights }
+    }
+
+    /// `values += K_G` (lower triangle on `pattern`, built from the structure's link rows).
+    pub fn add_to(&self, pattern: &StiffnessPattern, values: &mut [f64]) {
+        for (i, (rows, &w)) in self.rows.iter().zip(&self.weights).enumerate() {
+            if w != 0.0 {
+                pattern.add_outer(i, &rows[0], w, values);
+                pattern.add_outer(i, &rows[1], w, values);
+            }
+        }
+    }
+
+    /// `out += K_G v`.
+    pub fn apply_add(&self, v: &[f64], out: &mut [f64]) {
+        for (rows, &w) in self.rows.iter().zip(&self.weights) {
+            if w != 0.0 {
+                for row in rows {
+                    row.scatter(w * row.elongation(v), out);
+                }
+            }
+        }
+    }
+
+    /// `K_G v`.
+    pub fn product(&self, v: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; v.len()];
+        self.apply_add(v, &mut out);
+        out
+    }
+
+    /// `vᵀ K_G v`.
+    pub fn quadratic(&self, v: &[f64]) -> f64 {
+        self.rows
+            .iter()
+            .zip(&self.weights)
+            .map(|(rows, &w)| {
+                rows.iter()
+                    .map(|r| {
+                        let x = r.elongation(v);
+                        w * x * x
+                    })
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// Per link, `|t0 / L|`: the size of its geometric term.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+}
+
+/// `values = Σ_taut k Bᵢᵀ Bᵢ + K_G(t0)` (the tangent stiffness of the linear and prestress models
+/// on the taut set: docs/method.md §3, §8), lower triangle on `pattern`, built from the
+/// structure's link rows.
+pub fn assemble_tangent(
+    s: &Structure,
+    pattern: &StiffnessPattern,
+    taut: impl Fn(usize) -> bool,
+    values: &mut [f64],
+) {
+    pattern.assemble(
+        &s.link_dofs,
+        |i| if taut(i) { s.links[i].stiffness } else { 0.0 },
+        values,
+    );
+    if let Some(g) = &s.geometric {
+        g.add_to(pattern, values);
+    }
+}
+
+/// `out = (Σ_taut k Bᵢᵀ Bᵢ + K_G(t0)) v + μ v`, link by link ([`assemble_tangent`]'s matrix).
+pub fn tangent_product(s: &Structure, taut: &[bool], mu: f64, v: &[f64], out: &mut [f64]) {
+    out.iter_mut().zip(v).for_each(|(o, vi)| *o = mu * vi);
+    for ((link, row), _) in s
+        .links
+        .iter()
+        .zip(&s.link_dofs)
+        .zip(taut)
+        .filter(|(_, &taut)| taut)
+    {
+        row.scatter(link.stiffness * row.elongation(v), out);
+    }
+    if let Some(g) = &s.geometric {
+        g.apply_add(v, out);
+    }
+}
+
+/// The members on the current geometry `X + U` (docs/method.md §8): per link its current length
+/// ℓ and the row `∇ℓ` on the free dofs (the current unit vector n on b's dofs, −n on a's).
+#[derive(Debug, Clone)]
+pub struct CurrentGeometry {
+    /// Current lengths ℓ, m.
+    pub lengths: Vec<f64>,
+    /// Current unit vectors n, from a to b.
+    pub directions: Vec<[f64; 3]>,
+    /// `∇ℓ` on the free dofs, on the same dofs and in the same order as the link's row of B.
+    pub rows: Vec<SparseRow>,
+}
+
+impl CurrentGeometry {
+    /// The geometry at displacements U (free dofs; held components at their prescribed value).
+    pub fn of(s: &Structure, u: &[f64]) -> CurrentGeometry {
+        let full = s.full_displacements(u);
+        let position = |node: usize, k: usize| s.nodes[node][k] + full[3 * node + k];
+        let mut lengths = Vec::with_capacity(s.links.len());
+        let mut directions = Vec::with_capacity(s.links.len());
+        let mut rows = Vec::with_capacity(s.links.len());
+        for l in &s.links {
+            let d: [f64; 3] = std::array::from_fn(|k| position(l.b, k) - position(l.a, k));
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let n = [d[0] / len, d[1] / len, d[2] / len];
+            lengths.push(len);
+            directions.push(n);
+            rows.push(l.row_along(n, &s.dof_of));
+        }
+        CurrentGeometry {
+            lengths,
+            directions,
+            rows,
+        }
+    }
+
+    /// `values = Σ [[G, −G], [−G, G]]`, `G = k_t n nᵀ + (τ/ℓ)(I − n nᵀ)` per member (the
+    /// Hessian of §8's energy), lower triangle on `pattern`; `trial` the current trial tensions.
+    pub fn assemble_tangent(
+        &self,
+        s: &Structure,
+        trial: &[f64],
+        pattern: &StiffnessPattern,
+        values: &mut [f64],
+    ) {
+        values.iter_mut().for_each(|v| *v = 0.0);
+        for (i, l) in s.links.iter().enumerate() {
+            let t = trial[i];
+            pattern.add_outer(i, &self.rows[i], tangent_weight(l, t), values);
+            let transverse = tension(l, t) / self.lengths[i];
+            if transverse != 0.0 {
+                let (p, q) = transverse_pair(self.directions[i]);
+                pattern.add_outer(i, &l.row_along(p, &s.dof_of), transverse, values);
+                pattern.add_outer(i, &l.row_along(q, &s.dof_of), transverse, values);
+            }
+        }
+    }
+}
+
+impl Link {
+    /// The row `v·(U_b − U_a)` on the free dofs numbered by `dof_of` (clamped components left
+    /// out, zero coefficients kept): with v the member's unit vector, its row of B.
+    pub fn row_along(&self, v: [f64; 3], dof_of: &[usize]) -> SparseRow {
+        let free = |d: usize| (d != CLAMPED).then_some(d);
+        let ends = [(self.a, -1.0), (self.b, 1.0)];
+        SparseRow::new(ends.into_iter().flat_map(|(node, sign)| {
+            (0..3).map(move |k| (free(dof_of[3 * node + k]), sign * v[k]))
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transverse_pair_completes_an_orthonormal_basis() {
+        for n in [
+            [1.0, 0.0, 0.0],
+            [0.0, 0.6, 0.8],
+            normalised([1.0, -2.0, 0.5]),
+        ] {
+            let (p, q) = transverse_pair(n);
+            let d = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+            for (a, b, want) in [
+                (p, p, 1.0),
+                (q, q, 1.0),
+                (p, q, 0.0),
+                (p, n, 0.0),
+                (q, n, 0.0),
+            ] {
+                assert!((d(a, b) - want).abs() < 1e-14, "{a:?}·{b:?}");
+            }
+        }
+    }
+}
