@@ -351,9 +351,9 @@ fn format_row(r: &SummaryRow) -> String {
         r.solver,
         alpha_label(r.alpha),
         if r.converged {
-            "converged"
+            "converged".to_string()
         } else {
-            "NOT converged"
+            format!("NOT converged ({})", r.status)
         },
         r.iterations,
         r.slack_cables,
@@ -361,7 +361,7 @@ fn format_row(r: &SummaryRow) -> String {
         r.residual,
         1e3 * r.solve_seconds
     );
-    if !r.small_displacement_ok() {
+    if !r.status.no_answer() && !r.small_displacement_ok() {
         line.push_str(&format!(
             "\n  warning: {} at alpha = {}: a member's ends moved apart by {:.0} % of its length \
              (max deflection {:.3} m); the small-perturbation model (geometry not updated) is \

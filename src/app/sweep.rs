@@ -12,6 +12,7 @@ use crate::output::{
     FigureSettings, OpenError, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
+use crate::solvers::Status;
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent,
     Solution, Tee,
@@ -214,6 +215,7 @@ pub fn run(
     //    (newton and pcg-lcp use it; they stop on the same criterion as from a cold start).
     let mut rows = Vec::new();
     let mut failures = Vec::new();
+    let wants_eigenvalue = structure.model.has_geometric_stiffness() || case.output.stability;
     let mut previous: Vec<Option<Equilibrium>> = vec![None; solvers.len()];
     for &alpha in &case.load.alphas {
         let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
@@ -256,9 +258,13 @@ pub fn run(
                     )
                 }
             };
+            // 7. What the answer is beyond the solver's own stop: no equilibrium, or an
+            //    unstable one (docs/method.md §8).
+            let mut solution = solution;
+            let verdict = assess(&mut solution, &prepared, &load, wants_eigenvalue);
             previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
                 .then(|| solution.equilibrium.clone());
-            // 7. A non-finite answer (or a row it would give) is reported, never written.
+            // 8. A non-finite answer (or a row it would give) is reported, never written.
             let row = results::is_finite(&solution).then(|| {
                 SummaryRow::new(
                     key.solver,
@@ -266,6 +272,7 @@ pub fn run(
                     &load,
                     structure,
                     &solution,
+                    verdict.min_tangent_eigenvalue,
                     set_up.setup_seconds,
                 )
             });
@@ -281,18 +288,16 @@ pub fn run(
                 continue;
             };
             if !row.converged {
-                failures.push(format!(
-                    "{} at alpha = {}: not converged after {} iterations ({:?}), {} = {:e}; its \
-                     row says converged = false",
-                    row.solver,
-                    alpha_label(alpha),
-                    row.iterations,
-                    solution.info.status,
-                    solution.info.measure.short_name(),
-                    row.residual
-                ));
+                failures.push(not_converged_message(&row, &solution, &verdict));
             }
-            // 8. The files of this solve.
+            if row.status.no_answer() {
+                // 9. No answer: its row, and no file that would look like one.
+                sinks.end(&key, SolveEnd::NoAnswer { row: &row })?;
+                events(RunEvent::Row(&row));
+                rows.push(row);
+                continue;
+            }
+            // 9. The files of this solve.
             sinks.end(
                 &key,
                 SolveEnd::Solved {
@@ -304,10 +309,10 @@ pub fn run(
             rows.push(row);
         }
     }
-    // 9. The files of the whole sweep; the directory released.
+    // 10. The files of the whole sweep; the directory released.
     sinks.close()?;
     drop(sinks);
-    // 10. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
+    // 11. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
     let compare = case.output.plots && !case.output.compare_modules.is_empty();
     if let Some(out) = out.as_ref().filter(|_| compare) {
         events(RunEvent::Stage(
@@ -330,6 +335,92 @@ pub fn run(
             count: failures.len(),
             list: failure_list(&failures),
         })
+    }
+}
+
+/// What the sweep found of an answer beyond its solver's stop.
+struct Verdict {
+    /// The smallest tangent eigenvalue at the answer, when computed.
+    min_tangent_eigenvalue: Option<f64>,
+    /// Why the answer is no equilibrium, when it is none.
+    no_equilibrium: Option<crate::solvers::NoEquilibrium>,
+}
+
+/// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
+/// energy decreases without bound (no equilibrium exists: [`Status::NoEquilibrium`]); with
+/// `eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer where it
+/// is negative is an unstable equilibrium ([`Status::Unstable`]).
+fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue: bool) -> Verdict {
+    let s = &prepared.structure;
+    if !results::is_finite(solution) {
+        return Verdict {
+            min_tangent_eigenvalue: None,
+            no_equilibrium: None,
+        };
+    }
+    if let Some(none) = crate::solvers::no_equilibrium(s, &solution.equilibrium, load) {
+        solution.info.status = Status::NoEquilibrium;
+        return Verdict {
+            min_tangent_eigenvalue: None,
+            no_equilibrium: Some(none),
+        };
+    }
+    let min_tangent_eigenvalue = (eigenvalue && !solution.info.status.no_answer())
+        .then(|| results::smallest_tangent_eigenvalue(s, &solution.equilibrium, &prepared.taut));
+    if solution.info.status.converged() && min_tangent_eigenvalue.is_some_and(|v| v < 0.0) {
+        solution.info.status = Status::Unstable;
+    }
+    Verdict {
+        min_tangent_eigenvalue,
+        no_equilibrium: None,
+    }
+}
+
+/// The failure line of a row that did not converge: how it ended, and for no equilibrium the
+/// cables that went slack and the nodes of the mode.
+fn not_converged_message(row: &SummaryRow, solution: &Solution, verdict: &Verdict) -> String {
+    let head = format!("{} at alpha = {}", row.solver, alpha_label(row.alpha));
+    let ids = |ids: &[u64]| {
+        ids.iter()
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match (&verdict.no_equilibrium, row.status) {
+        (Some(none), _) => format!(
+            "{head}: no equilibrium: with cable(s) {} slack, a mechanism is left that the load \
+             works on (it moves nodes {}), so the energy decreases without bound; no \
+             displacement or tension file is written, and its row says converged = false, \
+             status = no_equilibrium. Add members or supports, prestress those cables, or model \
+             the geometric stiffness (`model.geometry`)",
+            ids(&none.slack_cables),
+            none.mode_nodes
+                .iter()
+                .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        (None, Status::LimitPoint) => format!(
+            "{head}: limit point: the load path could not be followed to this load (load \
+             increments halved below {} of the path from the last equilibrium); no \
+             displacement or tension file is written, and its row says converged = false, \
+             status = limit_point",
+            crate::solvers::newton::MIN_INCREMENT
+        ),
+        (None, Status::Unstable) => format!(
+            "{head}: an unstable equilibrium: the residual criterion holds, but the tangent \
+             stiffness has a negative eigenvalue ({:.3e} N/m): a saddle of the energy, which a \
+             load path would not stay on; its row says converged = false, status = unstable",
+            row.min_tangent_eigenvalue.unwrap_or(f64::NAN)
+        ),
+        _ => format!(
+            "{head}: not converged after {} iterations ({:?}), {} = {:e}; its row says \
+             converged = false",
+            row.iterations,
+            solution.info.status,
+            solution.info.measure.short_name(),
+            row.residual
+        ),
     }
 }
 

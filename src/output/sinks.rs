@@ -67,6 +67,11 @@ pub enum SolveEnd<'a> {
     },
     /// The answer has a non-finite value: no file of it is written.
     NonFinite,
+    /// The solve ended with no answer (no equilibrium, a limit point): its summary row only.
+    NoAnswer {
+        /// Its row of `summary.csv`.
+        row: &'a SummaryRow,
+    },
 }
 
 /// A family of output files.
@@ -306,7 +311,7 @@ impl<'s> PublishSink<'s> {
 impl Sink for PublishSink<'_> {
     fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
         match end {
-            SolveEnd::Solved { .. } => self.publish(),
+            SolveEnd::Solved { .. } | SolveEnd::NoAnswer { .. } => self.publish(),
             SolveEnd::NonFinite => {
                 let mut out = self.out.borrow_mut();
                 let root = out.root().to_path_buf();
@@ -352,11 +357,13 @@ impl Sink for StabilitySink<'_> {
             solver: row.solver.clone(),
             alpha: row.alpha,
             slack_cables: row.slack_cables,
-            min_tangent_eigenvalue: results::smallest_tangent_eigenvalue(
-                self.structure,
-                &solution.equilibrium,
-                self.taut,
-            ),
+            min_tangent_eigenvalue: row.min_tangent_eigenvalue.unwrap_or_else(|| {
+                results::smallest_tangent_eigenvalue(
+                    self.structure,
+                    &solution.equilibrium,
+                    self.taut,
+                )
+            }),
         };
         append(
             self.out,
@@ -382,7 +389,7 @@ impl<'s> SummarySink<'s> {
 
 impl Sink for SummarySink<'_> {
     fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { row, .. } = end else {
+        let (SolveEnd::Solved { row, .. } | SolveEnd::NoAnswer { row }) = end else {
             return Ok(());
         };
         append(self.out, "summary.csv", SUMMARY_HEADER, &summary_line(row))

@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::results;
-use crate::solvers::{displacement_residual, Equilibrium, Solution};
+use crate::solvers::{displacement_residual, Equilibrium, Solution, Status};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
@@ -29,8 +29,10 @@ pub struct SummaryRow {
     pub solver: String,
     /// Load factor.
     pub alpha: f64,
-    /// The solver's stopping criterion was met.
+    /// The solver's stopping criterion was met (and the answer is a stable equilibrium).
     pub converged: bool,
+    /// How the solve ended ([`Status::code`]).
+    pub status: Status,
     /// Iterations done.
     pub iterations: usize,
     /// Unilateral cables that are slack.
@@ -51,6 +53,9 @@ pub struct SummaryRow {
     pub slack_by_kind: [usize; results::SLACK_KINDS.len()],
     /// The largest relative displacement of a member's ends over its length.
     pub max_member_rotation: f64,
+    /// The smallest eigenvalue of the tangent stiffness at the answer, N/m, when computed
+    /// (models with geometric stiffness, or `output.stability`).
+    pub min_tangent_eigenvalue: Option<f64>,
     /// Set-up of the solver for this structure, s.
     pub setup_seconds: f64,
     /// This solve, s.
@@ -66,6 +71,7 @@ impl SummaryRow {
         load: &[f64],
         s: &Structure,
         solution: &Solution,
+        min_tangent_eigenvalue: Option<f64>,
         setup_seconds: f64,
     ) -> SummaryRow {
         let eq = &solution.equilibrium;
@@ -73,6 +79,8 @@ impl SummaryRow {
             solver: solver.to_string(),
             alpha,
             converged: solution.info.status.converged(),
+            status: solution.info.status,
+            min_tangent_eigenvalue,
             iterations: solution.info.iterations,
             slack_cables: eq.slack_count(),
             cables: s.n_cables(),
@@ -104,6 +112,7 @@ impl SummaryRow {
             self.residual,
             self.equilibrium_residual,
             self.max_member_rotation,
+            self.min_tangent_eigenvalue.unwrap_or(0.0),
         ]
         .iter()
         .all(|x| x.is_finite())
@@ -111,7 +120,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,status,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,min_tangent_eigenvalue,setup_seconds,solve_seconds";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
@@ -128,7 +137,8 @@ pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
     })
 }
 
-/// The line of `summary.csv` of `r` (no newline).
+/// The line of `summary.csv` of `r` (no newline). A row that is no answer
+/// ([`Status::no_answer`]) leaves the answer's columns (tension, deflection, rotation) empty.
 pub fn summary_line(r: &SummaryRow) -> String {
     let fraction = if r.cables > 0 {
         r.slack_cables as f64 / r.cables as f64
@@ -136,17 +146,25 @@ pub fn summary_line(r: &SummaryRow) -> String {
         0.0
     };
     let [lower, upper, bracing, diagonal, cable] = r.slack_by_kind;
+    let answer = |x: String| {
+        if r.status.no_answer() {
+            String::new()
+        } else {
+            x
+        }
+    };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{:e},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
+        r.status.code(),
         r.iterations,
         r.slack_cables,
         r.cables,
         fraction,
-        r.max_tension,
-        r.max_deflection,
+        answer(r.max_tension.to_string()),
+        answer(r.max_deflection.to_string()),
         r.residual,
         r.equilibrium_residual,
         r.search_updates,
@@ -155,8 +173,11 @@ pub fn summary_line(r: &SummaryRow) -> String {
         bracing,
         diagonal,
         cable,
-        r.max_member_rotation,
-        r.small_displacement_ok(),
+        answer(format!("{:e}", r.max_member_rotation)),
+        answer(r.small_displacement_ok().to_string()),
+        r.min_tangent_eigenvalue
+            .map(|v| format!("{v:e}"))
+            .unwrap_or_default(),
         r.setup_seconds,
         r.solve_seconds
     )

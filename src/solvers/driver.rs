@@ -6,6 +6,7 @@
 //! loop:
 //!     report the iterate (with e when a reference is given) to the observer
 //!     stop when the solver says so (converged or stalled), or at max_iterations
+//!     at iterations 16, 32, 64, …: stop when the iterate has run away (no equilibrium)
 //!     next_iter(state)
 //! answer ← iterate(state)
 //! ```
@@ -14,9 +15,14 @@
 //! measuring e and the observers' own work are not charged to the solve.
 
 use super::{
-    Equilibrium, IterationRecord, Measure, Observer, Reference, Solution, SolveInfo, Solver, Status,
+    no_equilibrium, Equilibrium, IterationRecord, Measure, Observer, Reference, Solution,
+    SolveInfo, Solver, Status,
 };
 use std::time::{Duration, Instant};
+
+/// The first iteration at which the driver checks an iterate for no equilibrium (then at every
+/// power of two).
+const RUNAWAY_FIRST_CHECK: usize = 16;
 
 /// Solver time, accumulated over the calls it times.
 #[derive(Default)]
@@ -78,6 +84,15 @@ pub fn drive_from<S: Solver + ?Sized>(
         }
         if progress.iteration >= solver.max_iterations() {
             break (Status::MaxIterations, progress);
+        }
+        // No equilibrium: the iterate has run away along a mechanism the load works on. Asked
+        // at iterations 16, 32, 64, …: a solver never spins to its cap, at the cost of a few
+        // iterates.
+        if progress.iteration >= RUNAWAY_FIRST_CHECK && progress.iteration.is_power_of_two() {
+            let iterate = clock.time(|| solver.iterate(&state));
+            if no_equilibrium(solver.structure(), &iterate, load).is_some() {
+                break (Status::NoEquilibrium, progress);
+            }
         }
         clock.time(|| solver.next_iter(&mut state));
     };

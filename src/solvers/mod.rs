@@ -8,6 +8,7 @@ mod energy_error;
 pub mod latin;
 mod method;
 pub mod newton;
+mod no_equilibrium;
 mod observer;
 pub mod pcg_lcp;
 mod residual;
@@ -19,6 +20,7 @@ mod taut;
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
+pub use no_equilibrium::{no_equilibrium, NoEquilibrium};
 pub use observer::{IterationRecord, Observer, Silent, Tee};
 pub use residual::{
     displacement_residual, relative_unbalance, unbalances, unbalances_on, Unbalances,

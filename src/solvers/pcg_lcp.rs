@@ -234,6 +234,10 @@ impl Solver for PcgLcp<'_> {
         Measure::ComplementarityResidual
     }
 
+    fn structure(&self) -> &Structure {
+        self.structure
+    }
+
     fn max_iterations(&self) -> usize {
         self.settings.max_iterations
     }

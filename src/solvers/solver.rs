@@ -5,6 +5,7 @@
 //! ([`super::driver::drive`]) does.
 
 use super::{Equilibrium, Measure, Status};
+use crate::structure::Structure;
 
 /// Where a state stands, as the solver sees it.
 #[derive(Debug, Clone, Copy)]
@@ -49,6 +50,9 @@ pub trait Solver {
 
     /// What [`Progress::residual`] measures.
     fn measure(&self) -> Measure;
+
+    /// The structure the solver is set up for.
+    fn structure(&self) -> &Structure;
 
     /// Iteration cap: the driver stops the solve there with [`Status::MaxIterations`].
     fn max_iterations(&self) -> usize;

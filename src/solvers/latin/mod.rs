@@ -600,6 +600,10 @@ impl Solver for Latin<'_> {
         Measure::Indicator
     }
 
+    fn structure(&self) -> &Structure {
+        self.structure
+    }
+
     fn max_iterations(&self) -> usize {
         self.settings.max_iterations
     }

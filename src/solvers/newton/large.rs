@@ -194,7 +194,7 @@ impl<'s> LargeNewton<'s> {
     /// length and the evaluation there; `None` when ΔU is not a descent direction.
     fn line_search(&self, state: &LargeState, step: &[f64]) -> Option<(f64, Evaluation)> {
         let slope0 = dot(&state.eval.gradient, step);
-        if !(slope0 < 0.0) {
+        if slope0.is_nan() || slope0 >= 0.0 {
             return None;
         }
         let at = |length: f64| {
@@ -301,6 +301,10 @@ impl Solver for LargeNewton<'_> {
 
     fn measure(&self) -> Measure {
         Measure::EquilibriumResidual
+    }
+
+    fn structure(&self) -> &Structure {
+        self.structure
     }
 
     fn max_iterations(&self) -> usize {

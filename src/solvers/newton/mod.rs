@@ -365,6 +365,10 @@ impl Solver for Newton<'_> {
         Measure::EquilibriumResidual
     }
 
+    fn structure(&self) -> &Structure {
+        self.structure
+    }
+
     fn max_iterations(&self) -> usize {
         self.settings.max_iterations
     }
