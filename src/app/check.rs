@@ -6,7 +6,9 @@ use crate::case::Case;
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
-use crate::structure::{ModuleKind, Structure};
+use crate::structure::{
+    prestress_stability, GeometricModel, ModuleKind, PrestressStability, Structure,
+};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -44,6 +46,13 @@ pub struct ModelReport {
     pub counts: EquilibriumCounts,
     /// The lower cable prestress p, N.
     pub prestress: f64,
+    /// The geometric effects modelled (`model.geometry`).
+    pub geometry: GeometricModel,
+    /// The prestress-stability test (docs/method.md §8), when there are mechanisms and at most
+    /// [`crate::structure::DENSE_LIMIT`] free dofs.
+    pub stability: Option<PrestressStability>,
+    /// The modes the prestress does not stiffen, described (nodes they move most).
+    pub unstiffened_modes: Vec<String>,
     /// The load factors.
     pub alphas: Vec<f64>,
     /// The solvers.
@@ -112,9 +121,24 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         free_prestress_imbalance,
         counts: equilibrium_counts(&s),
         prestress: s.prestress_scale,
+        geometry: case.model,
+        stability: None,
+        unstiffened_modes: Vec::new(),
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
     };
+    let mut model = model;
+    if model.counts.mechanisms > 0 {
+        model.stability = prestress_stability(&s);
+        if let Some(st) = &model.stability {
+            model.unstiffened_modes = st
+                .unstiffened()
+                .take(5)
+                .enumerate()
+                .map(|(k, mode)| mode.describe(&s, k + 1))
+                .collect();
+        }
+    }
     let mut report = CheckReport {
         model,
         stiffness_regular: false,
@@ -128,6 +152,13 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         return report;
     }
     report.stiffness_regular = true;
+    if let Some(&method) = case.solver.methods.iter().find(|m| !m.supports(case.model)) {
+        report.error = Some(SetupError::ModelNotSupported {
+            solver: method.name(),
+            model: case.model.name(),
+        });
+        return report;
+    }
     for &method in &case.solver.methods {
         let Some(settings) = case.solver.latin_settings(method) else {
             continue;
@@ -179,6 +210,18 @@ impl fmt::Display for CheckReport {
         writeln!(f, "bars            {}", m.bars)?;
         writeln!(
             f,
+            "model           geometry = {} ({})",
+            m.geometry.name(),
+            match m.geometry {
+                GeometricModel::Linear => "equilibrium on the initial geometry",
+                GeometricModel::Prestress =>
+                    "plus the geometric stiffness of the prestress, K + K_G(t0)",
+                GeometricModel::Large =>
+                    "the exact-length law on the current geometry, newton along the load path",
+            }
+        )?;
+        writeln!(
+            f,
             "max |B^T t0|    {:.3e} N ({:.1e} of the prestress scale)",
             m.prestress_imbalance,
             if m.prestress > 0.0 {
@@ -195,12 +238,41 @@ impl fmt::Display for CheckReport {
             c.free_dofs, c.members, c.rank, c.self_stress_states, c.mechanisms
         )?;
         if c.mechanisms > 0 {
-            writeln!(
-                f,
-                "                a mechanism is refused: the model is linear in the displacements and has no \
-                 geometric stiffness, so a structure stabilised only by its prestress (e.g. a tensegrity prism) \
-                 cannot be solved; hold more components (`supports.fix`) or add members"
-            )?;
+            match &m.stability {
+                Some(st) if st.stable() => writeln!(
+                    f,
+                    "                prestress-stable: the prestress stiffens all {} mechanism(s) \
+                     (smallest eigenvalue of M^T K_G M {:.3e} N/m): solvable with \
+                     model.geometry = prestress or large{}",
+                    st.mechanisms,
+                    st.smallest().unwrap_or(0.0),
+                    if m.geometry.has_geometric_stiffness() {
+                        ""
+                    } else {
+                        " (refused with the linear model, which has no geometric stiffness)"
+                    }
+                )?,
+                Some(st) => {
+                    writeln!(
+                        f,
+                        "                not prestress-stable: {} of {} mechanism(s) not stiffened \
+                         by the prestress (refused by every model); hold more components \
+                         (`supports.fix`), add members or change the prestress:",
+                        st.unstiffened().count(),
+                        st.mechanisms
+                    )?;
+                    for mode in &m.unstiffened_modes {
+                        writeln!(f, "                  {mode}")?;
+                    }
+                }
+                None => writeln!(
+                    f,
+                    "                a mechanism: refused with model.geometry = linear; prestress \
+                     stability is tested here up to {} free dofs (with geometric stiffness, run \
+                     factorizes K + K_G(t0) and refuses it when not positive definite)",
+                    crate::structure::DENSE_LIMIT
+                )?,
+            }
         }
         let alphas: Vec<String> = m.alphas.iter().map(|&a| alpha_label(a)).collect();
         writeln!(f, "load factors    {}", alphas.join(", "))?;
@@ -219,7 +291,15 @@ impl fmt::Display for CheckReport {
         if !self.stiffness_regular {
             return Ok(());
         }
-        writeln!(f, "stiffness       positive definite with every cable taut")?;
+        writeln!(
+            f,
+            "stiffness       positive definite with every cable taut{}",
+            if m.geometry.has_geometric_stiffness() {
+                " (K + K_G(t0), the prestress's geometric stiffness included)"
+            } else {
+                ""
+            }
+        )?;
         for LatinReport {
             method,
             settings,

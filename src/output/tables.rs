@@ -120,7 +120,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,status,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,min_tangent_eigenvalue,setup_seconds,solve_seconds";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
@@ -154,11 +154,10 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
-        r.status.code(),
         r.iterations,
         r.slack_cables,
         r.cables,
@@ -175,11 +174,12 @@ pub fn summary_line(r: &SummaryRow) -> String {
         cable,
         answer(format!("{:e}", r.max_member_rotation)),
         answer(r.small_displacement_ok().to_string()),
+        r.setup_seconds,
+        r.solve_seconds,
+        r.status.code(),
         r.min_tangent_eigenvalue
             .map(|v| format!("{v:e}"))
             .unwrap_or_default(),
-        r.setup_seconds,
-        r.solve_seconds
     )
 }
 

@@ -5,7 +5,7 @@ use super::SetupError;
 use crate::linalg::{
     factorize_counting_zero_modes, NodeOrdering, SparseCholesky, StiffnessPattern,
 };
-use crate::structure::{largest_moving_nodes, law, prestress_stability, Mode, Structure};
+use crate::structure::{law, prestress_stability, Structure};
 use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
@@ -82,7 +82,7 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
             .unstiffened()
             .take(3)
             .enumerate()
-            .map(|(k, m)| describe_mode(s, k + 1, m))
+            .map(|(k, m)| m.describe(s, k + 1))
             .collect();
         modes.join("; ")
     };
@@ -135,22 +135,4 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
             },
         },
     }
-}
-
-/// `mode 1 (prestress stiffness -2.1e3 N/m) moves nodes 4 (0.57, 0.1, 0), 5 (…), 6 (…)`.
-fn describe_mode(s: &Structure, number: usize, mode: &Mode) -> String {
-    let nodes: Vec<String> = largest_moving_nodes(s, &mode.displacement, 3)
-        .into_iter()
-        .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
-        .collect();
-    format!(
-        "mode {number} (prestress stiffness {:.3e} N/m{}) moves nodes {}",
-        mode.stiffness,
-        if mode.translation {
-            ", a rigid translation: too few supports"
-        } else {
-            ""
-        },
-        nodes.join(", ")
-    )
 }

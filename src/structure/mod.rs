@@ -16,7 +16,9 @@ pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout};
 pub use law::{GeometricModel, GeometricStiffness};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
-pub use stability::{largest_moving_nodes, prestress_stability, Mode, PrestressStability};
+pub use stability::{
+    largest_moving_nodes, prestress_stability, Mode, PrestressStability, DENSE_LIMIT,
+};
 pub use statics::{equilibrium_counts, self_stress_through, EquilibriumCounts, SelfStressRefusal};
 
 use crate::linalg::SparseRow;

@@ -29,6 +29,27 @@ pub struct Mode {
     pub translation: bool,
 }
 
+impl Mode {
+    /// `mode 1 (prestress stiffness -2.1e3 N/m) moves nodes 4 (0.57, 0.10, 0.00), 5 (…), 6 (…)`:
+    /// the three nodes it moves most, by id, with their motion (the mode of unit norm).
+    pub fn describe(&self, s: &Structure, number: usize) -> String {
+        let nodes: Vec<String> = largest_moving_nodes(s, &self.displacement, 3)
+            .into_iter()
+            .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
+            .collect();
+        format!(
+            "mode {number} (prestress stiffness {:.3e} N/m{}) moves nodes {}",
+            self.stiffness,
+            if self.translation {
+                ", a rigid translation: too few supports"
+            } else {
+                ""
+            },
+            nodes.join(", ")
+        )
+    }
+}
+
 /// The prestress-stability test of a structure.
 #[derive(Debug, Clone)]
 pub struct PrestressStability {
