@@ -1,0 +1,246 @@
+#!/usr/bin/env python3
+"""OpenSees corotational peer of tensolve's large-displacement model (SPEC §8).
+
+    python3 scripts/peers/corot.py CASE.toml OUT_DIR [--increments 20]
+
+Reads a `[structure]` case (its two tables, `[[supports.fix]]` by `nodes` or `box` with
+`dofs`, `[[load.point]]`, `load.nodal`, `load.alpha`, `cables.unilateral`) and solves it as a
+3-D OpenSees truss of `corotTruss` elements: member j of section S carries
+`InitStressMaterial` (σ0 = t0 / S) over `Elastic E 0 Eneg`, Eneg = 0 for unilateral cables and
+E otherwise. With engineering strain on the initial length L this is tensolve's law on the exact
+length, τ = t0 + (E S / L)(ℓ − L), clipped at 0 for unilateral cables. The prestress being a
+self-stress, α = 0 is the prestressed state (no displacement).
+
+The load path is the case's α in increasing order, each reached from the previous one (from 0
+for the first) in `--increments` equal load steps (LoadControl), each step solved by Newton to
+an unbalance of 1e-12 · (‖α_max F‖ + ‖Σ|t0| n‖) over the free dofs (UmfPack). For each α it
+writes `OUT_DIR/displacements/alpha{α}.csv` (node,ux,uy,uz) and `OUT_DIR/forces/alpha{α}.csv`
+(member,kind,force; axial force, tension > 0), α labelled as tensolve labels its files.
+
+Refused (exit 2, with the reason): a `[grid]` case, a non-zero `supports.fix` displacement,
+`load.self_weight`, `prestress.from`. Exit 1 when a load step does not converge.
+Needs `pip install openseespy numpy` (on Debian also `apt-get install libblas3 liblapack3
+libgfortran5`).
+"""
+
+import argparse
+import csv
+import os
+import sys
+import tomllib
+from decimal import Decimal
+
+import numpy as np
+
+NODE_HEADER = ["node", "x", "y", "z"]
+MEMBER_HEADER = ["member", "a", "b", "kind", "young", "section", "prestress"]
+AXES = {"x": 0, "y": 1, "z": 2}
+RELATIVE_UNBALANCE = 1e-12
+MAX_NEWTON_ITERATIONS = 50
+
+
+class CaseError(Exception):
+    """A case this peer cannot read or does not support (exit 2)."""
+
+
+def alpha_label(alpha):
+    """α as tensolve writes it in file names: Rust's `{}` for f64 (1 → `1`, 0.05 → `0.05`),
+    or its `{:e}` (`1e-250`) when that is longer than 24 characters."""
+    text = repr(float(alpha))
+    full = format(Decimal(text), "f")
+    if full.endswith(".0"):
+        full = full[:-2]
+    if len(full) <= 24:
+        return full
+    mantissa, _, exponent = text.partition("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def read_table(path, header):
+    """Rows of a tensolve CSV table (lines starting with `#` ignored), checked against its header."""
+    with open(path, newline="") as f:
+        lines = [line for line in f if not line.startswith("#")]
+    rows = list(csv.reader(lines))
+    if not rows or rows[0][: len(header)] != header:
+        raise CaseError(f"{path}: the header must start with {','.join(header)}")
+    return [dict(zip(rows[0], row)) for row in rows[1:] if row]
+
+
+def selected_nodes(entry, key, ids, X):
+    """Node indices chosen by a `nodes = [...]` or `box = {min, max}` entry."""
+    if ("nodes" in entry) == ("box" in entry):
+        raise CaseError(f"{key}: give exactly one of `nodes` and `box`")
+    if "nodes" in entry:
+        index = {node: i for i, node in enumerate(ids)}
+        unknown = [n for n in entry["nodes"] if n not in index]
+        if unknown:
+            raise CaseError(f"{key}.nodes: {unknown} are not ids of the nodes table")
+        return [index[n] for n in entry["nodes"]]
+    lo, hi = np.array(entry["box"]["min"], float), np.array(entry["box"]["max"], float)
+    tol = 1e-9 * max(np.abs(X).max(), 1.0)
+    inside = np.all((X >= lo - tol) & (X <= hi + tol), axis=1)
+    if not inside.any():
+        raise CaseError(f"{key}.box holds no node")
+    return list(np.flatnonzero(inside))
+
+
+def load_case(path):
+    """The structure, supports, load and α of a tensolve `[structure]` case."""
+    with open(path, "rb") as f:
+        case = tomllib.load(f)
+    if "structure" not in case:
+        raise CaseError("only `[structure]` cases are supported (write a grid as tables with scripts/grid_csv.py)")
+    if "self_weight" in case.get("load", {}):
+        raise CaseError("`load.self_weight` is not supported by this peer")
+    if "from" in case.get("prestress", {}):
+        raise CaseError("`prestress.from` is not supported by this peer: give the prestress in the members table")
+    if "alpha" not in case.get("load", {}):
+        raise CaseError("`load.alpha` is required")
+    base = os.path.dirname(os.path.abspath(path))
+    nodes = read_table(os.path.join(base, case["structure"]["nodes"]), NODE_HEADER)
+    members = read_table(os.path.join(base, case["structure"]["members"]), MEMBER_HEADER)
+    ids = [int(r["node"]) for r in nodes]
+    X = np.array([[float(r["x"]), float(r["y"]), float(r["z"])] for r in nodes])
+    index = {node: i for i, node in enumerate(ids)}
+    unilateral = case.get("cables", {}).get("unilateral", True)
+    bars = []
+    for r in members:
+        if r["kind"] not in ("bar", "cable"):
+            raise CaseError(f"member {r['member']}: kind must be bar or cable, not {r['kind']!r}")
+        bars.append(r["kind"] == "bar")
+    held = np.zeros(X.shape, dtype=bool)
+    for i, fix in enumerate(case.get("supports", {}).get("fix", [])):
+        key = f"supports.fix[{i}]"
+        if any(d != 0.0 for d in fix.get("displacement", [0.0, 0.0, 0.0])):
+            raise CaseError(f"{key}.displacement: prescribed (non-zero) displacements are not supported by this peer")
+        dofs = [AXES[d] for d in fix.get("dofs", ["x", "y", "z"])]
+        for n in selected_nodes(fix, key, ids, X):
+            held[n, dofs] = True
+    F = np.zeros(X.shape)
+    F[~held.all(axis=1)] += np.array(case["load"].get("nodal", [0.0, 0.0, 0.0]), float)
+    for i, point in enumerate(case["load"].get("point", [])):
+        for n in selected_nodes(point, f"load.point[{i}]", ids, X):
+            F[n] += np.array(point["force"], float)
+    F[held] = 0.0
+    alpha = case["load"]["alpha"]
+    if isinstance(alpha, dict):
+        lo, hi, steps = float(alpha["from"]), float(alpha["to"]), int(alpha["steps"])
+        # tensolve's values to the last bit (its file names carry them): rounded to 12 digits.
+        alpha = [lo] if steps == 1 else [float(f"{lo + (hi - lo) * i / (steps - 1):.11e}") for i in range(steps)]
+    return {
+        "ids": ids,
+        "X": X,
+        "member_ids": [int(r["member"]) for r in members],
+        "ends": np.array([[index[int(r["a"])], index[int(r["b"])]] for r in members]),
+        "bar": np.array(bars),
+        "young": np.array([float(r["young"]) for r in members]),
+        "section": np.array([float(r["section"]) for r in members]),
+        "t0": np.array([float(r["prestress"]) for r in members]),
+        "unilateral": unilateral,
+        "held": held,
+        "F": F,
+        "alphas": sorted({float(a) for a in alpha}),
+        "geometry": case.get("model", {}).get("geometry"),
+    }
+
+
+def unbalance_scale(c):
+    """‖α_max F‖ + ‖Σ |t0| |n|‖ over the free dofs: what the Newton test is relative to."""
+    d = c["X"][c["ends"][:, 1]] - c["X"][c["ends"][:, 0]]
+    share = np.abs(d / np.linalg.norm(d, axis=1)[:, None]) * np.abs(c["t0"])[:, None]
+    internal = np.zeros(c["X"].shape)
+    np.add.at(internal, c["ends"][:, 0], share)
+    np.add.at(internal, c["ends"][:, 1], share)
+    free = ~c["held"]
+    load = max(abs(a) for a in c["alphas"]) * np.linalg.norm(c["F"][free])
+    return load + np.linalg.norm(internal[free])
+
+
+def build_model(c, ops):
+    """The OpenSees model: nodes, supports, corotTruss members and the reference load (α = 1)."""
+    ops.wipe()
+    ops.model("basic", "-ndm", 3, "-ndf", 3)
+    for i, (x, y, z) in enumerate(c["X"]):
+        ops.node(i + 1, float(x), float(y), float(z))
+        if c["held"][i].any():
+            ops.fix(i + 1, *(int(h) for h in c["held"][i]))
+    for j, (a, b) in enumerate(c["ends"]):
+        e, s, t0 = c["young"][j], c["section"][j], c["t0"][j]
+        negative = e if c["bar"][j] or not c["unilateral"] else 0.0
+        ops.uniaxialMaterial("Elastic", 2 * j + 1, e, 0.0, negative)
+        material = 2 * j + 1
+        if t0 != 0.0:
+            ops.uniaxialMaterial("InitStressMaterial", 2 * j + 2, 2 * j + 1, t0 / s)
+            material = 2 * j + 2
+        ops.element("corotTruss", j + 1, int(a) + 1, int(b) + 1, float(s), material)
+    ops.timeSeries("Linear", 1)
+    ops.pattern("Plain", 1, 1)
+    for i, f in enumerate(c["F"]):
+        if np.any(f != 0.0):
+            ops.load(i + 1, *(float(v) for v in f))
+    ops.constraints("Plain")
+    ops.numberer("RCM")
+    ops.system("UmfPack")
+    ops.test("NormUnbalance", RELATIVE_UNBALANCE * unbalance_scale(c), MAX_NEWTON_ITERATIONS)
+    ops.algorithm("Newton")
+    ops.integrator("LoadControl", 0.0)
+    ops.analysis("Static")
+
+
+def write_state(c, ops, out_dir, alpha):
+    """displacements/alpha{α}.csv and forces/alpha{α}.csv of the current state."""
+    label = alpha_label(alpha)
+    for sub in ("displacements", "forces"):
+        os.makedirs(os.path.join(out_dir, sub), exist_ok=True)
+    with open(os.path.join(out_dir, "displacements", f"alpha{label}.csv"), "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["node", "ux", "uy", "uz"])
+        for i, node in enumerate(c["ids"]):
+            w.writerow([node, *(repr(float(u)) for u in ops.nodeDisp(i + 1))])
+    with open(os.path.join(out_dir, "forces", f"alpha{label}.csv"), "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["member", "kind", "force"])
+        for j, member in enumerate(c["member_ids"]):
+            force = ops.basicForce(j + 1)[0]
+            w.writerow([member, "bar" if c["bar"][j] else "cable", repr(float(force))])
+
+
+def solve(c, out_dir, increments):
+    """Follow the load path; write each α's state. Returns False when a step fails."""
+    import openseespy.opensees as ops
+
+    build_model(c, ops)
+    current = 0.0
+    for alpha in c["alphas"]:
+        if alpha != current:
+            ops.integrator("LoadControl", (alpha - current) / increments)
+            if ops.analyze(increments) != 0:
+                print(f"corot: no convergence on the way from alpha = {current} to {alpha}", file=sys.stderr)
+                return False
+            current = alpha
+        write_state(c, ops, out_dir, alpha)
+    ops.wipe()
+    return True
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case")
+    parser.add_argument("out_dir")
+    parser.add_argument("--increments", type=int, default=20, help="load steps between two α (default 20)")
+    args = parser.parse_args()
+    if args.increments < 1:
+        parser.error("--increments must be at least 1")
+    try:
+        case = load_case(args.case)
+    except (CaseError, KeyError, ValueError, OSError, tomllib.TOMLDecodeError) as e:
+        print(f"corot: {args.case}: {e}", file=sys.stderr)
+        return 2
+    if case["geometry"] not in (None, "large"):
+        print(f"corot: note: the case asks for geometry = {case['geometry']!r}; this peer solves large displacements",
+              file=sys.stderr)
+    return 0 if solve(case, args.out_dir, args.increments) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
