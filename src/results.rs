@@ -135,12 +135,7 @@ pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautS
     match s.model {
         GeometricModel::Large => {
             let current = CurrentGeometry::of(s, &eq.displacements);
-            let trial: Vec<f64> = s
-                .links
-                .iter()
-                .zip(&current.lengths)
-                .map(|(l, &len)| law::current_trial_tension(s, l, len))
-                .collect();
+            let trial: Vec<f64> = current.trial_tensions(s);
             current.assemble_tangent(s, &trial, pattern, &mut values);
         }
         _ => law::assemble_tangent(s, pattern, |i| !eq.slack[i], &mut values),

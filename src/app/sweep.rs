@@ -358,7 +358,12 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
             no_equilibrium: None,
         };
     }
-    if let Some(none) = crate::solvers::no_equilibrium(s, &solution.equilibrium, load) {
+    let found = solution
+        .info
+        .no_equilibrium
+        .clone()
+        .or_else(|| crate::solvers::no_equilibrium(s, &solution.equilibrium, load));
+    if let Some(none) = found {
         solution.info.status = Status::NoEquilibrium;
         return Verdict {
             min_tangent_eigenvalue: None,

@@ -66,6 +66,8 @@ pub fn drive_from<S: Solver + ?Sized>(
         Some(previous) => solver.warm_init(load, previous),
         None => solver.init(load),
     });
+    let mut last_checked: Option<Vec<f64>> = None;
+    let mut runaway = None;
     let (status, progress) = loop {
         let progress = solver.progress(&state);
         if progress.iteration > 0 || S::INIT_IS_ITERATE {
@@ -85,14 +87,25 @@ pub fn drive_from<S: Solver + ?Sized>(
         if progress.iteration >= solver.max_iterations() {
             break (Status::MaxIterations, progress);
         }
-        // No equilibrium: the iterate has run away along a mechanism the load works on. Asked
-        // at iterations 16, 32, 64, …: a solver never spins to its cap, at the cost of a few
-        // iterates.
+        // No equilibrium: the iterates run away along a mechanism the load works on. Asked
+        // at iterations 16, 32, 64, … of the change since the last check (the runaway
+        // direction, free of the part that converges): a solver never spins to its cap, at the
+        // cost of a few iterates.
         if progress.iteration >= RUNAWAY_FIRST_CHECK && progress.iteration.is_power_of_two() {
-            let iterate = clock.time(|| solver.iterate(&state));
-            if no_equilibrium(solver.structure(), &iterate, load).is_some() {
+            let mut iterate = clock.time(|| solver.iterate(&state));
+            let displacements = iterate.displacements.clone();
+            if let Some(last) = &last_checked {
+                iterate
+                    .displacements
+                    .iter_mut()
+                    .zip(last)
+                    .for_each(|(u, v)| *u -= v);
+            }
+            if let Some(found) = no_equilibrium(solver.structure(), &iterate, load) {
+                runaway = Some(found);
                 break (Status::NoEquilibrium, progress);
             }
+            last_checked = Some(displacements);
         }
         clock.time(|| solver.next_iter(&mut state));
     };
@@ -106,6 +119,7 @@ pub fn drive_from<S: Solver + ?Sized>(
             residual: progress.residual,
             setups: progress.setups,
             solve_seconds: clock.seconds(),
+            no_equilibrium: runaway,
         },
     }
 }

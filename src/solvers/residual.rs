@@ -85,11 +85,11 @@ pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
     match s.model {
         GeometricModel::Large => {
             let current = law::CurrentGeometry::of(s, u);
-            let tensions: Vec<f64> = s
-                .links
+            let tensions: Vec<f64> = current
+                .trial_tensions(s)
                 .iter()
-                .zip(&current.lengths)
-                .map(|(l, &len)| law::tension(l, law::current_trial_tension(s, l, len)))
+                .zip(&s.links)
+                .map(|(&t, l)| law::tension(l, t))
                 .collect();
             unbalances_on(s, &current.rows, &tensions, None, load, &mut r).relative
         }

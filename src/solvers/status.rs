@@ -112,4 +112,6 @@ pub struct SolveInfo {
     pub setups: usize,
     /// Wall time of the iterations (the solver's own work, observers excluded), s.
     pub solve_seconds: f64,
+    /// With [`Status::NoEquilibrium`] found by the driver: the runaway direction's certificate.
+    pub no_equilibrium: Option<super::NoEquilibrium>,
 }

@@ -135,14 +135,7 @@ pub fn slack_flags(s: &Structure, trial: &[f64], rule: SlackRule) -> Vec<bool> {
 /// current one (`large`).
 pub fn trial_tensions(s: &Structure, u: &[f64]) -> Vec<f64> {
     match s.model {
-        GeometricModel::Large => {
-            let current = CurrentGeometry::of(s, u);
-            s.links
-                .iter()
-                .zip(&current.lengths)
-                .map(|(l, &len)| current_trial_tension(s, l, len))
-                .collect()
-        }
+        GeometricModel::Large => CurrentGeometry::of(s, u).trial_tensions(s),
         _ => s
             .links
             .iter()
@@ -160,11 +153,11 @@ fn imposed_elongation(s: &Structure, l: &Link) -> f64 {
         .sum()
 }
 
-/// `t0 + k (ℓ − L)` at current length ℓ (docs/method.md §8): the exact length counts the
+/// `t0 + k (ℓ − L)` at the elongation `ℓ − L` (docs/method.md §8): the exact length counts the
 /// prescribed displacements itself, so the linear `k e_p` is taken out of the prestress.
 #[inline]
-pub fn current_trial_tension(s: &Structure, l: &Link, length: f64) -> f64 {
-    l.prestress - l.stiffness * imposed_elongation(s, l) + l.stiffness * (length - l.length)
+fn current_trial_tension(s: &Structure, l: &Link, elongation: f64) -> f64 {
+    l.prestress - l.stiffness * imposed_elongation(s, l) + l.stiffness * elongation
 }
 
 /// Two unit vectors orthogonal to the unit vector n and to each other: `I − n nᵀ = p pᵀ + q qᵀ`.
@@ -312,6 +305,10 @@ pub fn tangent_product(s: &Structure, taut: &[bool], mu: f64, v: &[f64], out: &m
 pub struct CurrentGeometry {
     /// Current lengths ℓ, m.
     pub lengths: Vec<f64>,
+    /// `ℓ − L`, m, computed as `(2 d0·Δu + Δu·Δu) / (ℓ + L)` (d0 the initial member vector, Δu
+    /// its ends' relative displacement): no cancellation at small displacements, where
+    /// `ℓ − L` by subtraction loses `1e-16 ℓ · k` of tension, above newton's tolerance.
+    pub elongations: Vec<f64>,
     /// Current unit vectors n, from a to b.
     pub directions: Vec<[f64; 3]>,
     /// `∇ℓ` on the free dofs, on the same dofs and in the same order as the link's row of B.
@@ -322,23 +319,38 @@ impl CurrentGeometry {
     /// The geometry at displacements U (free dofs; held components at their prescribed value).
     pub fn of(s: &Structure, u: &[f64]) -> CurrentGeometry {
         let full = s.full_displacements(u);
-        let position = |node: usize, k: usize| s.nodes[node][k] + full[3 * node + k];
         let mut lengths = Vec::with_capacity(s.links.len());
+        let mut elongations = Vec::with_capacity(s.links.len());
         let mut directions = Vec::with_capacity(s.links.len());
         let mut rows = Vec::with_capacity(s.links.len());
         for l in &s.links {
-            let d: [f64; 3] = std::array::from_fn(|k| position(l.b, k) - position(l.a, k));
+            let d0: [f64; 3] = std::array::from_fn(|k| s.nodes[l.b][k] - s.nodes[l.a][k]);
+            let du: [f64; 3] = std::array::from_fn(|k| full[3 * l.b + k] - full[3 * l.a + k]);
+            let d: [f64; 3] = std::array::from_fn(|k| d0[k] + du[k]);
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            // ℓ² − L² = 2 d0·Δu + Δu·Δu, so ℓ − L = (ℓ² − L²) / (ℓ + L).
+            let squares: f64 = (0..3).map(|k| 2.0 * d0[k] * du[k] + du[k] * du[k]).sum();
             let n = [d[0] / len, d[1] / len, d[2] / len];
             lengths.push(len);
+            elongations.push(squares / (len + l.length));
             directions.push(n);
             rows.push(l.row_along(n, &s.dof_of));
         }
         CurrentGeometry {
             lengths,
+            elongations,
             directions,
             rows,
         }
+    }
+
+    /// The trial tensions `t0 + k (ℓ − L)` of every member (before a cable's clipping).
+    pub fn trial_tensions(&self, s: &Structure) -> Vec<f64> {
+        s.links
+            .iter()
+            .zip(&self.elongations)
+            .map(|(l, &e)| current_trial_tension(s, l, e))
+            .collect()
     }
 
     /// `values = Σ [[G, −G], [−G, G]]`, `G = k_t n nᵀ + (τ/ℓ)(I − n nᵀ)` per member (the

@@ -114,12 +114,7 @@ impl<'s> LargeNewton<'s> {
     fn evaluate(&self, load: &[f64], u: &[f64]) -> Evaluation {
         let s = self.structure;
         let current = CurrentGeometry::of(s, u);
-        let trial: Vec<f64> = s
-            .links
-            .iter()
-            .zip(&current.lengths)
-            .map(|(l, &len)| law::current_trial_tension(s, l, len))
-            .collect();
+        let trial: Vec<f64> = current.trial_tensions(s);
         let tensions: Vec<f64> = s
             .links
             .iter()
@@ -383,12 +378,7 @@ impl Solver for LargeNewton<'_> {
 
     /// `e = ℓ(U) − L`.
     fn elongations(&self, state: &LargeState) -> Vec<f64> {
-        self.structure
-            .links
-            .iter()
-            .zip(&state.eval.current.lengths)
-            .map(|(l, &len)| len - l.length)
-            .collect()
+        state.eval.current.elongations.clone()
     }
 
     fn iterate(&self, state: &LargeState) -> Equilibrium {
