@@ -15,10 +15,10 @@ use faer::Mat;
 use std::path::Path;
 use std::time::Duration;
 use tensolve::linalg::PROBE_ITERATIONS;
-use tensolve::solvers::newton::{Newton, NewtonSettings};
+use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
-use tensolve::structure::Structure;
+use tensolve::structure::{GeometricModel, Structure};
 
 /// Sets a solver up on a structure and its taut stiffness (both borrowed).
 type Build = for<'a> fn(&'a Structure, &'a TautStiffness) -> Box<dyn AnySolver + 'a>;
@@ -291,6 +291,33 @@ fn sweep(c: &mut Criterion) {
                 run_sweep(&mut pcg, &structure, &alphas, warm)
             })
         });
+    }
+    // The geometric models (docs/method.md §8) on the same sweep: `prestress` warm-started like
+    // `newton/warm`; `large` along its load path (each α from the previous equilibrium).
+    for (name, model) in [
+        ("newton/prestress-warm", GeometricModel::Prestress),
+        ("newton/large", GeometricModel::Large),
+    ] {
+        let structure = paper_structure().with_model(model);
+        let taut = taut_stiffness(&structure);
+        let solve = |structure: &Structure, taut: &TautStiffness| -> (usize, String) {
+            if model == GeometricModel::Large {
+                let mut large = LargeNewton::new(structure, taut, NewtonSettings::default());
+                let iterations = run_sweep(&mut large, structure, &alphas, true);
+                (iterations, format!("{:?}", large.work()))
+            } else {
+                let mut newton =
+                    Newton::new(structure, taut, NewtonSettings::default()).expect("set-up");
+                let iterations = run_sweep(&mut newton, structure, &alphas, true);
+                (iterations, format!("{:?}", newton.work()))
+            }
+        };
+        let (iterations, work) = solve(&structure, &taut);
+        println!(
+            "paper_sweep41/{name}: {:.2} iterations per alpha ({work})",
+            iterations as f64 / alphas.len() as f64
+        );
+        group.bench_function(name, |b| b.iter(|| solve(&structure, &taut)));
     }
     group.finish();
 }

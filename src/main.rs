@@ -208,6 +208,9 @@ struct Reporter {
     shown: Instant,
     /// The last e reported in the solve in progress (LATIN against its reference).
     last_error: Option<f64>,
+    /// Rows whose left-out geometric term is above its limit: how many, and the largest (value,
+    /// solver and α).
+    geometric: (usize, Option<(f64, String)>),
 }
 
 impl Reporter {
@@ -233,6 +236,7 @@ impl Reporter {
             stage: None,
             shown: Instant::now(),
             last_error: None,
+            geometric: (0, None),
         }
     }
 
@@ -314,6 +318,14 @@ impl Reporter {
                 }
             }
             RunEvent::Row(row) => {
+                if row.needs_large() {
+                    let value = row.geometric_term.unwrap_or(0.0);
+                    self.geometric.0 += 1;
+                    if self.geometric.1.as_ref().is_none_or(|(v, _)| value > *v) {
+                        let at = format!("{}, alpha {}", row.solver, alpha_label(row.alpha));
+                        self.geometric.1 = Some((value, at));
+                    }
+                }
                 let mut text = format_row(row);
                 if let Some(e) = self.last_error.take() {
                     text.push_str(&format!(", e = {e:.1e}"));
@@ -361,7 +373,8 @@ fn format_row(r: &SummaryRow) -> String {
         r.residual,
         1e3 * r.solve_seconds
     );
-    if !r.status.no_answer() && !r.small_displacement_ok() {
+    if !r.status.no_answer() && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT
+    {
         line.push_str(&format!(
             "\n  warning: {} at alpha = {}: a member's ends moved apart by {:.0} % of its length \
              (max deflection {:.3} m); the small-perturbation model (geometry not updated) is \
@@ -399,6 +412,16 @@ fn run_command(
     let mut reporter = Reporter::new(quiet, solves);
     let result = run(&case, &options, &mut |event| reporter.run_event(event));
     reporter.finish();
+    if let (count, Some((largest, at))) = &reporter.geometric {
+        reporter.line(&format!(
+            "warning: {count} row(s) leave out a geometric term (the members' rotation under \
+             their tension) that changes the answer by more than {:.0} % (up to {:.1} %: {at}): \
+             `model.geometry = \"large\"` computes the large-displacement answer (summary.csv: \
+             geometric_term, small_displacement_ok = false)",
+            100.0 * tensolve::results::GEOMETRIC_TERM_LIMIT,
+            100.0 * largest
+        ));
+    }
     if !matches!(
         result,
         Err(RunError::Case(_)

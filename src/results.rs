@@ -80,6 +80,48 @@ pub fn max_member_rotation(s: &Structure, eq: &Equilibrium) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The geometric term a model on the initial geometry leaves out (docs/method.md §8), as the
+/// relative change of the answer it would make: `‖K⁻¹ g‖ / ‖U‖` on the free dofs, with g the
+/// first-order force of the members' rotation under the tension the model leaves out,
+/// `g = K_G(τ) U` for `linear`, `K_G(τ − t0) U` for `prestress` (whose K_G(t0) is in), and K
+/// the model's stiffness with every cable taut (its factor is at hand). `None` for `large`
+/// (nothing is left out) and without displacements.
+pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> Option<f64> {
+    let size = norm(&eq.displacements);
+    if s.model == GeometricModel::Large || size.is_nan() || size <= 0.0 {
+        return None;
+    }
+    let full = s.full_displacements(&eq.displacements);
+    let mut force = vec![0.0; s.n_free];
+    for (l, &tau) in s.links.iter().zip(&eq.tensions) {
+        let left_out = match s.model {
+            GeometricModel::Prestress => tau - l.prestress,
+            _ => tau,
+        };
+        if left_out == 0.0 {
+            continue;
+        }
+        // (τ/L)(I − n nᵀ)(U_b − U_a): on b, and its opposite on a.
+        let du: [f64; 3] = std::array::from_fn(|k| full[3 * l.b + k] - full[3 * l.a + k]);
+        let along: f64 = (0..3).map(|k| l.direction[k] * du[k]).sum();
+        for k in 0..3 {
+            let f = left_out / l.length * (du[k] - along * l.direction[k]);
+            for (node, sign) in [(l.b, 1.0), (l.a, -1.0)] {
+                let d = s.dof_of[3 * node + k];
+                if d != crate::structure::CLAMPED {
+                    force[d] += sign * f;
+                }
+            }
+        }
+    }
+    taut.factor.solve_in_place(&mut force);
+    Some(norm(&force) / size)
+}
+
+/// A geometric term above this (1 % of the answer) is worth modelling: `model.geometry =
+/// "large"` is recommended.
+pub const GEOMETRIC_TERM_LIMIT: f64 = 0.01;
+
 /// Slack cables per kind, in the order of [`SLACK_KINDS`].
 pub fn slack_by_kind(s: &Structure, eq: &Equilibrium) -> [usize; SLACK_KINDS.len()] {
     let mut counts = [0; SLACK_KINDS.len()];

@@ -272,7 +272,7 @@ pub fn run(
                     &load,
                     structure,
                     &solution,
-                    verdict.min_tangent_eigenvalue,
+                    (verdict.min_tangent_eigenvalue, verdict.geometric_term),
                     set_up.setup_seconds,
                 )
             });
@@ -342,6 +342,8 @@ pub fn run(
 struct Verdict {
     /// The smallest tangent eigenvalue at the answer, when computed.
     min_tangent_eigenvalue: Option<f64>,
+    /// The relative change the geometric term the model leaves out would make.
+    geometric_term: Option<f64>,
     /// Why the answer is no equilibrium, when it is none.
     no_equilibrium: Option<crate::solvers::NoEquilibrium>,
 }
@@ -355,6 +357,7 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
     if !results::is_finite(solution) {
         return Verdict {
             min_tangent_eigenvalue: None,
+            geometric_term: None,
             no_equilibrium: None,
         };
     }
@@ -367,6 +370,7 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
         solution.info.status = Status::NoEquilibrium;
         return Verdict {
             min_tangent_eigenvalue: None,
+            geometric_term: None,
             no_equilibrium: Some(none),
         };
     }
@@ -377,6 +381,7 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
     }
     Verdict {
         min_tangent_eigenvalue,
+        geometric_term: results::geometric_term(s, &solution.equilibrium, &prepared.taut),
         no_equilibrium: None,
     }
 }

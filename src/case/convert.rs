@@ -470,6 +470,12 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             "give the last iteration the convergence figures show as an integer ≥ 1 (the paper's is 100)",
         ));
     }
+    // `large` follows the load path: its α in increasing order (docs/method.md §8).
+    let model = raw.model.geometry.unwrap_or_default();
+    let mut load = load;
+    if model == crate::structure::GeometricModel::Large {
+        load.alphas.sort_by(f64::total_cmp);
+    }
     Ok(Case {
         grid,
         geometry,
@@ -477,7 +483,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         load,
         solver,
         output,
-        model: raw.model.geometry.unwrap_or_default(),
+        model,
     })
 }
 

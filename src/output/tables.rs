@@ -56,6 +56,9 @@ pub struct SummaryRow {
     /// The smallest eigenvalue of the tangent stiffness at the answer, N/m, when computed
     /// (models with geometric stiffness, or `output.stability`).
     pub min_tangent_eigenvalue: Option<f64>,
+    /// The relative change of the answer the geometric term the model leaves out would make
+    /// ([`results::geometric_term`]); `None` for `large` and without displacements.
+    pub geometric_term: Option<f64>,
     /// Set-up of the solver for this structure, s.
     pub setup_seconds: f64,
     /// This solve, s.
@@ -71,9 +74,10 @@ impl SummaryRow {
         load: &[f64],
         s: &Structure,
         solution: &Solution,
-        min_tangent_eigenvalue: Option<f64>,
+        verdict: (Option<f64>, Option<f64>),
         setup_seconds: f64,
     ) -> SummaryRow {
+        let (min_tangent_eigenvalue, geometric_term) = verdict;
         let eq = &solution.equilibrium;
         SummaryRow {
             solver: solver.to_string(),
@@ -91,6 +95,7 @@ impl SummaryRow {
             search_updates: solution.info.setups,
             slack_by_kind: results::slack_by_kind(s, eq),
             max_member_rotation: results::max_member_rotation(s, eq),
+            geometric_term,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
         }
@@ -99,9 +104,18 @@ impl SummaryRow {
 
 impl SummaryRow {
     /// Whether the small-perturbation model holds for this answer: no member's ends moved
-    /// apart by more than [`results::SMALL_DISPLACEMENT_LIMIT`] of its length.
+    /// apart by more than [`results::SMALL_DISPLACEMENT_LIMIT`] of its length, and the geometric
+    /// term the model leaves out changes the answer by at most
+    /// [`results::GEOMETRIC_TERM_LIMIT`] ([`SummaryRow::needs_large`]).
     pub fn small_displacement_ok(&self) -> bool {
-        self.max_member_rotation <= results::SMALL_DISPLACEMENT_LIMIT
+        self.max_member_rotation <= results::SMALL_DISPLACEMENT_LIMIT && !self.needs_large()
+    }
+
+    /// Whether the geometric term the model leaves out is above
+    /// [`results::GEOMETRIC_TERM_LIMIT`] of the load: `model.geometry = "large"` would differ.
+    pub fn needs_large(&self) -> bool {
+        self.geometric_term
+            .is_some_and(|g| g > results::GEOMETRIC_TERM_LIMIT)
     }
 
     /// Whether every number of the row is finite (a row with inf or NaN is never written).
@@ -113,6 +127,7 @@ impl SummaryRow {
             self.equilibrium_residual,
             self.max_member_rotation,
             self.min_tangent_eigenvalue.unwrap_or(0.0),
+            self.geometric_term.unwrap_or(0.0),
         ]
         .iter()
         .all(|x| x.is_finite())
@@ -120,7 +135,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
@@ -154,7 +169,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -180,6 +195,11 @@ pub fn summary_line(r: &SummaryRow) -> String {
         r.min_tangent_eigenvalue
             .map(|v| format!("{v:e}"))
             .unwrap_or_default(),
+        answer(
+            r.geometric_term
+                .map(|v| format!("{v:e}"))
+                .unwrap_or_default()
+        ),
     )
 }
 
