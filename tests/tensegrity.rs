@@ -417,3 +417,89 @@ fn large_answers_agree_with_opensees_corot_truss() {
         );
     }
 }
+
+/// `prestress.from = "self-stress"` takes a structure with mechanisms when the model has
+/// geometric stiffness (the simplex's state, scaled to 2 kN in top cable 3, is the shipped
+/// prestress: the same answer), counts members between two held nodes apart as trivial
+/// states (the bottom ring added), and refuses it under the linear model, saying why.
+#[test]
+fn self_stress_of_a_prestress_stable_mechanism() {
+    let dir = Temp::dir("self-stress");
+    std::fs::create_dir_all(&dir.0).unwrap();
+    std::fs::copy(
+        manifest_path("cases/simplex/nodes.csv"),
+        dir.0.join("nodes.csv"),
+    )
+    .unwrap();
+    let members = std::fs::read_to_string(manifest_path("cases/simplex/members.csv")).unwrap();
+    let mut lines: Vec<String> = members
+        .lines()
+        .map(|line| {
+            let mut fields: Vec<&str> = line.split(',').collect();
+            if !line.starts_with('#') && fields[0] != "member" {
+                fields[6] = "0";
+            }
+            fields.join(",")
+        })
+        .collect();
+    // The bottom ring, between the three held nodes: trivial self-stress states.
+    for (id, a, b) in [(100, 0, 1), (101, 1, 2), (102, 2, 0)] {
+        lines.push(format!("{id},{a},{b},cable,100000000000.0,5e-05,0"));
+    }
+    std::fs::write(dir.0.join("members.csv"), lines.join("\n") + "\n").unwrap();
+    let case = std::fs::read_to_string(case_path("simplex"))
+        .unwrap()
+        .replace("simplex/nodes.csv", "nodes.csv")
+        .replace("simplex/members.csv", "members.csv")
+        .replace(
+            "[model]",
+            "[prestress]\nfrom = \"self-stress\"\nmember = 3\nforce = 2000.0\n\n[model]",
+        );
+    std::fs::write(dir.0.join("case.toml"), case).unwrap();
+    let case = dir.0.join("case.toml");
+    let out = dir.0.join("out");
+    let run = tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let rows = read_csv(&out.join("summary.csv"));
+    let deflection = number(&rows[2], "max_deflection");
+    assert!((deflection - 0.055611).abs() < 1e-6, "{deflection}");
+    let linear = tensolve(&[
+        "check",
+        case.to_str().unwrap(),
+        "--set",
+        "model.geometry=\"linear\"",
+    ]);
+    assert_eq!(linear.status.code(), Some(2));
+    assert!(
+        stderr(&linear).contains("m = 1 mechanism(s) and model.geometry = \"linear\""),
+        "{}",
+        stderr(&linear)
+    );
+}
+
+/// `large` follows the load path: the case's α are solved in increasing order.
+#[test]
+fn large_solves_its_alphas_in_increasing_order() {
+    let out = Temp::dir("order");
+    let run = tensolve(&[
+        "run",
+        &case_path("simplex"),
+        "--out",
+        out.arg(),
+        "--quiet",
+        "--set",
+        "load.alpha=[1.0, 0.25, 0.5]",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let alphas: Vec<String> = read_csv(&out.0.join("summary.csv"))
+        .iter()
+        .map(|r| r["alpha"].clone())
+        .collect();
+    assert_eq!(alphas, ["0.25", "0.5", "1"]);
+}

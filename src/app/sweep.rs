@@ -180,7 +180,16 @@ pub fn run(
     events(RunEvent::Stage(
         "building the structure and factorising its taut stiffness",
     ));
-    let prepared = prepare(case)?;
+    let prepared = match prepare(case) {
+        Ok(prepared) => prepared,
+        Err(refused) => {
+            // Where a refused mechanism is: its modes, node by node, in mechanisms.csv.
+            if !refused.modes().is_empty() {
+                write_mechanisms(&dir, refused.modes())?;
+            }
+            return Err(refused.into());
+        }
+    };
     let structure = &prepared.structure;
     // 2. Every solver asked for, set up once.
     let mut solvers = Vec::with_capacity(methods.len());
@@ -336,6 +345,23 @@ pub fn run(
             list: failure_list(&failures),
         })
     }
+}
+
+/// `mechanisms.csv` (`node,mode,ux,uy,uz`) in the output directory, through its lock and
+/// staging like every result.
+fn write_mechanisms(dir: &Path, modes: &[crate::solvers::ModeRow]) -> Result<(), RunError> {
+    let mut out = OutputDir::open(dir)?;
+    let staging = out.staging().to_path_buf();
+    output::write_mechanisms(&staging, modes).map_err(|source| WriteError {
+        path: dir.join("mechanisms.csv"),
+        source,
+    })?;
+    out.commit()?;
+    out.finish().map_err(|source| WriteError {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    Ok(())
 }
 
 /// What the sweep found of an answer beyond its solver's stop.

@@ -365,7 +365,13 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
             displacement,
         }));
     }
-    super::prestress::apply(&raw.prestress, grid.is_some(), &mut geometry, &fixes)?;
+    super::prestress::apply(
+        &raw.prestress,
+        grid.is_some(),
+        &mut geometry,
+        &fixes,
+        raw.model.geometry.unwrap_or_default(),
+    )?;
     check_prestress(&geometry, &fixes)?;
 
     let default_nodal = if grid.is_some() {

@@ -5,7 +5,10 @@
 use super::convert::{bounded, number, PHYSICAL_MAX};
 use super::raw::{RawPrestress, RawPrestressSource};
 use super::CaseError;
-use crate::structure::{self_stress_through, Geometry, NodeFix, SelfStressRefusal, Structure};
+use crate::structure::{
+    self_stress_dense, self_stress_through, DenseSelfStressRefusal, GeometricModel, Geometry,
+    NodeFix, SelfStressRefusal, Structure,
+};
 
 /// Set `geometry`'s prestress from its self-stress state when `[prestress]` asks for it
 /// (`grid`: the case is a `[grid]`, whose prestress is `lower_cable`).
@@ -14,6 +17,7 @@ pub(super) fn apply(
     grid: bool,
     geometry: &mut Geometry,
     fixes: &[NodeFix],
+    model: GeometricModel,
 ) -> Result<(), CaseError> {
     let Some(RawPrestressSource::SelfStress) = raw.from else {
         for (key, given) in [
@@ -93,26 +97,63 @@ pub(super) fn apply(
     let structure = Structure::new(geometry, &unsettled, &Default::default());
     let state = match self_stress_through(&structure, j) {
         Ok(state) => state,
-        Err(SelfStressRefusal::Counts(c)) if c.self_stress_states != 1 => {
+        Err(SelfStressRefusal::Counts(c))
+            if c.mechanisms > 0 && !model.has_geometric_stiffness() =>
+        {
             return Err(CaseError::invalid(
                 FROM,
                 format!(
-                    "\"self-stress\" on a structure with s = {} self-stress states",
-                    c.self_stress_states
-                ),
-                "it needs exactly one (s = 1, as `tensolve check` counts them): give each member's prestress in the members table instead",
-            ))
-        }
-        Err(SelfStressRefusal::Counts(c)) => {
-            return Err(CaseError::invalid(
-                FROM,
-                format!(
-                    "\"self-stress\" on a structure with m = {} mechanism(s)",
+                    "\"self-stress\" on a structure with m = {} mechanism(s) and model.geometry = \"linear\"",
                     c.mechanisms
                 ),
-                "the state is computed on a structure without mechanisms (m = 0 in `tensolve check`): hold more components, or give each member's prestress in the members table",
+                "the linear model refuses mechanisms: hold more components, or, for a tensegrity its prestress stiffens, set `model.geometry = \"prestress\"` or `\"large\"` (the state is then computed with its mechanisms)",
             ))
         }
+        // Mechanisms (with geometric stiffness), or trivial states among the s counted: the
+        // dense computation counts the members between two held nodes apart.
+        Err(SelfStressRefusal::Counts(c)) => match self_stress_dense(&structure, j) {
+            Ok(dense) => dense.state,
+            Err(DenseSelfStressRefusal::Count(s, trivial)) => {
+                let ids: Vec<String> = trivial
+                    .iter()
+                    .take(5)
+                    .map(|&i| geometry.members[i].id.to_string())
+                    .collect();
+                let trivial_text = if trivial.is_empty() {
+                    "no trivial state".to_string()
+                } else {
+                    format!(
+                        "besides {} trivial one(s), member(s) {} between two held nodes, not counted",
+                        trivial.len(),
+                        ids.join(", ")
+                    )
+                };
+                return Err(CaseError::invalid(
+                    FROM,
+                    format!(
+                        "\"self-stress\" on a structure with s = {s} non-trivial self-stress state(s) ({trivial_text})"
+                    ),
+                    "it needs exactly one (s = 1): give each member's prestress in the members table instead",
+                ));
+            }
+            Err(DenseSelfStressRefusal::TooLarge) => {
+                return Err(CaseError::invalid(
+                    FROM,
+                    format!(
+                        "\"self-stress\" on a structure with s = {} self-stress states and m = {} mechanism(s)",
+                        c.self_stress_states, c.mechanisms
+                    ),
+                    "it needs exactly one state (s = 1) and, with mechanisms, a structure of at most 1500 free dofs: give each member's prestress in the members table instead",
+                ));
+            }
+            Err(DenseSelfStressRefusal::ZeroComponent) => {
+                return Err(CaseError::invalid(
+                    "prestress.member",
+                    id,
+                    "the self-stress state is zero on this member, so its tension cannot set the scale: name a member the state loads",
+                ))
+            }
+        },
         Err(SelfStressRefusal::ZeroComponent(_)) => {
             return Err(CaseError::invalid(
                 "prestress.member",

@@ -149,6 +149,27 @@ impl StiffnessPattern {
         }
     }
 
+    /// `values += Σ_{p ≥ q} sign_p sign_q G[comp_p][comp_q]` over the entries `(dof, sign, comp)`
+    /// of row `i` of the rows the pattern was built from (the same dofs in the same order): a
+    /// two-node member's block `[[G, −G], [−G, G]]` in one pass (docs/method.md §8).
+    pub fn add_block(
+        &self,
+        i: usize,
+        entries: &[(usize, f64, usize)],
+        g: &[[f64; 3]; 3],
+        values: &mut [f64],
+    ) {
+        let mut s = self.offsets[i];
+        for &(p, sp, cp) in entries {
+            for &(q, sq, cq) in entries {
+                if p >= q {
+                    values[self.slots[s] as usize] += sp * sq * g[cp][cq];
+                    s += 1;
+                }
+            }
+        }
+    }
+
     /// Every stored entry as `(row, column, slot)`, column by column.
     pub fn entries(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
         (0..self.n).flat_map(move |c| {

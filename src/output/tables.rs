@@ -224,6 +224,24 @@ where
     })
 }
 
+/// Write `dir/mechanisms.csv`: per refused mechanism mode (numbered from 1) and node (its id),
+/// the node's motion in the unit mode.
+pub fn write_mechanisms(dir: &Path, modes: &[(u64, usize, [f64; 3])]) -> std::io::Result<()> {
+    write_rows(
+        &dir.join("mechanisms.csv"),
+        ["node", "mode", "ux", "uy", "uz"],
+        modes.iter().map(|(node, mode, u)| {
+            [
+                node.to_string(),
+                mode.to_string(),
+                format!("{:e}", u[0]),
+                format!("{:e}", u[1]),
+                format!("{:e}", u[2]),
+            ]
+        }),
+    )
+}
+
 /// Write `dir/tensions/{solver}_alpha{α}.csv`: per cable, its kind, end nodes and tension
 /// τ (N); returns its path.
 pub fn write_tensions(

@@ -50,6 +50,8 @@ pub enum SetupError {
         /// What to do: for grids, hold more nodes or brace the modules; for general structures,
         /// hold more nodes, or model the geometric stiffness when the prestress stiffens them.
         advice: String,
+        /// The modes' nodal motions, for `mechanisms.csv` (empty when not computed).
+        modes: Vec<ModeRow>,
     },
     /// With geometric stiffness, `K + K_G(t0)` is not positive definite: the prestress does not
     /// stiffen every mechanism (docs/method.md §8).
@@ -61,6 +63,8 @@ pub enum SetupError {
         model: &'static str,
         /// The modes not stiffened, their nodes, and the fix.
         detail: String,
+        /// The modes' nodal motions, for `mechanisms.csv` (empty when not computed).
+        modes: Vec<ModeRow>,
     },
     /// A LATIN substructure operator could not be factorized or pseudo-inverted.
     #[error(
@@ -109,6 +113,21 @@ pub enum SetupError {
          try `solver.weak_interfaces = \"macro\"` or another `solver.subdomains`"
     )]
     SingularMacroProblem,
+}
+
+/// One row of `mechanisms.csv`: a node (its id), the mode (from 1), its motion (unit mode).
+pub type ModeRow = (u64, usize, [f64; 3]);
+
+impl SetupError {
+    /// The modes a mechanism refusal found, for `mechanisms.csv` (empty otherwise).
+    pub fn modes(&self) -> &[ModeRow] {
+        match self {
+            SetupError::Mechanism { modes, .. } | SetupError::NotPrestressStable { modes, .. } => {
+                modes
+            }
+            _ => &[],
+        }
+    }
 }
 
 /// `N`, or `at least N` when N is the most [`crate::linalg::zero_mode_count`] counts.

@@ -86,11 +86,37 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
             .collect();
         modes.join("; ")
     };
+    // The modes behind the refusal, node by node, for mechanisms.csv: those the prestress does
+    // not stiffen, or, under the linear model, every mechanism.
+    let rows = |st: &crate::structure::PrestressStability, all: bool| -> Vec<super::ModeRow> {
+        st.modes
+            .iter()
+            .filter(|m| all || m.stiffness <= st.threshold)
+            .enumerate()
+            .flat_map(|(k, m)| {
+                let full = s.full_displacements(&m.displacement);
+                (0..s.nodes.len())
+                    .map(move |v| {
+                        (
+                            s.node_ids[v],
+                            k + 1,
+                            [full[3 * v], full[3 * v + 1], full[3 * v + 2]],
+                        )
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    };
     if s.model.has_geometric_stiffness() {
+        let modes = stability
+            .as_ref()
+            .map(|st| rows(st, false))
+            .unwrap_or_default();
         let detail = match &stability {
             Some(st) if !st.stable() => format!(
-                "{} of its {} mechanism(s) not stiffened: {}; add members or supports, or \
-                 change the prestress",
+                "{} of its {} mechanism(s) not stiffened: {} (every node's motion in \
+                 mechanisms.csv of the output directory, written by `run`); add members or \
+                 supports, or change the prestress",
                 st.unstiffened().count(),
                 st.mechanisms,
                 unstiffened(st)
@@ -103,13 +129,17 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
         return SetupError::NotPrestressStable {
             model: s.model.name(),
             detail,
+            modes,
         };
     }
     let grid = s.layout.is_some();
     match stability {
         Some(st) if st.mechanisms > 0 && st.stable() => SetupError::Mechanism {
             zero_modes,
-            where_: String::new(),
+            where_: " (every node's motion in mechanisms.csv of the output directory, written \
+                     by `run`)"
+                .to_string(),
+            modes: rows(&st, true),
             advice: format!(
                 "it is prestress-stable (its prestress stiffens all {} mechanism(s), the \
                  smallest by {:.3e} N/m): solvable with `model.geometry = \"prestress\"` or \
@@ -120,9 +150,19 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
         },
         stability => SetupError::Mechanism {
             zero_modes,
+            modes: stability
+                .as_ref()
+                .map(|st| rows(st, true))
+                .unwrap_or_default(),
             where_: stability
                 .filter(|st| st.mechanisms > 0)
-                .map(|st| format!(" ({})", unstiffened(&st)))
+                .map(|st| {
+                    format!(
+                        " ({}; every node's motion in mechanisms.csv of the output directory, \
+                         written by `run`)",
+                        unstiffened(&st)
+                    )
+                })
                 .unwrap_or_default(),
             advice: if grid {
                 "hold more nodes (`supports.clamp`, `supports.fix`) or use a stiffer module \

@@ -363,15 +363,28 @@ impl CurrentGeometry {
         values: &mut [f64],
     ) {
         values.iter_mut().for_each(|v| *v = 0.0);
+        let mut entries = Vec::with_capacity(6);
         for (i, l) in s.links.iter().enumerate() {
             let t = trial[i];
-            pattern.add_outer(i, &self.rows[i], tangent_weight(l, t), values);
-            let transverse = tension(l, t) / self.lengths[i];
-            if transverse != 0.0 {
-                let (p, q) = transverse_pair(self.directions[i]);
-                pattern.add_outer(i, &l.row_along(p, &s.dof_of), transverse, values);
-                pattern.add_outer(i, &l.row_along(q, &s.dof_of), transverse, values);
+            let (axial, transverse) = (tangent_weight(l, t), tension(l, t) / self.lengths[i]);
+            let n = self.directions[i];
+            // G = k_t n nᵀ + (τ/ℓ)(I − n nᵀ).
+            let g: [[f64; 3]; 3] = std::array::from_fn(|a| {
+                std::array::from_fn(|b| {
+                    let identity = if a == b { 1.0 } else { 0.0 };
+                    axial * n[a] * n[b] + transverse * (identity - n[a] * n[b])
+                })
+            });
+            entries.clear();
+            for (node, sign) in [(l.a, -1.0), (l.b, 1.0)] {
+                for k in 0..3 {
+                    let d = s.dof_of[3 * node + k];
+                    if d != CLAMPED {
+                        entries.push((d, sign, k));
+                    }
+                }
             }
+            pattern.add_block(i, &entries, &g, values);
         }
     }
 }

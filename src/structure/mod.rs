@@ -19,7 +19,10 @@ pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use stability::{
     largest_moving_nodes, prestress_stability, Mode, PrestressStability, DENSE_LIMIT,
 };
-pub use statics::{equilibrium_counts, self_stress_through, EquilibriumCounts, SelfStressRefusal};
+pub use statics::{
+    equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
+    DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal,
+};
 
 use crate::linalg::SparseRow;
 

@@ -106,3 +106,89 @@ pub fn self_stress_through(structure: &Structure, j: usize) -> Result<Vec<f64>, 
     t[j] = 1.0;
     Ok(t)
 }
+
+/// The non-trivial self-stress state of a structure with mechanisms or trivial states, dense
+/// (docs/method.md §7–8): a member between two held nodes has no free dof, so it is a trivial
+/// self-stress state of its own (any tension there is carried by the supports); those are
+/// counted apart. With exactly one non-trivial state, it is returned scaled so that member `j`
+/// carries 1 (zero on the trivial members), with the number of trivial states.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DenseSelfStress {
+    /// The state, scaled so that member `j` carries 1; zero on trivial members.
+    pub state: Vec<f64>,
+    /// Members between two held nodes (trivial states), by index.
+    pub trivial: Vec<usize>,
+}
+
+/// Why [`self_stress_dense`] cannot give the state.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DenseSelfStressRefusal {
+    /// Not exactly one non-trivial state: `(non-trivial s, trivial member indices)`.
+    Count(usize, Vec<usize>),
+    /// The structure is larger than the dense computation takes (free dofs or members).
+    TooLarge,
+    /// The state's component on member `j` is zero (or `j` is trivial).
+    ZeroComponent,
+}
+
+/// The most members the dense self-stress takes (an eigen-decomposition of `A Aᵀ`, members²).
+pub const DENSE_MEMBERS: usize = 3000;
+
+/// See [`DenseSelfStress`]: the null space of `A = Bᵀ` over the non-trivial members, from the
+/// eigen-decomposition of `B Bᵀ` (members × members, unit stiffness).
+pub fn self_stress_dense(
+    structure: &Structure,
+    j: usize,
+) -> Result<DenseSelfStress, DenseSelfStressRefusal> {
+    let trivial: Vec<usize> = (0..structure.links.len())
+        .filter(|&i| structure.link_dofs[i].len == 0)
+        .collect();
+    let kept: Vec<usize> = (0..structure.links.len())
+        .filter(|&i| structure.link_dofs[i].len > 0)
+        .collect();
+    let m = kept.len();
+    if m > DENSE_MEMBERS || structure.n_free > super::DENSE_LIMIT {
+        return Err(DenseSelfStressRefusal::TooLarge);
+    }
+    // B Bᵀ over the kept members: its null space is the self-stress states.
+    let mut dense = vec![vec![0.0; structure.n_free]; m];
+    for (r, &i) in kept.iter().enumerate() {
+        for (d, c) in structure.link_dofs[i].iter() {
+            dense[r][d] += c;
+        }
+    }
+    let bbt = nalgebra::DMatrix::from_fn(m, m, |a, b| {
+        dense[a]
+            .iter()
+            .zip(&dense[b])
+            .map(|(x, y)| x * y)
+            .sum::<f64>()
+    });
+    let eig = nalgebra::SymmetricEigen::new(bbt);
+    let largest = eig.eigenvalues.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+    let null: Vec<usize> = (0..m)
+        .filter(|&c| eig.eigenvalues[c] <= 1e-10 * largest)
+        .collect();
+    if null.len() != 1 {
+        return Err(DenseSelfStressRefusal::Count(null.len(), trivial));
+    }
+    let Some(row) = kept.iter().position(|&i| i == j) else {
+        return Err(DenseSelfStressRefusal::ZeroComponent);
+    };
+    let v = eig.eigenvectors.column(null[0]);
+    if v[row].abs() <= ZERO_COMPONENT.sqrt() {
+        return Err(DenseSelfStressRefusal::ZeroComponent);
+    }
+    let mut state = vec![0.0; structure.links.len()];
+    for (r, &i) in kept.iter().enumerate() {
+        state[i] = v[r] / v[row];
+    }
+    let largest = state.iter().fold(0.0f64, |x, t| x.max(t.abs()));
+    for x in &mut state {
+        if x.abs() <= ROUNDOFF_RELATIVE * largest {
+            *x = 0.0;
+        }
+    }
+    state[j] = 1.0;
+    Ok(DenseSelfStress { state, trivial })
+}
