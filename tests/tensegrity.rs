@@ -334,6 +334,19 @@ fn refusals_name_the_mode_the_model_and_the_solver() {
             "{err}"
         );
     }
+    // `run` wrote where the mode is: every node's motion in the unit mode, the pinned bottom
+    // still, the top moving.
+    let modes = read_csv(&dir.0.join("out/mechanisms.csv"));
+    assert_eq!(modes.len(), 6);
+    for row in &modes {
+        assert_eq!(row["mode"], "1");
+        let motion: f64 = ["ux", "uy", "uz"]
+            .iter()
+            .map(|c| number(row, c).abs())
+            .sum();
+        let held = ["0", "1", "2"].contains(&row["node"].as_str());
+        assert_eq!(motion == 0.0, held, "{row:?}");
+    }
     let linear = tensolve(&[
         "run",
         &case_path("simplex"),
