@@ -43,11 +43,14 @@ fn case_path(name: &str) -> String {
 }
 
 /// Every shipped tensegrity solves with `large` at its three α (converged, a stable
-/// equilibrium, r(U) ≤ 1e-10) and with `prestress` (newton and pcg-lcp agreeing).
+/// equilibrium, r(U) ≤ 1e-10) and with `prestress` (all four solvers agreeing).
 #[test]
 fn shipped_tensegrities_solve_with_both_geometric_models() {
     for name in SHIPPED {
-        for (model, solvers) in [("large", "newton"), ("prestress", "newton,pcg-lcp")] {
+        for (model, solvers) in [
+            ("large", "newton"),
+            ("prestress", "newton,pcg-lcp,mono-latin,micro-macro"),
+        ] {
             let out = Temp::dir(&format!("{name}-{model}"));
             let run = tensolve(&[
                 "run",
@@ -74,13 +77,19 @@ fn shipped_tensegrities_solve_with_both_geometric_models() {
                     "{name} {model}: a stable equilibrium"
                 );
             }
-            // newton and pcg-lcp on K + K_G(t0): the same deflections and slack counts.
-            for pair in rows.chunks(2).filter(|_| solvers.contains(',')) {
-                let (a, b) = (&pair[0], &pair[1]);
-                assert_eq!(a["alpha"], b["alpha"]);
-                assert_eq!(a["slack_cables"], b["slack_cables"], "{name}");
-                let (da, db) = (number(a, "max_deflection"), number(b, "max_deflection"));
-                assert!((da - db).abs() <= 1e-8 * da, "{name}: {da} against {db}");
+            // The four solvers on K + K_G(t0): the same deflections and slack counts.
+            for group in rows.chunks(4).filter(|_| solvers.contains(',')) {
+                let a = &group[0];
+                for b in &group[1..] {
+                    assert_eq!(a["alpha"], b["alpha"]);
+                    assert_eq!(a["slack_cables"], b["slack_cables"], "{name}");
+                    let (da, db) = (number(a, "max_deflection"), number(b, "max_deflection"));
+                    assert!(
+                        (da - db).abs() <= 1e-6 * da,
+                        "{name} {}: {da} against {db}",
+                        b["solver"]
+                    );
+                }
             }
         }
     }
@@ -362,7 +371,7 @@ fn refusals_name_the_mode_the_model_and_the_solver() {
     );
     for (solver, model) in [
         ("pcg-lcp", "large"),
-        ("mono-latin", "prestress"),
+        ("mono-latin", "large"),
         ("micro-macro", "large"),
     ] {
         let o = tensolve(&[
@@ -515,4 +524,34 @@ fn large_solves_its_alphas_in_increasing_order() {
         .map(|r| r["alpha"].clone())
         .collect();
     assert_eq!(alphas, ["0.25", "0.5", "1"]);
+}
+
+/// The paper's grid with `prestress`: the four solvers agree (408 slack cables at α = 1, as in
+/// the linear model; micro-macro on its 4 × 4 substructures with K_G in every K_E).
+#[test]
+fn paper_grid_with_prestress_stiffness_four_solvers_agree() {
+    let out = Temp::dir("paper-prestress");
+    let run = tensolve(&[
+        "run",
+        manifest_path("cases/paper-exact.toml").to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--quiet",
+        "--solver",
+        "newton,pcg-lcp,mono-latin,micro-macro",
+        "--set",
+        "model.geometry=\"prestress\"",
+        "--set",
+        "load.alpha=[1.0]",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let rows = read_csv(&out.0.join("summary.csv"));
+    assert_eq!(rows.len(), 4);
+    let reference = number(&rows[0], "max_deflection");
+    for row in &rows {
+        assert_eq!(row["status"], "converged", "{row:?}");
+        assert_eq!(row["slack_cables"], "408", "{row:?}");
+        let d = number(row, "max_deflection");
+        assert!((d - reference).abs() <= 1e-6 * reference, "{row:?}");
+    }
 }

@@ -37,13 +37,9 @@ impl Method {
     }
 
     /// Whether the solver takes geometric model `model` (README "Real tensegrities"):
-    /// newton every model, pcg-lcp `linear` and `prestress`, the LATIN solvers `linear`.
+    /// newton every model, the others `linear` and `prestress` (`large` is newton's alone).
     pub fn supports(self, model: GeometricModel) -> bool {
-        match self {
-            Method::Newton => true,
-            Method::PcgLcp => model != GeometricModel::Large,
-            Method::MonoLatin | Method::MicroMacro => model == GeometricModel::Linear,
-        }
+        self == Method::Newton || model != GeometricModel::Large
     }
 
     /// The method called `name`.

@@ -69,11 +69,20 @@ pub enum SetupError {
     /// A LATIN substructure operator could not be factorized or pseudo-inverted.
     #[error(
         "substructure {index} has a singular operator (K_E or K*_E + QQᵀ): change \
-         `solver.subdomains`, `solver.dm` or `solver.l`"
+         `solver.subdomains`, `solver.dm` or `solver.l`{}",
+        if *prestress {
+            "; with `model.geometry = \"prestress\"`, the prestress's geometric stiffness gives a \
+             floating substructure's rotations a small stiffness its kernel test cannot \
+             classify: fewer subdomains, or mono-latin (one substructure)"
+        } else {
+            ""
+        }
     )]
     SingularSubstructure {
         /// The substructure, numbered row by row of the partition.
         index: usize,
+        /// Whether K_E holds the prestress's geometric stiffness.
+        prestress: bool,
     },
     /// A uniform LATIN search direction `solver.l` too far from the links' stiffness for the
     /// stages to be resolved in f64.
@@ -97,9 +106,9 @@ pub enum SetupError {
     /// The solver does not take the case's geometric model.
     #[error(
         "`{solver}` does not take `model.geometry = \"{model}\"`: newton takes \"linear\", \
-         \"prestress\" and \"large\"; pcg-lcp \"linear\" and \"prestress\"; mono-latin and \
-         micro-macro \"linear\" only. Remove it from `solver.methods` (or `--solver`), or \
-         change `model.geometry`"
+         \"prestress\" and \"large\"; pcg-lcp, mono-latin and micro-macro \"linear\" and \
+         \"prestress\". Remove it from `solver.methods` (or `--solver`), or change \
+         `model.geometry`"
     )]
     ModelNotSupported {
         /// The solver's name.

@@ -498,7 +498,10 @@ fn operators(
                 Substructure::new(
                     e, topo, structure, interfaces, holders, search, dm, dense, scratch,
                 )
-                .map_err(|_| SetupError::SingularSubstructure { index: e })
+                .map_err(|_| SetupError::SingularSubstructure {
+                    index: e,
+                    prestress: structure.geometric.is_some(),
+                })
             },
         )
         .collect::<Result<Vec<_>, _>>()?;

@@ -8,6 +8,7 @@ use super::macro_basis::orthonormal_columns;
 use super::partition::SubstructureTopology;
 use super::Interface;
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
+use crate::structure::law::transverse_pair;
 use crate::structure::{LinkDofs, Structure, CLAMPED};
 use nalgebra::DMatrix;
 
@@ -64,6 +65,10 @@ pub struct Substructure {
     pub n_macro: usize,
     /// The pattern of K_E (fixed by E's links).
     pattern: StiffnessPattern,
+    /// With the prestress's geometric stiffness (`model.geometry = "prestress"`): per link of
+    /// E (its index j in E) its two transverse rows on E's dofs and `t0 / L`, the share of
+    /// `K_G(t0)` that K_E holds (docs/method.md §8: part of the admissibility, not of the law).
+    geometric: Vec<(usize, LinkDofs, f64)>,
     /// Solves with K_E.
     pub factor: SpdSolver,
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × `n_macro`).
@@ -111,6 +116,25 @@ impl Substructure {
             .iter()
             .map(|&i| structure.links[i].compatibility_row(local_dof))
             .collect();
+        let geometric: Vec<(usize, LinkDofs, f64)> = if structure.geometric.is_some() {
+            topology
+                .links
+                .iter()
+                .enumerate()
+                .flat_map(|(j, &i)| {
+                    let l = &structure.links[i];
+                    let (p, q) = transverse_pair(l.direction);
+                    let w = l.prestress / l.length;
+                    [
+                        (j, l.row_along(p, local_dof), w),
+                        (j, l.row_along(q, local_dof), w),
+                    ]
+                })
+                .filter(|&(_, _, w)| w != 0.0)
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut sides = Vec::new();
         let mut gamma_dofs = Vec::new();
         let mut n_macro = 0;
@@ -147,6 +171,7 @@ impl Substructure {
         let values = stiffness(
             &pattern,
             &link_dofs,
+            &geometric,
             &gamma_dofs,
             &topology.links,
             search,
@@ -162,6 +187,7 @@ impl Substructure {
             gamma_dofs,
             n_macro,
             pattern,
+            geometric,
             factor,
             z: DMatrix::zeros(0, 0),
             k_star: DMatrix::zeros(0, 0),
@@ -220,6 +246,7 @@ impl Substructure {
         let values = stiffness(
             &self.pattern,
             &self.link_dofs,
+            &self.geometric,
             &self.gamma_dofs,
             &self.links,
             search,
@@ -246,6 +273,7 @@ impl Substructure {
             gamma_dofs: self.gamma_dofs.clone(),
             n_macro: self.n_macro,
             pattern: self.pattern.clone(),
+            geometric: self.geometric.clone(),
             factor,
             z: DMatrix::zeros(0, 0),
             k_star: DMatrix::zeros(0, 0),
@@ -328,11 +356,13 @@ impl Substructure {
     }
 }
 
-/// The values of `K_E = B_Eᵀ l B_E + d_m C_Eᵀ C_E` on `pattern` (`links`: E's global link
-/// indices, for their search direction in `search`).
+/// The values of `K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E` on `pattern` (`links`: E's global
+/// link indices, for their search direction in `search`; `geometric`: E's share of `K_G(t0)`,
+/// empty without geometric stiffness).
 fn stiffness(
     pattern: &StiffnessPattern,
     link_dofs: &[LinkDofs],
+    geometric: &[(usize, LinkDofs, f64)],
     gamma_dofs: &[usize],
     links: &[usize],
     search: &[f64],
@@ -340,6 +370,9 @@ fn stiffness(
 ) -> Vec<f64> {
     let mut values = vec![0.0; pattern.nnz()];
     pattern.assemble(link_dofs, |j| search[links[j]], &mut values);
+    for (j, row, w) in geometric {
+        pattern.add_outer(*j, row, *w, &mut values);
+    }
     for &d in gamma_dofs {
         values[pattern.diag_slot[d]] += dm;
     }
