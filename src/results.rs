@@ -91,29 +91,18 @@ pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> 
     if s.model == GeometricModel::Large || size.is_nan() || size <= 0.0 {
         return None;
     }
-    let full = s.full_displacements(&eq.displacements);
-    let mut force = vec![0.0; s.n_free];
-    for (l, &tau) in s.links.iter().zip(&eq.tensions) {
-        let left_out = match s.model {
-            GeometricModel::Prestress => tau - l.prestress,
-            _ => tau,
-        };
-        if left_out == 0.0 {
-            continue;
-        }
-        // (τ/L)(I − n nᵀ)(U_b − U_a): on b, and its opposite on a.
-        let du: [f64; 3] = std::array::from_fn(|k| full[3 * l.b + k] - full[3 * l.a + k]);
-        let along: f64 = (0..3).map(|k| l.direction[k] * du[k]).sum();
-        for k in 0..3 {
-            let f = left_out / l.length * (du[k] - along * l.direction[k]);
-            for (node, sign) in [(l.b, 1.0), (l.a, -1.0)] {
-                let d = s.dof_of[3 * node + k];
-                if d != crate::structure::CLAMPED {
-                    force[d] += sign * f;
-                }
-            }
-        }
-    }
+    let mut force = law::geometric_force(
+        s,
+        |i| {
+            let l = &s.links[i];
+            let left_out = match s.model {
+                GeometricModel::Prestress => eq.tensions[i] - l.prestress,
+                _ => eq.tensions[i],
+            };
+            left_out / l.length
+        },
+        &eq.displacements,
+    );
     taut.factor.solve_in_place(&mut force);
     Some(norm(&force) / size)
 }

@@ -291,39 +291,56 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     files
 }
 
-/// A prestress that does not stiffen the mechanism (the simplex with its prestress removed) is
-/// refused by the geometric models, naming the mode and its nodes; the linear model's refusal
-/// of the prestressed simplex says it is prestress-stable; solvers refuse models they do not
-/// take, by name.
-#[test]
-fn refusals_name_the_mode_the_model_and_the_solver() {
-    let dir = Temp::dir("unstiffened");
+/// The shipped simplex copied into a temporary directory, its members table and case text
+/// edited: returns the directory (removed on drop) and the case file.
+fn simplex_variant(
+    tag: &str,
+    members: impl FnOnce(&str) -> String,
+    case: impl FnOnce(String) -> String,
+) -> (Temp, std::path::PathBuf) {
+    let dir = Temp::dir(tag);
     std::fs::create_dir_all(&dir.0).unwrap();
     std::fs::copy(
         manifest_path("cases/simplex/nodes.csv"),
         dir.0.join("nodes.csv"),
     )
     .unwrap();
-    let members = std::fs::read_to_string(manifest_path("cases/simplex/members.csv")).unwrap();
-    let zeroed: Vec<String> = members
-        .lines()
-        .enumerate()
-        .map(|(i, line)| {
-            if i == 0 || line.starts_with('#') {
-                return line.to_string();
-            }
-            let mut fields: Vec<&str> = line.split(',').collect();
-            fields[6] = "0";
-            fields.join(",")
-        })
-        .collect();
-    std::fs::write(dir.0.join("members.csv"), zeroed.join("\n") + "\n").unwrap();
-    let case = std::fs::read_to_string(case_path("simplex"))
+    let table = std::fs::read_to_string(manifest_path("cases/simplex/members.csv")).unwrap();
+    std::fs::write(dir.0.join("members.csv"), members(&table)).unwrap();
+    let text = std::fs::read_to_string(case_path("simplex"))
         .unwrap()
         .replace("simplex/nodes.csv", "nodes.csv")
         .replace("simplex/members.csv", "members.csv");
-    std::fs::write(dir.0.join("case.toml"), case).unwrap();
-    let case = dir.0.join("case.toml");
+    let path = dir.0.join("case.toml");
+    std::fs::write(&path, case(text)).unwrap();
+    (dir, path)
+}
+
+/// The members table with every prestress set to 0.
+fn without_prestress(table: &str) -> Vec<String> {
+    table
+        .lines()
+        .map(|line| {
+            let mut fields: Vec<&str> = line.split(',').collect();
+            if !line.starts_with('#') && fields[0] != "member" {
+                fields[6] = "0";
+            }
+            fields.join(",")
+        })
+        .collect()
+}
+
+/// A prestress that does not stiffen the mechanism (the simplex with its prestress removed) is
+/// refused by the geometric models, naming the mode and its nodes; the linear model's refusal
+/// of the prestressed simplex says it is prestress-stable; solvers refuse models they do not
+/// take, by name.
+#[test]
+fn refusals_name_the_mode_the_model_and_the_solver() {
+    let (dir, case) = simplex_variant(
+        "unstiffened",
+        |table| without_prestress(table).join("\n") + "\n",
+        |text| text,
+    );
     let case = case.to_str().unwrap();
     for command in ["run", "check"] {
         let o = tensolve(
@@ -446,39 +463,23 @@ fn large_answers_agree_with_opensees_corot_truss() {
 /// states (the bottom ring added), and refuses it under the linear model, saying why.
 #[test]
 fn self_stress_of_a_prestress_stable_mechanism() {
-    let dir = Temp::dir("self-stress");
-    std::fs::create_dir_all(&dir.0).unwrap();
-    std::fs::copy(
-        manifest_path("cases/simplex/nodes.csv"),
-        dir.0.join("nodes.csv"),
-    )
-    .unwrap();
-    let members = std::fs::read_to_string(manifest_path("cases/simplex/members.csv")).unwrap();
-    let mut lines: Vec<String> = members
-        .lines()
-        .map(|line| {
-            let mut fields: Vec<&str> = line.split(',').collect();
-            if !line.starts_with('#') && fields[0] != "member" {
-                fields[6] = "0";
+    let (dir, case) = simplex_variant(
+        "self-stress",
+        |table| {
+            let mut lines = without_prestress(table);
+            // The bottom ring, between the three held nodes: trivial self-stress states.
+            for (id, a, b) in [(100, 0, 1), (101, 1, 2), (102, 2, 0)] {
+                lines.push(format!("{id},{a},{b},cable,100000000000.0,5e-05,0"));
             }
-            fields.join(",")
-        })
-        .collect();
-    // The bottom ring, between the three held nodes: trivial self-stress states.
-    for (id, a, b) in [(100, 0, 1), (101, 1, 2), (102, 2, 0)] {
-        lines.push(format!("{id},{a},{b},cable,100000000000.0,5e-05,0"));
-    }
-    std::fs::write(dir.0.join("members.csv"), lines.join("\n") + "\n").unwrap();
-    let case = std::fs::read_to_string(case_path("simplex"))
-        .unwrap()
-        .replace("simplex/nodes.csv", "nodes.csv")
-        .replace("simplex/members.csv", "members.csv")
-        .replace(
-            "[model]",
-            "[prestress]\nfrom = \"self-stress\"\nmember = 3\nforce = 2000.0\n\n[model]",
-        );
-    std::fs::write(dir.0.join("case.toml"), case).unwrap();
-    let case = dir.0.join("case.toml");
+            lines.join("\n") + "\n"
+        },
+        |text| {
+            text.replace(
+                "[model]",
+                "[prestress]\nfrom = \"self-stress\"\nmember = 3\nforce = 2000.0\n\n[model]",
+            )
+        },
+    );
     let out = dir.0.join("out");
     let run = tensolve(&[
         "run",

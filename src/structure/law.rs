@@ -299,6 +299,24 @@ pub fn tangent_product(s: &Structure, taut: &[bool], mu: f64, v: &[f64], out: &m
     }
 }
 
+/// `Σ w_i (I − n nᵀ)(U_b − U_a)` on the free dofs (a geometric stiffness with member weights
+/// `w_i`, `τ_i / L_i`, applied to U on the initial geometry: docs/method.md §8).
+pub fn geometric_force(s: &Structure, weight: impl Fn(usize) -> f64, u: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; s.n_free];
+    for (i, l) in s.links.iter().enumerate() {
+        let w = weight(i);
+        if w == 0.0 {
+            continue;
+        }
+        let (p, q) = transverse_pair(l.direction);
+        for v in [p, q] {
+            let row = l.row_along(v, &s.dof_of);
+            row.scatter(w * row.elongation(u), &mut out);
+        }
+    }
+    out
+}
+
 /// The members on the current geometry `X + U` (docs/method.md §8): per link its current length
 /// ℓ and the row `∇ℓ` on the free dofs (the current unit vector n on b's dofs, −n on a's).
 #[derive(Debug, Clone)]
