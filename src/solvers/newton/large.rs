@@ -3,8 +3,8 @@
 //!
 //! Minimises `Π(U) = Σ_bars (t0 e + ½ k e²) + Σ_cables ½ k ⟨e + t0/k⟩₊² − Fᵀ U` with
 //! `e = ℓ(U) − L` on the current geometry. A Newton step solves `H ΔU = −∇Π` with the Hessian
-//! `Σ [[G, −G], [−G, G]]`, `G = k_t n nᵀ + (τ/ℓ)(I − n nᵀ)`, first by CG preconditioned with the
-//! last factor (an earlier step's Hessian), else factorized; where H is not positive definite
+//! `Σ [[G, −G], [−G, G]]`, `G = k_t n nᵀ + (τ/ℓ)(I − n nᵀ)`, factorized; while steps with the
+//! last factor (chord steps) shrink the residual enough, it is reused; where H is not positive definite
 //! it is shifted, `H + σ diag(H)` with σ raised until the Cholesky factorisation succeeds. The
 //! line search follows the sign of `Π'(s) = ∇Π(U + sΔU)·ΔU` (a search on Π's value stalls at
 //! r ≈ 4e-8: Π is dominated by the prestress energy).
@@ -19,7 +19,7 @@
 //! stricter load-relative form ≤ tolerance, as for the linear newton.
 
 use super::NewtonSettings;
-use crate::linalg::{dot, preconditioned_cg, SparseCholesky, StiffnessPattern};
+use crate::linalg::{dot, SparseCholesky, StiffnessPattern};
 use crate::solvers::{
     unbalances_on, Equilibrium, Measure, Progress, Solver, Status, TautStiffness,
 };
@@ -37,11 +37,13 @@ const FIRST_SHIFT: f64 = 1e-8;
 const MAX_SHIFT: f64 = 1e4;
 /// Bisections of the line search at most.
 const LINE_SEARCH_BISECTIONS: usize = 40;
-/// A step is first solved by CG on the new Hessian preconditioned with the last factor (an
-/// earlier step's Hessian: the geometry changes little from one step, or one α, to the next),
-/// to the forcing term `r²` clamped to [1e-12, 1e-4] (as the linear newton's reuse), within
-/// this many iterations; else the Hessian is factorized.
-const REUSE_MAX_CG_ITERATIONS: usize = 4;
+/// A chord step (the last factor's Hessian for the new one: the geometry changes little from
+/// one step, or one α, to the next) must shrink the load-relative residual to this fraction,
+/// else the next step assembles and factorizes the Hessian. Paper case, 41-α sweep, one
+/// process: 0.03 183 ms, 0.1 195 ms, 0.3 217 ms, 0.5 260 ms, 0.01 213 ms; CG on the new Hessian
+/// preconditioned with the last factor (4 iterations to r²) instead: 234 ms; a factorization
+/// at every step: 241 ms.
+const CHORD_CONTRACTION: f64 = 0.03;
 
 /// What the large-displacement solver's work cost, over its solves.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -52,11 +54,11 @@ pub struct LargeWork {
     pub shifted_steps: usize,
     /// Numeric factorizations of a Hessian (shifted attempts included).
     pub factorizations: usize,
-    /// Steps solved by CG preconditioned with an earlier step's factor.
+    /// Chord steps: solved with an earlier step's factor, the Hessian not assembled.
     pub reused_steps: usize,
     /// Load increments halved.
     pub halvings: usize,
-    /// Solves started from the secant prediction of the last two equilibria.
+    /// Solves started from the prediction extrapolated from the last equilibria.
     pub predicted_starts: usize,
 }
 
@@ -67,12 +69,17 @@ pub struct LargeNewton<'s> {
     chol: SparseCholesky,
     settings: NewtonSettings,
     hessian: Vec<f64>,
-    /// `chol` holds the factor of an earlier Hessian (the CG preconditioner of the next steps).
+    /// `chol` holds the factor of an earlier Hessian.
     factored: bool,
+    /// Chord steps with that factor still contract the residual enough.
+    chord: bool,
+    /// The last step was a chord step.
+    last_was_chord: bool,
     /// The last equilibrium reached (its load and displacements): where a solve's path starts.
     reached: (Vec<f64>, Vec<f64>),
-    /// The equilibrium reached before it, for the secant predictor of the next solve.
-    before: Option<(Vec<f64>, Vec<f64>)>,
+    /// The equilibria reached before it (the latest last, at most two), for the predictor of
+    /// the next solve.
+    before: Vec<(Vec<f64>, Vec<f64>)>,
     work: LargeWork,
 }
 
@@ -118,8 +125,10 @@ impl<'s> LargeNewton<'s> {
             settings,
             hessian: vec![0.0; taut.values.len()],
             factored: false,
+            chord: false,
+            last_was_chord: false,
             reached: (vec![0.0; structure.n_free], vec![0.0; structure.n_free]),
-            before: None,
+            before: Vec::new(),
             work: LargeWork::default(),
         }
     }
@@ -160,35 +169,26 @@ impl<'s> LargeNewton<'s> {
         }
     }
 
-    /// `ΔU = −H⁻¹ ∇Π`: by CG preconditioned with the last factor when that converges to a
-    /// descent direction, else with H factorized, shifted where it is not positive definite;
-    /// `None` when no shift up to [`MAX_SHIFT`] makes it factorisable.
+    /// `ΔU = −H⁻¹ ∇Π`: a chord step with the last factor while chord steps contract the
+    /// residual ([`CHORD_CONTRACTION`]), else with H assembled and factorized, shifted where it
+    /// is not positive definite; `None` when no shift up to [`MAX_SHIFT`] makes it factorisable.
     fn newton_step(&mut self, state: &LargeState) -> Option<Vec<f64>> {
         let s = self.structure;
         self.work.steps += 1;
+        let rhs: Vec<f64> = state.eval.gradient.iter().map(|g| -g).collect();
+        if self.factored && self.chord {
+            // A chord step: the last factor's Hessian for this one.
+            let mut step = rhs;
+            self.chol.solve_in_place(&mut step);
+            self.work.reused_steps += 1;
+            self.last_was_chord = true;
+            return step.iter().all(|x| x.is_finite()).then_some(step);
+        }
+        self.last_was_chord = false;
         state
             .eval
             .current
             .assemble_tangent(s, &state.eval.trial, self.pattern, &mut self.hessian);
-        let rhs: Vec<f64> = state.eval.gradient.iter().map(|g| -g).collect();
-        if self.factored {
-            let mut step = vec![0.0; rhs.len()];
-            let (pattern, hessian, chol) = (self.pattern, &self.hessian, &self.chol);
-            let r = state.eval.residual;
-            let outcome = preconditioned_cg(
-                |v, out| pattern.sym_matvec(hessian, v, out),
-                |z| chol.solve_in_place(z),
-                &rhs,
-                &mut step,
-                (r * r).clamp(1e-12, 1e-4),
-                REUSE_MAX_CG_ITERATIONS,
-            );
-            let descent = dot(&step, &rhs) > 0.0;
-            if outcome.converged && descent && step.iter().all(|x| x.is_finite()) {
-                self.work.reused_steps += 1;
-                return Some(step);
-            }
-        }
         let diagonal: Vec<f64> = self
             .pattern
             .diag_slot
@@ -217,6 +217,7 @@ impl<'s> LargeNewton<'s> {
             shift = next;
         }
         self.factored = true;
+        self.chord = true;
         if shift > 0.0 {
             self.work.shifted_steps += 1;
         }
@@ -304,27 +305,57 @@ impl<'s> LargeNewton<'s> {
         state.eval = self.evaluate(&state.load, &state.u);
     }
 
-    /// The secant prediction of the answer at `load` from the last two equilibria,
-    /// `U₁ + t (U₁ − U₀)` with t the load's step along theirs, when the loads are collinear
-    /// and t in (0, 4].
+    /// The prediction of the answer at `load` by extrapolating the last equilibria along the
+    /// load path (Lagrange, through the last three when there are three, else the secant of the
+    /// last two), when their loads and `load` are collinear and `load` lies ahead by at most
+    /// four of the last steps.
     fn predict(&self, load: &[f64]) -> Option<Vec<f64>> {
-        let (l0, u0) = self.before.as_ref()?;
-        let (l1, u1) = &self.reached;
-        let step: Vec<f64> = l1.iter().zip(l0).map(|(a, b)| a - b).collect();
-        let ahead: Vec<f64> = load.iter().zip(l1).map(|(a, b)| a - b).collect();
+        let (l2, u2) = &self.reached;
+        let (l1, u1) = self.before.last()?;
+        let step: Vec<f64> = l2.iter().zip(l1).map(|(a, b)| a - b).collect();
         let squared = dot(&step, &step);
         if squared.is_nan() || squared <= 0.0 {
             return None;
         }
-        let t = dot(&ahead, &step) / squared;
-        // Collinear: what is ahead is t times the last step.
-        let off: f64 = ahead
-            .iter()
-            .zip(&step)
-            .map(|(a, b)| (a - t * b).powi(2))
-            .sum();
-        (t > 0.0 && t <= 4.0 && off <= 1e-12 * dot(&ahead, &ahead))
-            .then(|| u1.iter().zip(u0).map(|(a, b)| a + t * (a - b)).collect())
+        // The path parameter of a load: 0 at the last equilibrium, −1 at the one before.
+        let parameter = |l: &[f64]| -> Option<f64> {
+            let ahead: Vec<f64> = l.iter().zip(l2).map(|(a, b)| a - b).collect();
+            let t = dot(&ahead, &step) / squared;
+            let off: f64 = ahead
+                .iter()
+                .zip(&step)
+                .map(|(a, b)| (a - t * b).powi(2))
+                .sum();
+            (off <= 1e-12 * dot(&ahead, &ahead).max(squared)).then_some(t)
+        };
+        let t = parameter(load).filter(|&t| t > 0.0 && t <= 4.0)?;
+        let mut points: Vec<(f64, &Vec<f64>)> = vec![(-1.0, u1), (0.0, u2)];
+        if self.before.len() == 2 {
+            let (l0, u0) = &self.before[0];
+            if let Some(t0) = parameter(l0).filter(|&t0| t0 < -1.0) {
+                points.insert(0, (t0, u0));
+            }
+        }
+        // Lagrange weights at t.
+        let weights: Vec<f64> = (0..points.len())
+            .map(|i| {
+                (0..points.len())
+                    .filter(|&j| j != i)
+                    .map(|j| (t - points[j].0) / (points[i].0 - points[j].0))
+                    .product()
+            })
+            .collect();
+        Some(
+            (0..u2.len())
+                .map(|k| {
+                    points
+                        .iter()
+                        .zip(&weights)
+                        .map(|((_, u), w)| w * u[k])
+                        .sum()
+                })
+                .collect(),
+        )
     }
 
     fn converged(&self, eval: &Evaluation) -> bool {
@@ -338,7 +369,11 @@ impl<'s> LargeNewton<'s> {
             if state.done + state.increment >= 1.0 {
                 state.stop = Some(Status::Converged);
                 let reached = (state.target.clone(), state.u.clone());
-                self.before = Some(std::mem::replace(&mut self.reached, reached));
+                let previous = std::mem::replace(&mut self.reached, reached);
+                if self.before.len() == 2 {
+                    self.before.remove(0);
+                }
+                self.before.push(previous);
             } else {
                 self.advance(state);
             }
@@ -372,9 +407,10 @@ impl Solver for LargeNewton<'_> {
     }
 
     /// From the last equilibrium reached, the whole path in one increment first, started from
-    /// the secant prediction of the last two equilibria when there is one (paper case, 41-α
-    /// sweep: 2.63 Newton steps per α instead of 3.39, 0.78 of the time; its residual is often
-    /// larger than the last answer's, yet Newton converges faster from it).
+    /// the extrapolation of the last equilibria ([`LargeNewton::predict`]; paper case, 41-α
+    /// sweep with Newton steps: 2.63 steps per α with the secant instead of 3.39 from the last
+    /// answer, though the secant's residual is often the larger; with chord steps, 3.41 steps
+    /// per α through three points against 3.95 with the secant).
     fn init(&mut self, load: &[f64]) -> LargeState {
         let (start, u_done) = self.reached.clone();
         let mut u = u_done.clone();
@@ -424,6 +460,13 @@ impl Solver for LargeNewton<'_> {
                     .iter_mut()
                     .zip(&step)
                     .for_each(|(u, d)| *u += length * d);
+                // A chord step that contracted the residual by less than CHORD_CONTRACTION:
+                // the next step refactorizes.
+                if self.last_was_chord
+                    && eval.load_residual > CHORD_CONTRACTION * state.eval.load_residual
+                {
+                    self.chord = false;
+                }
                 state.eval = eval;
                 self.settle(state);
                 if state.stop.is_none() && state.increment_steps >= INCREMENT_MAX_STEPS {
