@@ -359,7 +359,7 @@ fn iterate_message(solver: &str, alpha: f64, measure: Measure, record: &Iteratio
 
 fn format_row(r: &SummaryRow) -> String {
     let mut line = format!(
-        "{:>11} alpha = {:<6} {} in {} it, {} / {} slack, residual {:.1e}, {:.1} ms",
+        "{:>11} alpha = {:<6} {} in {} it, {} / {} slack, {}r(U) {:.1e}, {:.1} ms",
         r.solver,
         alpha_label(r.alpha),
         if r.converged {
@@ -370,7 +370,13 @@ fn format_row(r: &SummaryRow) -> String {
         r.iterations,
         r.slack_cables,
         r.cables,
-        r.residual,
+        // The stopping measure beside r(U), when it is another measure.
+        match r.measure {
+            Measure::EquilibriumResidual => String::new(),
+            Measure::ComplementarityResidual => format!("complementarity {:.1e}, ", r.residual),
+            Measure::Indicator => format!("eta {:.1e}, ", r.residual),
+        },
+        r.equilibrium_residual,
         1e3 * r.solve_seconds
     );
     if !r.status.no_answer() && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT
@@ -537,7 +543,8 @@ fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Resu
         )));
     }
     let report = compare(run, golden, &settings).map_err(|e| bad(e.to_string()))?;
-    print!("{report}");
+    // `compare … | head`: a reader that stops early ends the report, not the command.
+    print_ignoring_closed_pipe(&report.to_string());
     if report.agree() {
         Ok(())
     } else {

@@ -435,3 +435,34 @@ fn stability_csv_reports_the_smallest_tangent_eigenvalue() {
         "docs/method.md: ≈ 164 N/m, got {lambda}"
     );
 }
+
+/// `scripts/peers/peers.py` on a `[structure]` case says it compares grids and names the peer
+/// that takes general structures (it died on `KeyError: 'grid'`). Needs numpy, which CI installs
+/// with openseespy.
+#[test]
+fn peers_script_refuses_a_structure_case_plainly() {
+    let numpy = std::process::Command::new("python3")
+        .args(["-c", "import numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !numpy {
+        assert!(std::env::var_os("CI").is_none(), "CI installs numpy");
+        eprintln!("skipped: numpy is not installed");
+        return;
+    }
+    let o = std::process::Command::new("python3")
+        .arg(manifest_path("scripts/peers/peers.py"))
+        .args([
+            manifest_path("cases/skew-grid.toml").to_str().unwrap(),
+            "1.0",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("has no [grid]") && err.contains("corot.py"),
+        "{err}"
+    );
+    assert!(!err.contains("Traceback"), "{err}");
+}

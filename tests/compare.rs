@@ -157,3 +157,23 @@ fn bad_input_exits_2() {
     assert_eq!(code, Some(2), "{text}");
     assert!(text.contains("--rtol"), "{text}");
 }
+
+/// `tensolve compare … | head`: a reader that closed its end is a normal end of the report
+/// (exit 0 when the runs agree, no panic), not a crash on the broken pipe.
+#[test]
+fn a_closed_pipe_ends_the_report_quietly() {
+    let golden = manifest_path("tests/golden/small");
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args([
+            "compare",
+            golden.to_str().unwrap(),
+            golden.to_str().unwrap(),
+        ])
+        .stdout(writer)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+}

@@ -42,7 +42,6 @@ import tomllib
 import xml.etree.ElementTree as ET
 
 import numpy as np
-import scipy.sparse as sp
 
 # The paper's materials and prestress (README "Case files" defaults).
 E_CABLE, A_CABLE = 1e11, 0.5e-4
@@ -192,6 +191,7 @@ def opensees(points, links, kind, clamped, alpha):
 def osqp_solve(points, links, kind, clamped, alpha):
     """Set-up + solve with OSQP at 1e-6; returns (seconds, slack count, max deflection, iters)."""
     import osqp
+    import scipy.sparse as sp
 
     start = time.perf_counter()
     direction, length, ea, t0, bar = link_data(points, links, kind)
@@ -236,6 +236,12 @@ def main():
     parser.add_argument("--warm", action="store_true",
                         help="time tensolve by its criterion benchmark (warm, in one process)")
     args = parser.parse_args()
+    if "grid" not in tomllib.load(open(args.case, "rb")):
+        print(f"peers.py: {args.case} has no [grid]: this comparison rebuilds the paper's module "
+              "grid in its peers (only `grid.modules` and `supports.clamp` are read); for a "
+              "[structure] case use scripts/peers/corot.py (OpenSees corotTruss, large "
+              "displacements) or scripts/peers/corot_compare.py", file=sys.stderr)
+        sys.exit(2)
     with tempfile.TemporaryDirectory() as out:
         ours, row, (nx, ny, clamp), vtu = tensolve_runs(args.tensolve, args.case, args.alpha, args.repeat, out)
         points, links, kind = read_vtu(vtu)

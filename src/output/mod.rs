@@ -20,7 +20,6 @@ pub use publish::{OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
     alpha_label, result_path, stability_line, summary_line, write_displacements, write_mechanisms,
-    write_stability, write_summary, write_tensions, StabilityRow, SummaryRow, STABILITY_HEADER,
-    SUMMARY_HEADER,
+    write_tensions, StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
 };
 pub use vtk::{kind_code, vtu_path, write_vtu, VTK_LINE};

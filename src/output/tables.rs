@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::results;
-use crate::solvers::{displacement_residual, Equilibrium, Solution, Status};
+use crate::solvers::{displacement_residual, Equilibrium, Measure, Solution, Status};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
@@ -33,6 +33,8 @@ pub struct SummaryRow {
     pub converged: bool,
     /// How the solve ended ([`Status::code`]).
     pub status: Status,
+    /// What `residual` measures (not a column: the solver says it).
+    pub measure: Measure,
     /// Iterations done.
     pub iterations: usize,
     /// Unilateral cables that are slack.
@@ -84,6 +86,7 @@ impl SummaryRow {
             alpha,
             converged: solution.info.status.converged(),
             status: solution.info.status,
+            measure: solution.info.measure,
             min_tangent_eigenvalue,
             iterations: solution.info.iterations,
             slack_cables: eq.slack_count(),
@@ -139,17 +142,6 @@ pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
-}
-
-/// Write `summary.csv` at `path` atomically, one line per row.
-pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> std::io::Result<()> {
-    write_atomic(path, |w| {
-        writeln!(w, "{SUMMARY_HEADER}")?;
-        for r in rows {
-            writeln!(w, "{}", summary_line(r))?;
-        }
-        Ok(())
-    })
 }
 
 /// The line of `summary.csv` of `r` (no newline). A row that is no answer
@@ -317,17 +309,6 @@ pub struct StabilityRow {
 
 /// Header line of `stability.csv`, one column per [`StabilityRow`] field.
 pub const STABILITY_HEADER: &str = "solver,alpha,slack_cables,min_tangent_eigenvalue";
-
-/// Write `stability.csv` at `path` atomically, one line per row.
-pub fn write_stability(path: &Path, rows: &[StabilityRow]) -> std::io::Result<()> {
-    write_atomic(path, |w| {
-        writeln!(w, "{STABILITY_HEADER}")?;
-        for r in rows {
-            writeln!(w, "{}", stability_line(r))?;
-        }
-        Ok(())
-    })
-}
 
 /// The line of `stability.csv` of `r` (no newline).
 pub fn stability_line(r: &StabilityRow) -> String {
