@@ -466,3 +466,37 @@ fn peers_script_refuses_a_structure_case_plainly() {
     );
     assert!(!err.contains("Traceback"), "{err}");
 }
+
+/// `check` prints the bounding box and the ranges of member lengths and E·S, and warns about
+/// a stiffness ratio beyond 1e8 (E of some members in the wrong unit) and a member beyond
+/// 1e4 m (coordinates in mm).
+#[test]
+fn check_shows_magnitudes_and_warns_about_unit_slips() {
+    let skew = manifest_path("cases/skew-grid.toml");
+    let o = tensolve(&["check", skew.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for line in [
+        "bounding box    x 0.0000e0 .. 7.6000e0, y 0.0000e0 .. 4.0000e0, z 0.0000e0 .. 1.1000e0 m",
+        "member lengths  5.8523e-1 .. 1.4318e0 m",
+        "member E·S      5.0000e6 .. 5.6000e7 N",
+    ] {
+        assert!(text.contains(line), "{text}");
+    }
+    assert!(!text.contains("warning"), "{text}");
+    let paper = manifest_path("cases/paper-exact.toml");
+    let slipped = tensolve(&[
+        "check",
+        paper.to_str().unwrap(),
+        "--set",
+        "cables.young=1e3",
+        "--set",
+        "grid.length=2e4",
+    ]);
+    let text = String::from_utf8_lossy(&slipped.stdout);
+    assert!(
+        text.contains("warning: the members' stiffness E·S/ℓ spans a ratio of")
+            && text.contains("warning: a member is 2.236e4 m long"),
+        "{text}"
+    );
+}

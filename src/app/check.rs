@@ -48,6 +48,14 @@ pub struct ModelReport {
     pub prestress: f64,
     /// The geometric effects modelled (`model.geometry`).
     pub geometry: GeometricModel,
+    /// The nodes' bounding box, m: `[min, max]` per axis.
+    pub bounding_box: [[f64; 2]; 3],
+    /// The range of the members' lengths, m.
+    pub lengths: [f64; 2],
+    /// The range of the members' E·S, N.
+    pub axial_rigidity: [f64; 2],
+    /// The range of the members' stiffness k = E·S/ℓ, N/m.
+    pub member_stiffness: [f64; 2],
     /// The prestress-stability test (docs/method.md §8), when there are mechanisms and at most
     /// [`crate::structure::DENSE_LIMIT`] free dofs.
     pub stability: Option<PrestressStability>,
@@ -60,6 +68,18 @@ pub struct ModelReport {
 }
 
 pub use crate::structure::{equilibrium_counts, EquilibriumCounts};
+
+impl ModelReport {
+    /// Largest over smallest member stiffness `k = E·S/ℓ` (1 without members).
+    pub fn stiffness_ratio(&self) -> f64 {
+        let [k_min, k_max] = self.member_stiffness;
+        if k_min > 0.0 {
+            k_max / k_min
+        } else {
+            1.0
+        }
+    }
+}
 
 /// The partition of one LATIN solver.
 #[derive(Debug, Clone)]
@@ -122,6 +142,16 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         counts: equilibrium_counts(&s),
         prestress: s.prestress_scale,
         geometry: case.model,
+        bounding_box: std::array::from_fn(|k| {
+            s.nodes
+                .iter()
+                .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], x| {
+                    [lo.min(x[k]), hi.max(x[k])]
+                })
+        }),
+        lengths: range(s.links.iter().map(|l| l.length)),
+        axial_rigidity: range(s.links.iter().map(|l| l.stiffness * l.length)),
+        member_stiffness: range(s.links.iter().map(|l| l.stiffness)),
         stability: None,
         unstiffened_modes: Vec::new(),
         alphas: case.load.alphas.clone(),
@@ -178,6 +208,24 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
     report
 }
 
+/// `[min, max]` of `values` (`[0, 0]` when empty).
+fn range(values: impl Iterator<Item = f64>) -> [f64; 2] {
+    let [lo, hi] = values.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], x| {
+        [lo.min(x), hi.max(x)]
+    });
+    if lo <= hi {
+        [lo, hi]
+    } else {
+        [0.0, 0.0]
+    }
+}
+
+/// A member stiffness ratio (largest k / smallest k) beyond this is warned about: a unit slip
+/// (E in GPa on some members) or a member f64 cannot resolve beside the others.
+pub const STIFFNESS_RATIO_WARNING: f64 = 1e8;
+/// A member longer than this (m) is warned about: coordinates in mm instead of m.
+pub const LENGTH_WARNING: f64 = 1e4;
+
 impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let m = &self.model;
@@ -208,6 +256,38 @@ impl fmt::Display for CheckReport {
             }
         )?;
         writeln!(f, "bars            {}", m.bars)?;
+        let [x, y, z] = m.bounding_box;
+        writeln!(
+            f,
+            "bounding box    x {:.4e} .. {:.4e}, y {:.4e} .. {:.4e}, z {:.4e} .. {:.4e} m",
+            x[0], x[1], y[0], y[1], z[0], z[1]
+        )?;
+        writeln!(
+            f,
+            "member lengths  {:.4e} .. {:.4e} m",
+            m.lengths[0], m.lengths[1]
+        )?;
+        writeln!(
+            f,
+            "member E·S      {:.4e} .. {:.4e} N",
+            m.axial_rigidity[0], m.axial_rigidity[1]
+        )?;
+        let ratio = m.stiffness_ratio();
+        if ratio > STIFFNESS_RATIO_WARNING {
+            writeln!(
+                f,
+                "  warning: the members' stiffness E·S/ℓ spans a ratio of {ratio:.1e} (beyond \
+                 {STIFFNESS_RATIO_WARNING:.0e}): is E given in Pa on every member (not GPa), S in m²?"
+            )?;
+        }
+        if m.lengths[1] > LENGTH_WARNING {
+            writeln!(
+                f,
+                "  warning: a member is {:.3e} m long (beyond {LENGTH_WARNING:.0e} m): are the \
+                 coordinates in m (not mm)?",
+                m.lengths[1]
+            )?;
+        }
         writeln!(
             f,
             "model           geometry = {} ({})",
