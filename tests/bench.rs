@@ -315,3 +315,28 @@ fn check_passes_on_every_new_case() {
     assert_eq!(bench.solver.methods, Method::ALL);
     assert_eq!(bench.load.alphas, [1.0]);
 }
+
+/// `bench` on a `large` case measures e on the exact elongations `ℓ − L`, as newton reports
+/// them (its reference was on `B U`, so e stayed near 1): every α ends at e ≤ 1e-8.
+#[test]
+fn bench_of_a_large_displacement_case_measures_e_on_the_exact_elongations() {
+    let out = Temp::dir("bench-large");
+    let o = tensolve(&[
+        "bench",
+        manifest_path("cases/simplex.toml").to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.0.join("bench.csv")).unwrap();
+    let mut last: BTreeMap<String, f64> = BTreeMap::new();
+    for line in text.lines().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        last.insert(fields[1].to_string(), fields[4].parse().unwrap());
+    }
+    assert_eq!(last.len(), 3, "{text}");
+    for (alpha, e) in &last {
+        assert!(*e <= 1e-8, "alpha {alpha}: final e = {e}");
+    }
+}

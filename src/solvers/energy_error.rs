@@ -1,6 +1,6 @@
 //! The energy error e of an iterate against a reference solution (paper §5.3, docs/method.md §4):
 //! `e² = Σ_links k (e_i − e_i^ref)² / Σ_links k (e_i^ref)²`, with `e = B U` the link
-//! elongations and k the link stiffness; absolute (no denominator) when the reference strains
+//! elongations (`ℓ − L` with `model.geometry = "large"`) and k the link stiffness; absolute (no denominator) when the reference strains
 //! nothing. This is the one implementation of e: the driver measures it on every iterate of
 //! every solver when a solve is given a [`Reference`].
 //!
@@ -21,10 +21,10 @@ pub struct Reference {
 }
 
 impl Reference {
-    /// The reference displacements `displacements` (free dofs) of `structure`.
+    /// The reference displacements `displacements` (free dofs) of `structure`, its elongations
+    /// under the structure's model (`ℓ − L` with `large`, as its solver reports them).
     pub fn new(structure: &Structure, displacements: &[f64]) -> Reference {
-        let mut elongations = vec![0.0; structure.links.len()];
-        structure.elongations(displacements, &mut elongations);
+        let elongations = crate::structure::law::elongations(structure, displacements);
         let stiffness: Vec<f64> = structure.links.iter().map(|l| l.stiffness).collect();
         let energy = weighted_norm2(&stiffness, elongations.iter().copied());
         Reference {

@@ -145,6 +145,15 @@ pub fn trial_tensions(s: &Structure, u: &[f64]) -> Vec<f64> {
     }
 }
 
+/// The elongation of every link at displacements U under the structure's model: `B U` on the
+/// initial geometry, `ℓ(U) − L` with `large` (what the energy error e is measured on).
+pub fn elongations(s: &Structure, u: &[f64]) -> Vec<f64> {
+    match s.model {
+        GeometricModel::Large => CurrentGeometry::of(s, u).elongations,
+        _ => s.link_dofs.iter().map(|row| row.elongation(u)).collect(),
+    }
+}
+
 /// The elongation a link's prescribed end displacements impose on the initial geometry,
 /// `e_p = n·(Ud_b − Ud_a)`: [`Link::prestress`] holds `t0 + k e_p`.
 fn imposed_elongation(s: &Structure, l: &Link) -> f64 {
