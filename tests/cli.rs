@@ -500,3 +500,29 @@ fn check_shows_magnitudes_and_warns_about_unit_slips() {
         "{text}"
     );
 }
+
+/// E given in GPa (a unit slip): the linear model's answer moves nodes by 2.4e8 m, far beyond
+/// the structure's own size; the rows say converged = false, status = beyond_model, exit 1.
+#[test]
+fn an_answer_beyond_the_structures_size_is_not_converged() {
+    let out = Temp::dir("gpa");
+    let o = tensolve(&[
+        "run",
+        manifest_path("cases/paper-exact.toml").to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--set",
+        "cables.young=100",
+        "--set",
+        "bars.young=200",
+        "--set",
+        "load.alpha=[1.0]",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("beyond the model"), "{}", stderr(&o));
+    let (header, rows) = read_csv(&out.0.join("summary.csv"));
+    for row in &rows {
+        assert_eq!(row[column(&header, "converged")], "false");
+        assert_eq!(row[column(&header, "status")], "beyond_model");
+    }
+}

@@ -556,3 +556,35 @@ fn paper_grid_with_prestress_stiffness_four_solvers_agree() {
         assert!((d - reference).abs() <= 1e-6 * reference, "{row:?}");
     }
 }
+
+/// A members table giving unilateral cables a compressed prestress (the simplex's self-stress
+/// with its sign flipped) is refused, naming the cables, by `check` and `run` alike.
+#[test]
+fn compressed_cable_prestress_is_refused_naming_the_cables() {
+    let (_dir, case) = simplex_variant(
+        "flipped",
+        |table| {
+            let lines: Vec<String> = table
+                .lines()
+                .map(|line| {
+                    let mut fields: Vec<String> = line.split(',').map(String::from).collect();
+                    if !line.starts_with('#') && fields[0] != "member" {
+                        fields[6] = format!("{}", -fields[6].parse::<f64>().unwrap());
+                    }
+                    fields.join(",")
+                })
+                .collect();
+            lines.join("\n") + "\n"
+        },
+        |text| text,
+    );
+    for command in ["check", "run"] {
+        let o = tensolve(&[command, case.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{command}");
+        assert!(
+            stderr(&o).contains("6 unilateral cable(s) in compression, member(s) 3, 4, 5, 6, 7, 8"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}

@@ -405,6 +405,14 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
     if solution.info.status.converged() && min_tangent_eigenvalue.is_some_and(|v| v < 0.0) {
         solution.info.status = Status::Unstable;
     }
+    // A model on the initial geometry whose answer moves a node by more than the structure's
+    // own size has left its domain: not a converged answer of it.
+    if solution.info.status.converged()
+        && s.model != crate::structure::GeometricModel::Large
+        && results::max_deflection(s, &solution.equilibrium) > s.size()
+    {
+        solution.info.status = Status::BeyondModel;
+    }
     Verdict {
         min_tangent_eigenvalue,
         geometric_term: results::geometric_term(s, &solution.equilibrium, &prepared.taut),
@@ -442,6 +450,13 @@ fn not_converged_message(row: &SummaryRow, solution: &Solution, verdict: &Verdic
              displacement or tension file is written, and its row says converged = false, \
              status = limit_point",
             crate::solvers::newton::MIN_INCREMENT
+        ),
+        (None, Status::BeyondModel) => format!(
+            "{head}: beyond the model: the answer moves a node by {:.3e} m, more than the \
+             structure's own size; a model on the initial geometry does not describe that (a \
+             unit slip, such as E in GPa or coordinates in mm? `tensolve check` prints the \
+             magnitudes); its row says converged = false, status = beyond_model",
+            row.max_deflection
         ),
         (None, Status::Unstable) => format!(
             "{head}: an unstable equilibrium: the residual criterion holds, but the tangent \

@@ -221,6 +221,37 @@ const IMBALANCE_RELATIVE: f64 = 1e-9;
 
 /// Refuse a prestress not in equilibrium at the free dofs (docs/method.md §7), naming the worst nodes.
 fn check_prestress(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(), CaseError> {
+    // A unilateral cable carries tension only: a compressed prestress is released at once
+    // (every solver would answer with the prestress gone and call it converged).
+    if geometry.unilateral {
+        let compressed: Vec<&crate::structure::Member> = geometry
+            .members
+            .iter()
+            .filter(|m| m.kind.is_cable() && m.prestress < 0.0)
+            .collect();
+        if !compressed.is_empty() {
+            let ids: Vec<String> = compressed
+                .iter()
+                .take(10)
+                .map(|m| m.id.to_string())
+                .collect();
+            let most = compressed.iter().fold(0.0f64, |x, m| x.min(m.prestress));
+            return Err(CaseError::invalid(
+                "prestress",
+                format!(
+                    "{} unilateral cable(s) in compression, member(s) {}{} (down to {} N)",
+                    compressed.len(),
+                    ids.join(", "),
+                    if compressed.len() > 10 { ", …" } else { "" },
+                    number(most)
+                ),
+                "a cable carries tension only, so its prestress t0 must be ≥ 0 (tension > 0): \
+                 check the sign of the members table's prestress column (a self-stress state may \
+                 be given with the opposite sign), make those members bars, or set \
+                 `cables.unilateral = false`",
+            ));
+        }
+    }
     // Without settlements the effective prestress is t0 itself; with them, the imposed
     // part is carried by the supports on purpose, so check t0 on the same free dofs.
     let s =

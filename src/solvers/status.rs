@@ -22,6 +22,10 @@ pub enum Status {
     /// The stopping criterion holds, but the tangent stiffness there has a negative eigenvalue:
     /// an unstable equilibrium (a saddle of the energy), not the answer a load would reach.
     Unstable,
+    /// The stopping criterion holds, but the answer of a model on the initial geometry moves a
+    /// node by more than the structure's own size: beyond what that model describes (a unit
+    /// slip, such as E in GPa, or a load far too large for it).
+    BeyondModel,
 }
 
 impl Status {
@@ -31,7 +35,7 @@ impl Status {
     }
 
     /// The `status` column's word: `converged`, `max_iterations`, `stalled`,
-    /// `no_equilibrium`, `limit_point`, `unstable`.
+    /// `no_equilibrium`, `limit_point`, `unstable`, `beyond_model`.
     pub fn code(self) -> &'static str {
         match self {
             Status::Converged => "converged",
@@ -40,6 +44,7 @@ impl Status {
             Status::NoEquilibrium => "no_equilibrium",
             Status::LimitPoint => "limit_point",
             Status::Unstable => "unstable",
+            Status::BeyondModel => "beyond_model",
         }
     }
 
@@ -59,6 +64,7 @@ impl fmt::Display for Status {
             Status::NoEquilibrium => "no equilibrium",
             Status::LimitPoint => "limit point",
             Status::Unstable => "unstable equilibrium",
+            Status::BeyondModel => "beyond the model",
         })
     }
 }

@@ -309,6 +309,23 @@ impl Structure {
         self
     }
 
+    /// The structure's own size: the diagonal of its nodes' bounding box, m.
+    pub fn size(&self) -> f64 {
+        let (lo, hi) = self.nodes.iter().fold(
+            ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |(lo, hi), x| {
+                (
+                    std::array::from_fn(|k| lo[k].min(x[k])),
+                    std::array::from_fn(|k| hi[k].max(x[k])),
+                )
+            },
+        );
+        (0..3)
+            .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+
     /// Number of cables (every link but the bars).
     pub fn n_cables(&self) -> usize {
         self.links.iter().filter(|l| l.kind.is_cable()).count()
