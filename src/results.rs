@@ -1,7 +1,7 @@
 //! Quantities derived from an equilibrium, computed independently of the solver that produced
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
-use crate::linalg::{norm, smallest_eigenvalues, ZERO_MODE_RELATIVE};
+use crate::linalg::{norm, smallest_eigenvalues};
 use crate::solvers::{relative_unbalance, Equilibrium, Solution, TautStiffness};
 use crate::structure::law::{self, CurrentGeometry};
 use crate::structure::{GeometricModel, LinkKind, Structure};
@@ -185,10 +185,16 @@ pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautS
     };
     let eig = smallest_eigenvalues(pattern, &values, &mut factor, block, iterations, tolerance);
     let scale = pattern.mean_diagonal(&values);
-    let zero = ZERO_MODE_RELATIVE * scale;
+    // Below TANGENT_ZERO_RELATIVE of the mean diagonal an eigenvalue is zero: the Ritz values
+    // carry round-off of about 1e-10 of the scale, which must not decide stable or unstable.
+    let zero = TANGENT_ZERO_RELATIVE * scale;
     match eig.values.first() {
         Some(&v) if v.is_finite() && v.abs() > zero => v.max(-scale),
         Some(&v) if v == f64::NEG_INFINITY => -scale,
         _ => 0.0,
     }
 }
+
+/// The smallest tangent eigenvalue is reported as exactly 0 within this fraction of the mean
+/// diagonal (a singular tangent, neither stable nor unstable by round-off).
+pub const TANGENT_ZERO_RELATIVE: f64 = 1e-8;

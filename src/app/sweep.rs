@@ -406,9 +406,8 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
         solution.info.status = Status::Unstable;
     }
     // A model on the initial geometry whose answer moves a node by more than the structure's
-    // own size has left its domain: not a converged answer of it.
-    if solution.info.status.converged()
-        && s.model != crate::structure::GeometricModel::Large
+    // own size has left its domain: converged or not, no answer of it.
+    if s.model != crate::structure::GeometricModel::Large
         && results::max_deflection(s, &solution.equilibrium) > s.size()
     {
         solution.info.status = Status::BeyondModel;
@@ -455,7 +454,8 @@ fn not_converged_message(row: &SummaryRow, solution: &Solution, verdict: &Verdic
             "{head}: beyond the model: the answer moves a node by {:.3e} m, more than the \
              structure's own size; a model on the initial geometry does not describe that (a \
              unit slip, such as E in GPa or coordinates in mm? `tensolve check` prints the \
-             magnitudes); its row says converged = false, status = beyond_model",
+             magnitudes); no displacement or tension file is written, and its row says \
+             converged = false, status = beyond_model",
             row.max_deflection
         ),
         (None, Status::Unstable) => format!(

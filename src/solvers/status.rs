@@ -22,9 +22,9 @@ pub enum Status {
     /// The stopping criterion holds, but the tangent stiffness there has a negative eigenvalue:
     /// an unstable equilibrium (a saddle of the energy), not the answer a load would reach.
     Unstable,
-    /// The stopping criterion holds, but the answer of a model on the initial geometry moves a
-    /// node by more than the structure's own size: beyond what that model describes (a unit
-    /// slip, such as E in GPa, or a load far too large for it).
+    /// The answer of a model on the initial geometry moves a node by more than the structure's
+    /// own size, whether the stopping criterion held or not: beyond what that model describes
+    /// (a unit slip, such as E in GPa, or a load far too large for it). Not an answer.
     BeyondModel,
 }
 
@@ -51,7 +51,10 @@ impl Status {
     /// Whether the final iterate is no answer at all (no equilibrium, or the load never
     /// reached): no displacement or tension file is written for it.
     pub fn no_answer(self) -> bool {
-        matches!(self, Status::NoEquilibrium | Status::LimitPoint)
+        matches!(
+            self,
+            Status::NoEquilibrium | Status::LimitPoint | Status::BeyondModel
+        )
     }
 }
 

@@ -27,7 +27,10 @@ use crate::structure::law::{self, CurrentGeometry, SlackRule};
 use crate::structure::Structure;
 
 /// Newton steps one load increment may take before it is halved.
-pub const INCREMENT_MAX_STEPS: usize = 30;
+pub const INCREMENT_MAX_STEPS: usize = 8;
+/// An increment whose r(U) is at or below this after [`INCREMENT_MAX_STEPS`] steps without
+/// meeting the tolerance sits at round-off: the solve ends `Stalled` rather than halving.
+const ROUNDOFF_RESIDUAL: f64 = 1e-12;
 /// The smallest load increment tried, as a fraction of the path from the last equilibrium to
 /// the solve's load: below it the solve stops at a limit point.
 pub const MIN_INCREMENT: f64 = 1.0 / 1024.0;
@@ -358,8 +361,11 @@ impl<'s> LargeNewton<'s> {
         )
     }
 
+    /// r(U) and its load-relative form both at or below the tolerance (with every cable slack
+    /// the load-relative scale holds the released prestress and alone could pass a state far
+    /// from equilibrium).
     fn converged(&self, eval: &Evaluation) -> bool {
-        eval.load_residual <= self.settings.tolerance
+        eval.load_residual.max(eval.residual) <= self.settings.tolerance
     }
 
     /// After a step or a new increment: an equilibrium at the increment's load either ends the
@@ -470,8 +476,19 @@ impl Solver for LargeNewton<'_> {
                 state.eval = eval;
                 self.settle(state);
                 if state.stop.is_none() && state.increment_steps >= INCREMENT_MAX_STEPS {
-                    self.halve(state);
-                    self.settle(state);
+                    if state.eval.residual <= ROUNDOFF_RESIDUAL {
+                        // At round-off (a load tiny against the prestress, or a tolerance f64
+                        // does not resolve): no smaller increment would do better. On the way,
+                        // the path goes on from here; at the load, the solve has stalled.
+                        if state.done + state.increment >= 1.0 {
+                            state.stop = Some(Status::Stalled);
+                        } else {
+                            self.advance(state);
+                        }
+                    } else {
+                        self.halve(state);
+                        self.settle(state);
+                    }
                 }
             }
             None => {

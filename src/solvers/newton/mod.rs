@@ -438,7 +438,7 @@ impl Solver for Newton<'_> {
         // (the prestress left out): the second is the stricter, and keeps U = 0 from passing
         // at a huge prestress (issue 13, D5a).
         let stop = stop_when(
-            state.load_residual <= self.settings.tolerance,
+            state.load_residual.max(state.residual) <= self.settings.tolerance,
             state.stalled,
         );
         Progress {
