@@ -345,14 +345,22 @@ pub struct CurrentGeometry {
 impl CurrentGeometry {
     /// The geometry at displacements U (free dofs; held components at their prescribed value).
     pub fn of(s: &Structure, u: &[f64]) -> CurrentGeometry {
-        let full = s.full_displacements(u);
+        // U of a component: the free dof's value, or the held component's prescribed one.
+        let displacement = |node: usize, k: usize| {
+            let d = s.dof_of[3 * node + k];
+            if d == CLAMPED {
+                s.prescribed[3 * node + k]
+            } else {
+                u[d]
+            }
+        };
         let mut lengths = Vec::with_capacity(s.links.len());
         let mut elongations = Vec::with_capacity(s.links.len());
         let mut directions = Vec::with_capacity(s.links.len());
         let mut rows = Vec::with_capacity(s.links.len());
         for l in &s.links {
             let d0: [f64; 3] = std::array::from_fn(|k| s.nodes[l.b][k] - s.nodes[l.a][k]);
-            let du: [f64; 3] = std::array::from_fn(|k| full[3 * l.b + k] - full[3 * l.a + k]);
+            let du: [f64; 3] = std::array::from_fn(|k| displacement(l.b, k) - displacement(l.a, k));
             let d: [f64; 3] = std::array::from_fn(|k| d0[k] + du[k]);
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             // ℓ² − L² = 2 d0·Δu + Δu·Δu, so ℓ − L = (ℓ² − L²) / (ℓ + L).
@@ -420,11 +428,23 @@ impl Link {
     /// The row `v·(U_b − U_a)` on the free dofs numbered by `dof_of` (clamped components left
     /// out, zero coefficients kept): with v the member's unit vector, its row of B.
     pub fn row_along(&self, v: [f64; 3], dof_of: &[usize]) -> SparseRow {
-        let free = |d: usize| (d != CLAMPED).then_some(d);
-        let ends = [(self.a, -1.0), (self.b, 1.0)];
-        SparseRow::new(ends.into_iter().flat_map(|(node, sign)| {
-            (0..3).map(move |k| (free(dof_of[3 * node + k]), sign * v[k]))
-        }))
+        let mut row = SparseRow {
+            len: 0,
+            dofs: [0; 6],
+            coef: [0.0; 6],
+        };
+        for (node, sign) in [(self.a, -1.0), (self.b, 1.0)] {
+            for (k, &vk) in v.iter().enumerate() {
+                let d = dof_of[3 * node + k];
+                if d != CLAMPED {
+                    let i = row.len as usize;
+                    row.dofs[i] = d as u32;
+                    row.coef[i] = sign * vk;
+                    row.len += 1;
+                }
+            }
+        }
+        row
     }
 }
 

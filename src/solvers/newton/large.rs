@@ -419,15 +419,24 @@ impl Solver for LargeNewton<'_> {
     /// per α through three points against 3.95 with the secant).
     fn init(&mut self, load: &[f64]) -> LargeState {
         let (start, u_done) = self.reached.clone();
-        let mut u = u_done.clone();
-        let mut eval = self.evaluate(load, &u);
-        if let Some(predicted) = self.predict(load) {
-            let at = self.evaluate(load, &predicted);
-            if at.load_residual.is_finite() {
+        // The prediction when it evaluates to finite numbers, else the last equilibrium.
+        let predicted = self
+            .predict(load)
+            .map(|u| {
+                let eval = self.evaluate(load, &u);
+                (u, eval)
+            })
+            .filter(|(_, eval)| eval.load_residual.is_finite());
+        let (u, eval) = match predicted {
+            Some(start) => {
                 self.work.predicted_starts += 1;
-                (u, eval) = (predicted, at);
+                start
             }
-        }
+            None => {
+                let eval = self.evaluate(load, &u_done);
+                (u_done.clone(), eval)
+            }
+        };
         let mut state = LargeState {
             start,
             target: load.to_vec(),
