@@ -27,7 +27,7 @@ use crate::structure::law::{self, CurrentGeometry, SlackRule};
 use crate::structure::Structure;
 
 /// Newton steps one load increment may take before it is halved.
-pub const INCREMENT_MAX_STEPS: usize = 8;
+pub const INCREMENT_MAX_STEPS: usize = 30;
 /// An increment whose r(U) is at or below this after [`INCREMENT_MAX_STEPS`] steps without
 /// meeting the tolerance sits at round-off: the solve ends `Stalled` rather than halving.
 const ROUNDOFF_RESIDUAL: f64 = 1e-12;
