@@ -9,8 +9,8 @@ use common::{manifest_path, stderr, tensolve, Temp};
 use std::path::Path;
 use std::process::Command;
 use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
-use tensolve::solvers::{drive, unbalances_on, Silent, Solution, Status, TautStiffness};
-use tensolve::structure::law::{self, CurrentGeometry};
+use tensolve::solvers::{current_unbalances, drive, Silent, Solution, Status, TautStiffness};
+use tensolve::structure::law::CurrentGeometry;
 use tensolve::structure::{GeometricModel, Structure};
 
 const SHIPPED: [&str; 4] = ["simplex", "prism4", "tower", "saddle-net"];
@@ -192,15 +192,8 @@ fn large_tangent_is_the_gradients_derivative() {
     let u = answer.equilibrium.displacements;
     let load = vec![0.0; s.n_free];
     let gradient = |u: &[f64]| {
-        let current = CurrentGeometry::of(&s, u);
-        let tensions: Vec<f64> = current
-            .trial_tensions(&s)
-            .iter()
-            .zip(&s.links)
-            .map(|(&t, l)| law::tension(l, t))
-            .collect();
         let mut g = vec![0.0; s.n_free];
-        unbalances_on(&s, &current.rows, &tensions, None, &load, &mut g);
+        current_unbalances(&s, &CurrentGeometry::of(&s, u), &load, &mut g);
         g
     };
     let current = CurrentGeometry::of(&s, &u);

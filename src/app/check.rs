@@ -142,13 +142,7 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         counts: equilibrium_counts(&s),
         prestress: s.prestress_scale,
         geometry: case.model,
-        bounding_box: std::array::from_fn(|k| {
-            s.nodes
-                .iter()
-                .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], x| {
-                    [lo.min(x[k]), hi.max(x[k])]
-                })
-        }),
+        bounding_box: s.bounding_box(),
         lengths: range(s.links.iter().map(|l| l.length)),
         axial_rigidity: range(s.links.iter().map(|l| l.stiffness * l.length)),
         member_stiffness: range(s.links.iter().map(|l| l.stiffness)),

@@ -85,13 +85,7 @@ pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
     match s.model {
         GeometricModel::Large => {
             let current = law::CurrentGeometry::of(s, u);
-            let tensions: Vec<f64> = current
-                .trial_tensions(s)
-                .iter()
-                .zip(&s.links)
-                .map(|(&t, l)| law::tension(l, t))
-                .collect();
-            unbalances_on(s, &current.rows, &tensions, None, load, &mut r).relative
+            current_unbalances(s, &current, load, &mut r).1.relative
         }
         _ => {
             let tensions: Vec<f64> = law::trial_tensions(s, u)
@@ -114,3 +108,21 @@ pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
 }
 
 pub use crate::structure::law::trial_tensions;
+
+/// `r ← Σ τ ∇ℓ − F` on the current geometry (docs/method.md §8: the large model's energy
+/// gradient) and its sizes ([`unbalances_on`]); returns the trial tensions `t0 + k (ℓ − L)` too.
+pub fn current_unbalances(
+    s: &Structure,
+    current: &law::CurrentGeometry,
+    load: &[f64],
+    r: &mut [f64],
+) -> (Vec<f64>, Unbalances) {
+    let trial = current.trial_tensions(s);
+    let tensions: Vec<f64> = trial
+        .iter()
+        .zip(&s.links)
+        .map(|(&t, l)| law::tension(l, t))
+        .collect();
+    let sizes = unbalances_on(s, &current.rows, &tensions, None, load, r);
+    (trial, sizes)
+}

@@ -1,6 +1,6 @@
 //! The member law and its tangent, in one place (docs/method.md §1, §8): the trial tension
 //! `t0 + k e`, the tension (clipped at 0 for unilateral cables), the slack classification and
-//! its two policies, the energy, the tangent weight, and the geometric terms the model asks
+//! its two policies, the tangent weight, and the geometric terms the model asks
 //! for (`model.geometry`): none (`linear`), the prestress's geometric stiffness `K_G(t0)`
 //! (`prestress`), or the exact length on the current geometry (`large`). Every solver and
 //! `results` ask here; nothing else writes the law.
@@ -79,18 +79,6 @@ pub fn tangent_weight(link: &Link, trial: f64) -> f64 {
         link.stiffness
     } else {
         0.0
-    }
-}
-
-/// The member's energy at elongation e (docs/method.md §1): `t0 e + ½ k e²` (bilateral),
-/// `½ k ⟨e + t0/k⟩₊²` (unilateral cable).
-pub fn energy(link: &Link, elongation: f64) -> f64 {
-    let k = link.stiffness;
-    if link.unilateral {
-        let stretch = (elongation + link.prestress / k).max(0.0);
-        0.5 * k * stretch * stretch
-    } else {
-        link.prestress * elongation + 0.5 * k * elongation * elongation
     }
 }
 

@@ -309,19 +309,22 @@ impl Structure {
         self
     }
 
+    /// The nodes' bounding box, m: `[min, max]` per axis (infinite bounds without nodes).
+    pub fn bounding_box(&self) -> [[f64; 2]; 3] {
+        std::array::from_fn(|k| {
+            self.nodes
+                .iter()
+                .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], x| {
+                    [lo.min(x[k]), hi.max(x[k])]
+                })
+        })
+    }
+
     /// The structure's own size: the diagonal of its nodes' bounding box, m.
     pub fn size(&self) -> f64 {
-        let (lo, hi) = self.nodes.iter().fold(
-            ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |(lo, hi), x| {
-                (
-                    std::array::from_fn(|k| lo[k].min(x[k])),
-                    std::array::from_fn(|k| hi[k].max(x[k])),
-                )
-            },
-        );
-        (0..3)
-            .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
+        self.bounding_box()
+            .iter()
+            .map(|[lo, hi]| (hi - lo).max(0.0).powi(2))
             .sum::<f64>()
             .sqrt()
     }

@@ -21,7 +21,7 @@
 use super::NewtonSettings;
 use crate::linalg::{dot, SparseCholesky, StiffnessPattern};
 use crate::solvers::{
-    unbalances_on, Equilibrium, Measure, Progress, Solver, Status, TautStiffness,
+    current_unbalances, Equilibrium, Measure, Progress, Solver, Status, TautStiffness,
 };
 use crate::structure::law::{self, CurrentGeometry, SlackRule};
 use crate::structure::Structure;
@@ -144,16 +144,9 @@ impl<'s> LargeNewton<'s> {
     fn evaluate(&self, load: &[f64], u: &[f64]) -> Evaluation {
         let s = self.structure;
         let current = CurrentGeometry::of(s, u);
-        let trial: Vec<f64> = current.trial_tensions(s);
-        let tensions: Vec<f64> = s
-            .links
-            .iter()
-            .zip(&trial)
-            .map(|(l, &t)| law::tension(l, t))
-            .collect();
         let mut gradient = vec![0.0; s.n_free];
         // ∇Π = Σ τ ∇ℓ − F.
-        let sizes = unbalances_on(s, &current.rows, &tensions, None, load, &mut gradient);
+        let (trial, sizes) = current_unbalances(s, &current, load, &mut gradient);
         let finite = gradient.iter().all(|g| g.is_finite());
         Evaluation {
             current,
