@@ -4,11 +4,19 @@
 //! Newton reference (set-up included, reference excluded).
 //!
 //! Run with `cargo bench --bench latin`.
+//!
+//! `cargo bench --bench latin -- table` prints instead the scaling table of docs/method.md §9
+//! (issue "micro-macro earns its place"): grids of n × n modules clamped on all lower edges at
+//! ≈ 14 % slack (n = 16 α 2.4, 32 α 0.6, 64 α 0.15, 128 α 0.0375), micro-macro at its
+//! defaults on substructures of H × H modules, with the bilateral floor
+//! (`cables.unilateral = false`) on the same partition, newton's and mono-latin's time beside
+//! it; e against newton. `-- table status` adds the status-following policy of before
+//! (`search_direction = "status"`); `-- table quick` stops at 64 × 64.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use std::path::Path;
 use std::time::Duration;
-use tensolve::solvers::latin::{Latin, LatinSettings};
+use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::{AnySolver, Reference, Silent, Solver, TautStiffness};
 
@@ -82,5 +90,166 @@ fn latin(c: &mut Criterion) {
     group.finish();
 }
 
+/// One row of the scaling table: iterations to e < 1e-3 and e < 1e-6, the total, rebuilds,
+/// set-up and solve seconds, e at the stop.
+struct Row {
+    to_1e3: Option<usize>,
+    to_1e6: Option<usize>,
+    total: usize,
+    rebuilds: usize,
+    setup: f64,
+    solve: f64,
+    final_e: f64,
+    converged: bool,
+}
+
+/// The case text of an n × n grid at `alpha`, all lower edges clamped.
+fn grid_case(n: usize, alpha: f64, extra: &str) -> String {
+    format!(
+        "[grid]\nmodules = [{n}, {n}]\n[supports]\nclamp = \"lower-all-edges\"\n\
+         [load]\nalpha = [{alpha}]\n{extra}\n[solver]\nmethods = [\"micro-macro\"]\n\
+         max_iterations = 3000\n"
+    )
+}
+
+fn latin_row(
+    structure: &tensolve::structure::Structure,
+    settings: LatinSettings,
+    load: &[f64],
+    reference: &Reference,
+) -> Row {
+    let clock = std::time::Instant::now();
+    let mut solver = Latin::new(structure, settings).expect("set-up");
+    let setup = clock.elapsed().as_secs_f64();
+    // First the iterates' errors against the reference, then the solve timed alone (the same
+    // iterates: the solver is deterministic).
+    let mut state = solver.init(load);
+    let mut errors = vec![reference.error(&solver.elongations(&state))];
+    let converged = loop {
+        let progress = solver.progress(&state);
+        if let Some(status) = progress.stop {
+            break status.converged();
+        }
+        if state.iteration >= settings.max_iterations {
+            break false;
+        }
+        solver.next_iter(&mut state);
+        errors.push(reference.error(&solver.elongations(&state)));
+    };
+    let clock = std::time::Instant::now();
+    let mut state = solver.init(load);
+    while solver.progress(&state).stop.is_none() && state.iteration < settings.max_iterations {
+        solver.next_iter(&mut state);
+    }
+    let solve = clock.elapsed().as_secs_f64();
+    let first = |tol: f64| errors.iter().position(|&e| e < tol);
+    Row {
+        to_1e3: first(1e-3),
+        to_1e6: first(1e-6),
+        total: state.iteration,
+        rebuilds: state.updates,
+        setup,
+        solve,
+        final_e: *errors.last().unwrap_or(&f64::NAN),
+        converged,
+    }
+}
+
+fn table(args: &[String]) {
+    tensolve::app::allocator::retain_freed_memory();
+    let quick = args.iter().any(|a| a == "quick");
+    let with_status = args.iter().any(|a| a == "status");
+    let grids: &[(usize, f64, &[usize])] = &[
+        (16, 2.4, &[4]),
+        (32, 0.6, &[4]),
+        (64, 0.15, &[4, 8, 16]),
+        (128, 0.0375, &[4, 16, 32]),
+    ];
+    println!(
+        "| grid, substructures | policy | to e < 1e-3 | to e < 1e-6 | total | rebuilds | e at stop | set-up s | solve s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let show = |o: Option<usize>| o.map_or("–".to_string(), |k| k.to_string());
+    for &(n, alpha, sizes) in grids {
+        if quick && n > 64 {
+            break;
+        }
+        for unilateral in [true, false] {
+            let extra = if unilateral {
+                ""
+            } else {
+                "[cables]\nunilateral = false"
+            };
+            let case = tensolve::case::parse(&grid_case(n, alpha, extra)).expect("case");
+            let structure = case.structure();
+            let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+            let taut = TautStiffness::new(&structure).expect("regular");
+            let clock = std::time::Instant::now();
+            let newton = Newton::new(&structure, &taut, NewtonSettings::default())
+                .expect("newton")
+                .solve(&load, None, &mut Silent);
+            let newton_seconds = clock.elapsed().as_secs_f64();
+            let reference = Reference::new(&structure, &newton.equilibrium.displacements);
+            let label = if unilateral { "" } else { " bilateral" };
+            println!(
+                "| {n} × {n}{label}: newton | – | – | – | {} | – | – | – | {newton_seconds:.2} (set-up included) |",
+                newton.info.iterations
+            );
+            let mut policies = vec![("inexact Newton", SearchPolicy::Newton)];
+            if with_status && unilateral {
+                policies.push(("status-following", SearchPolicy::Status));
+            }
+            for &h in sizes {
+                let parts = n / h;
+                for &(name, policy) in &policies {
+                    let settings = LatinSettings {
+                        subdomains: [parts, parts],
+                        policy,
+                        max_iterations: 3000,
+                        ..LatinSettings::default()
+                    };
+                    let row = latin_row(&structure, settings, &load, &reference);
+                    let name = if unilateral { name } else { "bilateral" };
+                    println!(
+                        "| {n} × {n}, {} of {h} × {h} | {name} | {} | {} | {}{} | {} | {:.1e} | {:.2} | {:.2} |",
+                        parts * parts,
+                        show(row.to_1e3),
+                        show(row.to_1e6),
+                        row.total,
+                        if row.converged { "" } else { " (not converged)" },
+                        row.rebuilds,
+                        row.final_e,
+                        row.setup,
+                        row.solve,
+                    );
+                }
+            }
+            if n == 64 && unilateral {
+                let settings = LatinSettings::default().monodomain();
+                let row = latin_row(&structure, settings, &load, &reference);
+                println!(
+                    "| {n} × {n}: mono-latin | inexact Newton | {} | {} | {} | {} | {:.1e} | {:.2} | {:.2} |",
+                    show(row.to_1e3),
+                    show(row.to_1e6),
+                    row.total,
+                    row.rebuilds,
+                    row.final_e,
+                    row.setup,
+                    row.solve,
+                );
+            }
+        }
+    }
+}
+
 criterion_group!(benches, latin);
-criterion_main!(benches);
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "table") {
+        table(&args);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -155,8 +155,13 @@ fn invalid_cases_exit_2_and_name_the_key() {
         ),
         (
             "unknown-search-direction",
-            with("[solver]\nsearch_direction = \"newton\""),
-            &["newton", "status"],
+            with("[solver]\nsearch_direction = \"gradient\""),
+            &["gradient", "status", "newton"],
+        ),
+        (
+            "forcing-out-of-range",
+            with("[solver]\nforcing = 1.5"),
+            &["solver.forcing", "1.5", "between 0 and 1"],
         ),
         (
             "unknown-stop-on",

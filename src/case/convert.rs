@@ -605,6 +605,16 @@ fn solver_choice(
     if let Some(policy) = raw.search_direction {
         choice.latin.policy = policy;
     }
+    if let Some(rho) = raw.forcing {
+        if !(rho.is_finite() && rho > 0.0 && rho < 1.0) {
+            return Err(CaseError::invalid(
+                "solver.forcing",
+                number(rho),
+                "give the forcing term ρ of the inexact Newton status steps between 0 and 1 (exclusive), e.g. 0.3",
+            ));
+        }
+        choice.latin.forcing = rho;
+    }
     if let Some(stop_on) = raw.stop_on {
         choice.latin.stop_on = stop_on;
     }

@@ -188,6 +188,7 @@ pub(super) struct RawSolver {
     pub relaxation: Option<f64>,
     pub anderson: Option<usize>,
     pub search_direction: Option<SearchPolicy>,
+    pub forcing: Option<f64>,
     pub stop_on: Option<StopOn>,
     pub residual_tolerance: Option<f64>,
     pub reference: Option<ReferenceChoice>,

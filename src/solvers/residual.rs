@@ -87,24 +87,42 @@ pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
             let current = law::CurrentGeometry::of(s, u);
             current_unbalances(s, &current, load, &mut r).1.relative
         }
-        _ => {
-            let tensions: Vec<f64> = law::trial_tensions(s, u)
-                .iter()
-                .zip(&s.links)
-                .map(|(&t, l)| law::tension(l, t))
-                .collect();
-            let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
-            unbalances_on(
-                s,
-                &s.link_dofs,
-                &tensions,
-                geometric_force.as_deref(),
-                load,
-                &mut r,
-            )
-            .relative
-        }
+        _ => small_displacement_residual(s, u, load, |l, trial, _| law::tension(l, trial)),
     }
+}
+
+/// r(U) under the law linearised at a slack status (docs/method.md §9, the inner problem of
+/// a status step): `τ = t0 + k e` of either sign on bars and on the cables taut in `slack`,
+/// `τ = 0` on the cables slack in it. The small-displacement models only.
+pub fn frozen_residual(s: &Structure, u: &[f64], load: &[f64], slack: &[bool]) -> f64 {
+    small_displacement_residual(s, u, load, |_, trial, i| if slack[i] { 0.0 } else { trial })
+}
+
+/// r(U) with the tensions `law(link, t0 + k e, index)` on the initial geometry (plus `K_G U`
+/// with the prestress's geometric stiffness).
+fn small_displacement_residual(
+    s: &Structure,
+    u: &[f64],
+    load: &[f64],
+    law: impl Fn(&crate::structure::Link, f64, usize) -> f64,
+) -> f64 {
+    let mut r = vec![0.0; s.n_free];
+    let tensions: Vec<f64> = law::trial_tensions(s, u)
+        .iter()
+        .zip(&s.links)
+        .enumerate()
+        .map(|(i, (&t, l))| law(l, t, i))
+        .collect();
+    let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
+    unbalances_on(
+        s,
+        &s.link_dofs,
+        &tensions,
+        geometric_force.as_deref(),
+        load,
+        &mut r,
+    )
+    .relative
 }
 
 pub use crate::structure::law::trial_tensions;

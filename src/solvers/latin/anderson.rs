@@ -7,12 +7,15 @@
 //! With m = 0 this is `x⁺ = β G(x) + (1 − β) x`: the linear stage is affine in x, so it is
 //! exactly the relaxation of s with μ = β.
 
-use nalgebra::{DMatrix, DVector};
+use crate::linalg::dot;
+use nalgebra::DMatrix;
 use std::collections::VecDeque;
 
-/// Singular values of ΔF below this fraction of the largest are dropped from the least-squares
-/// problem (nearly dependent differences).
-const RCOND: f64 = 1e-10;
+/// Directions of ΔF whose singular value is below this fraction of the largest are dropped
+/// from the least-squares problem (nearly dependent differences). It is applied to the
+/// eigenvalues of the column-scaled Gram matrix `ΔFᵀΔF`, squared: below 1e-7 the Gram
+/// matrix's eigenvalues (≈ 1e-14 of the largest) are round-off.
+const RCOND: f64 = 1e-7;
 
 /// The history of an Anderson-accelerated fixed-point iteration.
 #[derive(Debug, Clone, Default)]
@@ -21,8 +24,13 @@ pub struct Anderson {
     depth: usize,
     /// β: the damping of the step.
     damping: f64,
-    /// The last iterates x_i and their residuals f_i, oldest first (at most m).
-    history: VecDeque<(Vec<f64>, Vec<f64>)>,
+    /// The last iterate x and its residual f.
+    last: Option<(Vec<f64>, Vec<f64>)>,
+    /// The differences `(ΔX_i, ΔF_i)` of the last m iterates, oldest first.
+    differences: VecDeque<(Vec<f64>, Vec<f64>)>,
+    /// `ΔF_iᵀ ΔF_j`, updated as differences come and go (O(m n) an iteration instead of the
+    /// O(m² n) of a factorisation of ΔF).
+    gram: VecDeque<VecDeque<f64>>,
 }
 
 impl Anderson {
@@ -31,13 +39,15 @@ impl Anderson {
         Anderson {
             depth,
             damping,
-            history: VecDeque::new(),
+            ..Anderson::default()
         }
     }
 
     /// Forget the history: the map changed (new search directions).
     pub fn restart(&mut self) {
-        self.history.clear();
+        self.last = None;
+        self.differences.clear();
+        self.gram.clear();
     }
 
     /// The next input from `x` and `g = G(x)`. Right after a restart it is `G(x)` itself (the
@@ -51,37 +61,88 @@ impl Anderson {
         let f: Vec<f64> = g.iter().zip(x).map(|(g, x)| g - x).collect();
         // x⁺ = x + β f.
         let mut next: Vec<f64> = x.iter().zip(&f).map(|(x, f)| x + beta * f).collect();
-        let k = self.history.len();
-        if k > 0 && self.depth > 0 {
-            // ΔX_i = x_{i+1} − x_i, ΔF_i = f_{i+1} − f_i over the history and the current x, f.
-            let n = f.len();
-            let xs: Vec<&[f64]> = self.history.iter().map(|h| &h.0[..]).chain([x]).collect();
-            let fs: Vec<&[f64]> = self
-                .history
+        if self.depth == 0 {
+            return next;
+        }
+        if let Some((x_prev, f_prev)) = self.last.take() {
+            // ΔX = x − x_prev, ΔF = f − f_prev, and its products with the kept ΔF.
+            let dx: Vec<f64> = x.iter().zip(&x_prev).map(|(a, b)| a - b).collect();
+            let df: Vec<f64> = f.iter().zip(&f_prev).map(|(a, b)| a - b).collect();
+            if self.differences.len() == self.depth {
+                self.differences.pop_front();
+                self.gram.pop_front();
+                self.gram.iter_mut().for_each(|row| {
+                    row.pop_front();
+                });
+            }
+            let products: VecDeque<f64> = self
+                .differences
                 .iter()
-                .map(|h| &h.1[..])
-                .chain([&f[..]])
+                .map(|(_, other)| dot(other, &df))
+                .chain([dot(&df, &df)])
                 .collect();
-            let dx = DMatrix::<f64>::from_fn(n, k, |r, i| xs[i + 1][r] - xs[i][r]);
-            let df = DMatrix::<f64>::from_fn(n, k, |r, i| fs[i + 1][r] - fs[i][r]);
-            // γ = argmin ‖f − ΔF γ‖, by SVD with small singular values dropped.
-            let svd = df.clone().svd(true, true);
-            let cutoff = RCOND * svd.singular_values.max();
-            if let Ok(gamma) = svd.solve(&DVector::from_column_slice(&f), cutoff) {
-                // x⁺ −= (ΔX + β ΔF) γ.
-                let correction = (dx + df * beta) * gamma;
+            for (row, &p) in self.gram.iter_mut().zip(&products) {
+                row.push_back(p);
+            }
+            self.gram.push_back(products);
+            self.differences.push_back((dx, df));
+        }
+        if let Some(gamma) = self.coefficients(&f) {
+            // x⁺ −= (ΔX + β ΔF) γ.
+            for ((dx, df), &c) in self.differences.iter().zip(&gamma) {
                 next.iter_mut()
-                    .zip(correction.iter())
-                    .for_each(|(x, c)| *x -= c);
+                    .zip(dx.iter().zip(df))
+                    .for_each(|(x, (a, b))| *x -= c * (a + beta * b));
             }
         }
-        if self.depth > 0 {
-            self.history.push_back((x.to_vec(), f));
-            while self.history.len() > self.depth {
-                self.history.pop_front();
-            }
-        }
+        self.last = Some((x.to_vec(), f));
         next
+    }
+
+    /// `γ = argmin ‖f − ΔF γ‖` from the normal equations `ΔFᵀΔF γ = ΔFᵀ f`, scaled to a unit
+    /// diagonal and solved on the eigenvectors whose eigenvalue is above `RCOND²` of the
+    /// largest. `None` without history.
+    fn coefficients(&self, f: &[f64]) -> Option<Vec<f64>> {
+        let k = self.differences.len();
+        if k == 0 {
+            return None;
+        }
+        let scale: Vec<f64> = (0..k)
+            .map(|i| {
+                let d = self.gram[i][i];
+                if d > 0.0 {
+                    1.0 / d.sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let gram = DMatrix::from_fn(k, k, |i, j| scale[i] * self.gram[i][j] * scale[j]);
+        let rhs: Vec<f64> = self
+            .differences
+            .iter()
+            .zip(&scale)
+            .map(|((_, df), s)| s * dot(df, f))
+            .collect();
+        let eigen = gram.symmetric_eigen();
+        let largest = eigen.eigenvalues.max();
+        if !(largest > 0.0 && largest.is_finite()) {
+            return None;
+        }
+        let mut gamma = vec![0.0; k];
+        for (m, &lambda) in eigen.eigenvalues.iter().enumerate() {
+            if lambda <= RCOND * RCOND * largest {
+                continue;
+            }
+            let v = eigen.eigenvectors.column(m);
+            let c = v.iter().zip(&rhs).map(|(a, b)| a * b).sum::<f64>() / lambda;
+            gamma
+                .iter_mut()
+                .zip(v.iter())
+                .for_each(|(g, a)| *g += c * a);
+        }
+        gamma.iter_mut().zip(&scale).for_each(|(g, s)| *g *= s);
+        Some(gamma)
     }
 }
 
@@ -127,9 +188,9 @@ mod tests {
         let mut aa = Anderson::new(3, 0.5);
         let x = vec![1.0, 2.0];
         let _ = aa.step(&x, &[0.0, 0.0], false);
-        assert_eq!(aa.history.len(), 1);
+        assert!(aa.last.is_some());
         let next = aa.step(&x, &[3.0, 4.0], true);
         assert_eq!(next, vec![3.0, 4.0]);
-        assert!(aa.history.is_empty());
+        assert!(aa.last.is_none() && aa.differences.is_empty() && aa.gram.is_empty());
     }
 }

@@ -1,7 +1,9 @@
 //! The LATIN indicator η (docs/method.md §4 "Indicator", paper §5.3) between s (a linear stage) and the
 //! ŝ that fed it, and what the state reports after each linear stage.
 
+use super::local_stage::link_local_stage;
 use super::{displacement_residual, Latin, LatinState, SubState};
+use crate::solvers::frozen_residual;
 
 /// Δη below this fraction of the prestress scale is round-off (a load-induced Δη on the
 /// paper's case is 1e-4 of it at η = 1e-4).
@@ -11,18 +13,30 @@ impl Latin<'_> {
     /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (docs/method.md §4 "Indicator", §5.3). The distance is
     /// measured along the search direction that does not relate them: E⁺ (`t − t̂ = −l(e − ê)`)
     /// when ŝ fed s (the relaxed iteration), E⁻ when ŝ = local(s) (the accelerated one).
+    ///
+    /// With inexact Newton status steps ŝ lies on the law linearised at the status; η is
+    /// measured against the exact law all the same (the links' ŝ recomputed on it), so that
+    /// it says how far s is from the solution, not from the inner problem's.
     fn indicator(&self, state: &[SubState]) -> (f64, f64) {
         let dm = self.dm;
         let sign = if self.accelerated() { -1.0 } else { 1.0 };
+        let exact = self.newton_steps();
+        let links = &self.structure.links;
         let mut delta = 0.0;
         let mut size = 0.0;
         for (sub, st) in self.substructures.iter().zip(state) {
             for (j, &i) in sub.links.iter().enumerate() {
                 let l = self.search[i];
-                let d = (st.t[j] - st.t_hat[j]) + sign * l * (st.e[j] - st.e_hat[j]);
+                let (e_hat, t_hat) = if exact {
+                    let (e_hat, t_hat, _) = link_local_stage(&links[i], l, st.e[j], st.t[j]);
+                    (e_hat, t_hat)
+                } else {
+                    (st.e_hat[j], st.t_hat[j])
+                };
+                let d = (st.t[j] - t_hat) + sign * l * (st.e[j] - e_hat);
                 delta += d * d / l;
-                let e_mid = 0.5 * (st.e[j] + st.e_hat[j]);
-                let t_mid = 0.5 * (st.t[j] + st.t_hat[j]);
+                let e_mid = 0.5 * (st.e[j] + e_hat);
+                let t_mid = 0.5 * (st.t[j] + t_hat);
                 size += l * e_mid * e_mid + t_mid * t_mid / l;
             }
             for ss in &st.sides {
@@ -49,6 +63,10 @@ impl Latin<'_> {
         // r(U) of the linear stage's U under the exact law (docs/method.md §6).
         let u = self.displacements(&state.subs);
         state.residual = displacement_residual(self.structure, &u, &state.load);
+        if self.newton_steps() {
+            state.frozen_residual =
+                frozen_residual(self.structure, &u, &state.load, &self.search_slack);
+        }
 
         state.slack_cables = state
             .subs

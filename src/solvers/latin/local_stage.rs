@@ -7,19 +7,33 @@ use crate::structure::Link;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
+/// The law a local stage projects s on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum LocalLaw {
+    /// The exact unilateral law of the cables.
+    Exact,
+    /// The law linearised at the status the operators were built for (docs/method.md §9):
+    /// cables taut in it elastic both ways, cables slack in it without tension.
+    Frozen,
+}
+
 impl Latin<'_> {
-    /// Local stage (docs/method.md §4): given s in `state`, find ŝ.
-    pub(super) fn local_stage(&self, state: &mut [SubState]) {
+    /// Local stage (docs/method.md §4): given s in `state`, find ŝ on `law`.
+    pub(super) fn local_stage(&self, state: &mut [SubState], law: LocalLaw) {
         let s = self.structure;
         let search = &self.search;
+        let status = (law == LocalLaw::Frozen).then_some(&self.search_slack);
         self.substructures
             .par_iter()
             .zip(state.par_iter_mut())
             .with_min_len(self.chunk)
             .for_each(|(sub, st)| {
                 for (j, &i) in sub.links.iter().enumerate() {
-                    let (e_hat, t_hat, slack) =
-                        link_local_stage(&s.links[i], search[i], st.e[j], st.t[j]);
+                    let (link, l, e, t) = (&s.links[i], search[i], st.e[j], st.t[j]);
+                    let (e_hat, t_hat, slack) = match status {
+                        Some(status) => frozen_link_local_stage(link, l, e, t, status[i]),
+                        None => link_local_stage(link, l, e, t),
+                    };
                     st.e_hat[j] = e_hat;
                     st.t_hat[j] = t_hat;
                     st.slack_hat[j] = slack;
@@ -59,6 +73,26 @@ pub fn link_local_stage(link: &Link, l: f64, e: f64, t: f64) -> (f64, f64, bool)
     let t_hat = tau_hat - t0;
     let e_hat = e - (t_hat - t) / l;
     (e_hat, t_hat, slack)
+}
+
+/// `(ê, t̂, slack)` of one link on the law linearised at its status (docs/method.md §9): a bar
+/// or a cable taut in the status is elastic both ways (`t̂ = k ê`), a cable slack in it
+/// carries no tension (`τ̂ = t0 + t̂ = 0`, any ê); along the search direction l.
+pub fn frozen_link_local_stage(
+    link: &Link,
+    l: f64,
+    e: f64,
+    t: f64,
+    slack: bool,
+) -> (f64, f64, bool) {
+    if !slack {
+        // ê = (l e + t)/(k + l), t̂ = k ê.
+        let e_hat = (l * e + t) / (link.stiffness + l);
+        return (e_hat, link.stiffness * e_hat, false);
+    }
+    // τ̂ = 0, and (t̂ − t) + l (ê − e) = 0.
+    let t_hat = -link.prestress;
+    (e - (t_hat - t) / l, t_hat, true)
 }
 
 /// The interface's two sides: micro parts by the explicit formulas, macro parts pass through.
@@ -242,6 +276,36 @@ mod tests {
         let (_, t_hat, slack) = link_local_stage(&cable, k, -0.03, 1000.0 - 2000.0 - 1.0);
         assert!(slack);
         assert_eq!(t_hat, -t0);
+    }
+
+    #[test]
+    fn frozen_local_stage_is_on_the_linearised_law_and_the_search_direction() {
+        let (k, t0) = (1.0e5, 2000.0);
+        let cable = link(LinkKind::UpperCable, k, t0, true);
+        let mut rng = Rng(11);
+        for _ in 0..500 {
+            let l = k * 10f64.powf(2.0 * rng.next());
+            let (e, t) = (0.05 * rng.next(), 4000.0 * rng.next());
+            let scale = t.abs() + t0.abs() + l * e.abs();
+            for slack in [false, true] {
+                let (e_hat, t_hat, flagged) = frozen_link_local_stage(&cable, l, e, t, slack);
+                assert_eq!(flagged, slack);
+                let d = (t_hat - t) + l * (e_hat - e);
+                assert!(d.abs() <= 1e-12 * scale, "off the search direction: {d}");
+                if slack {
+                    assert_eq!(t0 + t_hat, 0.0, "slack in the status: no tension");
+                } else {
+                    // Taut in the status: t̂ = k ê even in compression (τ̂ < 0 allowed).
+                    assert!(close(t_hat, k * e_hat, scale));
+                }
+            }
+            // Where the exact law is taut, the taut linearisation agrees with it.
+            let exact = link_local_stage(&cable, l, e, t);
+            if !exact.2 {
+                let frozen = frozen_link_local_stage(&cable, l, e, t, false);
+                assert!(close(exact.0, frozen.0, 1e-6) && close(exact.1, frozen.1, scale));
+            }
+        }
     }
 
     fn side(rng: &mut Rng, n: usize) -> SideState {

@@ -34,6 +34,14 @@ const REGULARISATION: f64 = 1e-9;
 /// Iterative refinement stops after this many steps, or once the residual stops falling.
 const MAX_REFINEMENT: usize = 6;
 
+/// ... or, in the iterations, once the residual is below this fraction of the right-hand side
+/// (largest entries): the first solve leaves ≈ 1e-8 of it (the regularised kernel pivots),
+/// one step ≈ 1e-14, a second only round-off. It halves the solves (2 instead of 4 or 5 per
+/// macro solve on a 32 × 32 grid of 64 substructures); a less accurate macro answer on an
+/// ill-conditioned partition can slow the LATIN, never make a row converged (r(U) is measured
+/// on U). The set-up's regularity check refines to the end.
+const REFINED: f64 = 1e-12;
+
 /// The macro problem `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
 /// factorised once.
 pub struct MacroProblem {
@@ -212,7 +220,7 @@ impl MacroProblem {
         if previous.is_none() {
             let y0: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
             let mut y = factor.apply(&y0);
-            factor.solve(&mut y);
+            factor.solve(&mut y, 0.0);
             let error = y
                 .iter()
                 .zip(&y0)
@@ -265,7 +273,7 @@ impl MacroProblem {
                 }
             };
             rhs.iter_mut().enumerate().for_each(|(i, b)| *b *= scale(i));
-            factor.solve(&mut rhs);
+            factor.solve(&mut rhs, REFINED);
             rhs.iter_mut().enumerate().for_each(|(i, y)| *y *= scale(i));
         }
         rhs
@@ -292,7 +300,9 @@ impl Factor {
     }
 
     /// `y ← M⁻¹ y`: the regularised factor, then iterative refinement against M.
-    fn solve(&self, b: &mut [f64]) {
+    /// `refined`: refinement stops once the residual is below this fraction of `b` (0: only
+    /// when it stops falling).
+    fn solve(&self, b: &mut [f64], refined: f64) {
         let n = b.len();
         let symbolic = &self.pattern.symbolic;
         let ldlt = LdltRef::new(symbolic, &self.values);
@@ -308,12 +318,13 @@ impl Factor {
         let rhs = b.to_vec();
         solve(b);
         let mut last = f64::INFINITY;
+        let enough = refined * rhs.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for _ in 0..MAX_REFINEMENT {
             // r = b − M y; y += M̃⁻¹ r.
             let my = self.apply(b);
             let mut r: Vec<f64> = rhs.iter().zip(&my).map(|(b, m)| b - m).collect();
             let norm = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            if norm.is_nan() || norm >= 0.5 * last {
+            if norm.is_nan() || norm >= 0.5 * last || norm <= enough {
                 break;
             }
             last = norm;

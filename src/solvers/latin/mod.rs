@@ -32,6 +32,7 @@ mod macro_problem;
 pub mod partition;
 mod settings;
 mod state;
+mod status_step;
 mod substructure;
 
 pub use interfaces::Interface;
@@ -49,6 +50,7 @@ use crate::structure::law;
 use crate::structure::{Structure, CLAMPED};
 use anderson::Anderson;
 use interfaces::Interfaces;
+use local_stage::LocalLaw;
 use macro_problem::MacroProblem;
 use rayon::prelude::*;
 
@@ -514,9 +516,26 @@ fn operators(
 /// stage), or on the linear stage's input with Anderson acceleration (linear stage, then local
 /// stage, so that G is the whole map ŝ ↦ local(linear(ŝ))).
 impl Latin<'_> {
-    /// Whether the iteration is Anderson-accelerated (`solver.anderson` > 0).
+    /// Whether the iteration runs on the linear stage's input (Anderson-accelerated when
+    /// `solver.anderson` > 0): always with inexact Newton status steps, whose line search
+    /// blends that input.
     fn accelerated(&self) -> bool {
-        self.settings.anderson > 0
+        self.settings.anderson > 0 || self.newton_steps()
+    }
+
+    /// Whether the status is updated by inexact Newton steps (docs/method.md §9).
+    fn newton_steps(&self) -> bool {
+        self.settings.policy == SearchPolicy::Newton
+    }
+
+    /// The law of the local stage while iterating: linearised at the status with inexact
+    /// Newton steps, exact otherwise.
+    fn local_law(&self) -> LocalLaw {
+        if self.newton_steps() {
+            LocalLaw::Frozen
+        } else {
+            LocalLaw::Exact
+        }
     }
 
     /// Status-following l, when the policy asks for it: `true` when the operators changed.
@@ -532,7 +551,7 @@ impl Latin<'_> {
     /// ŝ = local(s), new operators if the status asks for them, then s = linear(ŝ), relaxed
     /// against the previous s with μ < 1.
     fn relaxed_iteration(&mut self, state: &mut LatinState) {
-        self.local_stage(&mut state.subs);
+        self.local_stage(&mut state.subs, LocalLaw::Exact);
         self.update_search(state);
         let mu = self.settings.relaxation;
         let relaxation = (state.relax && mu < 1.0).then_some(mu);
@@ -541,16 +560,16 @@ impl Latin<'_> {
     }
 
     /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; new
-    /// operators if the status asks for them; x⁺ from Anderson; then s = linear(x⁺) and
-    /// ŝ = local(s).
-    fn accelerated_iteration(&mut self, state: &mut LatinState) {
-        let restarted = self.update_search(state);
+    /// operators if the status asks for them (or `rebuilt` says a status step made them);
+    /// x⁺ from Anderson; then s = linear(x⁺) and ŝ = local(s).
+    fn accelerated_iteration(&mut self, state: &mut LatinState, rebuilt: bool) {
+        let restarted = self.update_search(state) || rebuilt;
         let g = self.linear_stage_input(&state.subs);
         let next = state.anderson.step(&state.input, &g, restarted);
         self.set_linear_stage_input(&mut state.subs, &next);
         state.input = next;
         self.linear_stage(&state.load, &mut state.subs, None);
-        self.local_stage(&mut state.subs);
+        self.local_stage(&mut state.subs, self.local_law());
         state.relax = true;
     }
 
@@ -627,6 +646,8 @@ impl Solver for Latin<'_> {
             updates: 0,
             relax: false,
             at_roundoff: false,
+            frozen_residual: f64::INFINITY,
+            step: None,
             load: load.to_vec(),
             input: Vec::new(),
             anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
@@ -635,10 +656,13 @@ impl Solver for Latin<'_> {
         self.linear_stage(&state.load, &mut state.subs, None);
         if self.accelerated() {
             state.input = self.linear_stage_input(&state.subs);
-            self.local_stage(&mut state.subs);
+            self.local_stage(&mut state.subs, self.local_law());
         }
         state.relax = true;
         self.measure_state(&mut state);
+        if self.newton_steps() {
+            state.step = Some(self.step_start(&state));
+        }
         state
     }
 
@@ -646,14 +670,21 @@ impl Solver for Latin<'_> {
     /// status changed (relaxation and acceleration then restart: the old s was computed with
     /// another l); then the linear stage, relaxed `s ← μ s_new + (1 − μ) s_old`, or with
     /// Anderson acceleration on its input.
+    /// With inexact Newton status steps, an inner run that has reached its forcing tolerance
+    /// first ends in a status step, and the iteration is the first of the next inner run.
     fn next_iter(&mut self, state: &mut LatinState) {
+        let stepped = self.newton_steps() && self.inner_run_done(state);
         if self.accelerated() {
-            self.accelerated_iteration(state);
+            let rebuilt = stepped && self.status_step(state).rebuilt;
+            self.accelerated_iteration(state, rebuilt);
         } else {
             self.relaxed_iteration(state);
         }
         state.iteration += 1;
         self.measure_state(state);
+        if stepped {
+            state.step = Some(self.step_start(state));
+        }
     }
 
     fn progress(&self, state: &LatinState) -> Progress {
@@ -698,7 +729,7 @@ impl Solver for Latin<'_> {
     fn iterate(&self, state: &LatinState) -> Equilibrium {
         let s = self.structure;
         let mut subs = state.subs.clone();
-        self.local_stage(&mut subs);
+        self.local_stage(&mut subs, LocalLaw::Exact);
         let u = self.displacements(&state.subs);
         let mut tensions = vec![0.0; s.links.len()];
         for (sub, st) in self.substructures.iter().zip(&subs) {

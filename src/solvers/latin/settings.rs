@@ -35,8 +35,15 @@ pub enum SearchPolicy {
     /// ε·l for slack ones, a cable being slack when the linear stage's trial tension
     /// `t0 + k e` is not positive; the operators are rebuilt when that set has changed since
     /// they were built (see [`LatinSettings::update_threshold`]).
-    #[default]
     Status,
+    /// Status updates as inexact Newton steps (docs/method.md §9): the status is frozen during
+    /// an inner LATIN run on the law linearised at it (taut cables elastic both ways, slack
+    /// ones without tension), which ends once r(U) under that law is below
+    /// [`LatinSettings::forcing`] × the exact r(U) at the step's start; a line search on the
+    /// exact energy between the step's start and end, then the status of the blended state
+    /// (`t0 + k e > 0`), and new operators (l as for `Status`) only if it changed.
+    #[default]
+    Newton,
 }
 
 /// What a LATIN solve stops on.
@@ -83,6 +90,9 @@ pub struct LatinSettings {
     pub anderson: usize,
     /// How l evolves. Default status-following.
     pub policy: SearchPolicy,
+    /// With inexact Newton status steps: the forcing term ρ, the fraction of the step's
+    /// starting r(U) the inner run must bring the linearised residual below. Default 0.3.
+    pub forcing: f64,
     /// With status-following l: rebuild the operators once at least this many cables differ
     /// between the current slack set and the one l was built for. Default 1.
     pub update_threshold: usize,
@@ -110,6 +120,7 @@ impl Default for LatinSettings {
             relaxation: 0.8,
             anderson: 5,
             policy: SearchPolicy::Status,
+            forcing: 0.3,
             update_threshold: 1,
             stop_on: StopOn::Both,
             tolerance: 1e-6,

@@ -94,6 +94,11 @@ pub struct LatinState {
     /// search direction was built for (status-following l).
     pub(super) status_streak: Vec<u8>,
 
+    /// With inexact Newton status steps: r(U) under the law linearised at the status.
+    pub frozen_residual: f64,
+    /// With inexact Newton status steps: where the current step started.
+    pub(super) step: Option<super::status_step::StepStart>,
+
     /// Δη is at round-off level against the prestress: nothing is left to iterate on.
     pub at_roundoff: bool,
     /// The load on the free dofs, N.

@@ -37,7 +37,7 @@ impl Ord for Breakpoint {
 /// the load along the step `Fᵀ ΔU`, and a quadratic term of the model (docs/method.md §8:
 /// `geometric = (ΔUᵀK_G U, ΔUᵀK_G ΔU)`, zero without geometric stiffness). `None` when ΔU is not a descent direction (φ'(0) ≥ 0) or
 /// φ has no minimiser along it.
-pub(super) fn exact_line_search(
+pub(crate) fn exact_line_search(
     links: &[Link],
     trial: &[f64],
     step_elongation: &[f64],

@@ -1,0 +1,135 @@
+//! Status updates as inexact Newton steps (docs/method.md §9): the slack status is frozen
+//! during an inner LATIN run on the law linearised at it; once the residual under that law is
+//! below ρ times the exact r(U) at the step's start (a Newton forcing term), a line search on
+//! the exact energy between the step's start and end blends the two states, the status of the
+//! blend (`t0 + k e > 0`) is taken, and the operators are rebuilt only if it changed. A
+//! semismooth Newton method whose linear solves are inexact LATIN runs.
+
+use super::{Latin, LatinState, SubState};
+use crate::linalg::dot;
+use crate::solvers::newton::exact_line_search;
+use crate::structure::law;
+
+/// An inner run that has not reached its forcing tolerance after this many iterations takes
+/// its step anyway (the linearised problem may have no equilibrium, e.g. a loaded node held
+/// by cables slack in the status alone).
+const INNER_MAX_ITERATIONS: usize = 60;
+
+/// The state at the start of a status step.
+#[derive(Debug, Clone)]
+pub(crate) struct StepStart {
+    /// s and ŝ per substructure.
+    subs: Vec<SubState>,
+    /// The linear stage's input that gave s.
+    input: Vec<f64>,
+    /// U of the linear stage.
+    displacements: Vec<f64>,
+    /// The exact r(U) there.
+    residual: f64,
+    /// The iteration it was taken at.
+    iteration: usize,
+}
+
+/// The state after a status step, before its inner run's first iteration.
+pub(super) struct StatusStep {
+    /// Whether the operators were rebuilt (the fixed-point map changed).
+    pub rebuilt: bool,
+}
+
+impl Latin<'_> {
+    /// Snapshot of `state` as the start of a status step.
+    pub(super) fn step_start(&self, state: &LatinState) -> StepStart {
+        StepStart {
+            subs: state.subs.clone(),
+            input: state.input.clone(),
+            displacements: self.displacements(&state.subs),
+            residual: state.residual,
+            iteration: state.iteration,
+        }
+    }
+
+    /// Whether the inner run has done its work: the linearised residual is below
+    /// `forcing × r(U)` at the step's start (or the run reached [`INNER_MAX_ITERATIONS`]).
+    pub(super) fn inner_run_done(&self, state: &LatinState) -> bool {
+        let Some(start) = &state.step else {
+            return false;
+        };
+        state.frozen_residual <= self.settings.forcing * start.residual
+            || state.iteration - start.iteration >= INNER_MAX_ITERATIONS
+    }
+
+    /// The end of an inner run: `θ` from the line search on the exact energy between the
+    /// step's start and `state`, `state ← start + θ (state − start)`, the blend's status, new
+    /// operators if it changed, and ŝ of the blend on the law linearised at that status.
+    pub(super) fn status_step(&mut self, state: &mut LatinState) -> StatusStep {
+        let start = state.step.take().expect("a status step has a start");
+        let end = self.displacements(&state.subs);
+        let theta = self.line_search(&start.displacements, &end, &state.load);
+        if theta < 1.0 {
+            for (st, st0) in state.subs.iter_mut().zip(&start.subs) {
+                st.blend_from(st0, theta);
+            }
+            blend(&mut state.input, &start.input, theta);
+        }
+        // The blend's status: slack where t0 + k e ≤ 0.
+        let links = &self.structure.links;
+        let mut slack = vec![false; links.len()];
+        for (sub, st) in self.substructures.iter().zip(&state.subs) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                slack[i] = links[i].unilateral && law::trial_tension(&links[i], st.e[j]) <= 0.0;
+            }
+        }
+        let rebuilt = slack != self.search_slack && self.set_search(slack);
+        if rebuilt {
+            state.updates += 1;
+        }
+        self.local_stage(&mut state.subs, self.local_law());
+        StatusStep { rebuilt }
+    }
+
+    /// θ ∈ (0, 1]: the minimiser of the exact energy `Π(U0 + θ (U1 − U0))` (docs/method.md §3,
+    /// newton's exact line search), 1 when it lies beyond or the step is not a descent.
+    fn line_search(&self, u0: &[f64], u1: &[f64], load: &[f64]) -> f64 {
+        let s = self.structure;
+        let step: Vec<f64> = u1.iter().zip(u0).map(|(b, a)| b - a).collect();
+        let trial = law::trial_tensions(s, u0);
+        let step_elongation: Vec<f64> = s.link_dofs.iter().map(|r| r.elongation(&step)).collect();
+        // (ΔUᵀ K_G U0, ΔUᵀ K_G ΔU) with the prestress's geometric stiffness.
+        let geometric = s.geometric.as_ref().map_or((0.0, 0.0), |g| {
+            (dot(&step, &g.product(u0)), g.quadratic(&step))
+        });
+        exact_line_search(
+            &s.links,
+            &trial,
+            &step_elongation,
+            dot(load, &step),
+            geometric,
+        )
+        .map_or(1.0, |theta| theta.min(1.0))
+    }
+}
+
+/// `x ← x0 + θ (x − x0)`.
+fn blend(x: &mut [f64], x0: &[f64], theta: f64) {
+    x.iter_mut()
+        .zip(x0)
+        .for_each(|(x, x0)| *x = x0 + theta * (*x - x0));
+}
+
+impl SubState {
+    /// `self ← start + θ (self − start)` on every field of s and ŝ.
+    fn blend_from(&mut self, start: &SubState, theta: f64) {
+        blend(&mut self.e, &start.e, theta);
+        blend(&mut self.t, &start.t, theta);
+        blend(&mut self.e_hat, &start.e_hat, theta);
+        blend(&mut self.t_hat, &start.t_hat, theta);
+        blend(&mut self.u, &start.u, theta);
+        for (side, side0) in self.sides.iter_mut().zip(&start.sides) {
+            blend(&mut side.u, &side0.u, theta);
+            blend(&mut side.f, &side0.f, theta);
+            blend(&mut side.u_hat, &side0.u_hat, theta);
+            blend(&mut side.f_hat, &side0.f_hat, theta);
+            blend(&mut side.hat_load, &side0.hat_load, theta);
+        }
+    }
+}
