@@ -13,7 +13,7 @@ use nalgebra::DMatrix;
 use std::process::Command;
 use tensolve::results::relative_difference;
 use tensolve::solvers::latin::{
-    macro_basis, Latin, LatinSettings, LatinState, Partition, WeakInterfaces,
+    macro_basis, Latin, LatinSettings, LatinState, Partition, SearchPolicy, WeakInterfaces,
 };
 use tensolve::solvers::newton::Newton;
 use tensolve::solvers::{AnySolver, Reference, Silent, Solution, Solver, TautStiffness};
@@ -434,12 +434,21 @@ fn mono_latin_solves_linear_case_in_one_iteration() {
     let reference = newton(&s, 1.0);
     // The relaxed iteration measures η between s and the ŝ that fed it, so it knows after
     // iteration 1; the accelerated one (the default) measures η between s and local(s), so it
-    // knows after the first linear stage (iteration 0).
-    for (anderson, iterations) in [(0, 1), (LatinSettings::default().anderson, 0)] {
+    // knows after the first linear stage (iteration 0). Inexact Newton status steps (the
+    // default policy) always iterate in the accelerated order.
+    let fixed = SearchPolicy::Stiffness;
+    let default = LatinSettings::default();
+    for (anderson, policy, iterations) in [
+        (0, fixed, 1),
+        (default.anderson, fixed, 0),
+        (0, default.policy, 0),
+        (default.anderson, default.policy, 0),
+    ] {
         let mut latin = Latin::new(
             &s,
             LatinSettings {
                 anderson,
+                policy,
                 ..settings([1, 1], WeakInterfaces::Macro)
             },
         )

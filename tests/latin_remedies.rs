@@ -8,7 +8,7 @@
 mod common;
 
 use common::{load, paper_structure, solve_both};
-use tensolve::solvers::latin::{Latin, LatinSettings, StopOn};
+use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy, StopOn};
 use tensolve::solvers::{
     displacement_residual, AnySolver, IterationRecord, Observer, Reference, Solution,
 };
@@ -265,4 +265,73 @@ fn homogenised_files_describe_every_macro_dof() {
         assert_eq!(seen[0].2, seen[1].2);
     }
     assert!(sides.keys().any(|(_, f)| f.starts_with("rotation about")));
+}
+
+/// An n × n grid clamped on all its lower edges (the LATIN scaling series, docs/method.md §9).
+fn clamped_grid(n: usize, unilateral: bool) -> Structure {
+    let cables = if unilateral {
+        ""
+    } else {
+        "[cables]\nunilateral = false\n"
+    };
+    tensolve::case::parse(&format!(
+        "[grid]\nmodules = [{n}, {n}]\n[supports]\nclamp = \"lower-all-edges\"\n[load]\nalpha = [1.0]\n{cables}"
+    ))
+    .expect("case")
+    .structure()
+}
+
+#[test]
+fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
+    // docs/method.md §9 at ≈ 14 % slack, substructures of 4 × 4 modules. Measured: 16 × 16
+    // (16 substructures) 68 iterations, 3 rebuilds; 32 × 32 (64) 76, 4; the status-following
+    // policy before it: 56 / 60 iterations with 9 / 12 rebuilds.
+    let mut counts = Vec::new();
+    for (n, alpha) in [(16, 2.4), (32, 0.6)] {
+        let s = clamped_grid(n, true);
+        let (exact, _) = solve_both(&s, alpha);
+        let parts = [n / 4, n / 4];
+        let (sol, records) = latin_solve(&s, partition(parts), alpha, &exact);
+        let e = records.last().and_then(|r| r.error).expect("error");
+        println!(
+            "{n} x {n}: {:?} in {} it, {} rebuilds, e = {e:e}",
+            sol.info.status, sol.info.iterations, sol.info.setups
+        );
+        assert!(sol.info.status.converged(), "{n}: {:?}", sol.info);
+        assert!(e <= 1e-5, "{n}: e = {e:e} at the stop");
+        assert_eq!(
+            sol.equilibrium.slack, exact.equilibrium.slack,
+            "{n}: newton's slack set"
+        );
+        assert!(sol.info.setups <= 4, "{n}: {} rebuilds", sol.info.setups);
+        // The status-following policy rebuilds at least twice as often on the same case.
+        let status = LatinSettings {
+            policy: SearchPolicy::Status,
+            ..partition(parts)
+        };
+        let (old, _) = latin_solve(&s, status, alpha, &exact);
+        assert!(
+            old.info.setups >= 2 * sol.info.setups,
+            "{n}: status-following {} rebuilds, inexact Newton {}",
+            old.info.setups,
+            sol.info.setups
+        );
+        counts.push(sol.info.iterations as f64);
+    }
+    let mean = counts.iter().sum::<f64>() / counts.len() as f64;
+    assert!(
+        counts.iter().all(|c| (c - mean).abs() <= 0.2 * mean),
+        "iterations {counts:?} not within 20 % of their mean"
+    );
+}
+
+#[test]
+fn inexact_newton_steps_on_a_bilateral_grid_never_rebuild() {
+    // Without unilateral cables the law is linear: the first inner run is the whole solve.
+    let s = clamped_grid(16, false);
+    let (exact, _) = solve_both(&s, 2.4);
+    let (sol, _) = latin_solve(&s, partition([4, 4]), 2.4, &exact);
+    assert!(sol.info.status.converged(), "{:?}", sol.info);
+    assert_eq!(sol.info.setups, 0);
+    assert_eq!(sol.equilibrium.slack_count(), 0);
 }

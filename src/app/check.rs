@@ -399,9 +399,9 @@ impl fmt::Display for CheckReport {
             writeln!(f, "  macro dofs    {}", r.macro_dofs)?;
             writeln!(f, "  kernel cols   {}", r.kernel_columns)?;
             let origin = if settings.dm.is_some() {
-                "solver.dm"
+                "solver.dm".to_string()
             } else {
-                "default 0.45 k/sqrt(H)"
+                format!("default {} k/sqrt(H)", crate::solvers::latin::DM_FACTOR)
             };
             writeln!(f, "  d_m           {:.4e} N/m ({origin})", r.dm)?;
         }

@@ -23,8 +23,8 @@ pub use method::Method;
 pub use no_equilibrium::{no_equilibrium, NoEquilibrium};
 pub use observer::{IterationRecord, Observer, Silent, Tee};
 pub use residual::{
-    current_unbalances, displacement_residual, frozen_residual, relative_unbalance, unbalances,
-    unbalances_on, Unbalances,
+    current_unbalances, displacement_residual, exact_and_frozen_residuals, relative_unbalance,
+    unbalances, unbalances_on, Unbalances,
 };
 pub use solution::{Equilibrium, Solution};
 pub use solver::{stop_when, Progress, Solver};

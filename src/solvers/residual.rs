@@ -59,6 +59,7 @@ pub fn unbalances_on(
     let load_scale = load_norm + norm(&added);
     Unbalances {
         relative: relative_to(load_norm + all_norm),
+        scale: load_norm + all_norm,
         load_relative: relative_to(if load_scale > 0.0 {
             load_scale
         } else {
@@ -72,6 +73,8 @@ pub fn unbalances_on(
 pub struct Unbalances {
     /// r(U), `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`.
     pub relative: f64,
+    /// Its scale, `‖F‖ + ‖|B|ᵀ|τ|‖` (N; where it is 0, `relative` is `‖Bᵀτ − F‖` itself).
+    pub scale: f64,
     /// `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)`.
     pub load_relative: f64,
 }
@@ -87,42 +90,69 @@ pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
             let current = law::CurrentGeometry::of(s, u);
             current_unbalances(s, &current, load, &mut r).1.relative
         }
-        _ => small_displacement_residual(s, u, load, |l, trial, _| law::tension(l, trial)),
+        _ => {
+            let tensions: Vec<f64> = law::trial_tensions(s, u)
+                .iter()
+                .zip(&s.links)
+                .map(|(&t, l)| law::tension(l, t))
+                .collect();
+            let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
+            unbalances_on(
+                s,
+                &s.link_dofs,
+                &tensions,
+                geometric_force.as_deref(),
+                load,
+                &mut r,
+            )
+            .relative
+        }
     }
 }
 
-/// r(U) under the law linearised at a slack status (docs/method.md §9, the inner problem of
-/// a status step): `τ = t0 + k e` of either sign on bars and on the cables taut in `slack`,
-/// `τ = 0` on the cables slack in it. The small-displacement models only.
-pub fn frozen_residual(s: &Structure, u: &[f64], load: &[f64], slack: &[bool]) -> f64 {
-    small_displacement_residual(s, u, load, |_, trial, i| if slack[i] { 0.0 } else { trial })
-}
-
-/// r(U) with the tensions `law(link, t0 + k e, index)` on the initial geometry (plus `K_G U`
-/// with the prestress's geometric stiffness).
-fn small_displacement_residual(
+/// `(r(U), r_frozen(U))`: r(U), and the residual under the law linearised at a slack status
+/// (docs/method.md §9, the inner problem of a status step: `τ = t0 + k e` of either sign on
+/// bars and on the cables taut in `slack`, `τ = 0` on the cables slack in it) relative to the
+/// same scale as r(U), in one pass over the links and a correction on the cables where the
+/// two laws differ. The small-displacement models only.
+pub fn exact_and_frozen_residuals(
     s: &Structure,
     u: &[f64],
     load: &[f64],
-    law: impl Fn(&crate::structure::Link, f64, usize) -> f64,
-) -> f64 {
-    let mut r = vec![0.0; s.n_free];
-    let tensions: Vec<f64> = law::trial_tensions(s, u)
+    slack: &[bool],
+) -> (f64, f64) {
+    let trial = law::trial_tensions(s, u);
+    let tensions: Vec<f64> = trial
         .iter()
         .zip(&s.links)
-        .enumerate()
-        .map(|(i, (&t, l))| law(l, t, i))
+        .map(|(&t, l)| law::tension(l, t))
         .collect();
     let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
-    unbalances_on(
+    let mut r = vec![0.0; s.n_free];
+    let exact = unbalances_on(
         s,
         &s.link_dofs,
         &tensions,
         geometric_force.as_deref(),
         load,
         &mut r,
-    )
-    .relative
+    );
+    for (i, row) in s.link_dofs.iter().enumerate() {
+        let frozen = if slack[i] { 0.0 } else { trial[i] };
+        let change = frozen - tensions[i];
+        if change != 0.0 {
+            for (d, c) in row.iter() {
+                r[d] += c * change;
+            }
+        }
+    }
+    let r_norm = norm(&r);
+    let frozen = if exact.scale > 0.0 {
+        r_norm / exact.scale
+    } else {
+        r_norm
+    };
+    (exact.relative, frozen)
 }
 
 pub use crate::structure::law::trial_tensions;

@@ -3,7 +3,7 @@
 
 use super::local_stage::link_local_stage;
 use super::{displacement_residual, Latin, LatinState, SubState};
-use crate::solvers::frozen_residual;
+use crate::solvers::exact_and_frozen_residuals;
 
 /// Δη below this fraction of the prestress scale is round-off (a load-induced Δη on the
 /// paper's case is 1e-4 of it at η = 1e-4).
@@ -62,10 +62,11 @@ impl Latin<'_> {
         state.at_roundoff = distance <= ROUNDOFF * self.prestress_scale;
         // r(U) of the linear stage's U under the exact law (docs/method.md §6).
         let u = self.displacements(&state.subs);
-        state.residual = displacement_residual(self.structure, &u, &state.load);
         if self.newton_steps() {
-            state.frozen_residual =
-                frozen_residual(self.structure, &u, &state.load, &self.search_slack);
+            (state.residual, state.frozen_residual) =
+                exact_and_frozen_residuals(self.structure, &u, &state.load, &state.law_slack);
+        } else {
+            state.residual = displacement_residual(self.structure, &u, &state.load);
         }
 
         state.slack_cables = state

@@ -2,12 +2,103 @@
 //! solve gluing the substructures by exact macro continuity, then per substructure its
 //! displacements, its links' (e, t) and its interface sides' (U, F).
 
+use super::substructure::Substructure;
 use super::{Latin, SubState};
 use crate::linalg::gemv;
+use crate::structure::Structure;
 use rayon::prelude::*;
 
+/// What a substructure hands to the macro problem: `y_E = K_E⁻¹ F̂d_E` (kept for its
+/// recovery) and `g_E = d_m R_Eᵀ C_E y_E` (its part of the macro right-hand side).
+pub(crate) struct Condensed {
+    /// `y_E`, on E's dofs.
+    pub y: Vec<f64>,
+    /// `g_E`, on E's macro dofs.
+    pub g: Vec<f64>,
+}
+
+/// The linear-stage inputs every substructure reads alike.
+pub(crate) struct StageInputs<'a> {
+    pub structure: &'a Structure,
+    /// The load on the free dofs.
+    pub load: &'a [f64],
+    /// l of every link.
+    pub search: &'a [f64],
+    pub dm: f64,
+}
+
+impl Substructure {
+    /// The first half of E's linear stage (docs/method.md §4): `F̂d_E` from the load share,
+    /// the links' `t̂ − l ê + t0` and the interfaces' `F̂^m + d_m Û^m` of ŝ; then
+    /// `y_E = K_E⁻¹ F̂d_E` and `g_E = d_m R_Eᵀ C_E y_E`.
+    pub(crate) fn condense(&self, inputs: &StageInputs<'_>, st: &SubState) -> Condensed {
+        let mut f: Vec<f64> = self
+            .dof_global
+            .iter()
+            .zip(&self.load_share)
+            .map(|(&d, &share)| inputs.load[d] * share)
+            .collect();
+        let links = &inputs.structure.links;
+        for (j, &i) in self.links.iter().enumerate() {
+            let w = st.t_hat[j] - inputs.search[i] * st.e_hat[j] + links[i].prestress;
+            self.link_dofs[j].scatter(-w, &mut f);
+        }
+        for (side, ss) in self.sides.iter().zip(&st.sides) {
+            for (r, &v) in ss.hat_load.iter().enumerate() {
+                f[self.gamma_dofs[side.gamma_offset + r]] += v;
+            }
+        }
+        self.factor.solve_in_place(&mut f);
+        let mut g = self.project(&f);
+        g.iter_mut().for_each(|x| *x *= inputs.dm);
+        Condensed { y: f, g }
+    }
+
+    /// The second half (docs/method.md §4): from E's macro forces `f_E = c_E f_Γ` and kernel
+    /// amplitudes `a_E`, `u_E = L_E f_E + K⁺_E g_E + Q_E a_E`, `U_E = y_E + d_m Z_E (u_E +
+    /// f_E/d_m)`, then s: the links' `e = B_E U_E`, `t = t̂ + l (e − ê)`, and the interfaces'
+    /// `U = C_E U_E`, `F = R f + F̂^m + d_m Û^m − d_m (U − R u)`.
+    pub(crate) fn recover(
+        &self,
+        inputs: &StageInputs<'_>,
+        f_e: &[f64],
+        a_e: &[f64],
+        condensed: Condensed,
+        st: &mut SubState,
+    ) {
+        let dm = inputs.dm;
+        let mut u_e = vec![0.0; self.n_macro];
+        gemv(&mut u_e, &self.flexibility, f_e, false);
+        gemv(&mut u_e, &self.k_plus, &condensed.g, true);
+        gemv(&mut u_e, &self.kernel, a_e, true);
+        // U_E = y_E + d_m Z_E (u_E + f_E/d_m).
+        let star: Vec<f64> = u_e.iter().zip(f_e).map(|(u, f)| dm * u + f).collect();
+        st.u.copy_from_slice(&condensed.y);
+        gemv(&mut st.u, &self.z, &star, true);
+        // e_E = B_E U_E, t_E = t̂_E + l(e_E − ê_E).
+        for (j, &i) in self.links.iter().enumerate() {
+            st.e[j] = self.link_dofs[j].elongation(&st.u);
+            st.t[j] = st.t_hat[j] + inputs.search[i] * (st.e[j] - st.e_hat[j]);
+        }
+        // Interfaces: U = C_E U_E, U^M = R u, F^M = R f, F^m = F̂^m + d_m Û^m − d_m(U − U^M).
+        for (side, ss) in self.sides.iter().zip(st.sides.iter_mut()) {
+            let block = side.macro_offset..side.macro_offset + side.cols;
+            let mut u_macro = vec![0.0; side.rows];
+            let mut f_macro = vec![0.0; side.rows];
+            gemv(&mut u_macro, &side.basis, &u_e[block.clone()], false);
+            gemv(&mut f_macro, &side.basis, &f_e[block], false);
+            for r in 0..side.rows {
+                let u = st.u[self.gamma_dofs[side.gamma_offset + r]];
+                ss.u[r] = u;
+                ss.f[r] = f_macro[r] + ss.hat_load[r] - dm * (u - u_macro[r]);
+            }
+        }
+    }
+}
+
 impl Latin<'_> {
-    /// Linear stage (docs/method.md §4): given ŝ in `state`, find s.
+    /// Linear stage (docs/method.md §4): given ŝ in `state`, find s: every substructure
+    /// condensed, the macro problem solved on their `g_E`, every substructure recovered.
     /// With `relaxation = Some(μ)`, s is then relaxed against the previous one on every field
     /// (e, t, U, interface U and F): `s ← μ s_new + (1 − μ) s_old`.
     pub(super) fn linear_stage(
@@ -16,86 +107,38 @@ impl Latin<'_> {
         state: &mut [SubState],
         relaxation: Option<f64>,
     ) {
-        let s = self.structure;
-        let dm = self.dm;
-        let search = &self.search;
-        // Per substructure: F̂d_E, y_E = K_E⁻¹ F̂d_E, g_E = d_m R_Eᵀ C_E y_E.
-        let condensed: Vec<(Vec<f64>, Vec<f64>)> = self
+        let inputs = StageInputs {
+            structure: self.structure,
+            load,
+            search: &self.search,
+            dm: self.dm,
+        };
+        let condensed: Vec<Condensed> = self
             .substructures
             .par_iter()
             .zip(state.par_iter())
             .with_min_len(self.chunk)
-            .map(|(sub, st)| {
-                let mut f: Vec<f64> = sub
-                    .dof_global
-                    .iter()
-                    .zip(&sub.load_share)
-                    .map(|(&d, &share)| load[d] * share)
-                    .collect();
-                for (j, &i) in sub.links.iter().enumerate() {
-                    let w = st.t_hat[j] - search[i] * st.e_hat[j] + s.links[i].prestress;
-                    sub.link_dofs[j].scatter(-w, &mut f);
-                }
-                for (side, ss) in sub.sides.iter().zip(&st.sides) {
-                    for (r, &v) in ss.hat_load.iter().enumerate() {
-                        f[sub.gamma_dofs[side.gamma_offset + r]] += v;
-                    }
-                }
-                sub.factor.solve_in_place(&mut f);
-                let mut g = sub.project(&f);
-                g.iter_mut().for_each(|x| *x *= dm);
-                (f, g)
-            })
+            .map(|(sub, st)| sub.condense(&inputs, st))
             .collect();
-        let (y, g): (Vec<Vec<f64>>, Vec<Vec<f64>>) = condensed.into_iter().unzip();
-        let solution = self
-            .macro_problem
-            .solve(&self.substructures, &self.interfaces, &g);
-        let interfaces = &self.interfaces;
-        let kernel_offset = &self.macro_problem.kernel_offset;
+        let mut rhs = self.macro_problem.zero_rhs();
+        for (e, (sub, c)) in self.substructures.iter().zip(&condensed).enumerate() {
+            self.macro_problem
+                .add_rhs(e, sub, &self.interfaces, &c.g, &mut rhs);
+        }
+        // The macro answer a decade more accurate than the r(U) stopped on, at most 1e-9.
+        let accuracy = (0.1 * self.settings.residual_tolerance()).clamp(1e-13, 1e-9);
+        let solution = self.macro_problem.solve_rhs(rhs, accuracy);
+        let (macro_problem, interfaces) = (&self.macro_problem, &self.interfaces);
         self.substructures
             .par_iter()
             .zip(state.par_iter_mut())
-            .zip(y.into_par_iter().zip(g.into_par_iter()))
+            .zip(condensed.into_par_iter())
             .with_min_len(self.chunk)
             .enumerate()
-            .for_each(|(e, ((sub, st), (y, g)))| {
+            .for_each(|(e, ((sub, st), condensed))| {
                 let previous = relaxation.map(|mu| (mu, Relaxed::of(st)));
-                // f_E = c_E f_Γ, a_E; u_E = L_E f_E + K⁺_E g_E + Q_E a_E.
-                let mut f_e = vec![0.0; sub.n_macro];
-                for side in &sub.sides {
-                    let off = interfaces[side.interface].macro_offset;
-                    for i in 0..side.cols {
-                        f_e[side.macro_offset + i] = side.sign() * solution[off + i];
-                    }
-                }
-                let a_e = &solution[kernel_offset[e]..kernel_offset[e] + sub.kernel.ncols()];
-                let mut u_e = vec![0.0; sub.n_macro];
-                gemv(&mut u_e, &sub.flexibility, &f_e, false);
-                gemv(&mut u_e, &sub.k_plus, &g, true);
-                gemv(&mut u_e, &sub.kernel, a_e, true);
-                // U_E = y_E + d_m Z_E (u_E + f_E/d_m).
-                let star: Vec<f64> = u_e.iter().zip(&f_e).map(|(u, f)| dm * u + f).collect();
-                st.u.copy_from_slice(&y);
-                gemv(&mut st.u, &sub.z, &star, true);
-                // e_E = B_E U_E, t_E = t̂_E + l(e_E − ê_E).
-                for (j, &i) in sub.links.iter().enumerate() {
-                    st.e[j] = sub.link_dofs[j].elongation(&st.u);
-                    st.t[j] = st.t_hat[j] + search[i] * (st.e[j] - st.e_hat[j]);
-                }
-                // Interfaces: U = C_E U_E, U^M = R u, F^M = R f, F^m = F̂^m + d_m Û^m − d_m(U − U^M).
-                for (side, ss) in sub.sides.iter().zip(st.sides.iter_mut()) {
-                    let block = side.macro_offset..side.macro_offset + side.cols;
-                    let mut u_macro = vec![0.0; side.rows];
-                    let mut f_macro = vec![0.0; side.rows];
-                    gemv(&mut u_macro, &side.basis, &u_e[block.clone()], false);
-                    gemv(&mut f_macro, &side.basis, &f_e[block], false);
-                    for r in 0..side.rows {
-                        let u = st.u[sub.gamma_dofs[side.gamma_offset + r]];
-                        ss.u[r] = u;
-                        ss.f[r] = f_macro[r] + ss.hat_load[r] - dm * (u - u_macro[r]);
-                    }
-                }
+                let (f_e, a_e) = macro_problem.answer(e, sub, interfaces, &solution);
+                sub.recover(&inputs, &f_e, a_e, condensed, st);
                 if let Some((mu, previous)) = previous {
                     previous.blend_into(st, mu);
                 }

@@ -9,12 +9,12 @@ use rayon::prelude::*;
 
 /// The law a local stage projects s on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum LocalLaw {
+pub(super) enum LocalLaw<'a> {
     /// The exact unilateral law of the cables.
     Exact,
-    /// The law linearised at the status the operators were built for (docs/method.md §9):
-    /// cables taut in it elastic both ways, cables slack in it without tension.
-    Frozen,
+    /// The law linearised at a slack status, per link (docs/method.md §9): cables taut in it
+    /// elastic both ways, cables slack in it without tension.
+    Frozen(&'a [bool]),
 }
 
 impl Latin<'_> {
@@ -22,7 +22,10 @@ impl Latin<'_> {
     pub(super) fn local_stage(&self, state: &mut [SubState], law: LocalLaw) {
         let s = self.structure;
         let search = &self.search;
-        let status = (law == LocalLaw::Frozen).then_some(&self.search_slack);
+        let status = match law {
+            LocalLaw::Exact => None,
+            LocalLaw::Frozen(status) => Some(status),
+        };
         self.substructures
             .par_iter()
             .zip(state.par_iter_mut())

@@ -34,13 +34,13 @@ const REGULARISATION: f64 = 1e-9;
 /// Iterative refinement stops after this many steps, or once the residual stops falling.
 const MAX_REFINEMENT: usize = 6;
 
-/// ... or, in the iterations, once the residual is below this fraction of the right-hand side
-/// (largest entries): the first solve leaves ≈ 1e-8 of it (the regularised kernel pivots),
-/// one step ≈ 1e-14, a second only round-off. It halves the solves (2 instead of 4 or 5 per
-/// macro solve on a 32 × 32 grid of 64 substructures); a less accurate macro answer on an
-/// ill-conditioned partition can slow the LATIN, never make a row converged (r(U) is measured
-/// on U). The set-up's regularity check refines to the end.
-const REFINED: f64 = 1e-12;
+/// ... or, in the iterations, once the residual is below a fraction of the right-hand side
+/// (largest entries) that the caller chooses: the first solve leaves 1e-8 to 1e-6 of it (the
+/// regularised kernel pivots), each step gains about three decades more. Refining to the end
+/// took 4 to 5 solves per macro solve on a 32 × 32 grid of 64 substructures, 3 at 1024
+/// substructures, where 1e-9 takes 2 and leaves the iteration counts unchanged. A less
+/// accurate macro answer can slow the LATIN, never make a row converged (r(U) is measured on
+/// U). The set-up's regularity check refines to the end.
 
 /// The macro problem `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
 /// factorised once.
@@ -233,36 +233,47 @@ impl MacroProblem {
         Ok(problem(Some(factor)))
     }
 
-    /// Right-hand side from every `g_E`, solve, and return `[f_Γ; a]`.
-    pub fn solve(
+    /// A zero right-hand side `[b_f; b_a]`.
+    pub fn zero_rhs(&self) -> Vec<f64> {
+        vec![0.0; self.n]
+    }
+
+    /// Substructure E's part of the right-hand side, added to `rhs` (a sum over the
+    /// substructures, in any order): `b_f −= c_Eᵀ (K⁺_E g_E + γ Q_E Q_Eᵀ g_E)`,
+    /// `b_a,E = −Q_Eᵀ g_E`.
+    pub fn add_rhs(
         &self,
-        subs: &[Substructure],
+        e: usize,
+        sub: &Substructure,
         interfaces: &[Interface],
-        g: &[Vec<f64>],
-    ) -> Vec<f64> {
+        g: &[f64],
+        rhs: &mut [f64],
+    ) {
         let gamma = AUGMENTATION / self.dm;
-        let mut rhs = vec![0.0; self.n];
-        for (e, sub) in subs.iter().enumerate() {
-            // b_f = −Σ c_Eᵀ K⁺_E g_E + γ N b_a, b_a = −(Q_Eᵀ g_E)_E.
-            let mut kg = vec![0.0; sub.n_macro];
-            gemv(&mut kg, &sub.k_plus, &g[e], false);
-            let mut qg = vec![0.0; sub.kernel.ncols()];
-            gemv_transposed(&mut qg, &sub.kernel, &g[e], false);
-            let mut nb = vec![0.0; sub.n_macro];
-            gemv(&mut nb, &sub.kernel, &qg, false);
-            for side in &sub.sides {
-                let row0 = interfaces[side.interface].macro_offset;
-                for i in 0..side.cols {
-                    let r = side.macro_offset + i;
-                    rhs[row0 + i] -= side.sign() * (kg[r] + gamma * nb[r]);
-                }
+        // b_f = −Σ c_Eᵀ K⁺_E g_E + γ N b_a, b_a = −(Q_Eᵀ g_E)_E.
+        let mut kg = vec![0.0; sub.n_macro];
+        gemv(&mut kg, &sub.k_plus, g, false);
+        let mut qg = vec![0.0; sub.kernel.ncols()];
+        gemv_transposed(&mut qg, &sub.kernel, g, false);
+        let mut nb = vec![0.0; sub.n_macro];
+        gemv(&mut nb, &sub.kernel, &qg, false);
+        for side in &sub.sides {
+            let row0 = interfaces[side.interface].macro_offset;
+            for i in 0..side.cols {
+                let r = side.macro_offset + i;
+                rhs[row0 + i] -= side.sign() * (kg[r] + gamma * nb[r]);
             }
-            let kernel_rows = self.kernel_offset[e]..self.kernel_offset[e] + sub.kernel.ncols();
-            rhs[kernel_rows]
-                .iter_mut()
-                .zip(&qg)
-                .for_each(|(r, q)| *r -= q);
         }
+        let kernel_rows = self.kernel_offset[e]..self.kernel_offset[e] + sub.kernel.ncols();
+        rhs[kernel_rows]
+            .iter_mut()
+            .zip(&qg)
+            .for_each(|(r, q)| *r -= q);
+    }
+
+    /// `[f_Γ; a]` from the assembled right-hand side, refined until the residual is below
+    /// `accuracy` times the right-hand side's largest entry (scaled).
+    pub fn solve_rhs(&self, mut rhs: Vec<f64>, accuracy: f64) -> Vec<f64> {
         if let Some(factor) = &self.factor {
             // x = D y with (D M̃ D) y = D b.
             let scale = |i: usize| {
@@ -273,10 +284,30 @@ impl MacroProblem {
                 }
             };
             rhs.iter_mut().enumerate().for_each(|(i, b)| *b *= scale(i));
-            factor.solve(&mut rhs, REFINED);
+            factor.solve(&mut rhs, accuracy);
             rhs.iter_mut().enumerate().for_each(|(i, y)| *y *= scale(i));
         }
         rhs
+    }
+
+    /// Substructure E's share of the answer: its macro forces `f_E = c_E f_Γ` (signed per
+    /// side) and its kernel amplitudes `a_E`.
+    pub fn answer<'a>(
+        &self,
+        e: usize,
+        sub: &Substructure,
+        interfaces: &[Interface],
+        solution: &'a [f64],
+    ) -> (Vec<f64>, &'a [f64]) {
+        let mut f_e = vec![0.0; sub.n_macro];
+        for side in &sub.sides {
+            let off = interfaces[side.interface].macro_offset;
+            for i in 0..side.cols {
+                f_e[side.macro_offset + i] = side.sign() * solution[off + i];
+            }
+        }
+        let a_e = &solution[self.kernel_offset[e]..self.kernel_offset[e] + sub.kernel.ncols()];
+        (f_e, a_e)
     }
 }
 

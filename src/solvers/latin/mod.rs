@@ -136,6 +136,9 @@ pub struct Latin<'s> {
     chunk: usize,
 }
 
+/// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
+pub const DM_FACTOR: f64 = 0.25;
+
 /// Below this many free dofs in all, an iteration runs on one thread: on the paper's case
 /// (2397 dofs, 16 substructures) two threads were slower than one (547 µs against 423 µs).
 const PARALLEL_MIN_DOFS: usize = 20_000;
@@ -160,17 +163,21 @@ const STATUS_BAND: f64 = 1e-3;
 /// to 32 and the re-set-ups by a third.
 const STATUS_PERSISTENCE: u8 = 2;
 
-/// The default d_m, N/m: `d_m = 0.45 k̄ / √H`. k̄ is the stiffness of a median cable and a
+/// The default d_m, N/m: `d_m = DM_FACTOR k̄ / √H`. k̄ is the stiffness of a median cable and a
 /// median bar in series, `k̄ = (1/k_c + 1/k_b)⁻¹` (the softer of the two governs how a load
 /// passes through a module: with the paper's cables k̄ ≈ k_c; with cables 100 times stiffer
 /// than bars k̄ ≈ k_b, where a cable-based d_m of 2e9 left micro-macro on a round-off floor
 /// of η ≈ 2e-10). H is the side of a substructure counted in modules of the paper's grid,
 /// `H = √(m / 16)` with m the mean number of links per substructure (a module has 16). At
 /// fixed module size h this is the optimised-Schwarz scaling `d_m ∝ 1/√(hH)`. On the paper's
-/// grid (k̄ = 6.2e6 N/m) it gives 2.0e6 / 1.40e6 / 0.99e6 N/m on substructures of 2 × 2 /
-/// 4 × 4 / 8 × 8 modules, close to where 16 × 16 grids clamped on two and on four edges
-/// needed the fewest iterations (d_m swept from 0.5e6 to 4e6); the paper's 3.92e6
+/// grid (k̄ = 6.1e6 N/m) it gives 1.08e6 / 0.77e6 / 0.54e6 N/m on substructures of 2 × 2 /
+/// 4 × 4 / 8 × 8 modules (the factor 0.45 was where 16 × 16 grids clamped on two and on four
+/// edges needed the fewest iterations with status-following l); the paper's 3.92e6
 /// ([`PAPER_DM`]) suits only the smallest substructures and does not scale (see the README).
+/// The factor was 0.45 with the status-following policy; with inexact Newton status steps and
+/// Anderson depth 20, 0.25 keeps the iterations flat from 16 to 1024 substructures of 4 × 4
+/// modules (within ± 20 % of their mean, where 0.45 and 0.35 give +29 % and +22 % at 1024;
+/// docs/method.md §9).
 pub fn auto_dm(structure: &Structure, substructures: usize) -> f64 {
     let median = |cables: bool| {
         let mut k: Vec<f64> = structure
@@ -194,7 +201,7 @@ pub fn auto_dm(structure: &Structure, substructures: usize) -> f64 {
     let h = (structure.links.len() as f64 / substructures.max(1) as f64 / 16.0)
         .sqrt()
         .max(1.0);
-    0.45 / compliance / h.sqrt()
+    DM_FACTOR / compliance / h.sqrt()
 }
 
 /// Memory all dense substructure inverses together may take (see
@@ -528,11 +535,11 @@ impl Latin<'_> {
         self.settings.policy == SearchPolicy::Newton
     }
 
-    /// The law of the local stage while iterating: linearised at the status with inexact
-    /// Newton steps, exact otherwise.
-    fn local_law(&self) -> LocalLaw {
+    /// The law of the local stage while iterating: linearised at the status `law_slack` with
+    /// inexact Newton steps, exact otherwise.
+    fn local_law<'a>(&self, law_slack: &'a [bool]) -> LocalLaw<'a> {
         if self.newton_steps() {
-            LocalLaw::Frozen
+            LocalLaw::Frozen(law_slack)
         } else {
             LocalLaw::Exact
         }
@@ -560,16 +567,16 @@ impl Latin<'_> {
     }
 
     /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; new
-    /// operators if the status asks for them (or `rebuilt` says a status step made them);
-    /// x⁺ from Anderson; then s = linear(x⁺) and ŝ = local(s).
-    fn accelerated_iteration(&mut self, state: &mut LatinState, rebuilt: bool) {
-        let restarted = self.update_search(state) || rebuilt;
+    /// operators if the status asks for them; x⁺ from Anderson (restarted when the map changed:
+    /// new operators, or `restart` from a status step); then s = linear(x⁺) and ŝ = local(s).
+    fn accelerated_iteration(&mut self, state: &mut LatinState, restart: bool) {
+        let restarted = self.update_search(state) || restart;
         let g = self.linear_stage_input(&state.subs);
         let next = state.anderson.step(&state.input, &g, restarted);
         self.set_linear_stage_input(&mut state.subs, &next);
         state.input = next;
         self.linear_stage(&state.load, &mut state.subs, None);
-        self.local_stage(&mut state.subs, self.local_law());
+        self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
         state.relax = true;
     }
 
@@ -647,6 +654,7 @@ impl Solver for Latin<'_> {
             relax: false,
             at_roundoff: false,
             frozen_residual: f64::INFINITY,
+            law_slack: vec![false; self.structure.links.len()],
             step: None,
             load: load.to_vec(),
             input: Vec::new(),
@@ -656,7 +664,7 @@ impl Solver for Latin<'_> {
         self.linear_stage(&state.load, &mut state.subs, None);
         if self.accelerated() {
             state.input = self.linear_stage_input(&state.subs);
-            self.local_stage(&mut state.subs, self.local_law());
+            self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
         }
         state.relax = true;
         self.measure_state(&mut state);
@@ -675,8 +683,8 @@ impl Solver for Latin<'_> {
     fn next_iter(&mut self, state: &mut LatinState) {
         let stepped = self.newton_steps() && self.inner_run_done(state);
         if self.accelerated() {
-            let rebuilt = stepped && self.status_step(state).rebuilt;
-            self.accelerated_iteration(state, rebuilt);
+            let restart = stepped && self.status_step(state).map_changed;
+            self.accelerated_iteration(state, restart);
         } else {
             self.relaxed_iteration(state);
         }

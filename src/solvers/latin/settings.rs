@@ -73,7 +73,7 @@ pub struct LatinSettings {
     /// Substructures along x and y; `[1, 1]` is the monodomain solver. Default `[4, 4]` (the
     /// paper's), limited to the grid by the case.
     pub subdomains: [usize; 2],
-    /// Interface search direction d_m, N/m. Default `None`: `0.4 k̄ / √H` (see
+    /// Interface search direction d_m, N/m. Default `None`: `0.25 k̄ / √H` (see
     /// [`super::auto_dm`]), which scales with the cables' stiffness and falls as the
     /// substructures grow; the paper's 3.92e6 is [`PAPER_DM`].
     pub dm: Option<f64>,
@@ -86,12 +86,14 @@ pub struct LatinSettings {
     /// relaxation when no history is kept). Default 0.8; 1 is the paper's plain method.
     pub relaxation: f64,
     /// Anderson acceleration: how many previous iterates the fixed point ŝ ↦ local(linear(ŝ))
-    /// extrapolates from (0: none, the plain relaxed iteration). Default 5.
+    /// extrapolates from (0: none, the plain relaxed iteration). Default 20 (docs/method.md §9: 5 needed
+    /// about 30 % more iterations at 1024 substructures).
     pub anderson: usize,
     /// How l evolves. Default status-following.
     pub policy: SearchPolicy,
     /// With inexact Newton status steps: the forcing term ρ, the fraction of the step's
-    /// starting r(U) the inner run must bring the linearised residual below. Default 0.3.
+    /// starting r(U) the inner run must bring the linearised residual below. Default 0.2
+    /// (docs/method.md §9: 0.3 needed 9–10 rebuilds on 16 substructures of 32 × 32 modules).
     pub forcing: f64,
     /// With status-following l: rebuild the operators once at least this many cables differ
     /// between the current slack set and the one l was built for. Default 1.
@@ -118,9 +120,9 @@ impl Default for LatinSettings {
             search: SearchDirection::Stiffness,
             weak: WeakInterfaces::Macro,
             relaxation: 0.8,
-            anderson: 5,
-            policy: SearchPolicy::Status,
-            forcing: 0.3,
+            anderson: 20,
+            policy: SearchPolicy::Newton,
+            forcing: 0.2,
             update_threshold: 1,
             stop_on: StopOn::Both,
             tolerance: 1e-6,

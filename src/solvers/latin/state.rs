@@ -96,6 +96,9 @@ pub struct LatinState {
 
     /// With inexact Newton status steps: r(U) under the law linearised at the status.
     pub frozen_residual: f64,
+    /// With inexact Newton status steps: the slack status the local stage's law is linearised
+    /// at (per link).
+    pub law_slack: Vec<bool>,
     /// With inexact Newton status steps: where the current step started.
     pub(super) step: Option<super::status_step::StepStart>,
 

@@ -195,7 +195,7 @@ impl Substructure {
             flexibility: DMatrix::zeros(0, 0),
             kernel: DMatrix::zeros(0, 0),
         };
-        sub.condense(dm);
+        sub.condense_operators(dm);
         // Kernel from the rigid motions (docs/method.md §4), completed by the null space of K*_E.
         let traces: Vec<InterfaceTrace<'_>> = sub
             .sides
@@ -281,14 +281,14 @@ impl Substructure {
             flexibility: DMatrix::zeros(0, 0),
             kernel: self.kernel.clone(),
         };
-        sub.condense(dm);
+        sub.condense_operators(dm);
         sub.invert(dm)?;
         Ok(sub)
     }
 
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` and `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E` (symmetrised) from the
     /// factor of K_E.
-    fn condense(&mut self, dm: f64) {
+    fn condense_operators(&mut self, dm: f64) {
         // Z_E column by column of the block-diagonal R_E.
         let n_macro = self.n_macro;
         let mut z = DMatrix::<f64>::zeros(self.n_dofs(), n_macro);
