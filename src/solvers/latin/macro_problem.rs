@@ -31,16 +31,15 @@ const AUGMENTATION: f64 = 2.0;
 /// elimination reaches it before the forces it is coupled to.
 const REGULARISATION: f64 = 1e-9;
 
-/// Iterative refinement stops after this many steps, or once the residual stops falling.
-const MAX_REFINEMENT: usize = 6;
-
-/// ... or, in the iterations, once the residual is below a fraction of the right-hand side
+/// Iterative refinement stops after this many steps, or once the residual stops falling,
+/// or, in the iterations, once the residual is below a fraction of the right-hand side
 /// (largest entries) that the caller chooses: the first solve leaves 1e-8 to 1e-6 of it (the
 /// regularised kernel pivots), each step gains about three decades more. Refining to the end
 /// took 4 to 5 solves per macro solve on a 32 × 32 grid of 64 substructures, 3 at 1024
 /// substructures, where 1e-9 takes 2 and leaves the iteration counts unchanged. A less
 /// accurate macro answer can slow the LATIN, never make a row converged (r(U) is measured on
 /// U). The set-up's regularity check refines to the end.
+const MAX_REFINEMENT: usize = 6;
 
 /// The macro problem `[Σ c_Eᵀ L_E c_E, N; Nᵀ, 0] [f_Γ; a] = −[Σ c_Eᵀ K⁺_E g_E; (Q_Eᵀ g_E)_E]`,
 /// factorised once.
