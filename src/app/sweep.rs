@@ -387,11 +387,13 @@ fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue
             no_equilibrium: None,
         };
     }
-    let found = solution
-        .info
-        .no_equilibrium
-        .clone()
-        .or_else(|| crate::solvers::no_equilibrium(s, &solution.equilibrium, load));
+    // A converged answer is an equilibrium (r(U) within its tolerance): only the others are
+    // asked for a runaway.
+    let found = solution.info.no_equilibrium.clone().or_else(|| {
+        (!solution.info.status.converged())
+            .then(|| crate::solvers::no_equilibrium(s, &solution.equilibrium, load))
+            .flatten()
+    });
     if let Some(none) = found {
         solution.info.status = Status::NoEquilibrium;
         return Verdict {

@@ -87,6 +87,10 @@ pub fn drive_from<S: Solver + ?Sized>(
         if progress.iteration >= solver.max_iterations() {
             break (Status::MaxIterations, progress);
         }
+        if let Some(found) = solver.runaway(&state) {
+            runaway = Some(found);
+            break (Status::NoEquilibrium, progress);
+        }
         // No equilibrium: the iterates run away along a mechanism the load works on. Asked
         // at iterations 16, 32, 64, … of the change since the last check (the runaway
         // direction, free of the part that converges): a solver never spins to its cap, at the

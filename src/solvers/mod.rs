@@ -20,7 +20,7 @@ mod taut;
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
-pub use no_equilibrium::{no_equilibrium, NoEquilibrium};
+pub use no_equilibrium::{no_equilibrium, no_equilibrium_along, NoEquilibrium};
 pub use observer::{IterationRecord, Observer, Silent, Tee};
 pub use residual::{
     current_unbalances, displacement_residual, exact_and_frozen_residuals, relative_unbalance,

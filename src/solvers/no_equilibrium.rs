@@ -21,20 +21,35 @@ pub struct NoEquilibrium {
 /// A member's length change along a unit direction at most this (m per m) is none.
 const MECHANISM_TOLERANCE: f64 = 1e-6;
 
+/// ... and the members' stretch energy along U, `Σ k e(U)²` (cables where they lengthen), is
+/// at most this fraction of the load's work `F·U`: along a runaway the work grows without
+/// bound while the stretch stays bounded; at an equilibrium the two are of one size
+/// (Clapeyron). The length test alone is not scale-free: on a 256 × 256 grid a converged
+/// smooth deflection (r(U) = 1e-12) has every member's length change below 1e-6 of ‖U‖.
+const RUNAWAY_ENERGY_RATIO: f64 = 1e-3;
+
 /// The no-equilibrium certificate of an answer whose displacements U have run away: with
 /// `d = U / ‖U‖`, `B_bars d = 0`, `B_cables d ≤ 0`, `F·d > 0` (to [`MECHANISM_TOLERANCE`]),
+/// the stretch energy negligible against the load's work ([`RUNAWAY_ENERGY_RATIO`]),
 /// and, with the prestress's geometric stiffness, `dᵀ K_G d ≤ 0`. `None` when U is not such a
 /// direction (a finite answer, however large, is judged elsewhere) or the model is `large`.
 pub fn no_equilibrium(s: &Structure, eq: &Equilibrium, load: &[f64]) -> Option<NoEquilibrium> {
+    no_equilibrium_along(s, &eq.displacements, load)
+}
+
+/// [`no_equilibrium`] of a displacement (or a change of displacements) `u`.
+pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
     if s.model == GeometricModel::Large {
         return None;
     }
-    let size = norm(&eq.displacements);
+    let size = norm(u);
     if size.is_nan() || size <= 0.0 || !size.is_finite() {
         return None;
     }
-    let d: Vec<f64> = eq.displacements.iter().map(|x| x / size).collect();
+    let d: Vec<f64> = u.iter().map(|x| x / size).collect();
     let mut slack_cables = Vec::new();
+    // Σ k e(d)² over the members that stretch (every bar and bilateral cable).
+    let mut stretch = 0.0;
     for (l, row) in s.links.iter().zip(&s.link_dofs) {
         let e = row.elongation(&d);
         if l.unilateral {
@@ -44,11 +59,18 @@ pub fn no_equilibrium(s: &Structure, eq: &Equilibrium, load: &[f64]) -> Option<N
             if e < -MECHANISM_TOLERANCE {
                 slack_cables.push(l.id);
             }
+            stretch += l.stiffness * e.max(0.0).powi(2);
         } else if e.abs() > MECHANISM_TOLERANCE {
             return None;
+        } else {
+            stretch += l.stiffness * e * e;
         }
     }
     let work = dot(load, &d);
+    // Σ k e(U)² = ‖U‖² Σ k e(d)² against F·U = ‖U‖ F·d.
+    if size * stretch > RUNAWAY_ENERGY_RATIO * work {
+        return None;
+    }
     let stiffened = s
         .geometric
         .as_ref()

@@ -83,6 +83,12 @@ pub trait Solver {
     /// The iterate as an equilibrium state: displacements U and tensions τ.
     fn iterate(&self, state: &Self::State) -> Equilibrium;
 
+    /// A no-equilibrium certificate the solver found itself (docs/method.md §8), beside the
+    /// driver's own check of the iterates. None by default.
+    fn runaway(&self, _state: &Self::State) -> Option<super::NoEquilibrium> {
+        None
+    }
+
     /// Homogenised substructure operators, for solvers that have them (micro-macro LATIN).
     fn homogenised(&mut self) -> Vec<super::latin::Homogenised> {
         Vec::new()

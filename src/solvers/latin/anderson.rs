@@ -7,8 +7,9 @@
 //! With m = 0 this is `x⁺ = β G(x) + (1 − β) x`: the linear stage is affine in x, so it is
 //! exactly the relaxation of s with μ = β.
 
-use crate::linalg::dot;
+use crate::linalg::{par_dot, par_update, par_zip_map, CHUNK};
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 use std::collections::VecDeque;
 
 /// Directions of ΔF whose singular value is below this fraction of the largest are dropped
@@ -58,16 +59,20 @@ impl Anderson {
             return g.to_vec();
         }
         let beta = self.damping;
-        let f: Vec<f64> = g.iter().zip(x).map(|(g, x)| g - x).collect();
+        let n = x.len();
+        let mut f = vec![0.0; n];
+        par_zip_map(&mut f, g, x, |g, x| g - x);
         // x⁺ = x + β f.
-        let mut next: Vec<f64> = x.iter().zip(&f).map(|(x, f)| x + beta * f).collect();
+        let mut next = vec![0.0; n];
+        par_zip_map(&mut next, x, &f, |x, f| x + beta * f);
         if self.depth == 0 {
             return next;
         }
         if let Some((x_prev, f_prev)) = self.last.take() {
             // ΔX = x − x_prev, ΔF = f − f_prev, and its products with the kept ΔF.
-            let dx: Vec<f64> = x.iter().zip(&x_prev).map(|(a, b)| a - b).collect();
-            let df: Vec<f64> = f.iter().zip(&f_prev).map(|(a, b)| a - b).collect();
+            let (mut dx, mut df) = (x_prev, f_prev);
+            par_update(&mut dx, x, |previous, x| x - previous);
+            par_update(&mut df, &f, |previous, f| f - previous);
             if self.differences.len() == self.depth {
                 self.differences.pop_front();
                 self.gram.pop_front();
@@ -78,8 +83,8 @@ impl Anderson {
             let products: VecDeque<f64> = self
                 .differences
                 .iter()
-                .map(|(_, other)| dot(other, &df))
-                .chain([dot(&df, &df)])
+                .map(|(_, other)| par_dot(other, &df))
+                .chain([par_dot(&df, &df)])
                 .collect();
             for (row, &p) in self.gram.iter_mut().zip(&products) {
                 row.push_back(p);
@@ -88,12 +93,20 @@ impl Anderson {
             self.differences.push_back((dx, df));
         }
         if let Some(gamma) = self.coefficients(&f) {
-            // x⁺ −= (ΔX + β ΔF) γ.
-            for ((dx, df), &c) in self.differences.iter().zip(&gamma) {
-                next.iter_mut()
-                    .zip(dx.iter().zip(df))
-                    .for_each(|(x, (a, b))| *x -= c * (a + beta * b));
-            }
+            // x⁺ −= (ΔX + β ΔF) γ, chunk by chunk over all the columns.
+            let differences = &self.differences;
+            next.par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(chunk, out)| {
+                    let start = chunk * CHUNK;
+                    for ((dx, df), &c) in differences.iter().zip(&gamma) {
+                        let (dx, df) =
+                            (&dx[start..start + out.len()], &df[start..start + out.len()]);
+                        out.iter_mut()
+                            .zip(dx.iter().zip(df))
+                            .for_each(|(x, (a, b))| *x -= c * (a + beta * b));
+                    }
+                });
         }
         self.last = Some((x.to_vec(), f));
         next
@@ -122,7 +135,7 @@ impl Anderson {
             .differences
             .iter()
             .zip(&scale)
-            .map(|((_, df), s)| s * dot(df, f))
+            .map(|((_, df), s)| s * par_dot(df, f))
             .collect();
         let eigen = gram.symmetric_eigen();
         let largest = eigen.eigenvalues.max();

@@ -42,16 +42,26 @@ impl Latin<'_> {
                     st.slack_hat[j] = slack;
                 }
             });
-        for (iface, &[ia, ib]) in self.interfaces.iter().zip(&self.side_slots) {
-            // Interfaces list their substructures in increasing order: a < b.
+        // Every interface's two sides, computed in parallel on copies, then written back.
+        let sides: Vec<(SideState, SideState)> = self
+            .interfaces
+            .par_iter()
+            .zip(self.side_slots.par_iter())
+            .with_min_len(self.chunk)
+            .map(|(iface, &[ia, ib])| {
+                let [a, b] = iface.topology.sides;
+                let (mut side_a, mut side_b) =
+                    (state[a].sides[ia].clone(), state[b].sides[ib].clone());
+                interface_local_stage(&iface.basis, self.dm, &mut side_a, &mut side_b);
+                (side_a, side_b)
+            })
+            .collect();
+        for ((iface, &[ia, ib]), (side_a, side_b)) in
+            self.interfaces.iter().zip(&self.side_slots).zip(sides)
+        {
             let [a, b] = iface.topology.sides;
-            let (lo, hi) = state.split_at_mut(b);
-            interface_local_stage(
-                &iface.basis,
-                self.dm,
-                &mut lo[a].sides[ia],
-                &mut hi[0].sides[ib],
-            );
+            state[a].sides[ia] = side_a;
+            state[b].sides[ib] = side_b;
         }
     }
 }

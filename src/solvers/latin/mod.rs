@@ -584,34 +584,57 @@ impl Latin<'_> {
     /// per interface row `(F̂^m + d_m Û^m)/√d_m`.
     fn linear_stage_input(&self, subs: &[SubState]) -> Vec<f64> {
         let sqrt_dm = self.dm.sqrt();
-        let mut x = Vec::new();
-        for (sub, st) in self.substructures.iter().zip(subs) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                let l = self.search[i];
-                x.push((st.t_hat[j] - l * st.e_hat[j]) / l.sqrt());
-            }
-            for side in &st.sides {
-                x.extend(side.hat_load.iter().map(|v| v / sqrt_dm));
-            }
-        }
-        x
+        let parts: Vec<Vec<f64>> = self
+            .substructures
+            .par_iter()
+            .zip(subs.par_iter())
+            .with_min_len(self.chunk)
+            .map(|(sub, st)| {
+                let mut x = Vec::with_capacity(Self::input_len(st));
+                for (j, &i) in sub.links.iter().enumerate() {
+                    let l = self.search[i];
+                    x.push((st.t_hat[j] - l * st.e_hat[j]) / l.sqrt());
+                }
+                for side in &st.sides {
+                    x.extend(side.hat_load.iter().map(|v| v / sqrt_dm));
+                }
+                x
+            })
+            .collect();
+        parts.concat()
+    }
+
+    /// How many entries of the linear stage's input a substructure holds.
+    fn input_len(st: &SubState) -> usize {
+        st.t_hat.len() + st.sides.iter().map(|s| s.hat_load.len()).sum::<usize>()
     }
 
     /// A ŝ that a linear stage reads as `x` (t̂ = √l x, ê = 0 on the links).
     fn set_linear_stage_input(&self, subs: &mut [SubState], x: &[f64]) {
         let sqrt_dm = self.dm.sqrt();
-        let mut x = x.iter();
-        for (sub, st) in self.substructures.iter().zip(subs.iter_mut()) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                st.t_hat[j] = x.next().copied().unwrap_or(0.0) * self.search[i].sqrt();
-                st.e_hat[j] = 0.0;
-            }
-            for side in st.sides.iter_mut() {
-                for v in side.hat_load.iter_mut() {
-                    *v = x.next().copied().unwrap_or(0.0) * sqrt_dm;
-                }
-            }
+        let mut pieces = Vec::with_capacity(subs.len());
+        let mut rest = x;
+        for st in subs.iter() {
+            let (piece, tail) = rest.split_at(Self::input_len(st).min(rest.len()));
+            pieces.push(piece);
+            rest = tail;
         }
+        self.substructures
+            .par_iter()
+            .zip(subs.par_iter_mut().zip(pieces.into_par_iter()))
+            .with_min_len(self.chunk)
+            .for_each(|(sub, (st, piece))| {
+                let mut x = piece.iter();
+                for (j, &i) in sub.links.iter().enumerate() {
+                    st.t_hat[j] = x.next().copied().unwrap_or(0.0) * self.search[i].sqrt();
+                    st.e_hat[j] = 0.0;
+                }
+                for side in st.sides.iter_mut() {
+                    for v in side.hat_load.iter_mut() {
+                        *v = x.next().copied().unwrap_or(0.0) * sqrt_dm;
+                    }
+                }
+            });
     }
 }
 
@@ -655,6 +678,7 @@ impl Solver for Latin<'_> {
             at_roundoff: false,
             frozen_residual: f64::INFINITY,
             law_slack: vec![false; self.structure.links.len()],
+            runaway: None,
             step: None,
             load: load.to_vec(),
             input: Vec::new(),
@@ -729,6 +753,10 @@ impl Solver for Latin<'_> {
             }
         }
         e
+    }
+
+    fn runaway(&self, state: &LatinState) -> Option<super::NoEquilibrium> {
+        state.runaway.clone()
     }
 
     /// U of the linear stage (interface nodes averaged over the substructures holding them),

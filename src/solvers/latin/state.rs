@@ -99,6 +99,9 @@ pub struct LatinState {
     /// With inexact Newton status steps: the slack status the local stage's law is linearised
     /// at (per link).
     pub law_slack: Vec<bool>,
+    /// With inexact Newton status steps: a step along which the exact energy decreases
+    /// without bound, as its certificate (docs/method.md §8).
+    pub(super) runaway: Option<crate::solvers::NoEquilibrium>,
     /// With inexact Newton status steps: where the current step started.
     pub(super) step: Option<super::status_step::StepStart>,
 

@@ -8,6 +8,7 @@
 use super::{Latin, LatinState, SubState};
 use crate::linalg::dot;
 use crate::solvers::newton::exact_line_search;
+use crate::solvers::no_equilibrium_along;
 use crate::structure::law;
 
 /// An inner run that has not reached its forcing tolerance after this many iterations takes
@@ -74,6 +75,19 @@ impl Latin<'_> {
     pub(super) fn status_step(&mut self, state: &mut LatinState) -> StatusStep {
         let start = state.step.take().expect("a status step has a start");
         let end = self.displacements(&state.subs);
+        // An inner run on a law whose status leaves a mechanism runs away along it, driven by
+        // the load or by the prestress the slack cables released: the step or its opposite
+        // is then a no-equilibrium certificate of the exact problem (docs/method.md §8; any
+        // direction that passes the test proves the energy unbounded below, however found).
+        let mut step: Vec<f64> = end
+            .iter()
+            .zip(&start.displacements)
+            .map(|(b, a)| b - a)
+            .collect();
+        state.runaway = no_equilibrium_along(self.structure, &step, &state.load).or_else(|| {
+            step.iter_mut().for_each(|x| *x = -*x);
+            no_equilibrium_along(self.structure, &step, &state.load)
+        });
         let theta = self.line_search(&start.displacements, &end, &state.load);
         if theta < 1.0 {
             for (st, st0) in state.subs.iter_mut().zip(&start.subs) {
@@ -110,7 +124,8 @@ impl Latin<'_> {
     }
 
     /// θ ∈ (0, 1]: the minimiser of the exact energy `Π(U0 + θ (U1 − U0))` (docs/method.md §3,
-    /// newton's exact line search), 1 when it lies beyond or the step is not a descent.
+    /// newton's exact line search), 1 when it lies beyond or the step is not a descent (a
+    /// step along which the energy is unbounded below has been caught as no equilibrium).
     fn line_search(&self, u0: &[f64], u1: &[f64], load: &[f64]) -> f64 {
         let s = self.structure;
         let step: Vec<f64> = u1.iter().zip(u0).map(|(b, a)| b - a).collect();
