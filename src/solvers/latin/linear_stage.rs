@@ -100,12 +100,14 @@ impl Latin<'_> {
     /// Linear stage (docs/method.md §4): given ŝ in `state`, find s: every substructure
     /// condensed, the macro problem solved on their `g_E`, every substructure recovered.
     /// With `relaxation = Some(μ)`, s is then relaxed against the previous one on every field
-    /// (e, t, U, interface U and F): `s ← μ s_new + (1 − μ) s_old`.
+    /// (e, t, U, interface U and F): `s ← μ s_new + (1 − μ) s_old`. The macro solve is refined
+    /// to `accuracy` of its right-hand side (0: to the end).
     pub(super) fn linear_stage(
         &self,
         load: &[f64],
         state: &mut [SubState],
         relaxation: Option<f64>,
+        accuracy: f64,
     ) {
         let inputs = StageInputs {
             structure: self.structure,
@@ -125,8 +127,6 @@ impl Latin<'_> {
             self.macro_problem
                 .add_rhs(e, sub, &self.interfaces, &c.g, &mut rhs);
         }
-        // The macro answer a decade more accurate than the r(U) stopped on, at most 1e-9.
-        let accuracy = (0.1 * self.settings.residual_tolerance()).clamp(1e-13, 1e-9);
         let solution = self.macro_problem.solve_rhs(rhs, accuracy);
         let (macro_problem, interfaces) = (&self.macro_problem, &self.interfaces);
         self.substructures

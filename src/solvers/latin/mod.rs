@@ -562,7 +562,8 @@ impl Latin<'_> {
         self.update_search(state);
         let mu = self.settings.relaxation;
         let relaxation = (state.relax && mu < 1.0).then_some(mu);
-        self.linear_stage(&state.load, &mut state.subs, relaxation);
+        let accuracy = self.macro_accuracy(state.residual);
+        self.linear_stage(&state.load, &mut state.subs, relaxation, accuracy);
         state.relax = true;
     }
 
@@ -575,9 +576,23 @@ impl Latin<'_> {
         let next = state.anderson.step(&state.input, &g, restarted);
         self.set_linear_stage_input(&mut state.subs, &next);
         state.input = next;
-        self.linear_stage(&state.load, &mut state.subs, None);
+        let accuracy = self.macro_accuracy(state.residual);
+        self.linear_stage(&state.load, &mut state.subs, None, accuracy);
         self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
         state.relax = true;
+    }
+
+    /// How far the macro solve is refined (a fraction of its right-hand side): 1e-9 while
+    /// r(U) is above 100 times its tolerance, to the end after. 1e-9 takes 2 solves where
+    /// refining to the end took 3 to 5 (the regularised factor leaves 1e-8 to 1e-6, each step
+    /// gains three decades) and leaves the iteration counts unchanged, but on one-module
+    /// substructures a macro answer to 1e-10 held r(U) above 1e-7 for 1000 iterations.
+    fn macro_accuracy(&self, residual: f64) -> f64 {
+        if residual > 100.0 * self.settings.residual_tolerance() {
+            1e-9
+        } else {
+            0.0
+        }
     }
 
     /// What a linear stage reads of ŝ, scaled to the energy norm: per link `(t̂ − l ê)/√l`,
@@ -685,7 +700,7 @@ impl Solver for Latin<'_> {
             anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
             status_streak: vec![0; self.structure.links.len()],
         };
-        self.linear_stage(&state.load, &mut state.subs, None);
+        self.linear_stage(&state.load, &mut state.subs, None, 1e-9);
         if self.accelerated() {
             state.input = self.linear_stage_input(&state.subs);
             self.local_stage(&mut state.subs, self.local_law(&state.law_slack));

@@ -40,6 +40,11 @@ pub(crate) struct StepStart {
 /// (docs/method.md §9).
 const REBUILD_FRACTION: f64 = 5e-4;
 
+/// A cable keeps its status while its trial tension is within this fraction of the r(U)
+/// tolerance times the RMS trial tension of the cables: its force is then below what r(U)
+/// can see.
+const STATUS_BAND: f64 = 0.1;
+
 /// What a status step changed.
 pub(super) struct StatusStep {
     /// Whether the fixed-point map changed (new law, new operators, or both): Anderson's
@@ -88,21 +93,43 @@ impl Latin<'_> {
             step.iter_mut().for_each(|x| *x = -*x);
             no_equilibrium_along(self.structure, &step, &state.load)
         });
-        let theta = self.line_search(&start.displacements, &end, &state.load);
+        // The full step when it lowered r(U): near the answer the energy along it is flat to
+        // round-off and its minimiser is noise (seen: θ ≈ 0.3–0.7 at r(U) ≈ 1e-8 blending
+        // the inner run's work away).
+        let theta = if state.residual < start.residual {
+            1.0
+        } else {
+            self.line_search(&start.displacements, &end, &state.load)
+        };
         if theta < 1.0 {
             for (st, st0) in state.subs.iter_mut().zip(&start.subs) {
                 st.blend_from(st0, theta);
             }
             blend(&mut state.input, &start.input, theta);
         }
-        // The blend's status: slack where t0 + k e ≤ 0.
+        // The blend's status: slack where τ = t0 + k e ≤ 0, a cable keeping its status while
+        // |τ| is within a band far below what r(U) is stopped on (a cable at zero tension in
+        // the answer would otherwise be free to flip at every step).
         let links = &self.structure.links;
-        let mut slack = vec![false; links.len()];
+        let mut trial = vec![0.0; links.len()];
         for (sub, st) in self.substructures.iter().zip(&state.subs) {
             for (j, &i) in sub.links.iter().enumerate() {
-                slack[i] = links[i].unilateral && law::trial_tension(&links[i], st.e[j]) <= 0.0;
+                trial[i] = law::trial_tension(&links[i], st.e[j]);
             }
         }
+        let (sum2, cables) = links
+            .iter()
+            .zip(&trial)
+            .filter(|(l, _)| l.unilateral)
+            .fold((0.0, 0usize), |(s, n), (_, t)| (s + t * t, n + 1));
+        let band =
+            STATUS_BAND * self.settings.residual_tolerance() * (sum2 / cables.max(1) as f64).sqrt();
+        let slack: Vec<bool> = links
+            .iter()
+            .zip(&trial)
+            .zip(&state.law_slack)
+            .map(|((l, &tau), &was)| l.unilateral && if was { tau <= band } else { tau < -band })
+            .collect();
 
         let law_changed = slack != state.law_slack;
         let disagree = slack
@@ -110,7 +137,6 @@ impl Latin<'_> {
             .zip(&self.search_slack)
             .filter(|(a, b)| a != b)
             .count();
-        let cables = links.iter().filter(|l| l.unilateral).count();
         let rebuilt =
             disagree as f64 > REBUILD_FRACTION * cables as f64 && self.set_search(slack.clone());
         if rebuilt {
