@@ -393,7 +393,11 @@ fn output_switches_limit_the_files() {
     let file = Temp::file(
         "switches",
         // pcg-lcp (a default solver) writes a history since main's c85db27: switched off too.
-        &format!("{VALID}[output]\ntensions = false\ndisplacements = false\nhistory = false\n"),
+        // forces/ and reactions/ (issue 27) are per-solve files too: switched off likewise.
+        &format!(
+            "{VALID}[output]\ntensions = false\ndisplacements = false\nhistory = false\n\
+             forces = false\nreactions = false\n"
+        ),
     );
     let out = Temp::dir("switches-out");
     let o = tensolve(&["run", file.arg(), "--out", out.arg(), "--quiet"]);
