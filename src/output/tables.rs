@@ -65,6 +65,9 @@ pub struct SummaryRow {
     pub setup_seconds: f64,
     /// This solve, s.
     pub solve_seconds: f64,
+    /// Converged because the stopping measure is at round-off (not a column: the solve line
+    /// says so instead of printing the measure, [`crate::solvers::SolveInfo::at_roundoff`]).
+    pub at_roundoff: bool,
 }
 
 impl SummaryRow {
@@ -101,6 +104,7 @@ impl SummaryRow {
             geometric_term,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
+            at_roundoff: solution.info.at_roundoff && solution.info.status.converged(),
         }
     }
 }
