@@ -261,7 +261,8 @@ fn figures_need_no_history_file_and_nothing_is_drawn_unless_asked() {
     // The convergence figures come from the solve's own records, not from the history files.
     let only_plots = Run::new(
         "plots-only",
-        "plots = true\nhistory = false\nsummary = false\ntensions = false\ndisplacements = false",
+        "plots = true\nhistory = false\nsummary = false\ntensions = false\ndisplacements = false\n\
+         forces = false\nreactions = false",
     );
     assert_eq!(file_names(&only_plots.0), ["plots"]);
     let eta = read_svg(&only_plots.0.join("plots/eta_micro-macro.svg"));
