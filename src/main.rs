@@ -362,16 +362,22 @@ fn format_row(r: &SummaryRow) -> String {
         "{:>11} alpha = {:<6} {} in {} it, {} / {} slack, {}r(U) {:.1e}, {:.1} ms",
         r.solver,
         alpha_label(r.alpha),
-        if r.converged {
-            "converged".to_string()
-        } else {
-            format!("NOT converged ({})", r.status)
+        match (r.converged, r.at_roundoff) {
+            // A LATIN stop on Δη at round-off of the prestress: η is then a ratio of round-off
+            // to round-off (no load), not a measure of anything.
+            (true, true) if r.alpha == 0.0 => {
+                "converged (no load: Δη at round-off of the prestress)".to_string()
+            }
+            (true, true) => "converged (Δη at round-off of the prestress)".to_string(),
+            (true, false) => "converged".to_string(),
+            (false, _) => format!("NOT converged ({})", r.status),
         },
         r.iterations,
         r.slack_cables,
         r.cables,
-        // The stopping measure beside r(U), when it is another measure.
+        // The stopping measure beside r(U), when it is another measure (and means something).
         match r.measure {
+            _ if r.converged && r.at_roundoff => String::new(),
             Measure::EquilibriumResidual => String::new(),
             Measure::ComplementarityResidual => format!("complementarity {:.1e}, ", r.residual),
             Measure::Indicator => format!("eta {:.1e}, ", r.residual),

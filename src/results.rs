@@ -107,6 +107,73 @@ pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> 
     Some(norm(&force) / size)
 }
 
+/// Per component `3·node + c` of every node, held ones included, the nodal forces of the
+/// members: each member's axial force τ (the answer's tensions) along `states.directions` (the
+/// initial unit vectors, or the current ones with `large`), `+τ n` at b and `−τ n` at a, i.e.
+/// `Bᵀτ` on every component; with `prestress`, plus the prestress's geometric force
+/// `K_G(t0) U` as the solver has it (on the free displacements). At a free component it
+/// balances the load to the solve's residual; at a held one it is what the support takes.
+pub fn member_nodal_forces(
+    s: &Structure,
+    eq: &Equilibrium,
+    states: &law::MemberStates,
+) -> Vec<f64> {
+    let every: Vec<usize> = (0..3 * s.n_nodes()).collect();
+    let mut f = vec![0.0; every.len()];
+    for ((l, &t), &n) in s.links.iter().zip(&eq.tensions).zip(&states.directions) {
+        l.row_along(n, &every).scatter(t, &mut f);
+    }
+    if let (GeometricModel::Prestress, Some(g)) = (s.model, &s.geometric) {
+        let mut u = vec![0.0; every.len()];
+        for (global, &d) in s.dof_of.iter().enumerate() {
+            if d != crate::structure::CLAMPED {
+                u[global] = eq.displacements[d];
+            }
+        }
+        let weights = g.weights();
+        let geometric = law::geometric_force_on(s, |i| weights[i], &u, &every, every.len());
+        f.iter_mut().zip(&geometric).for_each(|(fi, gi)| *fi += gi);
+    }
+    f
+}
+
+/// The reaction of a support on one held component, N.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reaction {
+    /// The node (index).
+    pub node: usize,
+    /// 0, 1, 2 for x, y, z.
+    pub component: usize,
+    /// The force the support puts on the node, N: `R = Bᵀτ − F` there (the members' pull
+    /// on the node and the load at that component balanced), with F the load on the held
+    /// component at α (`load.point`, self-weight: [`Structure::held_load`]).
+    pub force: f64,
+}
+
+/// The reaction on every held component at load factor `alpha`, node by node, x, y, z: with
+/// the load, they balance the structure as a whole to the solve's residual (`Σ R + Σ F = 0`).
+pub fn reactions(
+    s: &Structure,
+    eq: &Equilibrium,
+    alpha: f64,
+    states: &law::MemberStates,
+) -> Vec<Reaction> {
+    let mut f = member_nodal_forces(s, eq, states);
+    for &(global, load) in &s.held_load {
+        f[global] -= alpha * load;
+    }
+    s.dof_of
+        .iter()
+        .enumerate()
+        .filter(|(_, &d)| d == crate::structure::CLAMPED)
+        .map(|(global, _)| Reaction {
+            node: global / 3,
+            component: global % 3,
+            force: f[global],
+        })
+        .collect()
+}
+
 /// A geometric term above this (1 % of the answer) is worth modelling: `model.geometry =
 /// "large"` is recommended.
 pub const GEOMETRIC_TERM_LIMIT: f64 = 0.01;

@@ -398,7 +398,11 @@ fn output_switches_limit_the_files() {
     let file = Temp::file(
         "switches",
         // pcg-lcp (a default solver) writes a history since main's c85db27: switched off too.
-        &format!("{VALID}[output]\ntensions = false\ndisplacements = false\nhistory = false\n"),
+        // forces/ and reactions/ (issue 27) are per-solve files too: switched off likewise.
+        &format!(
+            "{VALID}[output]\ntensions = false\ndisplacements = false\nhistory = false\n\
+             forces = false\nreactions = false\n"
+        ),
     );
     let out = Temp::dir("switches-out");
     let o = tensolve(&["run", file.arg(), "--out", out.arg(), "--quiet"]);
@@ -530,4 +534,43 @@ fn an_answer_beyond_the_structures_size_is_not_converged() {
         assert_eq!(row[column(&header, "converged")], "false");
         assert_eq!(row[column(&header, "status")], "beyond_model");
     }
+}
+
+/// A LATIN row at α = 0 stops on Δη at round-off of the prestress (η is then round-off over
+/// round-off): its solve line says so, and does not print `converged … eta 5.2e-1` as if η had
+/// met the tolerance.
+#[test]
+fn a_latin_row_without_load_says_it_stopped_at_round_off() {
+    let out = Temp::dir("alpha0");
+    let case = manifest_path("cases/paper.toml");
+    let o = tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--set",
+        "load.alpha=[0]",
+        "--set",
+        "output.plots=false",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stderr(&o);
+    for solver in ["mono-latin", "micro-macro"] {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{solver} alpha = 0 ")))
+            .unwrap_or_else(|| panic!("no line of {solver} at alpha = 0 in:\n{text}"));
+        assert!(
+            line.contains("converged (no load: Δη at round-off of the prestress) in 0 it"),
+            "{line}"
+        );
+        assert!(!line.contains("eta"), "{line}");
+        assert!(line.contains("r(U)"), "{line}");
+    }
+    // The exact solvers' lines are unchanged.
+    let newton = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("newton alpha = 0 "))
+        .unwrap();
+    assert!(newton.contains(" converged in "), "{newton}");
 }

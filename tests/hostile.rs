@@ -297,6 +297,9 @@ fn d4_a_rerun_leaves_exactly_its_files_and_foreign_ones_alone() {
         "summary.csv",
         "tensions/newton_alpha1.csv",
         "displacements/newton_alpha1.csv",
+        // forces/ and reactions/ (issue 27): per-solve files of the rerun too.
+        "forces/newton_alpha1.csv",
+        "reactions/newton_alpha1.csv",
         "notes.txt",
         "tensions/mine.csv",
     ]
@@ -341,7 +344,8 @@ fn d7_a_killed_sweep_shows_no_file_without_its_row() {
         .collect();
     assert!(hidden.is_empty(), "{hidden:?}");
     assert_eq!(summary(&dir.0).len(), 1);
-    assert_eq!(files(&dir.0).len(), 3, "{:?}", files(&dir.0));
+    // summary, tensions, displacements, forces, reactions (issue 27 added the last two).
+    assert_eq!(files(&dir.0).len(), 5, "{:?}", files(&dir.0));
 }
 
 #[test]

@@ -918,3 +918,38 @@ fn cli_run_writes_micro_macro_history() {
 fn rows_len_minus_one(history: &str) -> usize {
     history.lines().count() - 2
 }
+
+/// `cases/paper-plain.toml`, the paper's method as published (relaxation 1, no acceleration,
+/// l = k fixed, d_m = 3.92e6, stop on η), run by the binary: its history at α = 1 reaches
+/// e < 1e-2 first at iteration 30 and e < 1e-3 first at 63, the paper's rates.
+#[test]
+fn paper_plain_case_reproduces_the_papers_rates() {
+    let out = temp_path("paper-plain");
+    let case = common::manifest_path("cases/paper-plain.toml");
+    let run = Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args(["run", case.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .args(["--set", "load.alpha=[1.0]", "--set", "output.plots=false"])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let history = std::fs::read_to_string(out.join("history/micro-macro_alpha1.csv")).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    let mut lines = history.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (iteration, error) = (at("iteration"), at("error_e"));
+    let rows: Vec<(usize, f64)> = lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[iteration].parse().unwrap(), f[error].parse().unwrap())
+        })
+        .collect();
+    let first_below = |threshold: f64| rows.iter().find(|(_, e)| *e < threshold).map(|r| r.0);
+    assert_eq!(first_below(1e-2), Some(30), "e < 1e-2");
+    assert_eq!(first_below(1e-3), Some(63), "e < 1e-3");
+}

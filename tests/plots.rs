@@ -261,7 +261,8 @@ fn figures_need_no_history_file_and_nothing_is_drawn_unless_asked() {
     // The convergence figures come from the solve's own records, not from the history files.
     let only_plots = Run::new(
         "plots-only",
-        "plots = true\nhistory = false\nsummary = false\ntensions = false\ndisplacements = false",
+        "plots = true\nhistory = false\nsummary = false\ntensions = false\ndisplacements = false\n\
+         forces = false\nreactions = false",
     );
     assert_eq!(file_names(&only_plots.0), ["plots"]);
     let eta = read_svg(&only_plots.0.join("plots/eta_micro-macro.svg"));
@@ -436,4 +437,73 @@ fn bad_figure_keys_are_rejected_by_name() {
         error.contains("output.compare_modules") && error.contains("plots = true"),
         "{error}"
     );
+}
+
+/// Figure 8 of a general structure (`cases/simplex.toml`, no modules): its captions and legend
+/// speak of supports, not of modules or clamped nodes, and both views draw every member
+/// undeformed in light grey (#AAAAAA, 2 px) before, so under, the deformed structure.
+#[test]
+fn figure_8_of_a_general_structure_says_supports_and_draws_the_undeformed_structure_under() {
+    let out = temp_path("deformed-general");
+    let case = common::manifest_path("cases/simplex.toml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args(["run", case.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .args(["--set", "output.plots=true"])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let svg = read_svg(&out.join("plots/deformed_alpha1.svg"));
+    let members = tensolve::case::load(&case).unwrap().structure().links.len();
+    let _ = std::fs::remove_dir_all(&out);
+
+    assert_texts(
+        &svg,
+        "general Figure 8",
+        &["■ support (held node)", "undeformed"],
+    );
+    for text in &svg.texts {
+        let lower = text.to_lowercase();
+        assert!(
+            !lower.contains("module") && !lower.contains("clamped"),
+            "a general structure's Figure 8 says `{text}`"
+        );
+    }
+    assert!(
+        svg.texts
+            .iter()
+            .any(|t| t.starts_with("oblique view (undeformed structure"))
+            && svg
+                .texts
+                .iter()
+                .any(|t| t.starts_with("top view (undeformed structure")),
+        "{:?}",
+        svg.texts
+    );
+    let undeformed: Vec<usize> = (0..svg.polylines.len())
+        .filter(|&i| svg.polylines[i].0 == "#AAAAAA" && svg.polylines[i].1 == "2")
+        .collect();
+    assert_eq!(
+        undeformed.len(),
+        2 * members,
+        "one undeformed segment per member and view"
+    );
+    // Under the deformed structure: each view's undeformed members come before its bars.
+    let bars: Vec<usize> = (0..svg.polylines.len())
+        .filter(|&i| svg.polylines[i].0 == BAR)
+        .collect();
+    assert_eq!(bars.len(), 2 * 3, "the simplex's three struts in each view");
+    assert!(
+        undeformed[members - 1] < bars[0],
+        "oblique view: outline under the bars"
+    );
+    assert!(
+        undeformed[2 * members - 1] < bars[3],
+        "top view: outline under the bars"
+    );
+    assert!(bars[2] < undeformed[members], "one view after the other");
 }

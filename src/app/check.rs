@@ -31,6 +31,9 @@ pub struct ModelReport {
     pub partly_held_nodes: usize,
     /// Held components with a non-zero prescribed displacement (settlements).
     pub prescribed_components: usize,
+    /// Held components that carry a load (`load.point`, self-weight): it goes straight to the
+    /// reactions.
+    pub held_load_components: usize,
     /// Cables.
     pub cables: usize,
     /// Whether the cables carry tension only.
@@ -134,6 +137,7 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
             })
             .count(),
         prescribed_components: s.prescribed.iter().filter(|&&d| d != 0.0).count(),
+        held_load_components: s.held_load.len(),
         cables: s.n_cables(),
         unilateral: case.unilateral(),
         bars: s.n_bars(),
@@ -239,6 +243,15 @@ impl fmt::Display for CheckReport {
              prescribed non-zero displacement(s)",
             m.clamped_nodes, m.partly_held_nodes, m.prescribed_components
         )?;
+        if m.held_load_components > 0 {
+            writeln!(
+                f,
+                "held loads      {} load component(s) (load.point, self-weight) sit on held \
+                 components: they take no part in the solve and go straight to the reactions \
+                 (reactions/)",
+                m.held_load_components
+            )?;
+        }
         writeln!(
             f,
             "cables          {} ({})",

@@ -556,6 +556,8 @@ fn writes_files(case: &Case) -> bool {
     o.history
         || o.tensions
         || o.displacements
+        || o.forces
+        || o.reactions
         || o.vtk
         || o.plots
         || o.stability
@@ -592,6 +594,8 @@ fn sinks<'s>(
         out.displacements,
         PerSolveSink::displacements(root, dir, structure),
     );
+    sinks.add(out.forces, PerSolveSink::forces(root, dir, structure));
+    sinks.add(out.reactions, PerSolveSink::reactions(root, dir, structure));
     sinks.add(out.vtk, PerSolveSink::vtk(root, dir, structure));
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {

@@ -461,6 +461,8 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         summary: o.summary.unwrap_or(defaults.summary),
         tensions: o.tensions.unwrap_or(defaults.tensions),
         displacements: o.displacements.unwrap_or(defaults.displacements),
+        forces: o.forces.unwrap_or(defaults.forces),
+        reactions: o.reactions.unwrap_or(defaults.reactions),
         history: o.history.unwrap_or(defaults.history),
         plots: o.plots.unwrap_or(defaults.plots),
         vtk: o.vtk.unwrap_or(defaults.vtk),

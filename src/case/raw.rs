@@ -202,6 +202,8 @@ pub(super) struct RawOutput {
     pub summary: Option<bool>,
     pub tensions: Option<bool>,
     pub displacements: Option<bool>,
+    pub forces: Option<bool>,
+    pub reactions: Option<bool>,
     pub history: Option<bool>,
     pub plots: Option<bool>,
     pub vtk: Option<bool>,

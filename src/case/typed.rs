@@ -163,6 +163,12 @@ pub struct OutputChoice {
     pub tensions: bool,
     /// `displacements/{solver}_alpha{α}.csv`. Default true.
     pub displacements: bool,
+    /// `forces/{solver}_alpha{α}.csv`: every member's axial force, elongation and length.
+    /// Default true.
+    pub forces: bool,
+    /// `reactions/{solver}_alpha{α}.csv`: the reaction on every held component, and their
+    /// sums. Default true.
+    pub reactions: bool,
     /// `history/{solver}_alpha{α}.csv` of the LATIN solvers (e, η per iteration). Default true.
     pub history: bool,
     /// SVG figures under `plots/` (the paper's Figures 6–11). Default false.
@@ -194,6 +200,8 @@ impl Default for OutputChoice {
             summary: true,
             tensions: true,
             displacements: true,
+            forces: true,
+            reactions: true,
             history: true,
             plots: false,
             vtk: false,

@@ -19,7 +19,8 @@ pub use plots::{FigureData, FigureSettings};
 pub use publish::{OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
-    alpha_label, result_path, stability_line, summary_line, write_displacements, write_mechanisms,
-    write_tensions, StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
+    alpha_label, result_path, stability_line, summary_line, write_displacements, write_forces,
+    write_mechanisms, write_reactions, write_tensions, StabilityRow, SummaryRow, STABILITY_HEADER,
+    SUMMARY_HEADER,
 };
 pub use vtk::{kind_code, vtu_path, write_vtu, VTK_LINE};

@@ -5,7 +5,7 @@
 //! | sink | files |
 //! |---|---|
 //! | [`HistorySink`] | `history/{solver}_alpha{α}.csv`, as the iterations go |
-//! | [`PerSolveSink`] | `tensions/{solver}_alpha{α}.csv`, `displacements/…`, `vtk/…vtu` |
+//! | [`PerSolveSink`] | `tensions/{solver}_alpha{α}.csv`, `displacements/…`, `forces/…`, `reactions/…`, `vtk/…vtu` |
 //! | [`PlotsSink`] | `plots/*.svg`, at the end of the sweep |
 //! | [`PublishSink`] | publishes what the sinks above staged: the solve's commit point |
 //! | [`StabilitySink`] | `stability.csv`, one row appended after every solve |
@@ -16,8 +16,8 @@
 
 use super::{
     history_column, result_path, stability_line, summary_line, vtu_path, write_displacements,
-    write_tensions, write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow,
-    SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
+    write_forces, write_reactions, write_tensions, write_vtu, FigureData, FigureSettings,
+    HistoryWriter, OutputDir, StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
 };
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
@@ -150,7 +150,7 @@ impl Sink for HistorySink {
 type WriteSolve = fn(&Path, &str, f64, &Structure, &Equilibrium) -> io::Result<PathBuf>;
 
 /// One file per solve, written when the solve ends with a finite answer:
-/// `tensions/…`, `displacements/…`, `vtk/…`.
+/// `tensions/…`, `displacements/…`, `forces/…`, `reactions/…`, `vtk/…`.
 pub struct PerSolveSink<'s> {
     root: PathBuf,
     dir: PathBuf,
@@ -182,6 +182,26 @@ impl<'s> PerSolveSink<'s> {
             structure,
             write_displacements,
             |dir, solver, alpha| result_path(dir, "displacements", solver, alpha),
+        )
+    }
+
+    /// `forces/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name the
+    /// file under `root`.
+    pub fn forces(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(root, dir, structure, write_forces, |dir, solver, alpha| {
+            result_path(dir, "forces", solver, alpha)
+        })
+    }
+
+    /// `reactions/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name the
+    /// file under `root`.
+    pub fn reactions(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+        Self::new(
+            root,
+            dir,
+            structure,
+            write_reactions,
+            |dir, solver, alpha| result_path(dir, "reactions", solver, alpha),
         )
     }
 

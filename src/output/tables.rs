@@ -1,5 +1,5 @@
 //! CSV tables: `summary.csv`, `tensions/{solver}_alpha{α}.csv`,
-//! `displacements/{solver}_alpha{α}.csv`.
+//! `displacements/{solver}_alpha{α}.csv`, `forces/…`, `reactions/…`.
 
 use super::write_atomic;
 use crate::results;
@@ -65,6 +65,9 @@ pub struct SummaryRow {
     pub setup_seconds: f64,
     /// This solve, s.
     pub solve_seconds: f64,
+    /// Converged because the stopping measure is at round-off (not a column: the solve line
+    /// says so instead of printing the measure, [`crate::solvers::SolveInfo::at_roundoff`]).
+    pub at_roundoff: bool,
 }
 
 impl SummaryRow {
@@ -101,6 +104,7 @@ impl SummaryRow {
             geometric_term,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
+            at_roundoff: solution.info.at_roundoff && solution.info.status.converged(),
         }
     }
 }
@@ -264,6 +268,92 @@ pub fn write_tensions(
     });
     let first = if general { "member" } else { "cable" };
     write_rows(&path, [first, "kind", "node_a", "node_b", "tension"], rows)?;
+    Ok(path)
+}
+
+/// `InvalidData` naming `what` when a value of `values` is not finite: nothing is written.
+fn finite(what: &str, values: impl IntoIterator<Item = f64>) -> std::io::Result<()> {
+    match values.into_iter().find(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(v) => Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("a {what} is {v} (not finite): no file written"),
+        )),
+    }
+}
+
+/// Write `dir/forces/{solver}_alpha{α}.csv`: per member (bars and cables, by id), its kind,
+/// end nodes, total axial force τ (N, tension > 0), elongation and length (m) under the
+/// model ([`crate::structure::law::member_states`]); returns its path.
+pub fn write_forces(
+    dir: &Path,
+    solver: &str,
+    alpha: f64,
+    s: &Structure,
+    eq: &Equilibrium,
+) -> std::io::Result<PathBuf> {
+    let path = result_path(dir, "forces", solver, alpha);
+    let states = crate::structure::law::member_states(s, &eq.displacements);
+    finite("member force", eq.tensions.iter().copied())?;
+    finite("member elongation", states.elongations.iter().copied())?;
+    finite("member length", states.lengths.iter().copied())?;
+    let rows = s.links.iter().enumerate().map(|(i, l)| {
+        [
+            l.id.to_string(),
+            l.kind.name().to_string(),
+            s.node_ids[l.a].to_string(),
+            s.node_ids[l.b].to_string(),
+            eq.tensions[i].to_string(),
+            states.elongations[i].to_string(),
+            states.lengths[i].to_string(),
+        ]
+    });
+    write_rows(
+        &path,
+        [
+            "member",
+            "kind",
+            "node_a",
+            "node_b",
+            "force_N",
+            "elongation_m",
+            "current_length_m",
+        ],
+        rows,
+    )?;
+    Ok(path)
+}
+
+/// Write `dir/reactions/{solver}_alpha{α}.csv`: per held component (node id, `x`, `y` or
+/// `z`) its reaction (N, [`results::reactions`]), then three rows of node `sum`: the sum of
+/// the reactions per component; returns its path.
+pub fn write_reactions(
+    dir: &Path,
+    solver: &str,
+    alpha: f64,
+    s: &Structure,
+    eq: &Equilibrium,
+) -> std::io::Result<PathBuf> {
+    const AXES: [&str; 3] = ["x", "y", "z"];
+    let path = result_path(dir, "reactions", solver, alpha);
+    let states = crate::structure::law::member_states(s, &eq.displacements);
+    let reactions = results::reactions(s, eq, alpha, &states);
+    finite("reaction", reactions.iter().map(|r| r.force))?;
+    let mut sums = [0.0; 3];
+    for r in &reactions {
+        sums[r.component] += r.force;
+    }
+    let rows = reactions
+        .iter()
+        .map(|r| {
+            [
+                s.node_ids[r.node].to_string(),
+                AXES[r.component].to_string(),
+                r.force.to_string(),
+            ]
+        })
+        .chain((0..3).map(|c| ["sum".to_string(), AXES[c].to_string(), sums[c].to_string()]));
+    write_rows(&path, ["node", "component", "reaction_N"], rows)?;
     Ok(path)
 }
 

@@ -123,6 +123,7 @@ pub fn drive_from<S: Solver + ?Sized>(
             residual: progress.residual,
             setups: progress.setups,
             solve_seconds: clock.seconds(),
+            at_roundoff: status == Status::Converged && progress.at_roundoff,
             no_equilibrium: runaway,
         },
     }

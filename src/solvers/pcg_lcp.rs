@@ -360,6 +360,7 @@ impl Solver for PcgLcp<'_> {
             equilibrium_residual: None,
             setups: 0,
             slack_cables: state.x.iter().filter(|&&xi| xi > 0.0).count(),
+            at_roundoff: false,
             stop,
         }
     }

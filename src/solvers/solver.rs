@@ -24,6 +24,10 @@ pub struct Progress {
     /// `Some` when the solver stops here: [`Status::Converged`] when its stopping criterion
     /// holds, [`Status::Stalled`] when it cannot go on. `None`: it can take another iteration.
     pub stop: Option<Status>,
+    /// The solver stops here as converged because its measure is at round-off, not because
+    /// its criterion holds (LATIN: Δη at round-off of the prestress, as with no load, where η
+    /// is a ratio of round-off to round-off).
+    pub at_roundoff: bool,
 }
 
 /// The stop of a solver whose criterion is a residual below its tolerance: converged when

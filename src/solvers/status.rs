@@ -121,6 +121,9 @@ pub struct SolveInfo {
     pub setups: usize,
     /// Wall time of the iterations (the solver's own work, observers excluded), s.
     pub solve_seconds: f64,
+    /// Converged because the stopping measure is at round-off, not because the criterion
+    /// holds ([`super::Progress::at_roundoff`]): the measure's value says nothing.
+    pub at_roundoff: bool,
     /// With [`Status::NoEquilibrium`] found by the driver: the runaway direction's certificate.
     pub no_equilibrium: Option<super::NoEquilibrium>,
 }

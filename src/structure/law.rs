@@ -142,6 +142,53 @@ pub fn elongations(s: &Structure, u: &[f64]) -> Vec<f64> {
     }
 }
 
+/// The members at displacements U as the model sees them, for reporting (`forces/`, the
+/// reactions): per link its elongation with the prescribed displacements included, its length,
+/// and the unit vector its axial force acts along.
+#[derive(Debug, Clone)]
+pub struct MemberStates {
+    /// Elongations, m: `n·(U_b − U_a)` on the initial geometry (the prescribed displacements'
+    /// `e_p` included), `ℓ − L` with `large`.
+    pub elongations: Vec<f64>,
+    /// Lengths, m: the linearised `L + e` on the initial geometry, the current ℓ with `large`.
+    pub lengths: Vec<f64>,
+    /// Unit vectors from a to b the axial force acts along: the initial ones, or the current
+    /// ones with `large`.
+    pub directions: Vec<[f64; 3]>,
+}
+
+/// [`MemberStates`] at displacements U (free dofs) under the structure's model.
+pub fn member_states(s: &Structure, u: &[f64]) -> MemberStates {
+    match s.model {
+        GeometricModel::Large => {
+            let current = CurrentGeometry::of(s, u);
+            MemberStates {
+                elongations: current.elongations,
+                lengths: current.lengths,
+                directions: current.directions,
+            }
+        }
+        _ => {
+            let elongations: Vec<f64> = s
+                .links
+                .iter()
+                .zip(&s.link_dofs)
+                .map(|(l, ld)| ld.elongation(u) + imposed_elongation(s, l))
+                .collect();
+            MemberStates {
+                lengths: s
+                    .links
+                    .iter()
+                    .zip(&elongations)
+                    .map(|(l, e)| l.length + e)
+                    .collect(),
+                elongations,
+                directions: s.links.iter().map(|l| l.direction).collect(),
+            }
+        }
+    }
+}
+
 /// The elongation a link's prescribed end displacements impose on the initial geometry,
 /// `e_p = n·(Ud_b − Ud_a)`: [`Link::prestress`] holds `t0 + k e_p`.
 fn imposed_elongation(s: &Structure, l: &Link) -> f64 {
@@ -299,7 +346,19 @@ pub fn tangent_product(s: &Structure, taut: &[bool], mu: f64, v: &[f64], out: &m
 /// `Σ w_i (I − n nᵀ)(U_b − U_a)` on the free dofs (a geometric stiffness with member weights
 /// `w_i`, `τ_i / L_i`, applied to U on the initial geometry: docs/method.md §8).
 pub fn geometric_force(s: &Structure, weight: impl Fn(usize) -> f64, u: &[f64]) -> Vec<f64> {
-    let mut out = vec![0.0; s.n_free];
+    geometric_force_on(s, weight, u, &s.dof_of, s.n_free)
+}
+
+/// [`geometric_force`] on the components numbered by `dof_of` (`3·node + c` → index, or
+/// [`CLAMPED`]), `n` of them: with every component numbered, the force on held ones too.
+pub fn geometric_force_on(
+    s: &Structure,
+    weight: impl Fn(usize) -> f64,
+    u: &[f64],
+    dof_of: &[usize],
+    n: usize,
+) -> Vec<f64> {
+    let mut out = vec![0.0; n];
     for (i, l) in s.links.iter().enumerate() {
         let w = weight(i);
         if w == 0.0 {
@@ -307,7 +366,7 @@ pub fn geometric_force(s: &Structure, weight: impl Fn(usize) -> f64, u: &[f64]) 
         }
         let (p, q) = transverse_pair(l.direction);
         for v in [p, q] {
-            let row = l.row_along(v, &s.dof_of);
+            let row = l.row_along(v, dof_of);
             row.scatter(w * row.elongation(u), &mut out);
         }
     }

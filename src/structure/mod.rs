@@ -127,6 +127,10 @@ pub struct Structure {
     pub link_dofs: Vec<LinkDofs>,
     /// Load at α = 1 on the free dofs, N.
     pub unit_load: Vec<f64>,
+    /// Load at α = 1 on held components, N, as `(3·node + c, force)` with the force non-zero:
+    /// the point loads and self-weight that fall on a held component. They take no part in
+    /// the solve and go straight to the support reactions.
+    pub held_load: Vec<(usize, f64)>,
     /// `B_fᵀ (k e_p)` on the free dofs: the nodal forces of the tensions the prescribed
     /// displacements impose (zero without settlements). Solvers that split `τ = t0 + t` and
     /// assume `B_fᵀ t0 = 0` solve under `α F − settlement_force`.
@@ -226,29 +230,39 @@ impl Structure {
             }
         }
         let mut unit_load = vec![0.0; n_free];
-        let add = |node: usize, force: [f64; 3], load: &mut Vec<f64>| {
+        // Per global dof: the point loads and self-weight that fall on a held component. The
+        // nodal load is the force on every free component only (the paper's "free node").
+        let mut on_held = vec![0.0; 3 * n_nodes];
+        let mut add = |node: usize, force: [f64; 3], held_too: bool| {
             for k in 0..3 {
                 let d = dof_of[3 * node + k];
                 if d != CLAMPED {
-                    load[d] += force[k];
+                    unit_load[d] += force[k];
+                } else if held_too {
+                    on_held[3 * node + k] += force[k];
                 }
             }
         };
         for node in 0..n_nodes {
-            add(node, loading.nodal, &mut unit_load);
+            add(node, loading.nodal, false);
         }
         for &(node, force) in &loading.points {
-            add(node, force, &mut unit_load);
+            add(node, force, true);
         }
         if let Some(g) = loading.gravity {
             for (m, l) in geometry.members.iter().zip(&links) {
                 // ρ S ℓ g / 2 on each end (docs/method.md §7).
                 let half = m.density * m.section * l.length / 2.0;
                 let w = [half * g[0], half * g[1], half * g[2]];
-                add(m.a, w, &mut unit_load);
-                add(m.b, w, &mut unit_load);
+                add(m.a, w, true);
+                add(m.b, w, true);
             }
         }
+        let held_load: Vec<(usize, f64)> = on_held
+            .into_iter()
+            .enumerate()
+            .filter(|&(_, f)| f != 0.0)
+            .collect();
         let prestress_scale = geometry
             .members
             .iter()
@@ -264,6 +278,7 @@ impl Structure {
             n_free,
             link_dofs,
             unit_load,
+            held_load,
             settlement_force,
             prestress_scale,
             model: GeometricModel::Linear,

@@ -1,16 +1,22 @@
 //! `deformed_alpha{α}.svg` (paper Figure 8): the deformed structure at one α, displacements
 //! multiplied by `output.amplification` (×10 by default, as the paper's), in one SVG of two
 //! panels: an oblique view (a fixed axonometric projection, seen from the front left and
-//! above, the undeformed outline in light grey) and a top view with x and y axes in m.
+//! above) and a top view with x and y axes in m.
 //!
 //! Every link is drawn. Cables are coloured by their tension τ on one scale, shown by the
 //! colour bar: yellow to dark red in tension, light to dark blue in compression (a bilateral
 //! cable of the linear case may carry it). Slack cables are thin dashed grey lines; bars are
-//! thin, near black and uncoloured. Clamped nodes are small black squares.
+//! thin, near black and uncoloured.
 //!
-//! In the top view a lower edge carries the lower cables of both modules beside it and half of
-//! it a bracing cable of each: each link is drawn shrunk toward its module's centre (lower
-//! cables by 10 %, bracing cables by 25 %) so that none hides another.
+//! A grid: the oblique view draws the undeformed outline of its lower corners in grey; clamped
+//! nodes are small black squares. In the top view a lower edge carries the lower cables of
+//! both modules beside it and half of it a bracing cable of each: each link is drawn shrunk
+//! toward its module's centre (lower cables by 10 %, bracing cables by 25 %) so that none
+//! hides another.
+//!
+//! A general structure (`[structure]`, no modules): both views draw every member undeformed
+//! in light grey under the deformed structure, members end to end; supports (nodes with a held
+//! component) are small black squares.
 
 use super::legend::{draw_colour_bar, draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::palette::{compression_colour, tension_colour};
@@ -46,6 +52,35 @@ const CABLE_WIDTH: u32 = 2;
 /// Slack cables: thin dashed grey.
 pub const SLACK: RGBColor = RGBColor(120, 120, 120);
 const OUTLINE: RGBColor = RGBColor(150, 150, 150);
+/// A general structure's undeformed members, under the deformed ones: light grey, and two
+/// pixels wide so that it shows beside them.
+pub const UNDEFORMED: RGBColor = RGBColor(170, 170, 170);
+const UNDEFORMED_WIDTH: u32 = 2;
+
+/// The nodes marked as supports: a grid's clamped nodes; every node with a held component of
+/// a general structure.
+fn supports(s: &Structure) -> impl Iterator<Item = usize> + '_ {
+    (0..s.n_nodes()).filter(move |&n| {
+        if s.layout.is_some() {
+            s.clamped[n]
+        } else {
+            s.held_components(n).iter().any(|&h| h)
+        }
+    })
+}
+
+/// Draw the segment `a`–`b` (pixels) of an undeformed member.
+fn draw_undeformed<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    a: (f64, f64),
+    b: (f64, f64),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let px = |p: (f64, f64)| (p.0.round() as i32, p.1.round() as i32);
+    area.draw(&PathElement::new(
+        vec![px(a), px(b)],
+        UNDEFORMED.stroke_width(UNDEFORMED_WIDTH),
+    ))
+}
 
 /// The drawn position of every node: its position plus the amplified displacement.
 fn deformed_nodes(s: &Structure, eq: &Equilibrium, amplification: f64) -> Vec<[f64; 3]> {
@@ -205,8 +240,9 @@ pub fn to_svg(
     let oblique_scale = (inner / (ox.end - ox.start)).min(MAX_VIEW_HEIGHT / (oy.end - oy.start));
     let oblique_height = ((oy.end - oy.start) * oblique_scale).ceil() as u32 + CAPTION + MARGIN;
 
-    // The top view: one scale on both axes.
-    let (tx, ty) = bounds(deformed.iter().map(|p| (p[0], p[1])));
+    // The top view: one scale on both axes (a general structure's undeformed members too).
+    let at_rest_plan = s.nodes.iter().filter(|_| s.layout.is_none());
+    let (tx, ty) = bounds(deformed.iter().chain(at_rest_plan).map(|p| (p[0], p[1])));
     let plot_width = view_width - (Y_LABELS + 2 * MARGIN) as f64;
     let top_scale = (plot_width / (tx.end - tx.start)).min(MAX_VIEW_HEIGHT / (ty.end - ty.start));
     let top_plot_width = ((tx.end - tx.start) * top_scale).ceil() as u32;
@@ -244,7 +280,7 @@ pub fn to_svg(
         let lower_width = top_plot_width + Y_LABELS + 2 * MARGIN;
         let (lower, _) = lower.split_horizontally(lower_width);
         draw_top(&lower, (tx, ty), &deformed, s, eq, &scale).map_err(plot_error)?;
-        draw_panel(&panel, &scale, eq).map_err(plot_error)?;
+        draw_panel(&panel, &scale, eq, s.layout.is_none()).map_err(plot_error)?;
         root.present().map_err(plot_error)?;
     }
     Ok(svg)
@@ -278,11 +314,24 @@ fn draw_oblique<DB: DrawingBackend>(
     scale: &TensionScale,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let caption = ("sans-serif", TEXT_SIZE).into_font().color(&BLACK);
+    let general = s.layout.is_none();
     area.draw_text(
-        "oblique view (undeformed outline in light grey)",
+        if general {
+            "oblique view (undeformed structure in light grey, under the deformed one)"
+        } else {
+            "oblique view (undeformed outline in light grey)"
+        },
         &caption,
         (MARGIN as i32, 4),
     )?;
+    // A general structure's undeformed members, first: under the deformed ones.
+    if general {
+        for link in &s.links {
+            let a = drawing.pixel(drawing.at_rest[link.a]);
+            let b = drawing.pixel(drawing.at_rest[link.b]);
+            draw_undeformed(area, a, b)?;
+        }
+    }
     // Far links first, so that near ones are drawn over them.
     let depth = |l: &Link| drawing.projected[l.a].2 + drawing.projected[l.b].2;
     let mut order: Vec<usize> = (0..s.links.len()).collect();
@@ -309,7 +358,7 @@ fn draw_oblique<DB: DrawingBackend>(
             .collect();
         area.draw(&PathElement::new(outline, OUTLINE.stroke_width(1)))?;
     }
-    for node in (0..s.n_nodes()).filter(|&n| s.clamped[n]) {
+    for node in supports(s) {
         let (x, y) = drawing.pixel(drawing.projected[node]);
         let (x, y) = (x.round() as i32, y.round() as i32);
         area.draw(&Rectangle::new(
@@ -353,9 +402,14 @@ fn draw_top<DB: DrawingBackend>(
     eq: &Equilibrium,
     scale: &TensionScale,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let general = s.layout.is_none();
     let mut chart = ChartBuilder::on(area)
         .caption(
-            "top view (links drawn shrunk toward their module's centre)",
+            if general {
+                "top view (undeformed structure in light grey, under the deformed one)"
+            } else {
+                "top view (links drawn shrunk toward their module's centre)"
+            },
             ("sans-serif", TEXT_SIZE),
         )
         .margin(MARGIN)
@@ -373,17 +427,28 @@ fn draw_top<DB: DrawingBackend>(
         .axis_desc_style(("sans-serif", 14))
         .draw()?;
     let plot = chart.plotting_area();
+    let to_pixel = |p: (f64, f64)| {
+        let (px, py) = plot.map_coordinate(&p);
+        let (ox, oy) = plot.get_base_pixel();
+        ((px - ox) as f64, (py - oy) as f64)
+    };
+    // A general structure's undeformed members, first: under the deformed ones.
+    if general {
+        let plan = |n: usize| (s.nodes[n][0], s.nodes[n][1]);
+        for link in &s.links {
+            draw_undeformed(
+                &plot.strip_coord_spec(),
+                to_pixel(plan(link.a)),
+                to_pixel(plan(link.b)),
+            )?;
+        }
+    }
     // Bars first: in the top view the cables lie over them.
     let mut order: Vec<usize> = (0..s.links.len()).collect();
     order.sort_by_key(|&i| s.links[i].kind.is_cable());
     for i in order {
         let link = &s.links[i];
         let [a, b] = top_ends(s, deformed, link);
-        let to_pixel = |p: (f64, f64)| {
-            let (px, py) = plot.map_coordinate(&p);
-            let (ox, oy) = plot.get_base_pixel();
-            ((px - ox) as f64, (py - oy) as f64)
-        };
         draw_link(
             &plot.strip_coord_spec(),
             to_pixel(a),
@@ -392,8 +457,7 @@ fn draw_top<DB: DrawingBackend>(
         )?;
     }
     chart.draw_series(
-        (0..s.n_nodes())
-            .filter(|&n| s.clamped[n])
+        supports(s)
             .map(|n| (deformed[n][0], deformed[n][1]))
             .map(|p| EmptyElement::at(p) + Rectangle::new([(-2, -2), (2, 2)], BLACK.filled())),
     )?;
@@ -404,9 +468,10 @@ fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     scale: &TensionScale,
     eq: &Equilibrium,
+    general: bool,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let slack = eq.slack_count();
-    let entries = [
+    let mut entries = vec![
         LegendEntry {
             label: "bar".into(),
             colour: BAR,
@@ -426,9 +491,23 @@ fn draw_panel<DB: DrawingBackend>(
             marker: None,
         },
     ];
-    let mut y = 30 + draw_line_legend(area, 30, "links", &entries)?;
+    if general {
+        entries.push(LegendEntry {
+            label: "undeformed".into(),
+            colour: UNDEFORMED,
+            dashed: false,
+            marker: None,
+        });
+    }
+    let title = if general { "members" } else { "links" };
+    let mut y = 30 + draw_line_legend(area, 30, title, &entries)?;
     let note = ("sans-serif", 13).into_font().color(&BLACK);
-    area.draw_text("■ clamped node", &note, (8, y))?;
+    let marker = if general {
+        "■ support (held node)"
+    } else {
+        "■ clamped node"
+    };
+    area.draw_text(marker, &note, (8, y))?;
     y += 18;
     if scale.lo < 0.0 {
         area.draw_text("blue: compressed cable", &note, (8, y))?;

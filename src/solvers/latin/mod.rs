@@ -755,6 +755,7 @@ impl Solver for Latin<'_> {
             equilibrium_residual: Some(state.residual),
             setups: state.updates,
             slack_cables: state.slack_cables,
+            at_roundoff: stop == Some(Status::Converged) && !criterion,
             stop,
         }
     }

@@ -510,6 +510,7 @@ impl Solver for LargeNewton<'_> {
                 .iter()
                 .filter(|&&x| x)
                 .count(),
+            at_roundoff: false,
             stop: state.stop,
         }
     }

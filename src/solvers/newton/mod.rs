@@ -451,6 +451,7 @@ impl Solver for Newton<'_> {
                 .iter()
                 .filter(|&&x| x)
                 .count(),
+            at_roundoff: false,
             stop,
         }
     }
