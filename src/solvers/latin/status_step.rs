@@ -93,10 +93,13 @@ impl Latin<'_> {
             step.iter_mut().for_each(|x| *x = -*x);
             no_equilibrium_along(self.structure, &step, &state.load)
         });
-        // The full step when it lowered r(U): near the answer the energy along it is flat to
-        // round-off and its minimiser is noise (seen: θ ≈ 0.3–0.7 at r(U) ≈ 1e-8 blending
-        // the inner run's work away).
-        let theta = if state.residual < start.residual {
+        // Near the answer (r(U) within 100 times its tolerance) the full step when it lowered
+        // r(U): there the energy along it is flat to round-off and its minimiser is noise
+        // (seen: θ ≈ 0.3–0.7 at r(U) ≈ 1e-8 blending the inner run's work away). Farther, the
+        // line search (taking the full step whenever r(U) fell cost 13 more iterations on
+        // 1024 substructures).
+        let near = state.residual <= 100.0 * self.settings.residual_tolerance();
+        let theta = if near && state.residual < start.residual {
             1.0
         } else {
             self.line_search(&start.displacements, &end, &state.load)
