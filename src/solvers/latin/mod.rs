@@ -307,18 +307,8 @@ impl<'s> Latin<'s> {
     /// row. `true` when rebuilt.
     fn follow_status(&mut self, state: &mut LatinState) -> bool {
         let links = &self.structure.links;
-        let mut trial = vec![0.0; links.len()];
-        for (sub, st) in self.substructures.iter().zip(&state.subs) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                trial[i] = law::trial_tension(&links[i], st.e[j]);
-            }
-        }
-        let (sum2, cables) = links
-            .iter()
-            .zip(&trial)
-            .filter(|(l, _)| l.unilateral)
-            .fold((0.0, 0usize), |(s, n), (_, t)| (s + t * t, n + 1));
-        let band = STATUS_BAND * (sum2 / cables.max(1) as f64).sqrt();
+        let (trial, rms) = self.trial_tensions(&state.subs);
+        let band = STATUS_BAND * rms;
         let mut slack = self.search_slack.clone();
         for (i, (l, &tau)) in links.iter().zip(&trial).enumerate() {
             let was_slack = self.search_slack[i];
@@ -351,6 +341,24 @@ impl<'s> Latin<'s> {
             }
         }
         rebuilt
+    }
+
+    /// Every link's trial tension `t0 + k e` from the linear stage's e, and the RMS of the
+    /// cables' (the scale of the status bands).
+    fn trial_tensions(&self, subs: &[SubState]) -> (Vec<f64>, f64) {
+        let links = &self.structure.links;
+        let mut trial = vec![0.0; links.len()];
+        for (sub, st) in self.substructures.iter().zip(subs) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                trial[i] = law::trial_tension(&links[i], st.e[j]);
+            }
+        }
+        let (sum2, cables) = links
+            .iter()
+            .zip(&trial)
+            .filter(|(l, _)| l.unilateral)
+            .fold((0.0, 0usize), |(s, n), (_, t)| (s + t * t, n + 1));
+        (trial, (sum2 / cables.max(1) as f64).sqrt())
     }
 
     /// New operators with ε·l on the cables of `slack`: the substructures where l changed,

@@ -114,19 +114,9 @@ impl Latin<'_> {
         // |τ| is within a band far below what r(U) is stopped on (a cable at zero tension in
         // the answer would otherwise be free to flip at every step).
         let links = &self.structure.links;
-        let mut trial = vec![0.0; links.len()];
-        for (sub, st) in self.substructures.iter().zip(&state.subs) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                trial[i] = law::trial_tension(&links[i], st.e[j]);
-            }
-        }
-        let (sum2, cables) = links
-            .iter()
-            .zip(&trial)
-            .filter(|(l, _)| l.unilateral)
-            .fold((0.0, 0usize), |(s, n), (_, t)| (s + t * t, n + 1));
-        let band =
-            STATUS_BAND * self.settings.residual_tolerance() * (sum2 / cables.max(1) as f64).sqrt();
+        let (trial, rms) = self.trial_tensions(&state.subs);
+        let band = STATUS_BAND * self.settings.residual_tolerance() * rms;
+        let cables = links.iter().filter(|l| l.unilateral).count();
         let slack: Vec<bool> = links
             .iter()
             .zip(&trial)
