@@ -66,8 +66,9 @@ fn a_fresh_run_agrees_with_the_stored_one() {
     let (code, text) = compare(&out.0, &golden, &[]);
     assert_eq!(code, Some(0), "{text}");
     assert!(text.contains("the runs agree"), "{text}");
-    // Summary, 8 tensions, 8 displacements, 4 LATIN and 2 pcg-lcp histories.
-    assert!(text.contains("in 23 files"), "{text}");
+    // Summary, 8 tensions, 8 displacements, 8 forces, 8 reactions, 4 LATIN and 2 pcg-lcp
+    // histories.
+    assert!(text.contains("in 39 files"), "{text}");
 }
 
 #[test]
