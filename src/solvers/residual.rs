@@ -90,24 +90,34 @@ pub fn displacement_residual(s: &Structure, u: &[f64], load: &[f64]) -> f64 {
             let current = law::CurrentGeometry::of(s, u);
             current_unbalances(s, &current, load, &mut r).1.relative
         }
-        _ => {
-            let tensions: Vec<f64> = law::trial_tensions(s, u)
-                .iter()
-                .zip(&s.links)
-                .map(|(&t, l)| law::tension(l, t))
-                .collect();
-            let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
-            unbalances_on(
-                s,
-                &s.link_dofs,
-                &tensions,
-                geometric_force.as_deref(),
-                load,
-                &mut r,
-            )
-            .relative
-        }
+        _ => small_unbalances(s, u, load, &mut r).2.relative,
     }
+}
+
+/// `r ← Bᵀτ(U) (+ K_G U) − F` under the exact law on the initial geometry, with the trial
+/// tensions `t0 + k B U`, the tensions and the sizes of r.
+fn small_unbalances(
+    s: &Structure,
+    u: &[f64],
+    load: &[f64],
+    r: &mut [f64],
+) -> (Vec<f64>, Vec<f64>, Unbalances) {
+    let trial = law::trial_tensions(s, u);
+    let tensions: Vec<f64> = trial
+        .iter()
+        .zip(&s.links)
+        .map(|(&t, l)| law::tension(l, t))
+        .collect();
+    let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
+    let sizes = unbalances_on(
+        s,
+        &s.link_dofs,
+        &tensions,
+        geometric_force.as_deref(),
+        load,
+        r,
+    );
+    (trial, tensions, sizes)
 }
 
 /// `(r(U), r_frozen(U))`: r(U), and the residual under the law linearised at a slack status
@@ -121,22 +131,8 @@ pub fn exact_and_frozen_residuals(
     load: &[f64],
     slack: &[bool],
 ) -> (f64, f64) {
-    let trial = law::trial_tensions(s, u);
-    let tensions: Vec<f64> = trial
-        .iter()
-        .zip(&s.links)
-        .map(|(&t, l)| law::tension(l, t))
-        .collect();
-    let geometric_force = s.geometric.as_ref().map(|g| g.product(u));
     let mut r = vec![0.0; s.n_free];
-    let exact = unbalances_on(
-        s,
-        &s.link_dofs,
-        &tensions,
-        geometric_force.as_deref(),
-        load,
-        &mut r,
-    );
+    let (trial, tensions, exact) = small_unbalances(s, u, load, &mut r);
     for (i, row) in s.link_dofs.iter().enumerate() {
         let frozen = if slack[i] { 0.0 } else { trial[i] };
         let change = frozen - tensions[i];

@@ -2,8 +2,9 @@
 //! during an inner LATIN run on the law linearised at it; once the residual under that law is
 //! below ρ times the exact r(U) at the step's start (a Newton forcing term), a line search on
 //! the exact energy between the step's start and end blends the two states, the status of the
-//! blend (`t0 + k e > 0`) is taken, and the operators are rebuilt only if it changed. A
-//! semismooth Newton method whose linear solves are inexact LATIN runs.
+//! blend (`t0 + k e > 0`) is taken by the law, and the operators are rebuilt only when enough
+//! cables' search directions disagree with it. A semismooth Newton method whose linear solves
+//! are inexact LATIN runs.
 
 use super::{Latin, LatinState, SubState};
 use crate::linalg::dot;
@@ -84,14 +85,14 @@ impl Latin<'_> {
         // the load or by the prestress the slack cables released: the step or its opposite
         // is then a no-equilibrium certificate of the exact problem (docs/method.md §8; any
         // direction that passes the test proves the energy unbounded below, however found).
-        let mut step: Vec<f64> = end
+        let step: Vec<f64> = end
             .iter()
             .zip(&start.displacements)
             .map(|(b, a)| b - a)
             .collect();
         state.runaway = no_equilibrium_along(self.structure, &step, &state.load).or_else(|| {
-            step.iter_mut().for_each(|x| *x = -*x);
-            no_equilibrium_along(self.structure, &step, &state.load)
+            let opposite: Vec<f64> = step.iter().map(|x| -x).collect();
+            no_equilibrium_along(self.structure, &opposite, &state.load)
         });
         // Near the answer (r(U) within 100 times its tolerance) the full step when it lowered
         // r(U): there the energy along it is flat to round-off and its minimiser is noise
@@ -102,7 +103,7 @@ impl Latin<'_> {
         let theta = if near && state.residual < start.residual {
             1.0
         } else {
-            self.line_search(&start.displacements, &end, &state.load)
+            self.line_search(&start.displacements, &step, &state.load)
         };
         if theta < 1.0 {
             for (st, st0) in state.subs.iter_mut().zip(&start.subs) {
@@ -142,23 +143,22 @@ impl Latin<'_> {
         }
     }
 
-    /// θ ∈ (0, 1]: the minimiser of the exact energy `Π(U0 + θ (U1 − U0))` (docs/method.md §3,
+    /// θ ∈ (0, 1]: the minimiser of the exact energy `Π(U0 + θ ΔU)` (docs/method.md §3,
     /// newton's exact line search), 1 when it lies beyond or the step is not a descent (a
     /// step along which the energy is unbounded below has been caught as no equilibrium).
-    fn line_search(&self, u0: &[f64], u1: &[f64], load: &[f64]) -> f64 {
+    fn line_search(&self, u0: &[f64], step: &[f64], load: &[f64]) -> f64 {
         let s = self.structure;
-        let step: Vec<f64> = u1.iter().zip(u0).map(|(b, a)| b - a).collect();
         let trial = law::trial_tensions(s, u0);
-        let step_elongation: Vec<f64> = s.link_dofs.iter().map(|r| r.elongation(&step)).collect();
+        let step_elongation: Vec<f64> = s.link_dofs.iter().map(|r| r.elongation(step)).collect();
         // (ΔUᵀ K_G U0, ΔUᵀ K_G ΔU) with the prestress's geometric stiffness.
         let geometric = s.geometric.as_ref().map_or((0.0, 0.0), |g| {
-            (dot(&step, &g.product(u0)), g.quadratic(&step))
+            (dot(step, &g.product(u0)), g.quadratic(step))
         });
         exact_line_search(
             &s.links,
             &trial,
             &step_elongation,
-            dot(load, &step),
+            dot(load, step),
             geometric,
         )
         .map_or(1.0, |theta| theta.min(1.0))
