@@ -926,17 +926,18 @@ fn rows_len_minus_one(history: &str) -> usize {
 fn paper_plain_case_reproduces_the_papers_rates() {
     let out = temp_path("paper-plain");
     let case = common::manifest_path("cases/paper-plain.toml");
-    let run = Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(["run", case.to_str().unwrap(), "--quiet", "--out"])
-        .arg(&out)
-        .args(["--set", "load.alpha=[1.0]", "--set", "output.plots=false"])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = common::tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "load.alpha=[1.0]",
+        "--set",
+        "output.plots=false",
+    ]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
     let history = std::fs::read_to_string(out.join("history/micro-macro_alpha1.csv")).unwrap();
     let _ = std::fs::remove_dir_all(&out);
     let mut lines = history.lines();

@@ -446,17 +446,16 @@ fn bad_figure_keys_are_rejected_by_name() {
 fn figure_8_of_a_general_structure_says_supports_and_draws_the_undeformed_structure_under() {
     let out = temp_path("deformed-general");
     let case = common::manifest_path("cases/simplex.toml");
-    let run = std::process::Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(["run", case.to_str().unwrap(), "--quiet", "--out"])
-        .arg(&out)
-        .args(["--set", "output.plots=true"])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = common::tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "output.plots=true",
+    ]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
     let svg = read_svg(&out.join("plots/deformed_alpha1.svg"));
     let members = tensolve::case::load(&case).unwrap().structure().links.len();
     let _ = std::fs::remove_dir_all(&out);
