@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{stderr, tensolve, Temp};
+use common::{code, stderr, tensolve, Temp};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -21,10 +21,6 @@ fn small_case(methods: &str, alphas: &str, extra: &str) -> String {
 /// `tensolve run CASE --out DIR --quiet`.
 fn run(case: &Temp, dir: &Path) -> Output {
     tensolve(&["run", case.arg(), "--out", dir.to_str().unwrap(), "--quiet"])
-}
-
-fn code(o: &Output) -> i32 {
-    o.status.code().unwrap_or(-1)
 }
 
 /// Every file under `dir`, relative, hidden bookkeeping (`.tensolve*`) left out.

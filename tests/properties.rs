@@ -14,17 +14,8 @@ use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, SetupError, Silent, TautStiffness};
 use tensolve::structure::Structure;
 
-/// `cases` cases from a fixed seed, so that CI runs the same cases every time; set
-/// `PROPTEST_RNG_SEED` to explore others.
 fn config(cases: u32) -> ProptestConfig {
-    let mut config = ProptestConfig {
-        cases,
-        ..ProptestConfig::default()
-    };
-    if std::env::var_os("PROPTEST_RNG_SEED").is_none() {
-        config.rng_seed = proptest::test_runner::RngSeed::Fixed(20_261_121);
-    }
-    config
+    common::fixed_seed_config(cases, 20_261_121)
 }
 
 const CLAMPS: [&str; 5] = [

@@ -106,6 +106,24 @@ pub fn tensolve(args: &[&str]) -> Output {
         .expect("run tensolve")
 }
 
+/// A process's exit code (-1 when a signal ended it).
+pub fn code(o: &Output) -> i32 {
+    o.status.code().unwrap_or(-1)
+}
+
+/// `cases` proptest cases from the fixed `seed`, so that CI runs the same cases every time;
+/// set `PROPTEST_RNG_SEED` to explore others.
+pub fn fixed_seed_config(cases: u32, seed: u64) -> proptest::test_runner::Config {
+    let mut config = proptest::test_runner::Config {
+        cases,
+        ..Default::default()
+    };
+    if std::env::var_os("PROPTEST_RNG_SEED").is_none() {
+        config.rng_seed = proptest::test_runner::RngSeed::Fixed(seed);
+    }
+    config
+}
+
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
