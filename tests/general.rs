@@ -584,18 +584,13 @@ fn latin_solvers_agree_with_newton_on_partial_supports_and_a_settlement() {
         };
         let mut latin = Latin::new(&s, settings).unwrap();
         if subdomains != [1, 1] {
-            // The partition does cut through the partly held edge: some interface has a node
-            // held in z, with only its x and y rows.
-            let partly_held = latin
-                .interfaces
-                .iter()
-                .flat_map(|i| &i.free)
-                .filter(|f| **f == [true, true, false])
-                .count();
+            // The partition does cut through the partly held edge (held in z only): some
+            // interface has a node with only its x and y rows.
+            let partly_held = latin.partly_held_interface_nodes();
             assert!(partly_held >= 1, "LATIN {subdomains:?}");
             println!(
                 "LATIN {subdomains:?}: {partly_held} partly held interface node(s), kernel columns {:?}",
-                latin.substructures.iter().map(|e| e.kernel.ncols()).collect::<Vec<_>>()
+                latin.kernel_columns()
             );
         }
         let sol = latin.solve(&f, None, &mut Silent);

@@ -42,7 +42,8 @@ fn orthonormal_columns_kept(fields: &[Vec<f64>], rows: usize) -> (DMatrix<f64>, 
 }
 
 /// The macro basis (3·nodes rows, node-major, x y z) of an interface through `positions`.
-pub fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64> {
+#[cfg(test)]
+pub(crate) fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64> {
     labelled_macro_basis(positions, &vec![[true; 3]; positions.len()], weak).0
 }
 

@@ -29,21 +29,24 @@ mod linear_stage;
 mod local_stage;
 mod macro_basis;
 mod macro_problem;
-pub mod partition;
+pub(crate) mod partition;
 mod settings;
 mod state;
 mod status_step;
 mod substructure;
+#[cfg(test)]
+mod tests;
 
-pub use interfaces::Interface;
-pub use local_stage::link_local_stage;
-pub use macro_basis::macro_basis;
-pub use partition::Partition;
+pub(crate) use interfaces::Interface;
+#[cfg(test)]
+use macro_basis::macro_basis;
+pub(crate) use partition::Partition;
 pub use settings::{
     LatinSettings, SearchDirection, SearchPolicy, StopOn, WeakInterfaces, PAPER_DM,
 };
-pub use state::{LatinState, SideState, SubState};
-pub use substructure::Substructure;
+pub use state::LatinState;
+pub(crate) use state::{SideState, SubState};
+pub(crate) use substructure::Substructure;
 
 use super::{displacement_residual, Equilibrium, Measure, Progress, SetupError, Solver, Status};
 use crate::structure::law;
@@ -121,9 +124,9 @@ pub struct Latin<'s> {
     /// The cables whose l is ε·l: the slack set of ŝ when the operators were last built.
     search_slack: Vec<bool>,
     /// The interfaces that carry constraints.
-    pub interfaces: Vec<Interface>,
+    pub(crate) interfaces: Vec<Interface>,
     /// The substructures, row by row of the partition.
-    pub substructures: Vec<Substructure>,
+    pub(crate) substructures: Vec<Substructure>,
     macro_problem: MacroProblem,
     /// Per interface: its index in the `sides` of its first and of its second substructure.
     side_slots: Vec<[usize; 2]>,
@@ -460,6 +463,25 @@ impl<'s> Latin<'s> {
                 flexibility: sub.flexibility.clone(),
             })
             .collect()
+    }
+
+    /// The number of kernel columns (rigid and zero-energy modes of K*_E) of every
+    /// substructure, row by row of the partition.
+    pub fn kernel_columns(&self) -> Vec<usize> {
+        self.substructures
+            .iter()
+            .map(|e| e.kernel.ncols())
+            .collect()
+    }
+
+    /// Interface nodes with some components held and others free (they keep only their free
+    /// components' rows of continuity).
+    pub fn partly_held_interface_nodes(&self) -> usize {
+        self.interfaces
+            .iter()
+            .flat_map(|i| &i.free)
+            .filter(|f| f.iter().any(|&x| x) && !f.iter().all(|&x| x))
+            .count()
     }
 
     /// The settings it was set up with.

@@ -42,8 +42,6 @@ impl InterfaceTopology {
 /// An `sx × sy` partition of the grid's modules into substructures, with their interfaces.
 #[derive(Debug, Clone)]
 pub struct Partition {
-    /// `[sx, sy]`: substructures along x and along y.
-    pub shape: [usize; 2],
     /// Per substructure, row by row (index `iy · sx + ix`): its links and nodes.
     pub substructures: Vec<SubstructureTopology>,
     /// One per pair of substructures sharing non-clamped nodes, by increasing pair `(E, E')`.
@@ -165,7 +163,6 @@ impl Partition {
             })
             .collect();
         Partition {
-            shape,
             substructures,
             interfaces,
             dropped_interfaces,
