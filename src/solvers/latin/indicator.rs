@@ -10,6 +10,11 @@ use rayon::prelude::*;
 /// paper's case is 1e-4 of it at η = 1e-4).
 const ROUNDOFF: f64 = 1e-12;
 
+/// Under a load, Δη below this fraction of the prestress scale is a stall: the stages'
+/// round-off on prestress-sized terms is ≈ 1e-16 of it, so a tiny load (α = 1e-9 on the paper
+/// grid) still iterates to its tolerance above it.
+const LOADED_ROUNDOFF: f64 = 1e-15;
+
 impl Latin<'_> {
     /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (docs/method.md §4 "Indicator", §5.3). The distance is
     /// measured along the search direction that does not relate them: E⁺ (`t − t̂ = −l(e − ê)`)
@@ -71,7 +76,12 @@ impl Latin<'_> {
         state.eta = if size > 0.0 { distance / size } else { 0.0 };
         // η is scale-free: when s and ŝ are both round-off (no load: the exact answer is
         // zero), it is a ratio of noise. Δη at round-off against the prestress is convergence.
-        state.at_roundoff = distance <= ROUNDOFF * self.prestress_scale;
+        let floor = if state.unloaded {
+            ROUNDOFF
+        } else {
+            LOADED_ROUNDOFF
+        };
+        state.at_roundoff = distance <= floor * self.prestress_scale;
         // r(U) of the linear stage's U under the exact law (docs/method.md §6).
         let u = self.displacements(&state.subs);
         if self.newton_steps() {

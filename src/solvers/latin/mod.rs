@@ -7,7 +7,8 @@
 //! by exact macro continuity; [`linear_stage`]). Iteration 0 is the linear stage from ŝ = 0;
 //! iteration k ≥ 1 is a local stage on s_{k−1} followed by a linear stage. After each linear
 //! stage it measures the indicator η between s and the ŝ that fed it ([`indicator`]), and
-//! stops when η ≤ `tolerance` (or when Δη is at round-off against the prestress).
+//! stops when η ≤ `tolerance` (or, with no load, when Δη is at round-off against the prestress;
+//! under a load that is a stall).
 //!
 //! | file | what |
 //! |---|---|
@@ -721,6 +722,8 @@ impl Solver for Latin<'_> {
             updates: 0,
             relax: false,
             at_roundoff: false,
+            unloaded: load.iter().all(|&f| f == 0.0)
+                && self.structure.prescribed.iter().all(|&d| d == 0.0),
             frozen_residual: f64::INFINITY,
             law_slack: vec![false; self.structure.links.len()],
             runaway: None,
@@ -774,8 +777,11 @@ impl Solver for Latin<'_> {
         };
         let stop = if !(state.eta.is_finite() && state.residual.is_finite()) {
             Some(Status::Stalled)
-        } else if criterion || state.at_roundoff {
+        } else if criterion || (state.at_roundoff && state.unloaded) {
             Some(Status::Converged)
+        } else if state.at_roundoff {
+            // Under a load, Δη at round-off with the criterion unmet: nothing left to gain.
+            Some(Status::Stalled)
         } else {
             None
         };

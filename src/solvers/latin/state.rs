@@ -107,6 +107,9 @@ pub struct LatinState {
 
     /// Δη is at round-off level against the prestress: nothing is left to iterate on.
     pub at_roundoff: bool,
+    /// No force and no settlement: the exact answer is U = 0 (η is then a ratio of round-off,
+    /// and Δη at round-off is convergence; under a load it is a stall).
+    pub(super) unloaded: bool,
     /// The load on the free dofs, N.
     pub(super) load: Vec<f64>,
 }
