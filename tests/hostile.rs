@@ -885,3 +885,21 @@ fn r3_the_round_off_stop_is_convergence_only_without_load() {
         }
     }
 }
+
+#[test]
+fn r7_minus_zero_is_the_load_factor_zero() {
+    // Review turn 4, R7: `alpha = [-0.0, 0.0]` gave two rows and the files `newton_alpha-0.csv`
+    // and `newton_alpha0.csv`; −0 is 0, named twice.
+    let case = Temp::file("r7", &small_case("[\"newton\"]", "[-0.0, 0.0]", ""));
+    let out = tensolve(&["check", case.arg()]);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(stderr(&out).contains("distinct"), "{}", stderr(&out));
+    let case = Temp::file("r7-alone", &small_case("[\"newton\"]", "[-0.0, 1.0]", ""));
+    let dir = Temp::dir("r7-out");
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let names = files(&dir.0);
+    assert!(names.contains("tensions/newton_alpha0.csv"), "{names:?}");
+    assert!(!names.iter().any(|n| n.contains("alpha-0")), "{names:?}");
+    assert_eq!(column(&summary(&dir.0)[0], "alpha"), "0");
+}

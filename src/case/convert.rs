@@ -772,6 +772,8 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
     for &a in &alphas {
         bounded(KEY, a, ALPHA_MAX, "every load factor")?;
     }
+    // −0 is the load factor 0 (one label, one file name: `alpha0`).
+    let alphas: Vec<f64> = alphas.into_iter().map(|a| a + 0.0).collect();
     // Two load factors with one label would write to the same files and repeat a row.
     let mut labels = std::collections::HashMap::new();
     for (i, &a) in alphas.iter().enumerate() {
