@@ -385,7 +385,9 @@ fn format_row(r: &SummaryRow) -> String {
         r.equilibrium_residual,
         1e3 * r.solve_seconds
     );
-    if !r.status.no_answer() && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT
+    if !r.status.no_answer()
+        && !r.updates_geometry
+        && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT
     {
         line.push_str(&format!(
             "\n  warning: {} at alpha = {}: a member's ends moved apart by {:.0} % of its length \

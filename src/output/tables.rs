@@ -55,6 +55,8 @@ pub struct SummaryRow {
     pub slack_by_kind: [usize; results::SLACK_KINDS.len()],
     /// The largest relative displacement of a member's ends over its length.
     pub max_member_rotation: f64,
+    /// The model updates the geometry (`large`): the small-perturbation check does not apply.
+    pub updates_geometry: bool,
     /// The smallest eigenvalue of the tangent stiffness at the answer, N/m, when computed
     /// (models with geometric stiffness, or `output.stability`).
     pub min_tangent_eigenvalue: Option<f64>,
@@ -101,6 +103,7 @@ impl SummaryRow {
             search_updates: solution.info.setups,
             slack_by_kind: results::slack_by_kind(s, eq),
             max_member_rotation: results::max_member_rotation(s, eq),
+            updates_geometry: s.model == crate::structure::GeometricModel::Large,
             geometric_term,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
@@ -113,9 +116,12 @@ impl SummaryRow {
     /// Whether the small-perturbation model holds for this answer: no member's ends moved
     /// apart by more than [`results::SMALL_DISPLACEMENT_LIMIT`] of its length, and the geometric
     /// term the model leaves out changes the answer by at most
-    /// [`results::GEOMETRIC_TERM_LIMIT`] ([`SummaryRow::needs_large`]).
-    pub fn small_displacement_ok(&self) -> bool {
-        self.max_member_rotation <= results::SMALL_DISPLACEMENT_LIMIT && !self.needs_large()
+    /// [`results::GEOMETRIC_TERM_LIMIT`] ([`SummaryRow::needs_large`]). `None` for the `large`
+    /// model, which updates the geometry.
+    pub fn small_displacement_ok(&self) -> Option<bool> {
+        (!self.updates_geometry).then(|| {
+            self.max_member_rotation <= results::SMALL_DISPLACEMENT_LIMIT && !self.needs_large()
+        })
     }
 
     /// Whether the geometric term the model leaves out is above
@@ -184,7 +190,11 @@ pub fn summary_line(r: &SummaryRow) -> String {
         diagonal,
         cable,
         answer(format!("{:e}", r.max_member_rotation)),
-        answer(r.small_displacement_ok().to_string()),
+        answer(
+            r.small_displacement_ok()
+                .map(|ok| ok.to_string())
+                .unwrap_or_default()
+        ),
         r.setup_seconds,
         r.solve_seconds,
         r.status.code(),
