@@ -903,3 +903,30 @@ fn r7_minus_zero_is_the_load_factor_zero() {
     assert!(!names.iter().any(|n| n.contains("alpha-0")), "{names:?}");
     assert_eq!(column(&summary(&dir.0)[0], "alpha"), "0");
 }
+
+#[test]
+fn r6_tables_are_read_bounded() {
+    // Review turn 4, R6: `nodes = "/dev/zero"` was read to the end of memory (2.1 GB before
+    // "cannot read case file `/dev/zero`: out of memory"); tables are now read bounded, like
+    // the case file, and the message names the table.
+    let members = common::manifest_path("cases/simplex/members.csv");
+    let case = Temp::file(
+        "r6",
+        &format!(
+            "[structure]\nnodes = \"/dev/zero\"\nmembers = \"{}\"\n[load]\nalpha = [1.0]\n",
+            members.display()
+        ),
+    );
+    let out = under_address_limit(
+        1_500_000,
+        &["check", case.arg()],
+        &[],
+        Duration::from_secs(60),
+    );
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("cannot read nodes table `/dev/zero`: it is larger than 256 MiB"),
+        "{}",
+        stderr(&out)
+    );
+}

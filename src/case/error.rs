@@ -7,8 +7,10 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum CaseError {
     /// The file cannot be read.
-    #[error("cannot read case file `{path}`: {reason}")]
+    #[error("cannot read {what} `{path}`: {reason}")]
     Io {
+        /// What the file is: `case file`, `nodes table`, `members table`.
+        what: &'static str,
         /// The path as given.
         path: String,
         /// The operating system's reason.

@@ -48,25 +48,42 @@ pub fn load_with(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
 /// list of 100,000 load factors, far below what parsing could exhaust memory with.
 pub const CASE_MAX_BYTES: u64 = 4 << 20;
 
+/// The largest node or member table read: 256 MiB is about four million members, beyond
+/// what a structure given as a table is (grids are generated, not read).
+pub const TABLE_MAX_BYTES: u64 = 256 << 20;
+
 /// The text of the case file at `path`, refused beyond [`CASE_MAX_BYTES`] (a device such as
 /// `/dev/zero` is never read to its end).
 fn read_bounded(path: &Path) -> Result<String, CaseError> {
+    read_text(
+        path,
+        "case file",
+        CASE_MAX_BYTES,
+        "a case file is a few lines of TOML (give long α lists as a range { from, to, steps })",
+    )
+}
+
+/// The text of the file `what` at `path`, refused beyond `limit` bytes (`why` says what such a
+/// file holds) or when it is not UTF-8.
+pub(crate) fn read_text(
+    path: &Path,
+    what: &'static str,
+    limit: u64,
+    why: &str,
+) -> Result<String, CaseError> {
     use std::io::Read;
     let io = |reason: String| CaseError::Io {
+        what,
         path: path.display().to_string(),
         reason,
     };
     let file = std::fs::File::open(path).map_err(|e| io(e.to_string()))?;
     let mut bytes = Vec::new();
-    file.take(CASE_MAX_BYTES + 1)
+    file.take(limit + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| io(e.to_string()))?;
-    if bytes.len() as u64 > CASE_MAX_BYTES {
-        return Err(io(format!(
-            "it is larger than {} MiB; a case file is a few lines of TOML (give long α lists \
-             as a range {{ from, to, steps }})",
-            CASE_MAX_BYTES >> 20
-        )));
+    if bytes.len() as u64 > limit {
+        return Err(io(format!("it is larger than {} MiB; {why}", limit >> 20)));
     }
     String::from_utf8(bytes).map_err(|e| {
         io(format!(

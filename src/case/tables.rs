@@ -291,17 +291,19 @@ pub fn load_geometry(
     members: &Path,
     unilateral: bool,
 ) -> Result<Geometry, CaseError> {
-    let read = |path: &Path| {
-        std::fs::read_to_string(path).map_err(|e| CaseError::Io {
-            path: path.display().to_string(),
-            reason: e.to_string(),
-        })
+    let read = |path: &Path, what: &'static str| {
+        super::read_text(
+            path,
+            what,
+            super::TABLE_MAX_BYTES,
+            "a table holds one line per node or member (about four million members at most)",
+        )
     };
     read_geometry(
         &nodes.display().to_string(),
-        &read(nodes)?,
+        &read(nodes, "nodes table")?,
         &members.display().to_string(),
-        &read(members)?,
+        &read(members, "members table")?,
         unilateral,
     )
 }
