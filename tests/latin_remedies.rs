@@ -10,19 +10,9 @@ mod common;
 use common::{load, paper_structure, solve_both};
 use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy, StopOn};
 use tensolve::solvers::{
-    displacement_residual, AnySolver, IterationRecord, Observer, Reference, Solution,
+    displacement_residual, AnySolver, IterationRecord, Recorder, Reference, Solution,
 };
 use tensolve::structure::Structure;
-
-/// Every record of a solve.
-#[derive(Default)]
-struct Records(Vec<IterationRecord>);
-
-impl Observer for Records {
-    fn iteration(&mut self, record: &IterationRecord) {
-        self.0.push(*record);
-    }
-}
 
 /// A LATIN solve of `s` at `alpha` against the newton solution `exact`, every iterate kept.
 fn latin_solve(
@@ -32,13 +22,13 @@ fn latin_solve(
     exact: &Solution,
 ) -> (Solution, Vec<IterationRecord>) {
     let reference = Reference::new(s, &exact.equilibrium.displacements);
-    let mut records = Records::default();
+    let mut records = Recorder::default();
     let solution = Latin::new(s, settings).expect("set-up").solve(
         &load(s, alpha),
         Some(&reference),
         &mut records,
     );
-    (solution, records.0)
+    (solution, records.records)
 }
 
 fn partition(subdomains: [usize; 2]) -> LatinSettings {

@@ -14,8 +14,8 @@ use crate::output::{
 use crate::results;
 use crate::solvers::Status;
 use crate::solvers::{
-    Equilibrium, IterationRecord, Measure, Method, Observer, Reference, SetupError, Silent,
-    Solution, Tee,
+    Equilibrium, IterationRecord, Measure, Method, Observer, Recorder, Reference, SetupError,
+    Silent, Solution, Tee,
 };
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
@@ -477,16 +477,6 @@ fn not_converged_message(row: &SummaryRow, solution: &Solution, verdict: &Verdic
     }
 }
 
-/// Keeps every iteration record of a solve.
-#[derive(Default)]
-struct Recorder(Vec<IterationRecord>);
-
-impl Observer for Recorder {
-    fn iteration(&mut self, record: &IterationRecord) {
-        self.0.push(*record);
-    }
-}
-
 /// `plots/error_modules.svg`: every LATIN solver of `methods` at the case's largest α, on the
 /// case's grid made of each module kind of `output.compare_modules` (the paper's Figure 12).
 fn write_module_comparison(
@@ -531,7 +521,7 @@ fn write_module_comparison(
                 History {
                     solver: set_up.method.name().to_string(),
                     alpha,
-                    records: recorder.0,
+                    records: recorder.records,
                 },
             ));
         }

@@ -21,7 +21,7 @@ pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use method::Method;
 pub use no_equilibrium::{no_equilibrium, no_equilibrium_along, NoEquilibrium};
-pub use observer::{IterationRecord, Observer, Silent, Tee};
+pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use residual::{
     current_unbalances, displacement_residual, exact_and_frozen_residuals, relative_unbalance,
     unbalances, unbalances_on, Unbalances,
