@@ -2,14 +2,11 @@
 //! (`member,a,b,kind,young,section,prestress[,density]`). Every row is checked and an error
 //! names the file, the line, the column, the value and the fix.
 
-use super::convert::number;
+use super::numbers::{number, PHYSICAL_MAX};
 use super::CaseError;
 use crate::structure::{length_and_direction, Geometry, LinkKind, Member};
 use std::collections::HashMap;
 use std::path::Path;
-
-/// Largest magnitude accepted for a coordinate or a member property (as for case numbers).
-const PHYSICAL_MAX: f64 = 1e15;
 
 /// One table being read: its file name for messages.
 struct Table<'a> {
