@@ -5,7 +5,7 @@ use crate::case::{Case, SolverChoice};
 use crate::solvers::latin::Latin;
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
-use crate::solvers::{AnySolver, Method, SetupError, TautStiffness};
+use crate::solvers::{AnySolver, Method, SetupError, Settings, TautStiffness};
 use crate::structure::{GeometricModel, Structure};
 use std::time::Instant;
 
@@ -60,23 +60,20 @@ pub fn set_up<'s>(
         });
     }
     let clock = Instant::now();
-    let (solver, shared): (Box<dyn AnySolver + 's>, f64) = match method {
-        Method::Newton if structure.model == GeometricModel::Large => (
-            Box::new(LargeNewton::new(structure, taut, choice.newton)),
+    let (solver, shared): (Box<dyn AnySolver + 's>, f64) = match choice.settings(method) {
+        Settings::Newton(settings) if structure.model == GeometricModel::Large => (
+            Box::new(LargeNewton::new(structure, taut, settings)),
             prepared.taut_seconds,
         ),
-        Method::Newton => (
-            Box::new(Newton::new(structure, taut, choice.newton)?),
+        Settings::Newton(settings) => (
+            Box::new(Newton::new(structure, taut, settings)?),
             prepared.taut_seconds,
         ),
-        Method::PcgLcp => (
-            Box::new(PcgLcp::new(structure, taut, choice.pcg_lcp)),
+        Settings::PcgLcp(settings) => (
+            Box::new(PcgLcp::new(structure, taut, settings)),
             prepared.taut_seconds,
         ),
-        Method::MonoLatin | Method::MicroMacro => {
-            let settings = choice
-                .latin_settings(method)
-                .expect("a LATIN method has LATIN settings");
+        Settings::MonoLatin(settings) | Settings::MicroMacro(settings) => {
             check_search_direction(structure, &settings.search)?;
             (Box::new(Latin::new(structure, settings)?), 0.0)
         }

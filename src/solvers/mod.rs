@@ -19,7 +19,7 @@ mod taut;
 
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
-pub use method::Method;
+pub use method::{Method, Settings};
 pub use no_equilibrium::{no_equilibrium, no_equilibrium_along, NoEquilibrium};
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use residual::{

@@ -143,15 +143,15 @@ pub enum RunEvent<'a> {
 }
 
 /// Passes every iterate of one solve to the run's events as [`RunEvent::Iteration`].
-struct IterationEvents<'e, 'k> {
+struct IterationEvents<'e> {
     events: &'e mut dyn FnMut(RunEvent<'_>),
-    key: SolveKey<'k>,
+    key: SolveKey,
 }
 
-impl Observer for IterationEvents<'_, '_> {
+impl Observer for IterationEvents<'_> {
     fn iteration(&mut self, record: &IterationRecord) {
         (self.events)(RunEvent::Iteration {
-            solver: self.key.solver,
+            solver: self.key.method.name(),
             alpha: self.key.alpha,
             measure: self.key.measure,
             record,
@@ -240,13 +240,13 @@ pub fn run(
             .map(|r| Reference::new(structure, &r.equilibrium.displacements));
         for (index, set_up) in solvers.iter_mut().enumerate() {
             let key = SolveKey {
-                solver: set_up.method.name(),
+                method: set_up.method,
                 alpha,
                 measure: set_up.solver.stopping_measure(),
             };
             sinks.start(&key)?;
             events(RunEvent::SolveStart {
-                solver: key.solver,
+                solver: key.method.name(),
                 alpha,
             });
             let solution = match (reference.shared_index(), &reference_solution) {
@@ -276,7 +276,7 @@ pub fn run(
             // 8. A non-finite answer (or a row it would give) is reported, never written.
             let row = results::is_finite(&solution).then(|| {
                 SummaryRow::new(
-                    key.solver,
+                    key.method.name(),
                     alpha,
                     &load,
                     structure,
@@ -290,7 +290,7 @@ pub fn run(
                 failures.push(format!(
                     "{} at alpha = {}: produced non-finite values after {} iterations; no row \
                      and no files written for it",
-                    key.solver,
+                    key.method.name(),
                     alpha_label(alpha),
                     solution.info.iterations,
                 ));
@@ -501,7 +501,7 @@ fn write_module_comparison(
         let mut solvers = Vec::new();
         for &method in methods {
             let set_up = set_up(method, &case.solver, &prepared)?;
-            if set_up.solver.stopping_measure() == Measure::Indicator {
+            if method.reports_error() {
                 solvers.push(set_up);
             }
         }
@@ -519,7 +519,7 @@ fn write_module_comparison(
             histories.push((
                 module.name(),
                 History {
-                    solver: set_up.method.name().to_string(),
+                    solver: set_up.method,
                     alpha,
                     records: recorder.records,
                 },
@@ -594,7 +594,7 @@ fn sinks<'s>(
         };
         sinks.add(
             true,
-            PlotsSink::new(root, dir, structure, first.method.name(), settings),
+            PlotsSink::new(root, dir, structure, first.method, settings),
         );
     }
     sinks.add(true, PublishSink::new(output));
@@ -619,9 +619,7 @@ impl<'s> ReferenceSource<'s> {
         solvers: &[SetUpSolver<'_>],
         prepared: &'s Prepared,
     ) -> Result<Self, SetupError> {
-        let reports_error = solvers
-            .iter()
-            .any(|s| s.solver.stopping_measure() == Measure::Indicator);
+        let reports_error = solvers.iter().any(|s| s.method.reports_error());
         let Some(method) = case.solver.reference.method().filter(|_| reports_error) else {
             return Ok(ReferenceSource::Unneeded);
         };

@@ -4,6 +4,7 @@
 use super::legend::{draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::marker::Marker;
 use super::palette::solver_colour;
+use crate::solvers::Method;
 use super::{alpha_text, log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
@@ -50,10 +51,11 @@ impl Series {
     /// One solver's curve in the solver's colour (the same in every figure), labelled with
     /// the solver's name, followed by ` (α = a)` when `alpha` is given (figures with several
     /// load factors).
-    pub fn of_solver(solver: &str, alpha: Option<f64>, points: Vec<(f64, f64)>) -> Series {
+    pub fn of_solver(solver: Method, alpha: Option<f64>, points: Vec<(f64, f64)>) -> Series {
+        let name = solver.name();
         let label = match alpha {
-            Some(alpha) => format!("{solver} (α = {})", alpha_text(alpha)),
-            None => solver.to_string(),
+            Some(alpha) => format!("{name} (α = {})", alpha_text(alpha)),
+            None => name.to_string(),
         };
         Series {
             label,
@@ -604,7 +606,7 @@ mod tests {
             legend_title: "solver".into(),
             markers: false,
             series: vec![Series::of_solver(
-                "newton",
+                Method::Newton,
                 Some(0.05),
                 vec![(1e-3, 1.0), (2e-3, 1e-9), (3e-3, 1e-16)],
             )],
@@ -642,8 +644,8 @@ mod tests {
             legend_title: "load factor".into(),
             markers: false,
             series: vec![
-                Series::of_solver("micro-macro", Some(1.0), decay),
-                Series::of_solver("mono-latin", Some(1.0), vec![(0.0, 1e-14)]),
+                Series::of_solver(Method::MicroMacro, Some(1.0), decay),
+                Series::of_solver(Method::MonoLatin, Some(1.0), vec![(0.0, 1e-14)]),
             ],
         };
         let frame = Frame {
