@@ -14,6 +14,7 @@
 //! In the line charts each series is one `<polyline>` of stroke width [`SERIES_STROKE_WIDTH`],
 //! and nothing else has that width.
 
+mod axes;
 mod chart;
 mod convergence;
 mod deformed;
