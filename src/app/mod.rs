@@ -6,5 +6,6 @@ pub mod allocator;
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod reference;
 pub mod setup;
 pub mod sweep;

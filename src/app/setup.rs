@@ -2,7 +2,7 @@
 //! then each solver asked for, with the set-up time it is charged.
 
 use crate::case::{Case, SolverChoice};
-use crate::solvers::latin::Latin;
+use crate::solvers::latin::{Homogenised, Latin};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{AnySolver, Method, SetupError, Settings, TautStiffness};
@@ -35,12 +35,32 @@ pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
     })
 }
 
+/// A solver as the application holds it: solved through the driver ([`AnySolver`]), and
+/// asked for the set-up products a run writes besides its solves.
+pub trait HeldSolver: AnySolver {
+    /// The homogenised substructure operators (`output.homogenised`) of the LATIN solvers;
+    /// none for the others.
+    fn homogenised(&mut self) -> Vec<Homogenised> {
+        Vec::new()
+    }
+}
+
+impl HeldSolver for Newton<'_> {}
+impl HeldSolver for LargeNewton<'_> {}
+impl HeldSolver for PcgLcp<'_> {}
+
+impl HeldSolver for Latin<'_> {
+    fn homogenised(&mut self) -> Vec<Homogenised> {
+        Latin::homogenised(self)
+    }
+}
+
 /// A solver set up for the prepared structure.
 pub struct SetUpSolver<'s> {
     /// Which solver.
     pub method: Method,
     /// The solver.
-    pub solver: Box<dyn AnySolver + 's>,
+    pub solver: Box<dyn HeldSolver + 's>,
     /// Its set-up time, s: the structure, plus for `newton` and `pcg-lcp` the factorization of
     /// the taut stiffness they solve with (the LATIN solvers never use it), plus its own.
     pub setup_seconds: f64,
@@ -60,7 +80,7 @@ pub fn set_up<'s>(
         });
     }
     let clock = Instant::now();
-    let (solver, shared): (Box<dyn AnySolver + 's>, f64) = match choice.settings(method) {
+    let (solver, shared): (Box<dyn HeldSolver + 's>, f64) = match choice.settings(method) {
         Settings::Newton(settings) if structure.model == GeometricModel::Large => (
             Box::new(LargeNewton::new(structure, taut, settings)),
             prepared.taut_seconds,
