@@ -210,8 +210,10 @@ const DENSE_BUDGET_BYTES: usize = 16 << 20;
 
 impl<'s> Latin<'s> {
     /// Set up: partition, interfaces, substructure operators (in parallel) and the macro
-    /// problem.
+    /// problem; settings the structure cannot take are refused first
+    /// ([`LatinSettings::validate`]).
     pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
+        settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let dm = settings
             .dm
