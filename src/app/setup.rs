@@ -94,7 +94,6 @@ pub fn set_up<'s>(
             prepared.taut_seconds,
         ),
         Settings::MonoLatin(settings) | Settings::MicroMacro(settings) => {
-            check_search_direction(structure, &settings.search)?;
             (Box::new(Latin::new(structure, settings)?), 0.0)
         }
     };
@@ -103,40 +102,4 @@ pub fn set_up<'s>(
         solver,
         setup_seconds: prepared.structure_seconds + shared + clock.elapsed().as_secs_f64(),
     })
-}
-
-/// How far a uniform `solver.l` may be from the links' stiffness: beyond, the stages' round-off
-/// (which scales with `1/√l` and `√l`) swamps the indicator (issue 13, D1: `l = 1e-300`
-/// "converged" in 0 iterations with an infinite deflection).
-const SEARCH_DIRECTION_RANGE: f64 = 1e8;
-
-/// Refuse a uniform search direction `l` outside `[k_min / 1e8, 1e8 k_max]`.
-fn check_search_direction(
-    structure: &Structure,
-    search: &crate::solvers::latin::SearchDirection,
-) -> Result<(), SetupError> {
-    let crate::solvers::latin::SearchDirection::Uniform(l) = *search else {
-        return Ok(());
-    };
-    let (k_min, k_max) = structure
-        .links
-        .iter()
-        .map(|l| l.stiffness)
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), k| {
-            (lo.min(k), hi.max(k))
-        });
-    let (min, max) = (
-        k_min / SEARCH_DIRECTION_RANGE,
-        k_max * SEARCH_DIRECTION_RANGE,
-    );
-    if k_max > 0.0 && !(min..=max).contains(&l) {
-        return Err(SetupError::SearchDirectionOutOfRange {
-            l,
-            k_min,
-            k_max,
-            min,
-            max,
-        });
-    }
-    Ok(())
 }
