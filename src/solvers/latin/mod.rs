@@ -666,10 +666,6 @@ impl Latin<'_> {
 impl Solver for Latin<'_> {
     type State = LatinState;
 
-    fn homogenised(&mut self) -> Vec<Homogenised> {
-        Latin::homogenised(self)
-    }
-
     /// Iteration 0 is the first linear stage.
     const INIT_IS_ITERATE: bool = true;
 
