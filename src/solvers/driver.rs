@@ -153,9 +153,6 @@ pub trait AnySolver {
 
     /// What the solver's stopping measure measures.
     fn stopping_measure(&self) -> Measure;
-
-    /// Homogenised substructure operators ([`Solver::homogenised`]).
-    fn homogenised_operators(&mut self) -> Vec<super::latin::Homogenised>;
 }
 
 impl<S: Solver> AnySolver for S {
@@ -171,9 +168,5 @@ impl<S: Solver> AnySolver for S {
 
     fn stopping_measure(&self) -> Measure {
         self.measure()
-    }
-
-    fn homogenised_operators(&mut self) -> Vec<super::latin::Homogenised> {
-        self.homogenised()
     }
 }

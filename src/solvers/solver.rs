@@ -92,9 +92,4 @@ pub trait Solver {
     fn runaway(&self, _state: &Self::State) -> Option<super::NoEquilibrium> {
         None
     }
-
-    /// Homogenised substructure operators, for solvers that have them (micro-macro LATIN).
-    fn homogenised(&mut self) -> Vec<super::latin::Homogenised> {
-        Vec::new()
-    }
 }
