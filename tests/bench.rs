@@ -191,7 +191,7 @@ fn capped_solves_reproduce_the_iterates() {
     for (name, solve) in solvers {
         let mut recorder = Recorder::default();
         let solution = solve(usize::MAX, &mut recorder);
-        let full: Vec<f64> = recorder.records.iter().map(|r| r.residual).collect();
+        let full: Vec<f64> = recorder.records.iter().map(|r| r.stopping_value).collect();
         assert_eq!(solution.info.status, Status::Converged, "{name}");
         assert!(full.len() >= 5, "{name}: {} iterations", full.len());
         let n = full.len();
@@ -199,7 +199,7 @@ fn capped_solves_reproduce_the_iterates() {
             let capped = solve(k, &mut Silent);
             assert_eq!(capped.info.iterations, k, "{name}");
             assert_eq!(
-                capped.info.residual.to_bits(),
+                capped.info.stopping_value.to_bits(),
                 residual.to_bits(),
                 "{name}: iteration {k}"
             );

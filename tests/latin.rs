@@ -369,7 +369,7 @@ fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, bud
     let trace: Vec<(usize, f64, Option<f64>)> = recorder
         .records
         .iter()
-        .map(|r| (r.iteration, r.residual, r.error))
+        .map(|r| (r.iteration, r.stopping_value, r.error))
         .collect();
     let d = relative_difference(
         &sol.equilibrium.displacements,
@@ -381,7 +381,7 @@ fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, bud
          e {:.3e}, slack {} (newton {}), |dU|/|U| {d:.3e}, {:.2} s",
         sol.info.status,
         sol.info.iterations,
-        sol.info.residual,
+        sol.info.stopping_value,
         last.2.unwrap(),
         sol.equilibrium.slack_count(),
         reference.equilibrium.slack_count(),

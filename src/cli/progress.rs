@@ -171,7 +171,7 @@ fn iterate_message(solver: &str, alpha: f64, measure: Measure, record: &Iteratio
         alpha_label(alpha),
         record.iteration,
         measure.short_name(),
-        record.residual
+        record.stopping_value
     );
     if let Some(e) = record.error {
         text.push_str(&format!(", e = {e:.1e}"));
@@ -205,8 +205,8 @@ fn format_row(r: &SummaryRow) -> String {
         match r.measure {
             _ if r.converged && r.at_roundoff => String::new(),
             Measure::EquilibriumResidual => String::new(),
-            Measure::ComplementarityResidual => format!("complementarity {:.1e}, ", r.residual),
-            Measure::Indicator => format!("eta {:.1e}, ", r.residual),
+            Measure::ComplementarityResidual => format!("complementarity {:.1e}, ", r.stopping_value),
+            Measure::Indicator => format!("eta {:.1e}, ", r.stopping_value),
         },
         r.equilibrium_residual,
         1e3 * r.solve_seconds
@@ -264,9 +264,9 @@ mod tests {
     fn an_iterate_shows_solver_alpha_iteration_measure_error_and_time() {
         let record = IterationRecord {
             iteration: 37,
-            residual: 3.2e-4,
+            stopping_value: 3.2e-4,
             equilibrium_residual: Some(1e-6),
-            setups: 0,
+            rebuilds: 0,
             error: Some(1.1e-3),
             slack_cables: 12,
             elapsed_seconds: 0.84,

@@ -8,11 +8,11 @@ pub struct IterationRecord {
     /// Iterations done to reach it.
     pub iteration: usize,
     /// The solver's stopping measure (η for the LATIN solvers; see [`super::Measure`]).
-    pub residual: f64,
+    pub stopping_value: f64,
     /// r(U) of the iterate, when the solver has it (see [`super::Progress`]).
     pub equilibrium_residual: Option<f64>,
-    /// Re-set-ups of the solver's operators so far in this solve.
-    pub setups: usize,
+    /// Operator rebuilds so far in this solve.
+    pub rebuilds: usize,
     /// Energy error e against a reference solution, when the solve was given one.
     pub error: Option<f64>,
     /// Slack cables of the iterate.

@@ -112,7 +112,7 @@ fn reference(prepared: &Prepared, load: &[f64], alpha: f64) -> Result<Reference,
         return Err(BenchError::Reference {
             alpha: alpha_label(alpha),
             status: solution.info.status,
-            residual: solution.info.residual,
+            residual: solution.info.stopping_value,
         });
     }
     Ok(Reference::new(

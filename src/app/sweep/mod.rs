@@ -63,7 +63,7 @@ pub enum RunEvent<'a> {
         solver: &'a str,
         /// The load factor.
         alpha: f64,
-        /// What `record.residual` measures.
+        /// What `record.stopping_value` measures.
         measure: Measure,
         /// The iterate.
         record: &'a IterationRecord,

@@ -114,7 +114,7 @@ pub(super) fn not_converged_message(row: &SummaryRow, solution: &Solution, verdi
             row.iterations,
             solution.info.status,
             solution.info.measure.short_name(),
-            row.residual
+            row.stopping_value
         ),
     }
 }

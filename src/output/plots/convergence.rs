@@ -27,7 +27,7 @@ impl Measure {
     fn value(self, r: &IterationRecord) -> Option<f64> {
         match self {
             Measure::Error => r.error,
-            Measure::Eta => Some(r.residual),
+            Measure::Eta => Some(r.stopping_value),
         }
     }
 

@@ -559,7 +559,7 @@ impl Latin<'_> {
     fn update_search(&mut self, state: &mut LatinState) -> bool {
         let updated = self.settings.policy == SearchPolicy::Status && self.follow_status(state);
         if updated {
-            state.updates += 1;
+            state.rebuilds += 1;
             state.relax = false;
         }
         updated
@@ -694,7 +694,7 @@ impl Solver for Latin<'_> {
             eta: f64::INFINITY,
             residual: f64::INFINITY,
             slack_cables: 0,
-            updates: 0,
+            rebuilds: 0,
             relax: false,
             at_roundoff: false,
             frozen_residual: f64::INFINITY,
@@ -757,9 +757,9 @@ impl Solver for Latin<'_> {
         };
         Progress {
             iteration: state.iteration,
-            residual: state.eta,
+            stopping_value: state.eta,
             equilibrium_residual: Some(state.residual),
-            setups: state.updates,
+            rebuilds: state.rebuilds,
             slack_cables: state.slack_cables,
             at_roundoff: stop == Some(Status::Converged) && !criterion,
             stop,

@@ -503,9 +503,9 @@ impl Solver for LargeNewton<'_> {
     fn progress(&self, state: &LargeState) -> Progress {
         Progress {
             iteration: state.iteration,
-            residual: state.eval.residual,
+            stopping_value: state.eval.residual,
             equilibrium_residual: Some(state.eval.residual),
-            setups: 0,
+            rebuilds: 0,
             slack_cables: law::slack_flags(self.structure, &state.eval.trial, SlackRule::Clipped)
                 .iter()
                 .filter(|&&x| x)

@@ -430,7 +430,7 @@ impl Solver for Newton<'_> {
         );
         Progress {
             iteration: state.iteration,
-            residual: state.residual,
+            stopping_value: state.residual,
             // newton's own measure is r(U).
             equilibrium_residual: Some(state.residual),
             rebuilds: 0,
