@@ -13,9 +13,7 @@ use tensolve::case;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::Method;
-use tensolve::solvers::{
-    AnySolver, Observer, Recorder, Silent, Solution, Status, TautStiffness,
-};
+use tensolve::solvers::{AnySolver, Observer, Recorder, Silent, Solution, Status, TautStiffness};
 
 /// 4 x 4 modules loaded 20 times harder than the paper's nodes, so that 28 of the 192 cables
 /// go slack at α = 1 (at the paper's 40 N none does and newton needs one step): newton takes

@@ -59,7 +59,11 @@ fn braced_paper_case_converges_with_newtons_slack_set() {
             // Measured: mono 24 / 431 / 36, micro-macro 53 / 55 / 70 iterations; e ≤ 4.4e-7.
             // The plain method never converges here (η stuck at 5.7e-2 on mono-latin).
             assert!(sol.info.status.converged(), "{subdomains:?} alpha {alpha}");
-            assert!(sol.info.stopping_value <= 1e-6, "eta {:e}", sol.info.stopping_value);
+            assert!(
+                sol.info.stopping_value <= 1e-6,
+                "eta {:e}",
+                sol.info.stopping_value
+            );
             assert!(e < 1e-5, "{subdomains:?} alpha {alpha}: e = {e:e}");
             assert!(
                 sol.equilibrium.slack == exact.equilibrium.slack,
@@ -293,7 +297,11 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
             sol.equilibrium.slack, exact.equilibrium.slack,
             "{n}: newton's slack set"
         );
-        assert!(sol.info.rebuilds <= 4, "{n}: {} rebuilds", sol.info.rebuilds);
+        assert!(
+            sol.info.rebuilds <= 4,
+            "{n}: {} rebuilds",
+            sol.info.rebuilds
+        );
         // The status-following policy rebuilds at least twice as often on the same case.
         let status = LatinSettings {
             policy: SearchPolicy::Status,

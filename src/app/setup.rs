@@ -5,7 +5,7 @@ use crate::case::{Case, SolverChoice};
 use crate::solvers::latin::{Homogenised, Latin};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
-use crate::solvers::{AnySolver, Method, SetupError, Settings, TautStiffness};
+use crate::solvers::{AnySolver, Method, Settings, SetupError, TautStiffness};
 use crate::structure::{GeometricModel, Structure};
 use std::time::Instant;
 

@@ -58,7 +58,6 @@ pub(super) fn vector(key: &str, v: [f64; 3], max: f64, what: &str) -> Result<[f6
     Ok(v)
 }
 
-
 /// A TOML value as the user wrote it (a date as a date, not toml's internal form).
 pub(super) fn shown(v: &toml::Value) -> String {
     match v {

@@ -43,25 +43,29 @@ pub(super) fn apply(
 
 /// Without `from = "self-stress"`, `member` and `force` scale nothing: refused when given.
 fn refuse_scale_without_source(raw: &RawPrestress) -> Result<(), CaseError> {
-        for (key, given) in [
-            ("prestress.member", raw.member.is_some()),
-            ("prestress.force", raw.force.is_some()),
-        ] {
-            if given {
-                return Err(CaseError::invalid(
-                    key,
-                    "given",
-                    "it scales the self-stress state: add `from = \"self-stress\"`, or remove it",
-                ));
-            }
+    for (key, given) in [
+        ("prestress.member", raw.member.is_some()),
+        ("prestress.force", raw.force.is_some()),
+    ] {
+        if given {
+            return Err(CaseError::invalid(
+                key,
+                "given",
+                "it scales the self-stress state: add `from = \"self-stress\"`, or remove it",
+            ));
         }
+    }
     Ok(())
 }
 
 /// The member (id and index) whose tension `force` scales the state, checked: a general
 /// structure, both keys given, a non-zero force, a member of the table, and no prestress given
 /// in the members table.
-fn scale(raw: &RawPrestress, grid: bool, geometry: &Geometry) -> Result<(u64, usize, f64), CaseError> {
+fn scale(
+    raw: &RawPrestress,
+    grid: bool,
+    geometry: &Geometry,
+) -> Result<(u64, usize, f64), CaseError> {
     if grid {
         return Err(CaseError::invalid(
             FROM,
@@ -202,7 +206,11 @@ fn self_stress_state(
 }
 
 /// Refuse a scaled state `force × state` that compresses a cable.
-fn refuse_compressed_cables(geometry: &Geometry, state: &[f64], force: f64) -> Result<(), CaseError> {
+fn refuse_compressed_cables(
+    geometry: &Geometry,
+    state: &[f64],
+    force: f64,
+) -> Result<(), CaseError> {
     let compressed: Vec<String> = geometry
         .members
         .iter()
@@ -268,8 +276,7 @@ pub(super) fn check_balanced(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(
     }
     // Without settlements the effective prestress is t0 itself; with them, the imposed
     // part is carried by the supports on purpose, so check t0 on the same free dofs.
-    let s =
-        Structure::new(geometry, &NodeFix::unsettled(fixes), &Default::default());
+    let s = Structure::new(geometry, &NodeFix::unsettled(fixes), &Default::default());
     let mut worst: Vec<(f64, usize, f64)> = s
         .free_prestress_imbalance()
         .iter()

@@ -205,7 +205,8 @@ fn format_row(r: &SummaryRow) -> String {
         match r.measure {
             _ if r.converged && r.at_roundoff => String::new(),
             Measure::EquilibriumResidual => String::new(),
-            Measure::ComplementarityResidual => format!("complementarity {:.1e}, ", r.stopping_value),
+            Measure::ComplementarityResidual =>
+                format!("complementarity {:.1e}, ", r.stopping_value),
             Measure::Indicator => format!("eta {:.1e}, ", r.stopping_value),
         },
         r.equilibrium_residual,

@@ -120,7 +120,10 @@ impl Sink for HistorySink {
             let writer =
                 HistoryWriter::create(&self.dir, key.method.name(), key.alpha, column, self.cables)
                     .map_err(WriteError::at(result_path(
-                        &self.root, "history", key.method.name(), key.alpha,
+                        &self.root,
+                        "history",
+                        key.method.name(),
+                        key.alpha,
                     )))?;
             self.writer = Some(writer);
         }
@@ -139,7 +142,10 @@ impl Sink for HistorySink {
                 .finish()
                 .map(|_| ())
                 .map_err(WriteError::at(result_path(
-                    &self.root, "history", key.method.name(), key.alpha,
+                    &self.root,
+                    "history",
+                    key.method.name(),
+                    key.alpha,
                 ))),
             None => Ok(()),
         }
@@ -242,7 +248,9 @@ impl Sink for PerSolveSink<'_> {
         )
         .map(|_| ())
         .map_err(WriteError::at((self.error_path)(
-            &self.root, key.method.name(), key.alpha,
+            &self.root,
+            key.method.name(),
+            key.alpha,
         )))
     }
 }

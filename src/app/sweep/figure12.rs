@@ -6,9 +6,9 @@ use crate::app::reference::ReferenceSource;
 use crate::app::setup::{prepare, set_up};
 use crate::case::Case;
 use crate::output::plots::{self, History};
+use crate::output::OutputDir;
 use crate::output::{FigureSettings, WriteError};
 use crate::solvers::{Method, Recorder, Reference};
-use crate::output::OutputDir;
 use std::cell::RefCell;
 use std::path::Path;
 

@@ -299,9 +299,8 @@ impl<'s> Sweep<'s> {
         // 7. What the answer is beyond the solver's own stop: no equilibrium, or an unstable
         //    one (docs/method.md §8).
         let verdict = assess(&mut solution, self.prepared, load, self.wants_eigenvalue);
-        self.previous[index] = (solution.info.status.converged()
-            && results::is_finite(&solution))
-        .then(|| solution.equilibrium.clone());
+        self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
+            .then(|| solution.equilibrium.clone());
         // 8. A non-finite answer (or a row it would give) is reported, never written.
         let row = results::is_finite(&solution).then(|| {
             SummaryRow::new(
@@ -430,4 +429,3 @@ fn sinks<'s>(
     sinks.add(out.summary, SummarySink::new(output));
     sinks
 }
-

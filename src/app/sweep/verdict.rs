@@ -20,7 +20,12 @@ pub(super) struct Verdict {
 /// energy decreases without bound (no equilibrium exists: [`Status::NoEquilibrium`]); with
 /// `eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer where it
 /// is negative is an unstable equilibrium ([`Status::Unstable`]).
-pub(super) fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64], eigenvalue: bool) -> Verdict {
+pub(super) fn assess(
+    solution: &mut Solution,
+    prepared: &Prepared,
+    load: &[f64],
+    eigenvalue: bool,
+) -> Verdict {
     let s = &prepared.structure;
     if !results::is_finite(solution) {
         return Verdict {
@@ -65,7 +70,11 @@ pub(super) fn assess(solution: &mut Solution, prepared: &Prepared, load: &[f64],
 
 /// The failure line of a row that did not converge: how it ended, and for no equilibrium the
 /// cables that went slack and the nodes of the mode.
-pub(super) fn not_converged_message(row: &SummaryRow, solution: &Solution, verdict: &Verdict) -> String {
+pub(super) fn not_converged_message(
+    row: &SummaryRow,
+    solution: &Solution,
+    verdict: &Verdict,
+) -> String {
     let head = format!("{} at alpha = {}", row.solver, alpha_label(row.alpha));
     let ids = |ids: &[u64]| {
         ids.iter()

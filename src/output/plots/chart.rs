@@ -2,14 +2,14 @@
 //! axis and a linear or logarithmic y axis, axis labels with units, a legend beside the plot.
 
 use super::axes::{
-    clip_start, linear_range, log_axis, log_range, log_x_range, scaled, single_point_notes,
-    thin, x_range, y_span_values,
+    clip_start, linear_range, log_axis, log_range, log_x_range, scaled, single_point_notes, thin,
+    x_range, y_span_values,
 };
 use super::legend::{draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::marker::Marker;
 use super::palette::solver_colour;
-use crate::solvers::Method;
 use super::{alpha_text, log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
+use crate::solvers::Method;
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
