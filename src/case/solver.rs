@@ -4,7 +4,7 @@
 use super::numbers::{number, positive, shown};
 use super::raw::RawSolver;
 use super::{CaseError, SolverChoice};
-use crate::solvers::latin::SearchDirection;
+use crate::solvers::latin::{LatinSettings, SearchDirection};
 
 /// The deepest Anderson history a case may ask for: each level keeps two vectors of the size
 /// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
@@ -16,11 +16,8 @@ pub(super) fn solver_choice(
     raw: RawSolver,
     modules: Option<[usize; 2]>,
 ) -> Result<SolverChoice, CaseError> {
-    // A general structure may be cut into any number of boxes (empty ones are refused at
-    // set-up); up to 1000 along each axis.
-    let [nx, ny] = modules.unwrap_or([1000, 1000]);
     let mut choice = SolverChoice::default();
-    if let Some(methods) = raw.methods {
+    if let Some(methods) = &raw.methods {
         if methods.is_empty() {
             return Err(CaseError::invalid(
                 "solver.methods",
@@ -28,8 +25,8 @@ pub(super) fn solver_choice(
                 "name at least one solver, e.g. [\"newton\"]",
             ));
         }
-        check_distinct_methods("solver.methods", &methods)?;
-        choice.methods = methods;
+        check_distinct_methods("solver.methods", methods)?;
+        choice.methods = methods.clone();
     }
     if let Some(tol) = raw.tolerance {
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
@@ -43,77 +40,7 @@ pub(super) fn solver_choice(
         choice.pcg_lcp.tolerance = tol;
         choice.latin.tolerance = tol;
     }
-    // The paper's partition, limited to the grid.
-    let [dx, dy] = choice.latin.subdomains;
-    let default = match modules {
-        Some(_) => [dx.min(nx), dy.min(ny)],
-        None => [1, 1],
-    };
-    let [sx, sy] = raw.subdomains.map_or(default, |s| s.0);
-    if sx == 0 || sy == 0 || sx > nx || sy > ny {
-        return Err(CaseError::invalid(
-            "solver.subdomains",
-            format!("[{sx}, {sy}]"),
-            format!("give 1 ≤ sx ≤ {nx} and 1 ≤ sy ≤ {ny} (at most one substructure per module)"),
-        ));
-    }
-    choice.latin.subdomains = [sx, sy];
-    if let Some(dm) = raw.dm {
-        positive("solver.dm", dm, "the interface search direction d_m in N/m")?;
-        choice.latin.dm = Some(dm);
-    }
-    if let Some(l) = &raw.l {
-        choice.latin.search = search_direction(l)?;
-    }
-    if let Some(weak) = raw.weak_interfaces {
-        choice.latin.weak = weak;
-    }
-    if let Some(mu) = raw.relaxation {
-        if !(mu.is_finite() && mu > 0.0 && mu <= 1.0) {
-            return Err(CaseError::invalid(
-                "solver.relaxation",
-                number(mu),
-                "give the relaxation μ of the LATIN linear stage in (0, 1], e.g. 0.8 (1: none)",
-            ));
-        }
-        choice.latin.relaxation = mu;
-    }
-    if let Some(depth) = raw.anderson {
-        if depth > MAX_ANDERSON_DEPTH {
-            return Err(CaseError::invalid(
-                "solver.anderson",
-                depth.to_string(),
-                "give the Anderson acceleration depth of the LATIN solvers between 0 (none) and 50, e.g. 5",
-            ));
-        }
-        choice.latin.anderson = depth;
-    }
-    if let Some(policy) = raw.search_direction {
-        choice.latin.policy = policy;
-    }
-    if let Some(rho) = raw.forcing {
-        if !(rho.is_finite() && rho > 0.0 && rho < 1.0) {
-            return Err(CaseError::invalid(
-                "solver.forcing",
-                number(rho),
-                "give the forcing term ρ of the inexact Newton status steps between 0 and 1 (exclusive), e.g. 0.3",
-            ));
-        }
-        choice.latin.forcing = rho;
-    }
-    if let Some(stop_on) = raw.stop_on {
-        choice.latin.stop_on = stop_on;
-    }
-    if let Some(tol) = raw.residual_tolerance {
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(CaseError::invalid(
-                "solver.residual_tolerance",
-                number(tol),
-                "give the LATIN equilibrium-residual tolerance between 0 and 1 (exclusive), e.g. 1e-8",
-            ));
-        }
-        choice.latin.residual_tolerance = Some(tol);
-    }
+    latin_settings(&raw, modules, &mut choice.latin)?;
     if let Some(reference) = raw.reference {
         choice.reference = reference;
     }
@@ -130,6 +57,90 @@ pub(super) fn solver_choice(
         choice.latin.max_iterations = max_iterations;
     }
     Ok(choice)
+}
+
+/// The LATIN keys of `[solver]` on a grid of `modules` (`None`: a general structure), set in
+/// `latin`.
+fn latin_settings(
+    raw: &RawSolver,
+    modules: Option<[usize; 2]>,
+    latin: &mut LatinSettings,
+) -> Result<(), CaseError> {
+    // A general structure may be cut into any number of boxes (empty ones are refused at
+    // set-up); up to 1000 along each axis.
+    let [nx, ny] = modules.unwrap_or([1000, 1000]);
+    // The paper's partition, limited to the grid.
+    let [dx, dy] = latin.subdomains;
+    let default = match modules {
+        Some(_) => [dx.min(nx), dy.min(ny)],
+        None => [1, 1],
+    };
+    let [sx, sy] = raw.subdomains.map_or(default, |s| s.0);
+    if sx == 0 || sy == 0 || sx > nx || sy > ny {
+        return Err(CaseError::invalid(
+            "solver.subdomains",
+            format!("[{sx}, {sy}]"),
+            format!("give 1 ≤ sx ≤ {nx} and 1 ≤ sy ≤ {ny} (at most one substructure per module)"),
+        ));
+    }
+    latin.subdomains = [sx, sy];
+    if let Some(dm) = raw.dm {
+        positive("solver.dm", dm, "the interface search direction d_m in N/m")?;
+        latin.dm = Some(dm);
+    }
+    if let Some(l) = &raw.l {
+        latin.search = search_direction(l)?;
+    }
+    if let Some(weak) = raw.weak_interfaces {
+        latin.weak = weak;
+    }
+    if let Some(mu) = raw.relaxation {
+        if !(mu.is_finite() && mu > 0.0 && mu <= 1.0) {
+            return Err(CaseError::invalid(
+                "solver.relaxation",
+                number(mu),
+                "give the relaxation μ of the LATIN linear stage in (0, 1], e.g. 0.8 (1: none)",
+            ));
+        }
+        latin.relaxation = mu;
+    }
+    if let Some(depth) = raw.anderson {
+        if depth > MAX_ANDERSON_DEPTH {
+            return Err(CaseError::invalid(
+                "solver.anderson",
+                depth.to_string(),
+                "give the Anderson acceleration depth of the LATIN solvers between 0 (none) and 50, e.g. 5",
+            ));
+        }
+        latin.anderson = depth;
+    }
+    if let Some(policy) = raw.search_direction {
+        latin.policy = policy;
+    }
+    if let Some(rho) = raw.forcing {
+        if !(rho.is_finite() && rho > 0.0 && rho < 1.0) {
+            return Err(CaseError::invalid(
+                "solver.forcing",
+                number(rho),
+                "give the forcing term ρ of the inexact Newton status steps between 0 and 1 (exclusive), e.g. 0.3",
+            ));
+        }
+        latin.forcing = rho;
+    }
+    if let Some(stop_on) = raw.stop_on {
+        latin.stop_on = stop_on;
+    }
+    if let Some(tol) = raw.residual_tolerance {
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(CaseError::invalid(
+                "solver.residual_tolerance",
+                number(tol),
+                "give the LATIN equilibrium-residual tolerance between 0 and 1 (exclusive), e.g. 1e-8",
+            ));
+        }
+        latin.residual_tolerance = Some(tol);
+    }
+    Ok(())
 }
 
 /// Refuse a solver named twice in `methods` (its files would overwrite each other).
