@@ -33,7 +33,7 @@ pub(super) fn load(
     let mut points = Vec::new();
     for (i, p) in raw.point.iter().flatten().enumerate() {
         let key = format!("load.point[{i}]");
-        let nodes = select(&key, &geometry, &index_of, &p.nodes, &p.in_box)?;
+        let nodes = select(&key, geometry, index_of, &p.nodes, &p.in_box)?;
         let force = vector(
             &format!("{key}.force"),
             p.force,

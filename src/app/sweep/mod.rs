@@ -230,7 +230,7 @@ impl<'s> Sweep<'s> {
         }
     }
 
-    /// 6. Every solver at `alpha`, after the reference solve (shared with a solver of the
+    /// Step 6: every solver at `alpha`, after the reference solve (shared with a solver of the
     /// case at its default settings, whose solve it then is).
     fn solve_alpha(
         &mut self,
@@ -286,7 +286,7 @@ impl<'s> Sweep<'s> {
         Ok(())
     }
 
-    /// 7.–9. What the answer of solver `index` is, its row and its files.
+    /// Steps 7–9: what the answer of solver `index` is, its row and its files.
     fn record(
         &mut self,
         index: usize,
@@ -343,7 +343,7 @@ impl<'s> Sweep<'s> {
         Ok(())
     }
 
-    /// 10. The files of the whole sweep; the rows and the failures.
+    /// Step 10: the files of the whole sweep; the rows and the failures.
     fn close(mut self) -> Result<(Vec<SummaryRow>, Vec<String>), RunError> {
         self.sinks.close()?;
         Ok((self.rows, self.failures))
