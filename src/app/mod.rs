@@ -1,5 +1,5 @@
 //! The application on top of the pipeline: set solvers up for a case ([`setup`]), run a sweep
-//! of load factors into files ([`sweep`]), measure what accuracy costs in time ([`bench`]) and
+//! of load factors into files (`sweep`), measure what accuracy costs in time (`bench`) and
 //! report what a case describes ([`check`]).
 
 pub mod allocator;

@@ -1,11 +1,11 @@
 //! The case file: what structure to build, which effects to model, which solvers to run and
-//! which outputs to write. The file is parsed into raw serde structs ([`raw`]) and converted
-//! into a fully typed [`Case`] ([`convert`]) whose numbers are known to be finite and physical;
+//! which outputs to write. The file is parsed into raw serde structs (`raw`) and converted
+//! into a fully typed `Case` (`convert`) whose numbers are known to be finite and physical;
 //! every other module receives that.
 //!
-//! Inside, one way only: [`numbers`] (the checks of a number) and [`raw`] under everything;
-//! [`tables`], [`nodes`], [`grid`], [`prestress`], [`load`], [`solver`] and [`output`] each
-//! convert one part of the file; [`convert`] calls them in file order.
+//! Inside, one way only: `numbers` (the checks of a number) and `raw` under everything;
+//! `tables`, `nodes`, `grid`, `prestress`, `load`, `solver` and `output` each
+//! convert one part of the file; `convert` calls them in file order.
 
 mod convert;
 mod error;

@@ -1,5 +1,5 @@
 //! Solvers. Each one is set up once per structure ([`SetupError`] when it cannot be) and is a
-//! state machine ([`Solver`]) that the one [`driver`] runs for any load; it reports what
+//! state machine (`Solver`) that the one `driver` runs for any load; it reports what
 //! happened in a [`SolveInfo`] and never prints. Observers (CSV writers, progress bars, the
 //! bench recorder) are attached from outside through [`Observer`].
 

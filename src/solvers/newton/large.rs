@@ -406,7 +406,7 @@ impl Solver for LargeNewton<'_> {
     }
 
     /// From the last equilibrium reached, the whole path in one increment first, started from
-    /// the extrapolation of the last equilibria ([`LargeNewton::predict`]; paper case, 41-α
+    /// the extrapolation of the last equilibria (`LargeNewton::predict`; paper case, 41-α
     /// sweep with Newton steps: 2.63 steps per α with the secant instead of 3.39 from the last
     /// answer, though the secant's residual is often the larger; with chord steps, 3.41 steps
     /// per α through three points against 3.95 with the secant).

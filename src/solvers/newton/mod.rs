@@ -2,7 +2,7 @@
 //!
 //! Minimises `Π(U) = Σ_bars (½ k e² + t0 e) + Σ_cables ½ k ⟨e + t0/k⟩₊² − Fᵀ U`. Each iteration
 //! solves `(K_bars + B_Aᵀ k_A B_A + μ I) ΔU = −∇Π` on the taut set A, then takes the exact
-//! minimiser of the 1-D piecewise quadratic `Π(U + sΔU)` ([`line_search`]). The
+//! minimiser of the 1-D piecewise quadratic `Π(U + sΔU)` (`line_search`). The
 //! regularisation μ vanishes with the residual; the symbolic factorization is the one of the
 //! taut stiffness, reused.
 //!
