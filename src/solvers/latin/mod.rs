@@ -3,10 +3,10 @@
 //! interfaces, `K = Bᵀ l B`, the augmented Lagrangian method of the paper's §5.4).
 //!
 //! The solver alternates a local stage (constitutive laws, per link and per interface, exact;
-//! [`local_stage`]) and a linear stage (equilibrium and compatibility per substructure, glued
-//! by exact macro continuity; [`linear_stage`]). Iteration 0 is the linear stage from ŝ = 0;
+//! `local_stage`) and a linear stage (equilibrium and compatibility per substructure, glued
+//! by exact macro continuity; `linear_stage`). Iteration 0 is the linear stage from ŝ = 0;
 //! iteration k ≥ 1 is a local stage on s_{k−1} followed by a linear stage. After each linear
-//! stage it measures the indicator η between s and the ŝ that fed it ([`indicator`]), and
+//! stage it measures the indicator η between s and the ŝ that fed it (`indicator`), and
 //! stops when η ≤ `tolerance` (or when Δη is at round-off against the prestress).
 //!
 //! | file | what |
