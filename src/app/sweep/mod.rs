@@ -107,11 +107,7 @@ pub fn run(
     ));
     let prepared = prepare_or_locate_mechanisms(case, &dir)?;
     // 2. Every solver asked for, set up once.
-    let mut solvers = Vec::with_capacity(methods.len());
-    for &method in &methods {
-        events(RunEvent::Stage(&format!("setting up {}", method.name())));
-        solvers.push(set_up(method, &case.solver, &prepared)?);
-    }
+    let mut solvers = set_up_all(case, &methods, &prepared, events)?;
     // 3. Where LATIN's error e is measured from.
     events(RunEvent::Stage("setting up the reference solver"));
     let reference = ReferenceSource::new(case, &solvers, &prepared)?;
@@ -161,6 +157,21 @@ fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
         .unwrap_or_else(|| case.solver.methods.clone());
     crate::case::check_distinct_methods("--solver", &methods)?;
     Ok(methods)
+}
+
+/// Every solver of `methods` set up for `prepared` with the settings of `case`, in order.
+fn set_up_all<'s>(
+    case: &Case,
+    methods: &[Method],
+    prepared: &'s Prepared,
+    events: &mut dyn FnMut(RunEvent<'_>),
+) -> Result<Vec<SetUpSolver<'s>>, RunError> {
+    let mut solvers = Vec::with_capacity(methods.len());
+    for &method in methods {
+        events(RunEvent::Stage(&format!("setting up {}", method.name())));
+        solvers.push(set_up(method, &case.solver, prepared)?);
+    }
+    Ok(solvers)
 }
 
 /// The structure of `case` and its taut stiffness; a refused mechanism's modes, node by node,
