@@ -147,7 +147,7 @@ fn latin_row(
         to_1e3: first(1e-3),
         to_1e6: first(1e-6),
         total: state.iteration,
-        rebuilds: state.updates,
+        rebuilds: state.rebuilds,
         setup,
         solve,
         final_e: *errors.last().unwrap_or(&f64::NAN),

@@ -29,7 +29,7 @@ fn bench_case(c: &mut Criterion, id: &str, file: &str) {
     };
     let info = setup_and_solve();
     assert!(
-        info.status.converged() && info.residual <= 1e-10,
+        info.status.converged() && info.stopping_value <= 1e-10,
         "{id}: {info:?}"
     );
     let mut group = c.benchmark_group(id);

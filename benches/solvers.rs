@@ -41,7 +41,7 @@ fn bench_solver(
         "{name}: {:?} after {} iterations (residual {:e})",
         info.status,
         info.iterations,
-        info.residual
+        info.stopping_value
     );
     group.bench_function(format!("{name}/setup+solve"), |b| {
         b.iter(|| build(structure, &taut_stiffness(structure)).solve(load, None, &mut Silent))

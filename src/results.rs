@@ -9,7 +9,7 @@ use crate::structure::{GeometricModel, LinkKind, Structure};
 /// Every number of a solution is finite (displacements, tensions, stopping measure).
 pub fn is_finite(solution: &Solution) -> bool {
     let eq = &solution.equilibrium;
-    solution.info.residual.is_finite()
+    solution.info.stopping_value.is_finite()
         && eq
             .displacements
             .iter()

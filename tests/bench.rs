@@ -13,9 +13,7 @@ use tensolve::case;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::Method;
-use tensolve::solvers::{
-    AnySolver, IterationRecord, Observer, Silent, Solution, Status, TautStiffness,
-};
+use tensolve::solvers::{AnySolver, Observer, Recorder, Silent, Solution, Status, TautStiffness};
 
 /// 4 x 4 modules loaded 20 times harder than the paper's nodes, so that 28 of the 192 cables
 /// go slack at α = 1 (at the paper's 40 N none does and newton needs one step): newton takes
@@ -160,16 +158,6 @@ fn bench_exit_codes() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("(not converged)"));
 }
 
-/// Residual of every iteration of a solve.
-#[derive(Default)]
-struct Residuals(Vec<f64>);
-
-impl Observer for Residuals {
-    fn iteration(&mut self, record: &IterationRecord) {
-        self.0.push(record.residual);
-    }
-}
-
 /// A solve with an iteration cap, watched by an observer.
 type CappedSolve<'a> = dyn Fn(usize, &mut dyn Observer) -> Solution + 'a;
 
@@ -199,16 +187,17 @@ fn capped_solves_reproduce_the_iterates() {
     };
     let solvers: [(&str, &CappedSolve); 2] = [("newton", &newton), ("pcg-lcp", &pcg)];
     for (name, solve) in solvers {
-        let mut full = Residuals::default();
-        let solution = solve(usize::MAX, &mut full);
+        let mut recorder = Recorder::default();
+        let solution = solve(usize::MAX, &mut recorder);
+        let full: Vec<f64> = recorder.records.iter().map(|r| r.stopping_value).collect();
         assert_eq!(solution.info.status, Status::Converged, "{name}");
-        assert!(full.0.len() >= 5, "{name}: {} iterations", full.0.len());
-        let n = full.0.len();
-        for (k, &residual) in (1..n).zip(&full.0) {
+        assert!(full.len() >= 5, "{name}: {} iterations", full.len());
+        let n = full.len();
+        for (k, &residual) in (1..n).zip(&full) {
             let capped = solve(k, &mut Silent);
             assert_eq!(capped.info.iterations, k, "{name}");
             assert_eq!(
-                capped.info.residual.to_bits(),
+                capped.info.stopping_value.to_bits(),
                 residual.to_bits(),
                 "{name}: iteration {k}"
             );

@@ -146,18 +146,17 @@ fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, bud
         },
     )
     .unwrap();
-    let mut trace = Vec::new();
-    struct Trace<'a>(&'a mut Vec<(usize, f64, Option<f64>)>);
-    impl tensolve::solvers::Observer for Trace<'_> {
-        fn iteration(&mut self, r: &tensolve::solvers::IterationRecord) {
-            self.0.push((r.iteration, r.residual, r.error));
-        }
-    }
+    let mut recorder = tensolve::solvers::Recorder::default();
     let sol = latin.solve(
         &load(&s, alpha),
         Some(&Reference::new(&s, &reference.equilibrium.displacements)),
-        &mut Trace(&mut trace),
+        &mut recorder,
     );
+    let trace: Vec<(usize, f64, Option<f64>)> = recorder
+        .records
+        .iter()
+        .map(|r| (r.iteration, r.stopping_value, r.error))
+        .collect();
     let d = relative_difference(
         &sol.equilibrium.displacements,
         &reference.equilibrium.displacements,
@@ -168,7 +167,7 @@ fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, bud
          e {:.3e}, slack {} (newton {}), |dU|/|U| {d:.3e}, {:.2} s",
         sol.info.status,
         sol.info.iterations,
-        sol.info.residual,
+        sol.info.stopping_value,
         last.2.unwrap(),
         sol.equilibrium.slack_count(),
         reference.equilibrium.slack_count(),

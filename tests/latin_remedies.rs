@@ -10,19 +10,9 @@ mod common;
 use common::{load, paper_structure, solve_both};
 use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy, StopOn};
 use tensolve::solvers::{
-    displacement_residual, AnySolver, IterationRecord, Observer, Reference, Solution,
+    displacement_residual, AnySolver, IterationRecord, Recorder, Reference, Solution,
 };
 use tensolve::structure::Structure;
-
-/// Every record of a solve.
-#[derive(Default)]
-struct Records(Vec<IterationRecord>);
-
-impl Observer for Records {
-    fn iteration(&mut self, record: &IterationRecord) {
-        self.0.push(*record);
-    }
-}
 
 /// A LATIN solve of `s` at `alpha` against the newton solution `exact`, every iterate kept.
 fn latin_solve(
@@ -32,13 +22,13 @@ fn latin_solve(
     exact: &Solution,
 ) -> (Solution, Vec<IterationRecord>) {
     let reference = Reference::new(s, &exact.equilibrium.displacements);
-    let mut records = Records::default();
+    let mut records = Recorder::default();
     let solution = Latin::new(s, settings).expect("set-up").solve(
         &load(s, alpha),
         Some(&reference),
         &mut records,
     );
-    (solution, records.0)
+    (solution, records.records)
 }
 
 fn partition(subdomains: [usize; 2]) -> LatinSettings {
@@ -62,20 +52,24 @@ fn braced_paper_case_converges_with_newtons_slack_set() {
                  r {:.1e}, e {e:.1e}",
                 sol.info.status,
                 sol.info.iterations,
-                sol.info.setups,
-                sol.info.residual,
+                sol.info.rebuilds,
+                sol.info.stopping_value,
                 last.equilibrium_residual.unwrap()
             );
             // Measured: mono 24 / 431 / 36, micro-macro 53 / 55 / 70 iterations; e ≤ 4.4e-7.
             // The plain method never converges here (η stuck at 5.7e-2 on mono-latin).
             assert!(sol.info.status.converged(), "{subdomains:?} alpha {alpha}");
-            assert!(sol.info.residual <= 1e-6, "eta {:e}", sol.info.residual);
+            assert!(
+                sol.info.stopping_value <= 1e-6,
+                "eta {:e}",
+                sol.info.stopping_value
+            );
             assert!(e < 1e-5, "{subdomains:?} alpha {alpha}: e = {e:e}");
             assert!(
                 sol.equilibrium.slack == exact.equilibrium.slack,
                 "{subdomains:?} alpha {alpha}: slack sets differ"
             );
-            assert!(sol.info.setups > 0, "status-following l re-set up");
+            assert!(sol.info.rebuilds > 0, "status-following l re-set up");
         }
     }
 }
@@ -91,10 +85,10 @@ fn paper_case_micro_macro_eta_has_no_floor() {
         ..partition([4, 4])
     };
     let (_, records) = latin_solve(&s, settings, 1.0, &exact);
-    let eta = |k: usize| records[k].residual;
+    let eta = |k: usize| records[k].stopping_value;
     let first = |f: &dyn Fn(&IterationRecord) -> bool| records.iter().position(f);
     let e_below = first(&|r| r.error.unwrap() < 1e-6);
-    let eta_below = first(&|r| r.residual < 1e-8);
+    let eta_below = first(&|r| r.stopping_value < 1e-8);
     println!(
         "paper micro-macro: e < 1e-6 at {e_below:?}, eta < 1e-8 at {eta_below:?}, eta(100) \
          {:.1e}, eta(140) {:.1e}",
@@ -145,7 +139,7 @@ fn equilibrium_residual_is_one_measure_for_every_solver() {
     let (r_newton, r_pcg) = (r(&newton), r(&pcg));
     println!("r(U): newton {r_newton:.1e}, pcg-lcp {r_pcg:.1e}");
     // newton's own stopping measure is r(U); pcg-lcp's answer meets it too (measured 1.1e-11).
-    assert_eq!(r_newton, newton.info.residual);
+    assert_eq!(r_newton, newton.info.stopping_value);
     assert!(
         r_newton <= 1e-10 && r_pcg <= 1e-10,
         "{r_newton:e} {r_pcg:e}"
@@ -189,8 +183,8 @@ fn plain_method_stays_reachable() {
         sol.info.status, sol.info.iterations
     );
     // l never changes, and it stops on η alone.
-    assert!(records.iter().all(|r| r.setups == 0));
-    assert!(sol.info.residual <= 1e-6);
+    assert!(records.iter().all(|r| r.rebuilds == 0));
+    assert!(sol.info.stopping_value <= 1e-6);
 }
 
 #[test]
@@ -295,7 +289,7 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
         let e = records.last().and_then(|r| r.error).expect("error");
         println!(
             "{n} x {n}: {:?} in {} it, {} rebuilds, e = {e:e}",
-            sol.info.status, sol.info.iterations, sol.info.setups
+            sol.info.status, sol.info.iterations, sol.info.rebuilds
         );
         assert!(sol.info.status.converged(), "{n}: {:?}", sol.info);
         assert!(e <= 1e-5, "{n}: e = {e:e} at the stop");
@@ -303,7 +297,11 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
             sol.equilibrium.slack, exact.equilibrium.slack,
             "{n}: newton's slack set"
         );
-        assert!(sol.info.setups <= 4, "{n}: {} rebuilds", sol.info.setups);
+        assert!(
+            sol.info.rebuilds <= 4,
+            "{n}: {} rebuilds",
+            sol.info.rebuilds
+        );
         // The status-following policy rebuilds at least twice as often on the same case.
         let status = LatinSettings {
             policy: SearchPolicy::Status,
@@ -311,10 +309,10 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
         };
         let (old, _) = latin_solve(&s, status, alpha, &exact);
         assert!(
-            old.info.setups >= 2 * sol.info.setups,
+            old.info.rebuilds >= 2 * sol.info.rebuilds,
             "{n}: status-following {} rebuilds, inexact Newton {}",
-            old.info.setups,
-            sol.info.setups
+            old.info.rebuilds,
+            sol.info.rebuilds
         );
         counts.push(sol.info.iterations as f64);
     }
@@ -332,6 +330,6 @@ fn inexact_newton_steps_on_a_bilateral_grid_never_rebuild() {
     let (exact, _) = solve_both(&s, 2.4);
     let (sol, _) = latin_solve(&s, partition([4, 4]), 2.4, &exact);
     assert!(sol.info.status.converged(), "{:?}", sol.info);
-    assert_eq!(sol.info.setups, 0);
+    assert_eq!(sol.info.rebuilds, 0);
     assert_eq!(sol.equilibrium.slack_count(), 0);
 }

@@ -226,6 +226,20 @@ pub const LENGTH_WARNING: f64 = 1e4;
 
 impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_structure(f)?;
+        self.write_model(f)?;
+        self.write_run(f)?;
+        if !self.stiffness_regular {
+            return Ok(());
+        }
+        self.write_set_up(f)
+    }
+}
+
+impl CheckReport {
+    /// The structure: its size, supports, members and their magnitudes (with the unit-slip
+    /// warnings).
+    fn write_structure(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let m = &self.model;
         writeln!(f, "case            {}", m.case.display())?;
         match (m.modules, m.module) {
@@ -295,6 +309,13 @@ impl fmt::Display for CheckReport {
                 m.lengths[1]
             )?;
         }
+        Ok(())
+    }
+
+    /// The model, the prestress's balance, and the equilibrium matrix's counts (with the
+    /// mechanisms' prestress stability).
+    fn write_model(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.model;
         writeln!(
             f,
             "model           geometry = {} ({})",
@@ -361,6 +382,12 @@ impl fmt::Display for CheckReport {
                 )?,
             }
         }
+        Ok(())
+    }
+
+    /// What a run would do: the load factors, the solvers, the memory it needs.
+    fn write_run(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.model;
         let alphas: Vec<String> = m.alphas.iter().map(|&a| alpha_label(a)).collect();
         writeln!(f, "load factors    {}", alphas.join(", "))?;
         let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();
@@ -375,9 +402,12 @@ impl fmt::Display for CheckReport {
             )?,
             None => writeln!(f, "  available     unknown (no limit readable)")?,
         }
-        if !self.stiffness_regular {
-            return Ok(());
-        }
+        Ok(())
+    }
+
+    /// The taut stiffness, and each LATIN solver's partition as set up.
+    fn write_set_up(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.model;
         writeln!(
             f,
             "stiffness       positive definite with every cable taut{}",

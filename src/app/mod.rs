@@ -1,10 +1,11 @@
 //! The application on top of the pipeline: set solvers up for a case ([`setup`]), run a sweep
-//! of load factors into files ([`sweep`]), measure what accuracy costs in time ([`bench`]) and
+//! of load factors into files (`sweep`), measure what accuracy costs in time (`bench`) and
 //! report what a case describes ([`check`]).
 
 pub mod allocator;
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod reference;
 pub mod setup;
 pub mod sweep;

@@ -2,10 +2,10 @@
 //! then each solver asked for, with the set-up time it is charged.
 
 use crate::case::{Case, SolverChoice};
-use crate::solvers::latin::Latin;
+use crate::solvers::latin::{Homogenised, Latin};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
-use crate::solvers::{AnySolver, Method, SetupError, TautStiffness};
+use crate::solvers::{AnySolver, Method, Settings, SetupError, TautStiffness};
 use crate::structure::{GeometricModel, Structure};
 use std::time::Instant;
 
@@ -35,12 +35,32 @@ pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
     })
 }
 
+/// A solver as the application holds it: solved through the driver ([`AnySolver`]), and
+/// asked for the set-up products a run writes besides its solves.
+pub trait HeldSolver: AnySolver {
+    /// The homogenised substructure operators (`output.homogenised`) of the LATIN solvers;
+    /// none for the others.
+    fn homogenised(&mut self) -> Vec<Homogenised> {
+        Vec::new()
+    }
+}
+
+impl HeldSolver for Newton<'_> {}
+impl HeldSolver for LargeNewton<'_> {}
+impl HeldSolver for PcgLcp<'_> {}
+
+impl HeldSolver for Latin<'_> {
+    fn homogenised(&mut self) -> Vec<Homogenised> {
+        Latin::homogenised(self)
+    }
+}
+
 /// A solver set up for the prepared structure.
 pub struct SetUpSolver<'s> {
     /// Which solver.
     pub method: Method,
     /// The solver.
-    pub solver: Box<dyn AnySolver + 's>,
+    pub solver: Box<dyn HeldSolver + 's>,
     /// Its set-up time, s: the structure, plus for `newton` and `pcg-lcp` the factorization of
     /// the taut stiffness they solve with (the LATIN solvers never use it), plus its own.
     pub setup_seconds: f64,
@@ -60,24 +80,20 @@ pub fn set_up<'s>(
         });
     }
     let clock = Instant::now();
-    let (solver, shared): (Box<dyn AnySolver + 's>, f64) = match method {
-        Method::Newton if structure.model == GeometricModel::Large => (
-            Box::new(LargeNewton::new(structure, taut, choice.newton)),
+    let (solver, shared): (Box<dyn HeldSolver + 's>, f64) = match choice.settings(method) {
+        Settings::Newton(settings) if structure.model == GeometricModel::Large => (
+            Box::new(LargeNewton::new(structure, taut, settings)),
             prepared.taut_seconds,
         ),
-        Method::Newton => (
-            Box::new(Newton::new(structure, taut, choice.newton)?),
+        Settings::Newton(settings) => (
+            Box::new(Newton::new(structure, taut, settings)?),
             prepared.taut_seconds,
         ),
-        Method::PcgLcp => (
-            Box::new(PcgLcp::new(structure, taut, choice.pcg_lcp)),
+        Settings::PcgLcp(settings) => (
+            Box::new(PcgLcp::new(structure, taut, settings)),
             prepared.taut_seconds,
         ),
-        Method::MonoLatin | Method::MicroMacro => {
-            let settings = choice
-                .latin_settings(method)
-                .expect("a LATIN method has LATIN settings");
-            check_search_direction(structure, &settings.search)?;
+        Settings::MonoLatin(settings) | Settings::MicroMacro(settings) => {
             (Box::new(Latin::new(structure, settings)?), 0.0)
         }
     };
@@ -86,40 +102,4 @@ pub fn set_up<'s>(
         solver,
         setup_seconds: prepared.structure_seconds + shared + clock.elapsed().as_secs_f64(),
     })
-}
-
-/// How far a uniform `solver.l` may be from the links' stiffness: beyond, the stages' round-off
-/// (which scales with `1/√l` and `√l`) swamps the indicator (issue 13, D1: `l = 1e-300`
-/// "converged" in 0 iterations with an infinite deflection).
-const SEARCH_DIRECTION_RANGE: f64 = 1e8;
-
-/// Refuse a uniform search direction `l` outside `[k_min / 1e8, 1e8 k_max]`.
-fn check_search_direction(
-    structure: &Structure,
-    search: &crate::solvers::latin::SearchDirection,
-) -> Result<(), SetupError> {
-    let crate::solvers::latin::SearchDirection::Uniform(l) = *search else {
-        return Ok(());
-    };
-    let (k_min, k_max) = structure
-        .links
-        .iter()
-        .map(|l| l.stiffness)
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), k| {
-            (lo.min(k), hi.max(k))
-        });
-    let (min, max) = (
-        k_min / SEARCH_DIRECTION_RANGE,
-        k_max * SEARCH_DIRECTION_RANGE,
-    );
-    if k_max > 0.0 && !(min..=max).contains(&l) {
-        return Err(SetupError::SearchDirectionOutOfRange {
-            l,
-            k_min,
-            k_max,
-            min,
-            max,
-        });
-    }
-    Ok(())
 }

@@ -1,13 +1,23 @@
 //! The case file: what structure to build, which effects to model, which solvers to run and
-//! which outputs to write. The file is parsed into raw serde structs ([`raw`]) and converted
-//! into a fully typed [`Case`] ([`convert`]) whose numbers are known to be finite and physical;
+//! which outputs to write. The file is parsed into raw serde structs (`raw`) and converted
+//! into a fully typed `Case` (`convert`) whose numbers are known to be finite and physical;
 //! every other module receives that.
+//!
+//! Inside, one way only: `numbers` (the checks of a number) and `raw` under everything;
+//! `tables`, `nodes`, `grid`, `prestress`, `load`, `solver` and `output` each
+//! convert one part of the file; `convert` calls them in file order.
 
 mod convert;
 mod error;
+mod grid;
+mod load;
 pub mod memory;
+mod nodes;
+mod numbers;
+mod output;
 mod prestress;
 mod raw;
+mod solver;
 mod tables;
 mod typed;
 
@@ -98,7 +108,7 @@ pub fn check_distinct_methods(
     key: &'static str,
     methods: &[crate::solvers::Method],
 ) -> Result<(), CaseError> {
-    convert::check_distinct_methods(key, methods)
+    solver::check_distinct_methods(key, methods)
 }
 
 /// Parse and validate case text (no output directory default is applied here); `[structure]`

@@ -1,14 +1,19 @@
-//! `[prestress] from = "self-stress", member = ID, force = N` (docs/method.md §7): a general
-//! structure's prestress as its single self-stress state, scaled so that one member carries a
-//! given tension. It replaces the members table's prestress column, which must then be 0.
+//! The prestress of a case. `[prestress] from = "self-stress", member = ID, force = N`
+//! (docs/method.md §7): a general structure's prestress as its single self-stress state, scaled
+//! so that one member carries a given tension; it replaces the members table's prestress
+//! column, which must then be 0. Then every prestress, however given, is checked: no
+//! compressed unilateral cable, and in equilibrium at the free dofs.
 
-use super::convert::{bounded, number, PHYSICAL_MAX};
+use super::numbers::{bounded, number, PHYSICAL_MAX};
 use super::raw::{RawPrestress, RawPrestressSource};
 use super::CaseError;
 use crate::structure::{
     self_stress_dense, self_stress_through, DenseSelfStressRefusal, GeometricModel, Geometry,
     NodeFix, SelfStressRefusal, Structure,
 };
+
+/// Where a `[prestress]` self-stress state's scale is read from.
+const FROM: &str = "prestress.from";
 
 /// Set `geometry`'s prestress from its self-stress state when `[prestress]` asks for it
 /// (`grid`: the case is a `[grid]`, whose prestress is `lower_cable`).
@@ -20,21 +25,47 @@ pub(super) fn apply(
     model: GeometricModel,
 ) -> Result<(), CaseError> {
     let Some(RawPrestressSource::SelfStress) = raw.from else {
-        for (key, given) in [
-            ("prestress.member", raw.member.is_some()),
-            ("prestress.force", raw.force.is_some()),
-        ] {
-            if given {
-                return Err(CaseError::invalid(
-                    key,
-                    "given",
-                    "it scales the self-stress state: add `from = \"self-stress\"`, or remove it",
-                ));
-            }
-        }
-        return Ok(());
+        return refuse_scale_without_source(raw);
     };
-    const FROM: &str = "prestress.from";
+    // 1. The scale: member j carries tension `force`.
+    let (id, j, force) = scale(raw, grid, geometry)?;
+    // 2. The state, on the free dofs of the supports (settlements do not change them).
+    let unsettled = NodeFix::unsettled(fixes);
+    let structure = Structure::new(geometry, &unsettled, &Default::default());
+    let state = self_stress_state(&structure, geometry, id, j, model)?;
+    // 3. No cable compressed by the scaled state; then the state is the prestress.
+    refuse_compressed_cables(geometry, &state, force)?;
+    for (m, t) in geometry.members.iter_mut().zip(&state) {
+        m.prestress = force * t;
+    }
+    Ok(())
+}
+
+/// Without `from = "self-stress"`, `member` and `force` scale nothing: refused when given.
+fn refuse_scale_without_source(raw: &RawPrestress) -> Result<(), CaseError> {
+    for (key, given) in [
+        ("prestress.member", raw.member.is_some()),
+        ("prestress.force", raw.force.is_some()),
+    ] {
+        if given {
+            return Err(CaseError::invalid(
+                key,
+                "given",
+                "it scales the self-stress state: add `from = \"self-stress\"`, or remove it",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The member (id and index) whose tension `force` scales the state, checked: a general
+/// structure, both keys given, a non-zero force, a member of the table, and no prestress given
+/// in the members table.
+fn scale(
+    raw: &RawPrestress,
+    grid: bool,
+    geometry: &Geometry,
+) -> Result<(u64, usize, f64), CaseError> {
     if grid {
         return Err(CaseError::invalid(
             FROM,
@@ -92,10 +123,20 @@ pub(super) fn apply(
             "the self-stress state replaces the members' prestress: set the prestress column to 0, or remove `from`",
         ));
     }
-    // The free dofs are those of the supports; settlements do not change them.
-    let unsettled = NodeFix::unsettled(fixes);
-    let structure = Structure::new(geometry, &unsettled, &Default::default());
-    let state = match self_stress_through(&structure, j) {
+    Ok((id, j, force))
+}
+
+/// The single self-stress state of `structure` through member `j` (id `id`), unit on it;
+/// refused with what the structure has instead (mechanisms under the linear model, several
+/// states, none loading member `j`).
+fn self_stress_state(
+    structure: &Structure,
+    geometry: &Geometry,
+    id: u64,
+    j: usize,
+    model: GeometricModel,
+) -> Result<Vec<f64>, CaseError> {
+    Ok(match self_stress_through(structure, j) {
         Ok(state) => state,
         Err(SelfStressRefusal::Counts(c))
             if c.mechanisms > 0 && !model.has_geometric_stiffness() =>
@@ -111,7 +152,7 @@ pub(super) fn apply(
         }
         // Mechanisms (with geometric stiffness), or trivial states among the s counted: the
         // dense computation counts the members between two held nodes apart.
-        Err(SelfStressRefusal::Counts(c)) => match self_stress_dense(&structure, j) {
+        Err(SelfStressRefusal::Counts(c)) => match self_stress_dense(structure, j) {
             Ok(dense) => dense.state,
             Err(DenseSelfStressRefusal::Count(s, trivial)) => {
                 let ids: Vec<String> = trivial
@@ -161,11 +202,19 @@ pub(super) fn apply(
                 "the self-stress state is zero on this member, so its tension cannot set the scale: name a member the state loads",
             ))
         }
-    };
+    })
+}
+
+/// Refuse a scaled state `force × state` that compresses a cable.
+fn refuse_compressed_cables(
+    geometry: &Geometry,
+    state: &[f64],
+    force: f64,
+) -> Result<(), CaseError> {
     let compressed: Vec<String> = geometry
         .members
         .iter()
-        .zip(&state)
+        .zip(state)
         .filter(|(m, &t)| m.kind.is_cable() && force * t < 0.0)
         .map(|(m, &t)| {
             // Shown to 12 significant digits: −1000, not −999.9999999999998.
@@ -185,8 +234,80 @@ pub(super) fn apply(
             ),
         ));
     }
-    for (m, t) in geometry.members.iter_mut().zip(&state) {
-        m.prestress = force * t;
-    }
     Ok(())
+}
+
+/// Relative prestress imbalance above which a prestress is refused: `|Bᵀt0|` at a node
+/// against the `Σ|t0|` of the links meeting there.
+const IMBALANCE_RELATIVE: f64 = 1e-9;
+
+/// Refuse a prestress not in equilibrium at the free dofs (docs/method.md §7), naming the worst nodes.
+pub(super) fn check_balanced(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(), CaseError> {
+    // A unilateral cable carries tension only: a compressed prestress is released at once
+    // (every solver would answer with the prestress gone and call it converged).
+    if geometry.unilateral {
+        let compressed: Vec<&crate::structure::Member> = geometry
+            .members
+            .iter()
+            .filter(|m| m.kind.is_cable() && m.prestress < 0.0)
+            .collect();
+        if !compressed.is_empty() {
+            let ids: Vec<String> = compressed
+                .iter()
+                .take(10)
+                .map(|m| m.id.to_string())
+                .collect();
+            let most = compressed.iter().fold(0.0f64, |x, m| x.min(m.prestress));
+            return Err(CaseError::invalid(
+                "prestress",
+                format!(
+                    "{} unilateral cable(s) in compression, member(s) {}{} (down to {} N)",
+                    compressed.len(),
+                    ids.join(", "),
+                    if compressed.len() > 10 { ", …" } else { "" },
+                    number(most)
+                ),
+                "a cable carries tension only, so its prestress t0 must be ≥ 0 (tension > 0): \
+                 check the sign of the members table's prestress column (a self-stress state may \
+                 be given with the opposite sign), make those members bars, or set \
+                 `cables.unilateral = false`",
+            ));
+        }
+    }
+    // Without settlements the effective prestress is t0 itself; with them, the imposed
+    // part is carried by the supports on purpose, so check t0 on the same free dofs.
+    let s = Structure::new(geometry, &NodeFix::unsettled(fixes), &Default::default());
+    let mut worst: Vec<(f64, usize, f64)> = s
+        .free_prestress_imbalance()
+        .iter()
+        .enumerate()
+        .filter_map(|(n, (f, scale))| {
+            let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            (norm > IMBALANCE_RELATIVE * scale.max(f64::MIN_POSITIVE)).then_some((
+                norm / scale,
+                n,
+                norm,
+            ))
+        })
+        .collect();
+    if worst.is_empty() {
+        return Ok(());
+    }
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let names: Vec<String> = worst
+        .iter()
+        .take(3)
+        .map(|&(_, n, norm)| {
+            format!(
+                "node {} (|Bᵀt0| = {} N)",
+                geometry.node_ids[n],
+                number(norm)
+            )
+        })
+        .collect();
+    Err(CaseError::invalid(
+        "prestress",
+        format!("{} unbalanced node(s): {}", worst.len(), names.join(", ")),
+        "give member prestresses t0 in equilibrium at every free node (Bᵀt0 = 0 on the free dofs), or hold those nodes",
+    ))
 }

@@ -2,14 +2,11 @@
 //! (`member,a,b,kind,young,section,prestress[,density]`). Every row is checked and an error
 //! names the file, the line, the column, the value and the fix.
 
-use super::convert::number;
+use super::numbers::{number, PHYSICAL_MAX};
 use super::CaseError;
 use crate::structure::{length_and_direction, Geometry, LinkKind, Member};
 use std::collections::HashMap;
 use std::path::Path;
-
-/// Largest magnitude accepted for a coordinate or a member property (as for case numbers).
-const PHYSICAL_MAX: f64 = 1e15;
 
 /// One table being read: its file name for messages.
 struct Table<'a> {
@@ -164,6 +161,22 @@ pub fn read_geometry(
     members_text: &str,
     unilateral: bool,
 ) -> Result<Geometry, CaseError> {
+    let (node_ids, nodes, index_of) = read_nodes(nodes_name, nodes_text)?;
+    let members = read_members(members_name, members_text, nodes_name, &nodes, &index_of)?;
+    Ok(Geometry {
+        node_ids,
+        nodes,
+        members,
+        unilateral,
+    })
+}
+
+/// Node ids, positions, and each id's (index, line), of the nodes table.
+type Nodes = (Vec<u64>, Vec<[f64; 3]>, HashMap<u64, (usize, u64)>);
+
+/// The nodes table `nodes_text` (file `nodes_name`): every id unique, every coordinate a
+/// bounded number.
+fn read_nodes(nodes_name: &str, nodes_text: &str) -> Result<Nodes, CaseError> {
     let table = Table { file: nodes_name };
     let mut node_ids = Vec::new();
     let mut nodes = Vec::new();
@@ -191,6 +204,19 @@ pub fn read_geometry(
     if nodes.is_empty() {
         return Err(table.error(1, "node", "", "give at least two nodes, one row each"));
     }
+    Ok((node_ids, nodes, index_of))
+}
+
+/// The members table `members_text` (file `members_name`) between the nodes of `nodes` (ids
+/// in `index_of`, from the file `nodes_name`): every id unique, both ends defined and apart,
+/// a known kind, physical properties.
+fn read_members(
+    members_name: &str,
+    members_text: &str,
+    nodes_name: &str,
+    nodes: &[[f64; 3]],
+    index_of: &HashMap<u64, (usize, u64)>,
+) -> Result<Vec<Member>, CaseError> {
     let table = Table { file: members_name };
     let mut members = Vec::new();
     let mut seen: HashMap<u64, u64> = HashMap::new();
@@ -277,12 +303,7 @@ pub fn read_geometry(
     if members.is_empty() {
         return Err(table.error(1, "member", "", "give at least one member, one row each"));
     }
-    Ok(Geometry {
-        node_ids,
-        nodes,
-        members,
-        unilateral,
-    })
+    Ok(members)
 }
 
 /// Read the two tables from files (paths as given, already resolved against the case file).

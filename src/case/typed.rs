@@ -4,7 +4,7 @@
 use crate::solvers::latin::LatinSettings;
 use crate::solvers::newton::NewtonSettings;
 use crate::solvers::pcg_lcp::PcgLcpSettings;
-use crate::solvers::Method;
+use crate::solvers::{Method, Settings};
 use crate::structure::{Geometry, GridLayout, GridSpec, LoadPattern, Loading, NodeFix, Structure};
 use serde::Deserialize;
 use std::path::PathBuf;
@@ -130,13 +130,22 @@ impl Default for SolverChoice {
 }
 
 impl SolverChoice {
-    /// The LATIN settings of `method` (`mono-latin`: the 1 × 1 partition), `None` for the
-    /// other solvers.
-    pub fn latin_settings(&self, method: Method) -> Option<LatinSettings> {
+    /// The settings `method` runs with (`mono-latin`: the LATIN settings on the 1 × 1
+    /// partition).
+    pub fn settings(&self, method: Method) -> Settings {
         match method {
-            Method::MonoLatin => Some(self.latin.monodomain()),
-            Method::MicroMacro => Some(self.latin),
-            Method::Newton | Method::PcgLcp => None,
+            Method::Newton => Settings::Newton(self.newton),
+            Method::PcgLcp => Settings::PcgLcp(self.pcg_lcp),
+            Method::MonoLatin => Settings::MonoLatin(self.latin.monodomain()),
+            Method::MicroMacro => Settings::MicroMacro(self.latin),
+        }
+    }
+
+    /// The LATIN settings of `method`, `None` for the other solvers.
+    pub fn latin_settings(&self, method: Method) -> Option<LatinSettings> {
+        match self.settings(method) {
+            Settings::MonoLatin(latin) | Settings::MicroMacro(latin) => Some(latin),
+            Settings::Newton(_) | Settings::PcgLcp(_) => None,
         }
     }
 

@@ -3,11 +3,11 @@
 //! Solves take `&self` (a solve's small workspace is allocated per call) so that one factor can
 //! be shared.
 
-use super::{nested_dissection, StiffnessPattern};
+use super::ordering::{node_ordering, NodeOrdering};
+use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::perm::PermRef;
-use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, simplicial, supernodal, CholeskySymbolicParams, LltRef,
     SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
@@ -134,100 +134,6 @@ impl std::fmt::Debug for SparseCholesky {
             .field("factor_entries", &self.l_values.len())
             .finish()
     }
-}
-
-/// Fill-reducing ordering of the node graph (dofs taken three by three, as every pattern here
-/// numbers a node's three components consecutively), expanded to the dofs. Any permutation
-/// is correct, so a pattern that is not node-major only loses fill quality.
-#[derive(Debug, Clone, Copy)]
-pub enum NodeOrdering<'a> {
-    /// Approximate minimum degree on the node graph: nine times fewer entries than AMD on the
-    /// dofs, with the same fill on these grids.
-    Amd,
-    /// Nested dissection from each node's coordinates (one per node of the pattern,
-    /// i.e. per three dofs), [`nested_dissection`]; falls back to AMD if the count differs.
-    NestedDissection(&'a [[f64; 3]]),
-}
-
-/// The node graph of a node-major pattern, as CSR (offsets, neighbours), symmetric.
-fn node_graph(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
-    let nodes = p.n / 3;
-    // A link couples all three components of its two nodes, so the first component of each
-    // node carries the whole node graph: its column lists the later neighbours (r > c).
-    let later = |c: usize| {
-        p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]]
-            .iter()
-            .filter(move |&&r| r % 3 == 0 && r / 3 != c / 3)
-            .map(|&r| r / 3)
-    };
-    let mut offsets = vec![0usize; nodes + 1];
-    for v in 0..nodes {
-        for w in later(3 * v) {
-            offsets[v + 1] += 1;
-            offsets[w + 1] += 1;
-        }
-    }
-    for v in 0..nodes {
-        offsets[v + 1] += offsets[v];
-    }
-    // Filling node by node puts each list in increasing order: earlier neighbours first (they
-    // are filled while visiting them, in order), then the later ones (rows are sorted).
-    let mut neighbours = vec![0usize; offsets[nodes]];
-    let mut fill = offsets[..nodes].to_vec();
-    for v in 0..nodes {
-        for w in later(3 * v) {
-            neighbours[fill[w]] = v;
-            fill[w] += 1;
-        }
-        for w in later(3 * v) {
-            neighbours[fill[v]] = w;
-            fill[v] += 1;
-        }
-    }
-    (offsets, neighbours)
-}
-
-/// The dof permutation (forward, inverse) of `ordering` on `p`'s node graph.
-fn node_ordering(p: &StiffnessPattern, ordering: NodeOrdering<'_>) -> (Vec<usize>, Vec<usize>) {
-    let n = p.n;
-    let identity = || ((0..n).collect(), (0..n).collect());
-    if !n.is_multiple_of(3) || n == 0 {
-        return identity();
-    }
-    let nodes = n / 3;
-    let (offsets, neighbours) = node_graph(p);
-    let perm = match ordering {
-        NodeOrdering::NestedDissection(xy) if xy.len() == nodes => {
-            nested_dissection(&offsets, &neighbours, xy)
-        }
-        _ => {
-            let graph =
-                SymbolicSparseColMatRef::new_checked(nodes, nodes, &offsets, None, &neighbours);
-            let (mut perm, mut perm_inv) = (vec![0usize; nodes], vec![0usize; nodes]);
-            let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(nodes, neighbours.len()));
-            let ordered = amd::order(
-                &mut perm,
-                &mut perm_inv,
-                graph,
-                Default::default(),
-                MemStack::new(&mut scratch),
-            );
-            if ordered.is_err() {
-                return identity();
-            }
-            perm
-        }
-    };
-    let mut perm_inv = vec![0usize; nodes];
-    for (k, &v) in perm.iter().enumerate() {
-        perm_inv[v] = k;
-    }
-    let expand = |p: &[usize]| -> Vec<usize> {
-        p.iter()
-            .flat_map(|&k| [3 * k, 3 * k + 1, 3 * k + 2])
-            .collect()
-    };
-    (expand(&perm), expand(&perm_inv))
 }
 
 impl SparseCholesky {

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 /// Header line of a history CSV file: per iteration, energy error e (empty without a
 /// reference), the stopping measure under `measure_column` ([`history_column`]), r(U),
-/// fraction of cables slack, re-set-ups, solver time (s).
+/// fraction of cables slack, operator rebuilds (column `search_updates`), solver time (s).
 pub fn history_header(measure_column: &str) -> String {
     format!(
         "iteration,error_e,{measure_column},equilibrium_residual,slack_fraction,search_updates,elapsed_seconds"
@@ -106,7 +106,7 @@ impl Observer for HistoryWriter {
         let result = writeln!(
             out,
             "{},{},{:e},{},{},{},{}",
-            r.iteration, error, r.residual, residual, fraction, r.setups, r.elapsed_seconds
+            r.iteration, error, r.stopping_value, residual, fraction, r.rebuilds, r.elapsed_seconds
         )
         .and_then(|_| out.flush());
         if let Err(e) = result {

@@ -20,7 +20,7 @@ use super::{
     HistoryWriter, OutputDir, StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
 };
 use crate::results;
-use crate::solvers::{Equilibrium, IterationRecord, Measure, Solution, TautStiffness};
+use crate::solvers::{Equilibrium, IterationRecord, Measure, Method, Solution, TautStiffness};
 use crate::structure::Structure;
 use std::cell::RefCell;
 use std::io;
@@ -46,9 +46,9 @@ impl WriteError {
 
 /// Which solve is starting.
 #[derive(Debug, Clone, Copy)]
-pub struct SolveKey<'a> {
-    /// The solver's name.
-    pub solver: &'a str,
+pub struct SolveKey {
+    /// The solver.
+    pub method: Method,
     /// The load factor.
     pub alpha: f64,
     /// What the solver's stopping measure measures.
@@ -118,9 +118,12 @@ impl Sink for HistorySink {
     fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
         if let Some(column) = history_column(key.measure) {
             let writer =
-                HistoryWriter::create(&self.dir, key.solver, key.alpha, column, self.cables)
+                HistoryWriter::create(&self.dir, key.method.name(), key.alpha, column, self.cables)
                     .map_err(WriteError::at(result_path(
-                        &self.root, "history", key.solver, key.alpha,
+                        &self.root,
+                        "history",
+                        key.method.name(),
+                        key.alpha,
                     )))?;
             self.writer = Some(writer);
         }
@@ -139,7 +142,10 @@ impl Sink for HistorySink {
                 .finish()
                 .map(|_| ())
                 .map_err(WriteError::at(result_path(
-                    &self.root, "history", key.solver, key.alpha,
+                    &self.root,
+                    "history",
+                    key.method.name(),
+                    key.alpha,
                 ))),
             None => Ok(()),
         }
@@ -235,14 +241,16 @@ impl Sink for PerSolveSink<'_> {
         };
         (self.write)(
             &self.dir,
-            key.solver,
+            key.method.name(),
             key.alpha,
             self.structure,
             &solution.equilibrium,
         )
         .map(|_| ())
         .map_err(WriteError::at((self.error_path)(
-            &self.root, key.solver, key.alpha,
+            &self.root,
+            key.method.name(),
+            key.alpha,
         )))
     }
 }
@@ -265,7 +273,7 @@ impl<'s> PlotsSink<'s> {
         root: &Path,
         dir: &Path,
         structure: &'s Structure,
-        first_solver: &str,
+        first_solver: Method,
         settings: FigureSettings,
     ) -> Self {
         PlotsSink {
@@ -280,7 +288,7 @@ impl<'s> PlotsSink<'s> {
 
 impl Sink for PlotsSink<'_> {
     fn start(&mut self, key: &SolveKey) -> Result<(), WriteError> {
-        self.records = (key.measure == Measure::Indicator).then(Vec::new);
+        self.records = key.method.reports_error().then(Vec::new);
         Ok(())
     }
 
@@ -294,9 +302,9 @@ impl Sink for PlotsSink<'_> {
         let records = self.records.take();
         if let SolveEnd::Solved { solution, .. } = end {
             self.figures
-                .add_solve(key.solver, key.alpha, self.structure, &solution.equilibrium);
+                .add_solve(key.method, key.alpha, self.structure, &solution.equilibrium);
             if let Some(records) = records {
-                self.figures.add_history(key.solver, key.alpha, records);
+                self.figures.add_history(key.method, key.alpha, records);
             }
         }
         Ok(())

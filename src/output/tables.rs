@@ -33,7 +33,7 @@ pub struct SummaryRow {
     pub converged: bool,
     /// How the solve ended ([`Status::code`]).
     pub status: Status,
-    /// What `residual` measures (not a column: the solver says it).
+    /// What `stopping_value` measures (not a column: the solver says it).
     pub measure: Measure,
     /// Iterations done.
     pub iterations: usize,
@@ -45,12 +45,12 @@ pub struct SummaryRow {
     pub max_tension: f64,
     /// Largest nodal displacement magnitude, m.
     pub max_deflection: f64,
-    /// The solver's stopping measure at the end.
-    pub residual: f64,
+    /// The solver's stopping measure at the end (column `residual`).
+    pub stopping_value: f64,
     /// r(U) of the answer's displacements: the measure every solver shares.
     pub equilibrium_residual: f64,
-    /// Re-set-ups of the solver's operators during the solve.
-    pub search_updates: usize,
+    /// Operator rebuilds during the solve (column `search_updates`).
+    pub rebuilds: usize,
     /// Slack cables per kind ([`results::SLACK_KINDS`]).
     pub slack_by_kind: [usize; results::SLACK_KINDS.len()],
     /// The largest relative displacement of a member's ends over its length.
@@ -98,9 +98,9 @@ impl SummaryRow {
             cables: s.n_cables(),
             max_tension: results::max_cable_tension(s, eq),
             max_deflection: results::max_deflection(s, eq),
-            residual: solution.info.residual,
+            stopping_value: solution.info.stopping_value,
             equilibrium_residual: displacement_residual(s, &eq.displacements, load),
-            search_updates: solution.info.setups,
+            rebuilds: solution.info.rebuilds,
             slack_by_kind: results::slack_by_kind(s, eq),
             max_member_rotation: results::max_member_rotation(s, eq),
             updates_geometry: s.model == crate::structure::GeometricModel::Large,
@@ -136,7 +136,7 @@ impl SummaryRow {
         [
             self.max_tension,
             self.max_deflection,
-            self.residual,
+            self.stopping_value,
             self.equilibrium_residual,
             self.max_member_rotation,
             self.min_tangent_eigenvalue.unwrap_or(0.0),
@@ -181,9 +181,9 @@ pub fn summary_line(r: &SummaryRow) -> String {
         fraction,
         answer(r.max_tension.to_string()),
         answer(r.max_deflection.to_string()),
-        r.residual,
+        r.stopping_value,
         r.equilibrium_residual,
-        r.search_updates,
+        r.rebuilds,
         lower,
         upper,
         bracing,

@@ -73,9 +73,9 @@ pub fn drive_from<S: Solver + ?Sized>(
         if progress.iteration > 0 || S::INIT_IS_ITERATE {
             observer.iteration(&IterationRecord {
                 iteration: progress.iteration,
-                residual: progress.residual,
+                stopping_value: progress.stopping_value,
                 equilibrium_residual: progress.equilibrium_residual,
-                setups: progress.setups,
+                rebuilds: progress.rebuilds,
                 error: reference.map(|r| r.error(&solver.elongations(&state))),
                 slack_cables: progress.slack_cables,
                 elapsed_seconds: clock.seconds(),
@@ -120,8 +120,8 @@ pub fn drive_from<S: Solver + ?Sized>(
             status,
             iterations: progress.iteration,
             measure: solver.measure(),
-            residual: progress.residual,
-            setups: progress.setups,
+            stopping_value: progress.stopping_value,
+            rebuilds: progress.rebuilds,
             solve_seconds: clock.seconds(),
             at_roundoff: status == Status::Converged && progress.at_roundoff,
             no_equilibrium: runaway,
@@ -153,9 +153,6 @@ pub trait AnySolver {
 
     /// What the solver's stopping measure measures.
     fn stopping_measure(&self) -> Measure;
-
-    /// Homogenised substructure operators ([`Solver::homogenised`]).
-    fn homogenised_operators(&mut self) -> Vec<super::latin::Homogenised>;
 }
 
 impl<S: Solver> AnySolver for S {
@@ -171,9 +168,5 @@ impl<S: Solver> AnySolver for S {
 
     fn stopping_measure(&self) -> Measure {
         self.measure()
-    }
-
-    fn homogenised_operators(&mut self) -> Vec<super::latin::Homogenised> {
-        self.homogenised()
     }
 }

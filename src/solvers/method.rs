@@ -1,5 +1,11 @@
-//! The solvers a case may ask for, by name.
+//! The solvers a case may ask for, and what the rest of the program knows of each: its name,
+//! its colour in the figures, the factors it holds, whether it reports the energy error e, the
+//! geometric models it takes. Every fact about a solver that is not its algorithm is here,
+//! matched exhaustively, so a new solver cannot be forgotten by one of them.
 
+use super::latin::LatinSettings;
+use super::newton::NewtonSettings;
+use super::pcg_lcp::PcgLcpSettings;
 use crate::structure::GeometricModel;
 use serde::Deserialize;
 
@@ -39,11 +45,83 @@ impl Method {
     /// Whether the solver takes geometric model `model` (README "Real tensegrities"):
     /// newton every model, the others `linear` and `prestress` (`large` is newton's alone).
     pub fn supports(self, model: GeometricModel) -> bool {
-        self == Method::Newton || model != GeometricModel::Large
+        match self {
+            Method::Newton => true,
+            Method::PcgLcp | Method::MonoLatin | Method::MicroMacro => {
+                model != GeometricModel::Large
+            }
+        }
+    }
+
+    /// Whether the solver is a LATIN solver, set up on a partition into substructures
+    /// (`solver.subdomains`; mono-latin's is 1 × 1) with the `[solver]` LATIN settings.
+    pub fn is_latin(self) -> bool {
+        match self {
+            Method::Newton | Method::PcgLcp => false,
+            Method::MonoLatin | Method::MicroMacro => true,
+        }
+    }
+
+    /// Whether the solver reports the energy error e of every iterate against a reference
+    /// solve (`solver.reference`): the LATIN solvers, whose stopping measure η is not e. Those
+    /// write `history/` and appear in the convergence figures (Figures 9–12).
+    pub fn reports_error(self) -> bool {
+        self.is_latin()
+    }
+
+    /// Sparse factors the solver holds beyond the taut stiffness every run factorizes, in
+    /// units of the structure's stiffness factor (the memory estimate): newton its Hessian's;
+    /// pcg-lcp none (it solves with K's); mono-latin its whole-structure operators (measured
+    /// 3.0–3.4 units on 64 × 64 to 256 × 256, rounded up to 4); micro-macro its substructure
+    /// operators and macro problem (2.3–2.7 units on 64 × 64 to 256 × 256 with 4 × 4
+    /// substructures, rounded up to 3).
+    pub fn factor_units(self) -> f64 {
+        match self {
+            Method::Newton => 1.0,
+            Method::PcgLcp => 0.0,
+            Method::MonoLatin => 4.0,
+            Method::MicroMacro => 3.0,
+        }
+    }
+
+    /// The solver's colour in every figure, sRGB.
+    pub fn colour(self) -> [u8; 3] {
+        match self {
+            Method::Newton => [31, 119, 180],
+            Method::PcgLcp => [255, 127, 14],
+            Method::MonoLatin => [44, 160, 44],
+            Method::MicroMacro => [148, 103, 189],
+        }
     }
 
     /// The method called `name`.
     pub fn from_name(name: &str) -> Option<Method> {
         Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// The settings of one solver, paired with its method by type: a solver cannot be given
+/// another's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Settings {
+    /// `newton`'s (the large-rotation newton takes the same).
+    Newton(NewtonSettings),
+    /// `pcg-lcp`'s.
+    PcgLcp(PcgLcpSettings),
+    /// `mono-latin`'s: LATIN settings on the 1 × 1 partition.
+    MonoLatin(LatinSettings),
+    /// `micro-macro`'s.
+    MicroMacro(LatinSettings),
+}
+
+impl Settings {
+    /// The method these settings are for.
+    pub fn method(&self) -> Method {
+        match self {
+            Settings::Newton(_) => Method::Newton,
+            Settings::PcgLcp(_) => Method::PcgLcp,
+            Settings::MonoLatin(_) => Method::MonoLatin,
+            Settings::MicroMacro(_) => Method::MicroMacro,
+        }
     }
 }

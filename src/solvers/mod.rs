@@ -1,5 +1,5 @@
 //! Solvers. Each one is set up once per structure ([`SetupError`] when it cannot be) and is a
-//! state machine ([`Solver`]) that the one [`driver`] runs for any load; it reports what
+//! state machine (`Solver`) that the one `driver` runs for any load; it reports what
 //! happened in a [`SolveInfo`] and never prints. Observers (CSV writers, progress bars, the
 //! bench recorder) are attached from outside through [`Observer`].
 
@@ -19,9 +19,9 @@ mod taut;
 
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
-pub use method::Method;
+pub use method::{Method, Settings};
 pub use no_equilibrium::{no_equilibrium, no_equilibrium_along, NoEquilibrium};
-pub use observer::{IterationRecord, Observer, Silent, Tee};
+pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use residual::{
     current_unbalances, displacement_residual, exact_and_frozen_residuals, relative_unbalance,
     unbalances, unbalances_on, Unbalances,

@@ -29,8 +29,8 @@ const MECHANISM_TOLERANCE: f64 = 1e-6;
 const RUNAWAY_ENERGY_RATIO: f64 = 1e-3;
 
 /// The no-equilibrium certificate of an answer whose displacements U have run away: with
-/// `d = U / ‖U‖`, `B_bars d = 0`, `B_cables d ≤ 0`, `F·d > 0` (to [`MECHANISM_TOLERANCE`]),
-/// the stretch energy negligible against the load's work ([`RUNAWAY_ENERGY_RATIO`]),
+/// `d = U / ‖U‖`, `B_bars d = 0`, `B_cables d ≤ 0`, `F·d > 0` (to `MECHANISM_TOLERANCE`),
+/// the stretch energy negligible against the load's work (`RUNAWAY_ENERGY_RATIO`),
 /// and, with the prestress's geometric stiffness, `dᵀ K_G d ≤ 0`. `None` when U is not such a
 /// direction (a finite answer, however large, is judged elsewhere) or the model is `large`.
 pub fn no_equilibrium(s: &Structure, eq: &Equilibrium, load: &[f64]) -> Option<NoEquilibrium> {

@@ -1,6 +1,6 @@
 //! Observers: what sees a solve from outside. The driver hands every iterate's
 //! [`IterationRecord`] to an [`Observer`]; CSV writers, figure recorders, progress bars and the
-//! bench recorder are observers.
+//! bench are observers; [`Recorder`] keeps every record for whoever reads them after the solve.
 
 /// One iterate as seen from outside the solver.
 #[derive(Debug, Clone, Copy)]
@@ -8,11 +8,11 @@ pub struct IterationRecord {
     /// Iterations done to reach it.
     pub iteration: usize,
     /// The solver's stopping measure (η for the LATIN solvers; see [`super::Measure`]).
-    pub residual: f64,
+    pub stopping_value: f64,
     /// r(U) of the iterate, when the solver has it (see [`super::Progress`]).
     pub equilibrium_residual: Option<f64>,
-    /// Re-set-ups of the solver's operators so far in this solve.
-    pub setups: usize,
+    /// Operator rebuilds so far in this solve.
+    pub rebuilds: usize,
     /// Energy error e against a reference solution, when the solve was given one.
     pub error: Option<f64>,
     /// Slack cables of the iterate.
@@ -32,6 +32,20 @@ pub struct Silent;
 
 impl Observer for Silent {
     fn iteration(&mut self, _: &IterationRecord) {}
+}
+
+/// Keeps every iterate's record of a solve, in order: what a figure, a bench series or a test
+/// reads once the solve is done.
+#[derive(Debug, Clone, Default)]
+pub struct Recorder {
+    /// The records, one per iterate reported.
+    pub records: Vec<IterationRecord>,
+}
+
+impl Observer for Recorder {
+    fn iteration(&mut self, record: &IterationRecord) {
+        self.records.push(*record);
+    }
 }
 
 /// Passes every record to each of its observers, in order.

@@ -355,10 +355,10 @@ impl Solver for PcgLcp<'_> {
         let stop = stop_when(state.residual <= self.settings.tolerance, state.stalled);
         Progress {
             iteration: state.iteration,
-            residual: state.residual,
+            stopping_value: state.residual,
             // r(U) would cost a solve with K per iteration.
             equilibrium_residual: None,
-            setups: 0,
+            rebuilds: 0,
             slack_cables: state.x.iter().filter(|&&xi| xi > 0.0).count(),
             at_roundoff: false,
             stop,

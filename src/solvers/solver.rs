@@ -13,12 +13,12 @@ pub struct Progress {
     /// Iterations done to reach this state (0 after `init`).
     pub iteration: usize,
     /// The stopping measure of this state (see [`Solver::measure`]).
-    pub residual: f64,
+    pub stopping_value: f64,
     /// r(U), the equilibrium residual of the state's displacements under the exact law
     /// ([`super::displacement_residual`]), when the solver has it at no extra cost.
     pub equilibrium_residual: Option<f64>,
-    /// Re-set-ups of the solver's operators so far in this solve (status-following LATIN).
-    pub setups: usize,
+    /// Operator rebuilds so far in this solve (status-following LATIN; 0 for the others).
+    pub rebuilds: usize,
     /// Slack cables of this state.
     pub slack_cables: usize,
     /// `Some` when the solver stops here: [`Status::Converged`] when its stopping criterion
@@ -52,7 +52,7 @@ pub trait Solver {
     /// of the method (newton's U = 0, pcg-lcp's λ = 0) is not reported.
     const INIT_IS_ITERATE: bool;
 
-    /// What [`Progress::residual`] measures.
+    /// What [`Progress::stopping_value`] measures.
     fn measure(&self) -> Measure;
 
     /// The structure the solver is set up for.
@@ -91,10 +91,5 @@ pub trait Solver {
     /// driver's own check of the iterates. None by default.
     fn runaway(&self, _state: &Self::State) -> Option<super::NoEquilibrium> {
         None
-    }
-
-    /// Homogenised substructure operators, for solvers that have them (micro-macro LATIN).
-    fn homogenised(&mut self) -> Vec<super::latin::Homogenised> {
-        Vec::new()
     }
 }

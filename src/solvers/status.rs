@@ -72,7 +72,7 @@ impl fmt::Display for Status {
     }
 }
 
-/// What a solver's stopping measure (its `residual`) measures.
+/// What a solver's stopping measure (its `stopping_value`) measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Measure {
     /// Relative equilibrium residual `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs
@@ -113,12 +113,12 @@ pub struct SolveInfo {
     pub status: Status,
     /// Iterations done (newton steps, MPRGP steps, LATIN iterations after iteration 0).
     pub iterations: usize,
-    /// What `residual` measures.
+    /// What `stopping_value` measures.
     pub measure: Measure,
     /// The stopping measure at the end, as described by `measure`.
-    pub residual: f64,
-    /// Re-set-ups of the solver's operators during the solve (status-following LATIN).
-    pub setups: usize,
+    pub stopping_value: f64,
+    /// Operator rebuilds during the solve (status-following LATIN; 0 for the others).
+    pub rebuilds: usize,
     /// Wall time of the iterations (the solver's own work, observers excluded), s.
     pub solve_seconds: f64,
     /// Converged because the stopping measure is at round-off, not because the criterion

@@ -9,14 +9,8 @@ use crate::structure::{law, prestress_stability, Structure};
 use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
-/// coordinates rather than AMD. Factor entries, AMD against nested dissection: paper case
-/// (799 free nodes) 0.193 M against 0.197 M; 64 × 64 (12 k) 6.5 M against 5.2 M; 128 × 128
-/// (49 k) 35.4 M against 25.5 M; 256 × 256 (197 k) 194 M against 122 M, whose numeric
-/// factorization takes 13 s with AMD and 4.4 s with nested dissection (one run, one core).
-/// Time of newton with set-up, nested dissection against AMD (medians of interleaved
-/// rounds, parts of 8 nodes left whole): 0.94 on the paper case at α = 1 (its analysis is
-/// cheaper, and its factorization too despite more entries), 0.87 on 32 × 32 (3.2 k
-/// nodes). Smaller structures keep AMD, which needs no geometry to do well.
+/// coordinates rather than AMD (smaller structures keep AMD, which needs no geometry); the
+/// measurements behind 512: docs/method.md, "Tuning log".
 const NESTED_DISSECTION_MIN_NODES: usize = 512;
 
 /// `K = Bᵀ k B` with every cable taut, its pattern (shared by every stiffness of the structure)

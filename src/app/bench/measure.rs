@@ -5,7 +5,7 @@ use super::BenchError;
 use crate::app::setup::{set_up, Prepared};
 use crate::case::{Case, SolverChoice};
 use crate::output::alpha_label;
-use crate::solvers::{IterationRecord, Method, Observer, Reference, SetupError, Silent, Status};
+use crate::solvers::{Method, Recorder, Reference, SetupError, Silent, Status};
 
 /// One iterate of one solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,29 +112,13 @@ fn reference(prepared: &Prepared, load: &[f64], alpha: f64) -> Result<Reference,
         return Err(BenchError::Reference {
             alpha: alpha_label(alpha),
             status: solution.info.status,
-            residual: solution.info.residual,
+            residual: solution.info.stopping_value,
         });
     }
     Ok(Reference::new(
         &prepared.structure,
         &solution.equilibrium.displacements,
     ))
-}
-
-/// Turns the driver's iteration records into samples.
-struct SampleRecorder {
-    setup_seconds: f64,
-    samples: Vec<Sample>,
-}
-
-impl Observer for SampleRecorder {
-    fn iteration(&mut self, record: &IterationRecord) {
-        self.samples.push(Sample {
-            iteration: record.iteration,
-            seconds: self.setup_seconds + record.elapsed_seconds,
-            error: record.error.unwrap_or(f64::NAN),
-        });
-    }
 }
 
 /// Run every solver of the case at every α of it against a `newton` reference.
@@ -175,12 +159,17 @@ fn measure_series(
 ) -> Result<Series, SetupError> {
     let mut solver = set_up(method, &case.solver, prepared)?;
     let setup_seconds = solver.setup_seconds;
-    let mut recorder = SampleRecorder {
-        setup_seconds,
-        samples: Vec::new(),
-    };
+    let mut recorder = Recorder::default();
     let solution = solver.solver.solve(load, Some(reference), &mut recorder);
-    let mut samples = recorder.samples;
+    let mut samples: Vec<Sample> = recorder
+        .records
+        .iter()
+        .map(|record| Sample {
+            iteration: record.iteration,
+            seconds: setup_seconds + record.elapsed_seconds,
+            error: record.error.unwrap_or(f64::NAN),
+        })
+        .collect();
     // The last iterate is the answer: timed when the solve returned it. Its e is the one the
     // driver reported, or (when the start was the answer) that of the answer's displacements.
     let last = solution.info.iterations;

@@ -43,7 +43,7 @@ fn chart(series: &[Series], title: &str) -> LineChart {
                 .map(|p| (p.seconds, p.error.max(PLOT_FLOOR)))
                 .collect();
             let alpha = several_alphas.then_some(s.alpha);
-            let mut curve = Curve::of_solver(s.method.name(), alpha, points);
+            let mut curve = Curve::of_solver(s.method, alpha, points);
             if s.samples.iter().any(|p| p.error <= 0.0) {
                 curve.label += ", e = 0 on the lower edge";
             }

@@ -39,20 +39,6 @@ pub const BYTES_PER_FACTOR_ENTRY: f64 = 10.0;
 /// counted as nested dissection.
 pub const AMD_FILL_RATIO: f64 = 1.6;
 
-/// Factors (in units of the structure's stiffness factor) a solver holds beyond the taut
-/// stiffness every run factorizes: newton its Hessian's; pcg-lcp none (it solves with K's);
-/// mono-latin its whole-structure operators (measured 3.0–3.4 units on 64 × 64 to 256 × 256,
-/// rounded up to 4); micro-macro its substructure operators and macro problem (2.3–2.7 units
-/// on 64 × 64 to 256 × 256 with 4 × 4 substructures, rounded up to 3).
-pub fn factor_units(method: Method) -> f64 {
-    match method {
-        Method::Newton => 1.0,
-        Method::PcgLcp => 0.0,
-        Method::MonoLatin => 4.0,
-        Method::MicroMacro => 3.0,
-    }
-}
-
 /// The size of a structure, as the estimate needs it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Size {
@@ -121,8 +107,8 @@ impl MemoryEstimate {
         let mut units = 1.0; // K with every cable taut (the mechanism check), always factorized
         let mut latin = false;
         for &m in &work.methods {
-            units += factor_units(m);
-            latin |= matches!(m, Method::MonoLatin | Method::MicroMacro);
+            units += m.factor_units();
+            latin |= m.is_latin();
         }
         if work.stability {
             units += 1.0;
@@ -133,8 +119,8 @@ impl MemoryEstimate {
             units += work
                 .methods
                 .iter()
-                .filter(|m| matches!(m, Method::MonoLatin | Method::MicroMacro))
-                .map(|&m| factor_units(m))
+                .filter(|m| m.is_latin())
+                .map(|&m| m.factor_units())
                 .sum::<f64>();
             parts.push(("second grid (Figure 12)".into(), size.structure_bytes()));
         }
@@ -216,11 +202,10 @@ impl Workload {
     /// reference solver when it is not one of them at its default settings, and the outputs
     /// that factorize again.
     pub fn run(case: &super::Case, methods: &[Method]) -> Workload {
-        let is_latin = |m: &Method| matches!(m, Method::MonoLatin | Method::MicroMacro);
         let mut all = methods.to_vec();
         if let Some(reference) = case.solver.reference.method() {
             let shared = methods.contains(&reference) && case.solver.is_default(reference);
-            if methods.iter().any(is_latin) && !shared {
+            if methods.iter().any(|m| m.reports_error()) && !shared {
                 all.push(reference);
             }
         }
@@ -240,7 +225,7 @@ impl Workload {
             .methods
             .iter()
             .copied()
-            .filter(|m| matches!(m, Method::MonoLatin | Method::MicroMacro))
+            .filter(|m| m.is_latin())
             .collect();
         Workload {
             methods: latin,
@@ -258,7 +243,7 @@ impl Workload {
             .iter()
             .copied()
             .chain([Method::Newton])
-            .max_by(|a, b| factor_units(*a).total_cmp(&factor_units(*b)))
+            .max_by(|a, b| a.factor_units().total_cmp(&b.factor_units()))
             .unwrap_or(Method::Newton);
         Workload {
             methods: vec![largest],

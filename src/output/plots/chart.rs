@@ -1,15 +1,19 @@
 //! The line chart every curve figure is: series of (x, y) points on a linear or logarithmic x
 //! axis and a linear or logarithmic y axis, axis labels with units, a legend beside the plot.
 
+use super::axes::{
+    clip_start, linear_range, log_axis, log_range, log_x_range, scaled, single_point_notes, thin,
+    x_range, y_span_values,
+};
 use super::legend::{draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::marker::Marker;
 use super::palette::solver_colour;
 use super::{alpha_text, log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
+use crate::solvers::Method;
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::io;
-use std::ops::Range;
 
 /// Width of the plot (axes, labels and title), px.
 const PLOT_WIDTH: u32 = 770;
@@ -50,10 +54,11 @@ impl Series {
     /// One solver's curve in the solver's colour (the same in every figure), labelled with
     /// the solver's name, followed by ` (α = a)` when `alpha` is given (figures with several
     /// load factors).
-    pub fn of_solver(solver: &str, alpha: Option<f64>, points: Vec<(f64, f64)>) -> Series {
+    pub fn of_solver(solver: Method, alpha: Option<f64>, points: Vec<(f64, f64)>) -> Series {
+        let name = solver.name();
         let label = match alpha {
-            Some(alpha) => format!("{solver} (α = {})", alpha_text(alpha)),
-            None => solver.to_string(),
+            Some(alpha) => format!("{name} (α = {})", alpha_text(alpha)),
+            None => name.to_string(),
         };
         Series {
             label,
@@ -283,220 +288,6 @@ fn text_width(text: &str, size: u32) -> u32 {
     (em * size as f64).ceil() as u32
 }
 
-/// The span of the x values (0..1 without any), 2 % wider on each side with markers so that
-/// the end markers are whole.
-fn x_range(series: &[Series], markers: bool) -> Range<f64> {
-    let (lo, hi) = min_max(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-    let pad = if markers { 0.02 } else { 0.0 };
-    match (lo, hi) {
-        (Some(lo), Some(hi)) if hi > lo => lo - pad * (hi - lo)..hi + pad * (hi - lo),
-        (Some(lo), _) => lo - 0.5..lo + 0.5,
-        _ => 0.0..1.0,
-    }
-}
-
-/// Whole decades around the positive x values ([`log_range`]); with markers, widened by 2 %
-/// of the span (in decades) at an end where a point lies on the edge, so that its marker is
-/// whole.
-fn log_x_range(values: impl Iterator<Item = f64>, markers: bool) -> Range<f64> {
-    let values: Vec<f64> = values.filter(|&x| x > 0.0).collect();
-    let range = log_range(values.iter().copied());
-    if !markers {
-        return range;
-    }
-    let (lo, hi) = (range.start.log10(), range.end.log10());
-    let pad = 0.02 * (hi - lo);
-    let near = |edge: f64| values.iter().any(|x| (x.log10() - edge).abs() < pad);
-    let lo = if near(lo) { lo - pad } else { lo };
-    let hi = if near(hi) { hi + pad } else { hi };
-    10f64.powf(lo)..10f64.powf(hi)
-}
-
-/// Below this, a log axis is drawn in scaled units (see [`log_axis`]).
-const LOG_AXIS_SMALLEST: f64 = 1e-12;
-
-/// A log axis over `range` and the factor its values are drawn multiplied by: 1, or when the
-/// range reaches below [`LOG_AXIS_SMALLEST`] the power of ten that brings its lower end into
-/// [1, 10). Plotters takes log-axis values below `f64::EPSILON` for the axis' zero and draws
-/// no tick or grid line there (e = 0 drawn at 10⁻¹⁶ would sit on an unlabelled edge); the
-/// tick labels divide the factor out again.
-fn log_axis(range: Range<f64>) -> (Range<f64>, f64) {
-    if range.start >= LOG_AXIS_SMALLEST {
-        return (range, 1.0);
-    }
-    let factor = 10f64.powi(-(range.start.log10().floor() as i32));
-    (range.start * factor..range.end * factor, factor)
-}
-
-/// Two lines under the legend for every series of a single point (drawn as a dot, on the
-/// axis' edge when its value is beyond it): what it is, and its value.
-fn single_point_notes(series: &[Series], edges: &Range<f64>) -> Vec<String> {
-    let mut notes = Vec::new();
-    for s in series {
-        if let [(x, y)] = s.points.as_slice() {
-            let side = if *y < edges.start {
-                ", below the axis"
-            } else if *y > edges.end {
-                ", above the axis"
-            } else {
-                ""
-            };
-            notes.push(format!("{}: a single point,", s.label));
-            notes.push(format!("({}, {y:.1e}){side}", tick_label(*x)));
-        }
-    }
-    notes
-}
-
-/// The y values the y axis spans: those of the series of two points or more (of all series
-/// when none has two), at x ≥ `frame.y_from_x` when some are.
-fn y_span_values(series: &[Series], frame: &Frame) -> Vec<f64> {
-    let lines: Vec<&Series> = series.iter().filter(|s| s.points.len() >= 2).collect();
-    let lines = if lines.is_empty() {
-        series.iter().collect()
-    } else {
-        lines
-    };
-    let from = frame.y_from_x.unwrap_or(f64::NEG_INFINITY);
-    let after: Vec<f64> = lines
-        .iter()
-        .flat_map(|s| s.points.iter().filter(|p| p.0 >= from).map(|p| p.1))
-        .collect();
-    if after.is_empty() {
-        lines
-            .iter()
-            .flat_map(|s| s.points.iter().map(|p| p.1))
-            .collect()
-    } else {
-        after
-    }
-}
-
-/// `s` with its leading points beyond the y axis' `edges` replaced by the point where the
-/// line to the next point crosses the edge (interpolated in the axis' scale), so that a start
-/// above the axis is drawn from the edge. A one-point series beyond the edges is drawn on the
-/// nearer edge (the note under the legend gives its value).
-fn clip_start(mut s: Series, edges: &Range<f64>, scale: Scale) -> Series {
-    if let [(x, y)] = s.points.as_slice() {
-        let (x, y) = (*x, *y);
-        if y < edges.start {
-            s.points = vec![(x, edges.start)];
-        } else if y > edges.end {
-            s.points = vec![(x, edges.end)];
-        }
-        return s;
-    }
-    let map = |y: f64| match scale {
-        Scale::Linear => y,
-        Scale::Log => y.log10(),
-    };
-    let unmap = |v: f64| match scale {
-        Scale::Linear => v,
-        Scale::Log => 10f64.powf(v),
-    };
-    let (lo, hi) = (map(edges.start), map(edges.end));
-    let inside = |y: f64| (lo..=hi).contains(&map(y));
-    let first_inside = s.points.iter().position(|p| inside(p.1));
-    match first_inside {
-        None => s.points.clear(),
-        Some(0) => {}
-        Some(k) => {
-            let (x0, y0) = s.points[k - 1];
-            let (x1, y1) = s.points[k];
-            let (v0, v1) = (map(y0), map(y1));
-            let edge = if v0 > hi { hi } else { lo };
-            let f = (edge - v0) / (v1 - v0);
-            let crossing = (x0 + f * (x1 - x0), unmap(edge));
-            s.points.splice(..k, [crossing]);
-        }
-    }
-    s
-}
-
-/// `series` with every x multiplied by `x_factor` and every y by `y_factor` (as is when both
-/// are 1).
-fn scaled(series: Vec<Series>, x_factor: f64, y_factor: f64) -> Vec<Series> {
-    if x_factor == 1.0 && y_factor == 1.0 {
-        return series;
-    }
-    series
-        .into_iter()
-        .map(|s| Series {
-            points: s
-                .points
-                .iter()
-                .map(|&(x, y)| (x * x_factor, y * y_factor))
-                .collect(),
-            ..s
-        })
-        .collect()
-}
-
-/// From 0 (or below the smallest value when negative) to 5 % above the largest value.
-fn linear_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = min_max(values);
-    let (lo, hi) = (lo.unwrap_or(0.0), hi.unwrap_or(1.0));
-    let span = hi - lo.min(0.0);
-    let pad = if span > 0.0 {
-        0.05 * span
-    } else {
-        hi.abs().max(1.0)
-    };
-    let lo = if lo >= 0.0 { 0.0 } else { lo - pad };
-    lo..hi + pad
-}
-
-/// Whole decades around the positive values, widened by a hair so that round-off in the
-/// logarithms never drops the end decades' labels.
-fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = min_max(values.filter(|&y| y > 0.0));
-    let lo = lo.map_or(-1.0, |v| v.log10().floor());
-    let hi = hi.map_or(0.0, |v| v.log10().ceil()).max(lo + 1.0);
-    10f64.powf(lo) * (1.0 - 1e-9)..10f64.powf(hi) * (1.0 + 1e-9)
-}
-
-fn min_max(values: impl Iterator<Item = f64>) -> (Option<f64>, Option<f64>) {
-    values.fold((None, None), |(lo, hi), v| {
-        (
-            Some(lo.map_or(v, |l: f64| l.min(v))),
-            Some(hi.map_or(v, |h: f64| h.max(v))),
-        )
-    })
-}
-
-/// At most about `max` points: consecutive points in buckets, each bucket keeping its lowest
-/// and highest point in order (a curve keeps its shape at the plot's resolution).
-pub fn thin(points: &[(f64, f64)], max: usize) -> Vec<(f64, f64)> {
-    if points.len() <= max {
-        return points.to_vec();
-    }
-    let bucket = points.len().div_ceil(max / 2);
-    let mut kept = Vec::with_capacity(max + 2);
-    for chunk in points.chunks(bucket) {
-        let by_y = |a: &&(f64, f64), b: &&(f64, f64)| a.1.total_cmp(&b.1);
-        let low = chunk
-            .iter()
-            .enumerate()
-            .min_by(|a, b| by_y(&a.1, &b.1))
-            .unwrap();
-        let high = chunk
-            .iter()
-            .enumerate()
-            .max_by(|a, b| by_y(&a.1, &b.1))
-            .unwrap();
-        let (first, second) = if low.0 <= high.0 {
-            (low, high)
-        } else {
-            (high, low)
-        };
-        kept.push(*first.1);
-        if second.0 != first.0 {
-            kept.push(*second.1);
-        }
-    }
-    kept
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -604,7 +395,7 @@ mod tests {
             legend_title: "solver".into(),
             markers: false,
             series: vec![Series::of_solver(
-                "newton",
+                Method::Newton,
                 Some(0.05),
                 vec![(1e-3, 1.0), (2e-3, 1e-9), (3e-3, 1e-16)],
             )],
@@ -642,8 +433,8 @@ mod tests {
             legend_title: "load factor".into(),
             markers: false,
             series: vec![
-                Series::of_solver("micro-macro", Some(1.0), decay),
-                Series::of_solver("mono-latin", Some(1.0), vec![(0.0, 1e-14)]),
+                Series::of_solver(Method::MicroMacro, Some(1.0), decay),
+                Series::of_solver(Method::MonoLatin, Some(1.0), vec![(0.0, 1e-14)]),
             ],
         };
         let frame = Frame {

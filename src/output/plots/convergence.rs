@@ -12,7 +12,7 @@
 use super::chart::{Frame, LineChart, Scale, Series};
 use super::palette::{ordered_colour, solver_colour};
 use super::{alpha_text, FigureSettings, History};
-use crate::solvers::IterationRecord;
+use crate::solvers::{IterationRecord, Method};
 use std::io;
 
 #[derive(Debug, Clone, Copy)]
@@ -27,7 +27,7 @@ impl Measure {
     fn value(self, r: &IterationRecord) -> Option<f64> {
         match self {
             Measure::Error => r.error,
-            Measure::Eta => Some(r.residual),
+            Measure::Eta => Some(r.stopping_value),
         }
     }
 
@@ -62,10 +62,10 @@ pub fn figures(
         x_max: Some(settings.max_plot_iterations as f64),
         y_from_x: Some(1.0),
     };
-    let mut solvers: Vec<&str> = Vec::new();
+    let mut solvers: Vec<Method> = Vec::new();
     for h in histories {
-        if !solvers.contains(&h.solver.as_str()) {
-            solvers.push(&h.solver);
+        if !solvers.contains(&h.solver) {
+            solvers.push(h.solver);
         }
     }
     let mut figures = Vec::new();
@@ -74,7 +74,7 @@ pub fn figures(
         own.sort_by(|a, b| a.alpha.total_cmp(&b.alpha));
         for measure in [Measure::Error, Measure::Eta] {
             if let Some(chart) = per_alpha_chart(solver, measure, &own) {
-                let name = format!("{}_{solver}.svg", measure.file_stem());
+                let name = format!("{}_{}.svg", measure.file_stem(), solver.name());
                 figures.push((name, chart.to_svg_framed(&frame)?));
             }
         }
@@ -102,7 +102,7 @@ fn points(h: &History, measure: Measure) -> Vec<(f64, f64)> {
 }
 
 /// One series per α of one solver; None when no record has the measure.
-fn per_alpha_chart(solver: &str, measure: Measure, histories: &[&History]) -> Option<LineChart> {
+fn per_alpha_chart(solver: Method, measure: Measure, histories: &[&History]) -> Option<LineChart> {
     let n = histories.len();
     let series: Vec<Series> = histories
         .iter()
@@ -114,7 +114,7 @@ fn per_alpha_chart(solver: &str, measure: Measure, histories: &[&History]) -> Op
         })
         .collect();
     convergence_chart(
-        format!("{} per iteration ({solver})", measure.what()),
+        format!("{} per iteration ({})", measure.what(), solver.name()),
         measure,
         "load factor",
         series,
@@ -132,29 +132,30 @@ pub fn modules_chart(
         y_from_x: Some(1.0),
     };
     let mut modules: Vec<&str> = Vec::new();
-    let mut solvers: Vec<&str> = Vec::new();
+    let mut solvers: Vec<Method> = Vec::new();
     for (module, h) in histories {
         if !modules.contains(module) {
             modules.push(module);
         }
-        if !solvers.contains(&h.solver.as_str()) {
-            solvers.push(&h.solver);
+        if !solvers.contains(&h.solver) {
+            solvers.push(h.solver);
         }
     }
     // Solvers whose curves are lines take the full hues; one-point ones (a direct solve) the
     // lighter shades.
-    let is_line = |solver: &str| {
+    let is_line = |solver: Method| {
         histories
             .iter()
             .any(|(_, h)| h.solver == solver && h.records.len() > 1)
     };
-    solvers.sort_by_key(|solver| !is_line(solver));
+    solvers.sort_by_key(|&solver| !is_line(solver));
     let index = |list: &[&str], name: &str| list.iter().position(|x| *x == name).unwrap_or(0);
+    let solver_index = |solver: Method| solvers.iter().position(|&x| x == solver).unwrap_or(0);
     let series: Vec<Series> = histories
         .iter()
         .map(|(module, h)| Series {
-            label: format!("{module}, {}", h.solver),
-            colour: module_colour(index(&modules, module), index(&solvers, &h.solver)),
+            label: format!("{module}, {}", h.solver.name()),
+            colour: module_colour(index(&modules, module), solver_index(h.solver)),
             points: points(h, Measure::Error),
         })
         .collect();
@@ -193,11 +194,11 @@ fn solvers_chart(histories: &[&History]) -> Option<LineChart> {
         .iter()
         .map(|h| Series {
             label: if distinct.len() == 1 {
-                h.solver.clone()
+                h.solver.name().to_string()
             } else {
-                format!("{} (α = {})", h.solver, alpha_text(h.alpha))
+                format!("{} (α = {})", h.solver.name(), alpha_text(h.alpha))
             },
-            colour: solver_colour(&h.solver),
+            colour: solver_colour(h.solver),
             points: points(h, Measure::Error),
         })
         .collect();

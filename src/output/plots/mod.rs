@@ -14,6 +14,7 @@
 //! In the line charts each series is one `<polyline>` of stroke width [`SERIES_STROKE_WIDTH`],
 //! and nothing else has that width.
 
+mod axes;
 mod chart;
 mod convergence;
 mod deformed;
@@ -26,7 +27,7 @@ mod tensions;
 pub use chart::{Frame, LineChart, Scale, Series};
 
 use super::{alpha_label, write_atomic};
-use crate::solvers::{Equilibrium, IterationRecord};
+use crate::solvers::{Equilibrium, IterationRecord, Method};
 use crate::structure::Structure;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -37,8 +38,8 @@ pub const SERIES_STROKE_WIDTH: u32 = 2;
 /// The iteration records of one LATIN solve.
 #[derive(Debug, Clone)]
 pub struct History {
-    /// Solver name.
-    pub solver: String,
+    /// The solver.
+    pub solver: Method,
     /// Load factor α of the solve.
     pub alpha: f64,
     /// One record per iteration, in order.
@@ -58,7 +59,7 @@ pub struct FigureSettings {
 /// Slack fraction of one solver at each α, in solve order.
 #[derive(Debug, Clone)]
 struct SlackSeries {
-    solver: String,
+    solver: Method,
     points: Vec<(f64, f64)>,
 }
 
@@ -67,7 +68,7 @@ struct SlackSeries {
 pub struct FigureData {
     settings: FigureSettings,
     /// The solver whose results Figures 6 and 8 show.
-    first_solver: String,
+    first_solver: Method,
     /// Per α: the first solver's cable tensions, sorted increasingly.
     tensions: Vec<(f64, Vec<f64>)>,
     slack: Vec<SlackSeries>,
@@ -78,10 +79,10 @@ pub struct FigureData {
 
 impl FigureData {
     /// No data yet; `first_solver`'s solves are the ones Figures 6 and 8 show.
-    pub fn new(first_solver: &str, settings: FigureSettings) -> Self {
+    pub fn new(first_solver: Method, settings: FigureSettings) -> Self {
         FigureData {
             settings,
-            first_solver: first_solver.to_string(),
+            first_solver,
             tensions: Vec::new(),
             slack: Vec::new(),
             histories: Vec::new(),
@@ -90,12 +91,12 @@ impl FigureData {
     }
 
     /// Keep what the figures need of one solve.
-    pub fn add_solve(&mut self, solver: &str, alpha: f64, s: &Structure, eq: &Equilibrium) {
+    pub fn add_solve(&mut self, solver: Method, alpha: f64, s: &Structure, eq: &Equilibrium) {
         let fraction = eq.slack_count() as f64 / s.n_cables().max(1) as f64;
         match self.slack.iter_mut().find(|series| series.solver == solver) {
             Some(series) => series.points.push((alpha, fraction)),
             None => self.slack.push(SlackSeries {
-                solver: solver.to_string(),
+                solver,
                 points: vec![(alpha, fraction)],
             }),
         }
@@ -113,9 +114,9 @@ impl FigureData {
     }
 
     /// Keep the iteration records of one LATIN solve (Figures 9–11).
-    pub fn add_history(&mut self, solver: &str, alpha: f64, records: Vec<IterationRecord>) {
+    pub fn add_history(&mut self, solver: Method, alpha: f64, records: Vec<IterationRecord>) {
         self.histories.push(History {
-            solver: solver.to_string(),
+            solver,
             alpha,
             records,
         });
@@ -129,21 +130,21 @@ impl FigureData {
             if !sets.iter().any(|(alpha, _)| *alpha == 0.0) {
                 sets.extend(tensions::at_rest(s));
             }
-            let chart = tensions::chart(&self.first_solver, &sets);
+            let chart = tensions::chart(self.first_solver.name(), &sets);
             figures.push(("tensions.svg".into(), chart.to_svg()?));
         }
         if !self.slack.is_empty() {
-            let series: Vec<(&str, &[(f64, f64)])> = self
+            let series: Vec<(Method, &[(f64, f64)])> = self
                 .slack
                 .iter()
-                .map(|x| (x.solver.as_str(), x.points.as_slice()))
+                .map(|x| (x.solver, x.points.as_slice()))
                 .collect();
             figures.push(("slack_fraction.svg".into(), slack::chart(&series).to_svg()?));
         }
         figures.extend(convergence::figures(&self.histories, &self.settings)?);
         if let Some((alpha, eq)) = &self.deformed {
             let amplification = self.settings.amplification;
-            let svg = deformed::to_svg(&self.first_solver, *alpha, amplification, s, eq)?;
+            let svg = deformed::to_svg(self.first_solver.name(), *alpha, amplification, s, eq)?;
             figures.push((format!("deformed_alpha{}.svg", alpha_label(*alpha)), svg));
         }
         let plots = dir.join("plots");

@@ -2,17 +2,13 @@
 //! Okabe–Ito qualitative palette for series of α (viridis beyond seven), yellow to dark red for
 //! cable tensions, blues for compressions.
 
+use crate::solvers::Method;
 use plotters::style::RGBColor;
 
-/// The colour of a solver, the same in every figure.
-pub fn solver_colour(name: &str) -> RGBColor {
-    match name {
-        "newton" => RGBColor(31, 119, 180),
-        "pcg-lcp" => RGBColor(255, 127, 14),
-        "mono-latin" => RGBColor(44, 160, 44),
-        "micro-macro" => RGBColor(148, 103, 189),
-        _ => RGBColor(127, 127, 127),
-    }
+/// The colour of a solver, the same in every figure ([`Method::colour`]).
+pub fn solver_colour(method: Method) -> RGBColor {
+    let [r, g, b] = method.colour();
+    RGBColor(r, g, b)
 }
 
 /// The Okabe–Ito palette (Okabe & Ito, *Color Universal Design*, 2008) without its yellow,

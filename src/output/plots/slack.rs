@@ -3,17 +3,18 @@
 
 use super::chart::{LineChart, Scale, Series};
 use super::palette::solver_colour;
+use crate::solvers::Method;
 
 /// `per_solver`: (solver, [(α, slack fraction)]).
-pub fn chart(per_solver: &[(&str, &[(f64, f64)])]) -> LineChart {
+pub fn chart(per_solver: &[(Method, &[(f64, f64)])]) -> LineChart {
     let series = per_solver
         .iter()
         .map(|(solver, points)| {
             let mut points = points.to_vec();
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
             Series {
-                label: solver.to_string(),
-                colour: solver_colour(solver),
+                label: solver.name().to_string(),
+                colour: solver_colour(*solver),
                 points,
             }
         })

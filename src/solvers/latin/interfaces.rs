@@ -20,7 +20,7 @@ pub struct Interface {
     pub basis: DMatrix<f64>,
     /// First column of its macro forces among the macro problem's unknowns.
     pub macro_offset: usize,
-    /// What each column of R is (see [`super::macro_basis::labelled_macro_basis`]).
+    /// What each column of R is (see `super::macro_basis::labelled_macro_basis`).
     pub fields: Vec<String>,
     /// Centroid G of its nodes, m.
     pub centroid: [f64; 3],

@@ -99,6 +99,8 @@ impl MacroProblem {
         Self::assemble(subs, interfaces, self.dm, self.factor.as_ref())
     }
 
+    /// Assemble the macro matrix in an order fixed by the partition, reuse `previous`'s
+    /// symbolic analysis when the pattern is the same, factorise, and check the factor.
     fn assemble(
         subs: &[Substructure],
         interfaces: &[Interface],
@@ -122,8 +124,31 @@ impl MacroProblem {
         if n == 0 {
             return Ok(problem(None));
         }
-        // Lower triangle of D [Ã, N; Nᵀ, 0] D, entry by entry in an order fixed by the
-        // partition (zeros included, so the pattern never changes); duplicates are summed.
+        let (entries, values) = Self::entries(subs, interfaces, dm, &kernel_offset, n);
+        let pattern = match previous {
+            Some(old) if old.pattern.argsort_len == values.len() => Arc::clone(&old.pattern),
+            _ => Arc::new(MacroPattern::new(n, &entries)?),
+        };
+        drop(entries);
+        let factor = Factor::new(pattern, &values, n_forces)?;
+        drop(values);
+        // Checked at set-up only: a re-set-up changes l > 0 alone, which keeps every
+        // K*_E + Q_E Q_Eᵀ definite (its Cholesky succeeded) and so Ã definite.
+        if previous.is_none() {
+            factor.check_regular(n)?;
+        }
+        Ok(problem(Some(factor)))
+    }
+
+    /// Lower triangle of D [Ã, N; Nᵀ, 0] D, entry by entry in an order fixed by the partition
+    /// (zeros included, so the pattern never changes); duplicates are summed on assembly.
+    fn entries(
+        subs: &[Substructure],
+        interfaces: &[Interface],
+        dm: f64,
+        kernel_offset: &[usize],
+        n: usize,
+    ) -> (Vec<Pair<usize, usize>>, Vec<f64>) {
         let gamma = AUGMENTATION / dm;
         let mut entries: Vec<Pair<usize, usize>> = Vec::new();
         let mut values: Vec<f64> = Vec::new();
@@ -161,75 +186,7 @@ impl MacroProblem {
         for i in 0..n {
             add(i, i, 0.0);
         }
-        let pattern = match previous {
-            Some(old) if old.pattern.argsort_len == values.len() => Arc::clone(&old.pattern),
-            _ => {
-                let (lower, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &entries)
-                    .map_err(|_| SingularMacroProblem)?;
-                let symbolic = factorize_symbolic_cholesky(
-                    lower.as_ref(),
-                    Side::Lower,
-                    SymmetricOrdering::Amd,
-                    Default::default(),
-                )
-                .map_err(|_| SingularMacroProblem)?;
-                Arc::new(MacroPattern {
-                    argsort_len: values.len(),
-                    lower,
-                    argsort,
-                    symbolic,
-                })
-            }
-        };
-        drop(entries);
-        let lower =
-            SparseColMat::new_from_argsort(pattern.lower.clone(), &pattern.argsort, &values)
-                .map_err(|_| SingularMacroProblem)?;
-        drop(values);
-        let symbolic = &pattern.symbolic;
-        // + for the forces, − for the kernel amplitudes.
-        let signs: Vec<i8> = (0..n).map(|i| if i < n_forces { 1 } else { -1 }).collect();
-        let mut factor_values = vec![0.0; symbolic.len_val()];
-        let mut scratch = MemBuffer::new(
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        symbolic
-            .factorize_numeric_ldlt(
-                &mut factor_values,
-                lower.as_ref(),
-                Side::Lower,
-                LdltRegularization {
-                    dynamic_regularization_signs: Some(&signs),
-                    dynamic_regularization_delta: REGULARISATION,
-                    dynamic_regularization_epsilon: REGULARISATION,
-                },
-                Par::Seq,
-                MemStack::new(&mut scratch),
-                Default::default(),
-            )
-            .map_err(|_| SingularMacroProblem)?;
-        let factor = Factor {
-            pattern: Arc::clone(&pattern),
-            lower,
-            values: factor_values,
-        };
-        // A regularised factor of a singular matrix solves nothing: solve M y = M y0 for a
-        // known y0 and compare. Checked at set-up only: a re-set-up changes l > 0 alone, which
-        // keeps every K*_E + Q_E Q_Eᵀ definite (its Cholesky succeeded) and so Ã definite.
-        if previous.is_none() {
-            let y0: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
-            let mut y = factor.apply(&y0);
-            factor.solve(&mut y, 0.0);
-            let error = y
-                .iter()
-                .zip(&y0)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            if error.is_nan() || error > 1e-6 {
-                return Err(SingularMacroProblem);
-            }
-        }
-        Ok(problem(Some(factor)))
+        (entries, values)
     }
 
     /// A zero right-hand side `[b_f; b_a]`.
@@ -307,6 +264,86 @@ impl MacroProblem {
         }
         let a_e = &solution[self.kernel_offset[e]..self.kernel_offset[e] + sub.kernel.ncols()];
         (f_e, a_e)
+    }
+}
+
+impl MacroPattern {
+    /// The pattern of `entries` (n × n, lower triangle), its assembly order and its symbolic
+    /// `L D Lᵀ` analysis (AMD).
+    fn new(n: usize, entries: &[Pair<usize, usize>]) -> Result<Self, SingularMacroProblem> {
+        let (lower, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, entries)
+            .map_err(|_| SingularMacroProblem)?;
+        let symbolic = factorize_symbolic_cholesky(
+            lower.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(|_| SingularMacroProblem)?;
+        Ok(MacroPattern {
+            argsort_len: entries.len(),
+            lower,
+            argsort,
+            symbolic,
+        })
+    }
+}
+
+impl Factor {
+    /// The regularised `L D Lᵀ` factor of the matrix of `values` (in `pattern`'s assembly
+    /// order); the first `n_forces` unknowns are forces (+), the rest kernel amplitudes (−).
+    fn new(
+        pattern: Arc<MacroPattern>,
+        values: &[f64],
+        n_forces: usize,
+    ) -> Result<Self, SingularMacroProblem> {
+        let lower = SparseColMat::new_from_argsort(pattern.lower.clone(), &pattern.argsort, values)
+            .map_err(|_| SingularMacroProblem)?;
+        let symbolic = &pattern.symbolic;
+        let n = lower.nrows();
+        // + for the forces, − for the kernel amplitudes.
+        let signs: Vec<i8> = (0..n).map(|i| if i < n_forces { 1 } else { -1 }).collect();
+        let mut factor_values = vec![0.0; symbolic.len_val()];
+        let mut scratch = MemBuffer::new(
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+        );
+        symbolic
+            .factorize_numeric_ldlt(
+                &mut factor_values,
+                lower.as_ref(),
+                Side::Lower,
+                LdltRegularization {
+                    dynamic_regularization_signs: Some(&signs),
+                    dynamic_regularization_delta: REGULARISATION,
+                    dynamic_regularization_epsilon: REGULARISATION,
+                },
+                Par::Seq,
+                MemStack::new(&mut scratch),
+                Default::default(),
+            )
+            .map_err(|_| SingularMacroProblem)?;
+        Ok(Factor {
+            pattern: Arc::clone(&pattern),
+            lower,
+            values: factor_values,
+        })
+    }
+
+    /// A regularised factor of a singular matrix solves nothing: solve M y = M y0 for a known
+    /// y0 of size `n` and compare.
+    fn check_regular(&self, n: usize) -> Result<(), SingularMacroProblem> {
+        let y0: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 / 7.0).collect();
+        let mut y = self.apply(&y0);
+        self.solve(&mut y, 0.0);
+        let error = y
+            .iter()
+            .zip(&y0)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if error.is_nan() || error > 1e-6 {
+            return Err(SingularMacroProblem);
+        }
+        Ok(())
     }
 }
 

@@ -3,10 +3,10 @@
 //! interfaces, `K = Bᵀ l B`, the augmented Lagrangian method of the paper's §5.4).
 //!
 //! The solver alternates a local stage (constitutive laws, per link and per interface, exact;
-//! [`local_stage`]) and a linear stage (equilibrium and compatibility per substructure, glued
-//! by exact macro continuity; [`linear_stage`]). Iteration 0 is the linear stage from ŝ = 0;
+//! `local_stage`) and a linear stage (equilibrium and compatibility per substructure, glued
+//! by exact macro continuity; `linear_stage`). Iteration 0 is the linear stage from ŝ = 0;
 //! iteration k ≥ 1 is a local stage on s_{k−1} followed by a linear stage. After each linear
-//! stage it measures the indicator η between s and the ŝ that fed it ([`indicator`]), and
+//! stage it measures the indicator η between s and the ŝ that fed it (`indicator`), and
 //! stops when η ≤ `tolerance` (or, with no load, when Δη is at round-off against the prestress;
 //! under a load that is a stall).
 //!
@@ -148,12 +148,7 @@ pub const DM_FACTOR: f64 = 0.25;
 const PARALLEL_MIN_DOFS: usize = 20_000;
 
 /// ε of status-following l: a slack cable's search direction is ε·l. It must stay > 0 (a link
-/// with l = 0 has no local stage). docs/method.md §6's prototype used 1e-6; here that left r(U) on a
-/// floor of 3e-6 on 32 × 32 and 64 × 64 grids (substructure operators nearly singular where
-/// only slack cables hold a node), while 1e-3 and 1e-2 converged alike without floor
-/// (iterations to e < 1e-3 on 16 / 64 / 256 substructures: 29 / 49 / 116 and 30 / 48 / 120) and
-/// 1e-1 was slower (32 / 59 / 137, 205 re-set-ups on 64 × 64). 1e-2 keeps the widest margin
-/// from the floor.
+/// with l = 0 has no local stage); why 1e-2: docs/method.md, "Tuning log".
 const SLACK_SEARCH_FACTOR: f64 = 1e-2;
 
 /// Half-width of the band around zero tension inside which a cable keeps its search
@@ -161,27 +156,17 @@ const SLACK_SEARCH_FACTOR: f64 = 1e-2;
 const STATUS_BAND: f64 = 1e-3;
 
 /// A cable's search direction follows its status only once the status has differed from the
-/// one l was built for in this many consecutive linear stages. With Anderson acceleration,
-/// 1 let cables near zero tension flip back and forth (each flip a re-set-up and a restart
-/// of the history); 2 cut the iterations to e < 1e-3 on 64 × 64 (256 substructures) from 37
-/// to 32 and the re-set-ups by a third.
+/// one l was built for in this many consecutive linear stages (why 2: docs/method.md, "Tuning
+/// log").
 const STATUS_PERSISTENCE: u8 = 2;
 
 /// The default d_m, N/m: `d_m = DM_FACTOR k̄ / √H`. k̄ is the stiffness of a median cable and a
 /// median bar in series, `k̄ = (1/k_c + 1/k_b)⁻¹` (the softer of the two governs how a load
-/// passes through a module: with the paper's cables k̄ ≈ k_c; with cables 100 times stiffer
-/// than bars k̄ ≈ k_b, where a cable-based d_m of 2e9 left micro-macro on a round-off floor
-/// of η ≈ 2e-10). H is the side of a substructure counted in modules of the paper's grid,
-/// `H = √(m / 16)` with m the mean number of links per substructure (a module has 16). At
-/// fixed module size h this is the optimised-Schwarz scaling `d_m ∝ 1/√(hH)`. On the paper's
-/// grid (k̄ = 6.1e6 N/m) it gives 1.08e6 / 0.77e6 / 0.54e6 N/m on substructures of 2 × 2 /
-/// 4 × 4 / 8 × 8 modules (the factor 0.45 was where 16 × 16 grids clamped on two and on four
-/// edges needed the fewest iterations with status-following l); the paper's 3.92e6
-/// ([`PAPER_DM`]) suits only the smallest substructures and does not scale (see the README).
-/// The factor was 0.45 with the status-following policy; with inexact Newton status steps and
-/// Anderson depth 20, 0.25 keeps the iterations flat from 16 to 1024 substructures of 4 × 4
-/// modules (within ± 20 % of their mean, where 0.45 and 0.35 give +29 % and +22 % at 1024;
-/// docs/method.md §9).
+/// passes through a module). H is the side of a substructure counted in modules of the paper's
+/// grid, `H = √(m / 16)` with m the mean number of links per substructure (a module has 16).
+/// At fixed module size h this is the optimised-Schwarz scaling `d_m ∝ 1/√(hH)`; the paper's
+/// 3.92e6 ([`PAPER_DM`]) suits only the smallest substructures. How the factor was chosen:
+/// docs/method.md, "Tuning log".
 pub fn auto_dm(structure: &Structure, substructures: usize) -> f64 {
     let median = |cables: bool| {
         let mut k: Vec<f64> = structure
@@ -214,8 +199,10 @@ const DENSE_BUDGET_BYTES: usize = 16 << 20;
 
 impl<'s> Latin<'s> {
     /// Set up: partition, interfaces, substructure operators (in parallel) and the macro
-    /// problem.
+    /// problem; settings the structure cannot take are refused first
+    /// ([`LatinSettings::validate`]).
     pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
+        settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let dm = settings
             .dm
@@ -580,7 +567,7 @@ impl Latin<'_> {
     fn update_search(&mut self, state: &mut LatinState) -> bool {
         let updated = self.settings.policy == SearchPolicy::Status && self.follow_status(state);
         if updated {
-            state.updates += 1;
+            state.rebuilds += 1;
             state.relax = false;
         }
         updated
@@ -687,10 +674,6 @@ impl Latin<'_> {
 impl Solver for Latin<'_> {
     type State = LatinState;
 
-    fn homogenised(&mut self) -> Vec<Homogenised> {
-        Latin::homogenised(self)
-    }
-
     /// Iteration 0 is the first linear stage.
     const INIT_IS_ITERATE: bool = true;
 
@@ -719,7 +702,7 @@ impl Solver for Latin<'_> {
             eta: f64::INFINITY,
             residual: f64::INFINITY,
             slack_cables: 0,
-            updates: 0,
+            rebuilds: 0,
             relax: false,
             at_roundoff: false,
             unloaded: load.iter().all(|&f| f == 0.0)
@@ -787,9 +770,9 @@ impl Solver for Latin<'_> {
         };
         Progress {
             iteration: state.iteration,
-            residual: state.eta,
+            stopping_value: state.eta,
             equilibrium_residual: Some(state.residual),
-            setups: state.updates,
+            rebuilds: state.rebuilds,
             slack_cables: state.slack_cables,
             at_roundoff: stop == Some(Status::Converged) && !criterion,
             stop,

@@ -26,7 +26,7 @@ pub struct SubstructureTopology {
 /// An interface Γ_EE': the pair of substructures (E, E') and the non-clamped nodes they share.
 #[derive(Debug, Clone)]
 pub struct InterfaceTopology {
-    /// The two substructures, `sides[0] < sides[1]`; macro forces count positive on sides[0].
+    /// The two substructures, `sides[0] < sides[1]`; macro forces count positive on `sides[0]`.
     pub sides: [usize; 2],
     /// Shared non-clamped nodes, increasing.
     pub nodes: Vec<usize>,

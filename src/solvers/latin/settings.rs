@@ -1,5 +1,7 @@
 //! Settings of the LATIN solver, each default written once, at its field.
 
+use crate::solvers::SetupError;
+use crate::structure::Structure;
 use serde::Deserialize;
 
 /// The search direction `l` on the links (docs/method.md §4 "Search directions").
@@ -73,8 +75,8 @@ pub struct LatinSettings {
     /// Substructures along x and y; `[1, 1]` is the monodomain solver. Default `[4, 4]` (the
     /// paper's), limited to the grid by the case.
     pub subdomains: [usize; 2],
-    /// Interface search direction d_m, N/m. Default `None`: `0.25 k̄ / √H` (see
-    /// [`super::auto_dm`]), which scales with the cables' stiffness and falls as the
+    /// Interface search direction d_m, N/m. Default `None`: `c k̄ / √H` with c =
+    /// [`super::DM_FACTOR`] (see [`super::auto_dm`]), which scales with the cables' stiffness and falls as the
     /// substructures grow; the paper's 3.92e6 is [`PAPER_DM`].
     pub dm: Option<f64>,
     /// Link search direction l. Default `l = k`.
@@ -132,7 +134,41 @@ impl Default for LatinSettings {
     }
 }
 
+/// How far a uniform `solver.l` may be from the links' stiffness: beyond, the stages' round-off
+/// (which scales with `1/√l` and `√l`) swamps the indicator (issue 13, D1: `l = 1e-300`
+/// "converged" in 0 iterations with an infinite deflection).
+const SEARCH_DIRECTION_RANGE: f64 = 1e8;
+
 impl LatinSettings {
+    /// Refuse settings the solver cannot be set up with on `structure`: a uniform search
+    /// direction `l` outside `[k_min / 1e8, 1e8 k_max]` of the links' stiffness k.
+    pub fn validate(&self, structure: &Structure) -> Result<(), SetupError> {
+        let SearchDirection::Uniform(l) = self.search else {
+            return Ok(());
+        };
+        let (k_min, k_max) = structure
+            .links
+            .iter()
+            .map(|l| l.stiffness)
+            .fold((f64::INFINITY, 0.0_f64), |(lo, hi), k| {
+                (lo.min(k), hi.max(k))
+            });
+        let (min, max) = (
+            k_min / SEARCH_DIRECTION_RANGE,
+            k_max * SEARCH_DIRECTION_RANGE,
+        );
+        if k_max > 0.0 && !(min..=max).contains(&l) {
+            return Err(SetupError::SearchDirectionOutOfRange {
+                l,
+                k_min,
+                k_max,
+                min,
+                max,
+            });
+        }
+        Ok(())
+    }
+
     /// The tolerance r(U) is held to.
     pub fn residual_tolerance(&self) -> f64 {
         self.residual_tolerance

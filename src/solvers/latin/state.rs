@@ -81,8 +81,8 @@ pub struct LatinState {
     pub residual: f64,
     /// Slack cables of ŝ.
     pub slack_cables: usize,
-    /// Re-set-ups of the operators (status-following l) so far in this solve.
-    pub updates: usize,
+    /// Operator rebuilds (status-following l) so far in this solve.
+    pub rebuilds: usize,
     /// Whether s was computed with the current operators, so that the next linear stage may
     /// be relaxed (or extrapolated) against it: not after a re-set-up.
     pub(super) relax: bool,

@@ -134,7 +134,7 @@ impl Latin<'_> {
         let rebuilt =
             disagree as f64 > REBUILD_FRACTION * cables as f64 && self.set_search(slack.clone());
         if rebuilt {
-            state.updates += 1;
+            state.rebuilds += 1;
         }
         state.law_slack = slack;
         self.local_stage(&mut state.subs, self.local_law(&state.law_slack));

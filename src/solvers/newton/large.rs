@@ -406,7 +406,7 @@ impl Solver for LargeNewton<'_> {
     }
 
     /// From the last equilibrium reached, the whole path in one increment first, started from
-    /// the extrapolation of the last equilibria ([`LargeNewton::predict`]; paper case, 41-α
+    /// the extrapolation of the last equilibria (`LargeNewton::predict`; paper case, 41-α
     /// sweep with Newton steps: 2.63 steps per α with the secant instead of 3.39 from the last
     /// answer, though the secant's residual is often the larger; with chord steps, 3.41 steps
     /// per α through three points against 3.95 with the secant).
@@ -503,9 +503,9 @@ impl Solver for LargeNewton<'_> {
     fn progress(&self, state: &LargeState) -> Progress {
         Progress {
             iteration: state.iteration,
-            residual: state.eval.residual,
+            stopping_value: state.eval.residual,
             equilibrium_residual: Some(state.eval.residual),
-            setups: 0,
+            rebuilds: 0,
             slack_cables: law::slack_flags(self.structure, &state.eval.trial, SlackRule::Clipped)
                 .iter()
                 .filter(|&&x| x)

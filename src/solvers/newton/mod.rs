@@ -2,7 +2,7 @@
 //!
 //! Minimises `Π(U) = Σ_bars (½ k e² + t0 e) + Σ_cables ½ k ⟨e + t0/k⟩₊² − Fᵀ U`. Each iteration
 //! solves `(K_bars + B_Aᵀ k_A B_A + μ I) ΔU = −∇Π` on the taut set A, then takes the exact
-//! minimiser of the 1-D piecewise quadratic `Π(U + sΔU)` ([`line_search`]). The
+//! minimiser of the 1-D piecewise quadratic `Π(U + sΔU)` (`line_search`). The
 //! regularisation μ vanishes with the residual; the symbolic factorization is the one of the
 //! taut stiffness, reused.
 //!
@@ -76,28 +76,15 @@ pub struct NewtonWork {
 }
 
 /// Regularisation μ = `REGULARISATION · min(1, residual)² · mean diagonal`: enough to step
-/// through a taut set that is a mechanism on the way, and vanishing quadratically so that the
-/// step on the final active set is exact to round-off (with a linear decay the paper case
-/// needed one more factorization; measured on the paper case at α = 1 and 3, a 32 × 32 grid at
-/// α = 0.3 and the 64 × 64 case). A factorization that fails raises μ (see `newton_step`).
-/// Why 1e-8 and not the 1e-6 of before: a step solved by CG with an earlier Hessian's
-/// corrected factor differs from it only by the two μ, so a smaller μ lets CG stop after one
-/// iteration instead of two (paper case, 41 α, one process alternating μ = 1e-8 with
-/// [`REUSE_CG_LOOSEST`] = 1e-4 against 1e-6 with 1e-8: cold 92 CG iterations instead of 147,
-/// warm 67 instead of 91, 0.87 and 0.91 of the time; the looser forcing term alone gave 107
-/// and 91 iterations, 0.96 and 0.99; 159 steps instead of 161 cold, 81 warm as before, the
-/// same factorizations and slack sets; μ = 1e-10 saved a few more iterations but no time).
+/// through a taut set that is a mechanism on the way, vanishing quadratically so that the step
+/// on the final active set is exact to round-off; a factorization that fails raises μ (see
+/// `newton_step`). Why quadratic and why 1e-8: docs/method.md, "Tuning log".
 const REGULARISATION: f64 = 1e-8;
 
 /// CG on a new Hessian, preconditioned by the factor of an earlier one corrected for the links
 /// whose state changed ([`LowRankUpdate`]), is tried when their taut sets differ by at most
-/// this many links. The correction costs a forward substitution with one right-hand side per
-/// changed link; measured on the paper case (one run, medians of 400): a factorization 1.68–
-/// 1.91 ms, a solve 0.23–0.25 ms, a forward substitution with 18 right-hand sides 0.55–0.62 ms,
-/// so that r links cost about 0.032 r ms, and CG's two iterations about 0.6 ms: the correction
-/// pays up to r ≈ 32 (at larger sizes a factorization costs more solves, so the cap is on the
-/// safe side). Before the correction, CG preconditioned with the bare factor needed about
-/// 2 + 0.45 r iterations for r changed links and paid up to r ≈ 16.
+/// this many links (the correction costs one right-hand side per changed link; where it stops
+/// paying: docs/method.md, "Tuning log").
 const REUSE_MAX_CHANGED_LINKS: usize = 32;
 /// CG iterations allowed before giving up and refactorising (the corrected factor is exact but
 /// for the regularisations' difference: usually one or two iterations when it works).
@@ -443,10 +430,10 @@ impl Solver for Newton<'_> {
         );
         Progress {
             iteration: state.iteration,
-            residual: state.residual,
+            stopping_value: state.residual,
             // newton's own measure is r(U).
             equilibrium_residual: Some(state.residual),
-            setups: 0,
+            rebuilds: 0,
             slack_cables: law::slack_flags(self.structure, &state.trial, SlackRule::Clipped)
                 .iter()
                 .filter(|&&x| x)

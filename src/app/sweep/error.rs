@@ -1,0 +1,90 @@
+//! Why a run failed, and the exit status each reason maps to.
+
+use crate::case::CaseError;
+use crate::output::{OpenError, WriteError};
+use crate::solvers::SetupError;
+use thiserror::Error;
+
+/// Why a run failed, or did not produce all that was asked.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The case is invalid.
+    #[error(transparent)]
+    Case(#[from] CaseError),
+    /// A solver cannot be set up for the structure (a mechanism, a singular partition).
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// The output directory cannot be created or written.
+    #[error(
+        "output directory `{dir}` is not writable ({reason}): set `output.dir` in the case or \
+         pass `--out DIR` with a directory you can write to"
+    )]
+    OutputDir {
+        /// The directory.
+        dir: String,
+        /// Why.
+        reason: String,
+    },
+    /// Another run holds the output directory's lock.
+    #[error("{0}")]
+    Busy(OpenError),
+    /// A file could not be written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// Some solves did not meet their stopping criterion (their rows say so) or had no finite
+    /// answer (no row, no files); each item of the list says which.
+    #[error("{count} solve(s) did not converge: {list}")]
+    NotConverged {
+        /// How many.
+        count: usize,
+        /// Which, and how they ended.
+        list: String,
+    },
+}
+
+impl RunError {
+    /// 2 for bad input (the case, the structure it describes, the output directory); 3 when
+    /// another run holds the output directory; 1 when the run could not produce what was
+    /// asked.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. } => 2,
+            RunError::Busy(_) => 3,
+            RunError::Write { .. } | RunError::NotConverged { .. } => 1,
+        }
+    }
+}
+
+impl RunError {
+    /// The failure of a run some of whose solves (`failures`, one line each) failed.
+    pub(super) fn not_converged(failures: &[String]) -> Self {
+        RunError::NotConverged {
+            count: failures.len(),
+            list: failure_list(failures),
+        }
+    }
+}
+
+impl From<OpenError> for RunError {
+    fn from(e: OpenError) -> Self {
+        match e {
+            OpenError::Busy { .. } => RunError::Busy(e),
+            OpenError::Io { dir, source } => RunError::OutputDir {
+                dir: dir.display().to_string(),
+                reason: source.to_string(),
+            },
+        }
+    }
+}
+
+/// At most this many failed solves are listed in a message; the rest are counted.
+const LISTED_FAILURES: usize = 10;
+
+/// `list` joined, its first [`LISTED_FAILURES`] items in full and the rest counted.
+fn failure_list(list: &[String]) -> String {
+    let mut text = list[..list.len().min(LISTED_FAILURES)].join("; ");
+    if list.len() > LISTED_FAILURES {
+        text.push_str(&format!("; and {} more", list.len() - LISTED_FAILURES));
+    }
+    text
+}

@@ -1,0 +1,442 @@
+//! `tensolve run`: one case, end to end. Build the structure, set the asked solvers up once,
+//! solve every α, hand every solve to the sinks the case asks for. Only what the case asks
+//! for is computed and written.
+
+mod error;
+mod figure12;
+mod verdict;
+
+pub use error::RunError;
+
+use super::reference::ReferenceSource;
+use super::setup::{prepare, set_up, Prepared, SetUpSolver};
+use crate::case::memory::{self, MemoryEstimate, Size, Workload};
+use crate::case::Case;
+use crate::output::{
+    self, alpha_label,
+    sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
+    FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
+};
+use crate::results;
+use crate::solvers::{
+    Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
+};
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+use verdict::{assess, not_converged_message};
+
+/// What the command line adds to a case.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Overrides `output.dir`.
+    pub out_dir: Option<PathBuf>,
+    /// Overrides `solver.methods`.
+    pub methods: Option<Vec<Method>>,
+}
+
+/// The output directory: `--out`, else `output.dir`, else `out/case`.
+pub fn output_dir(case: &Case, options: &RunOptions) -> PathBuf {
+    options
+        .out_dir
+        .clone()
+        .or_else(|| case.output.dir.clone())
+        .unwrap_or_else(|| PathBuf::from("out/case"))
+}
+
+/// What a run is doing, for a progress display: the run reports each as it happens and never
+/// prints.
+#[derive(Debug, Clone, Copy)]
+pub enum RunEvent<'a> {
+    /// A set-up step began (the structure, a solver's factorisations, a reference solve);
+    /// it lasts until the next event.
+    Stage(&'a str),
+    /// A solve began.
+    SolveStart {
+        /// The solver's name.
+        solver: &'a str,
+        /// The load factor.
+        alpha: f64,
+    },
+    /// An iterate of the solve in progress.
+    Iteration {
+        /// The solver's name.
+        solver: &'a str,
+        /// The load factor.
+        alpha: f64,
+        /// What `record.stopping_value` measures.
+        measure: Measure,
+        /// The iterate.
+        record: &'a IterationRecord,
+    },
+    /// A solve ended and its summary row was written.
+    Row(&'a SummaryRow),
+}
+
+/// Passes every iterate of one solve to the run's events as [`RunEvent::Iteration`].
+struct IterationEvents<'e> {
+    events: &'e mut dyn FnMut(RunEvent<'_>),
+    key: SolveKey,
+}
+
+impl Observer for IterationEvents<'_> {
+    fn iteration(&mut self, record: &IterationRecord) {
+        (self.events)(RunEvent::Iteration {
+            solver: self.key.method.name(),
+            alpha: self.key.alpha,
+            measure: self.key.measure,
+            record,
+        });
+    }
+}
+
+/// Run a validated case. `events` sees what the run is doing ([`RunEvent`]), every summary
+/// row as soon as it is written among them.
+pub fn run(
+    case: &Case,
+    options: &RunOptions,
+    events: &mut dyn FnMut(RunEvent<'_>),
+) -> Result<Vec<SummaryRow>, RunError> {
+    let dir = output_dir(case, options);
+    let methods = methods(case, options)?;
+    // 0. The memory the run needs, estimated before anything large is allocated.
+    let estimate = MemoryEstimate::new(Size::of(case), &Workload::run(case, &methods));
+    memory::ensure_fits(&estimate, "run")?;
+    // 1. The structure and its mechanism check (K with every cable taut, factorized).
+    events(RunEvent::Stage(
+        "building the structure and factorising its taut stiffness",
+    ));
+    let prepared = prepare_or_locate_mechanisms(case, &dir)?;
+    // 2. Every solver asked for, set up once.
+    let mut solvers = set_up_all(case, &methods, &prepared, events)?;
+    // 3. Where LATIN's error e is measured from.
+    events(RunEvent::Stage("setting up the reference solver"));
+    let reference = ReferenceSource::new(case, &solvers, &prepared)?;
+    // 4. The output directory, once the case is known solvable: locked for this run, with a
+    //    private staging directory; then the sinks of the files asked for.
+    let out = writes_files(case)
+        .then(|| OutputDir::open(&dir).map(RefCell::new))
+        .transpose()?;
+    let sinks = sinks(case, &dir, out.as_ref(), &prepared, &solvers);
+    // 5. The homogenised substructure operators, when asked (set-up products, written once).
+    if let Some(out) = out.as_ref().filter(|_| case.output.homogenised) {
+        events(RunEvent::Stage("writing the homogenised operators"));
+        write_homogenised(&dir, out, &mut solvers)?;
+    }
+    // 6. Every α, every solver (steps 7–9 in `Sweep`); 10. the files of the whole sweep.
+    let mut sweep = Sweep::new(case, &prepared, solvers, reference, sinks);
+    for &alpha in &case.load.alphas {
+        sweep.solve_alpha(alpha, events)?;
+    }
+    let (rows, failures) = sweep.close()?;
+    // 11. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
+    let compare = case.output.plots && !case.output.compare_modules.is_empty();
+    if let Some(out) = out.as_ref().filter(|_| compare) {
+        events(RunEvent::Stage(
+            "Figure 12: the LATIN solvers on each module of output.compare_modules",
+        ));
+        figure12::write(case, &methods, out, &dir)?;
+    }
+    // 12. The directory released; the run fails when a solve did.
+    if let Some(out) = out {
+        out.into_inner().finish().map_err(|source| WriteError {
+            path: dir.clone(),
+            source,
+        })?;
+    }
+    match failures.is_empty() {
+        true => Ok(rows),
+        false => Err(RunError::not_converged(&failures)),
+    }
+}
+
+/// The solvers of the run: `--solver`, else `solver.methods`, each named once.
+fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
+    let methods = options
+        .methods
+        .clone()
+        .unwrap_or_else(|| case.solver.methods.clone());
+    crate::case::check_distinct_methods("--solver", &methods)?;
+    Ok(methods)
+}
+
+/// Every solver of `methods` set up for `prepared` with the settings of `case`, in order.
+fn set_up_all<'s>(
+    case: &Case,
+    methods: &[Method],
+    prepared: &'s Prepared,
+    events: &mut dyn FnMut(RunEvent<'_>),
+) -> Result<Vec<SetUpSolver<'s>>, RunError> {
+    let mut solvers = Vec::with_capacity(methods.len());
+    for &method in methods {
+        events(RunEvent::Stage(&format!("setting up {}", method.name())));
+        solvers.push(set_up(method, &case.solver, prepared)?);
+    }
+    Ok(solvers)
+}
+
+/// The structure of `case` and its taut stiffness; a refused mechanism's modes, node by node,
+/// are written to `mechanisms.csv` under `dir` before the refusal is returned.
+fn prepare_or_locate_mechanisms(case: &Case, dir: &Path) -> Result<Prepared, RunError> {
+    prepare(case).or_else(|refused| {
+        if !refused.modes().is_empty() {
+            write_mechanisms(dir, refused.modes())?;
+        }
+        Err(refused.into())
+    })
+}
+
+/// Every LATIN solver's homogenised substructure operators under `homogenised/`, committed
+/// to the output directory `out` (`root`: its path, for errors).
+fn write_homogenised(
+    root: &Path,
+    out: &RefCell<OutputDir>,
+    solvers: &mut [SetUpSolver<'_>],
+) -> Result<(), RunError> {
+    for set_up in solvers {
+        let operators = set_up.solver.homogenised();
+        let staging = out.borrow().staging().to_path_buf();
+        output::write_homogenised(&staging, &operators).map_err(|source| WriteError {
+            path: root.join("homogenised"),
+            source,
+        })?;
+        out.borrow_mut().commit()?;
+    }
+    Ok(())
+}
+
+/// The sweep over α: the solvers, where their e is measured from, the sinks, and what the
+/// solves have given so far.
+struct Sweep<'s> {
+    prepared: &'s Prepared,
+    solvers: Vec<SetUpSolver<'s>>,
+    reference: ReferenceSource<'s>,
+    sinks: Sinks<'s>,
+    /// Each solver's converged answer at the previous α: its warm start (newton and pcg-lcp
+    /// use it; they stop on the same criterion as from a cold start).
+    previous: Vec<Option<Equilibrium>>,
+    /// Whether the smallest tangent eigenvalue is computed at every answer.
+    wants_eigenvalue: bool,
+    rows: Vec<SummaryRow>,
+    failures: Vec<String>,
+}
+
+impl<'s> Sweep<'s> {
+    fn new(
+        case: &Case,
+        prepared: &'s Prepared,
+        solvers: Vec<SetUpSolver<'s>>,
+        reference: ReferenceSource<'s>,
+        sinks: Sinks<'s>,
+    ) -> Self {
+        let model = prepared.structure.model;
+        Sweep {
+            prepared,
+            previous: vec![None; solvers.len()],
+            solvers,
+            reference,
+            sinks,
+            wants_eigenvalue: model.has_geometric_stiffness() || case.output.stability,
+            rows: Vec::new(),
+            failures: Vec::new(),
+        }
+    }
+
+    /// Step 6: every solver at `alpha`, after the reference solve (shared with a solver of the
+    /// case at its default settings, whose solve it then is).
+    fn solve_alpha(
+        &mut self,
+        alpha: f64,
+        events: &mut dyn FnMut(RunEvent<'_>),
+    ) -> Result<(), RunError> {
+        let structure = &self.prepared.structure;
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        if self.reference.needed() {
+            events(RunEvent::Stage(&format!(
+                "reference solve at alpha = {}",
+                alpha_label(alpha)
+            )));
+        }
+        let reference_solution = self
+            .reference
+            .solve(&load, &mut self.solvers, &self.previous);
+        let reference_errors = reference_solution
+            .as_ref()
+            .map(|r| Reference::new(structure, &r.equilibrium.displacements));
+        for index in 0..self.solvers.len() {
+            let set_up = &mut self.solvers[index];
+            let key = SolveKey {
+                method: set_up.method,
+                alpha,
+                measure: set_up.solver.stopping_measure(),
+            };
+            self.sinks.start(&key)?;
+            events(RunEvent::SolveStart {
+                solver: key.method.name(),
+                alpha,
+            });
+            let solution = match (self.reference.shared_index(), &reference_solution) {
+                (Some(i), Some(r)) if i == index => r.clone(),
+                _ => {
+                    let mut progress = IterationEvents {
+                        events: &mut *events,
+                        key,
+                    };
+                    let mut observers = Tee::default()
+                        .with(Some(&mut self.sinks))
+                        .with(Some(&mut progress));
+                    set_up.solver.solve_from(
+                        &load,
+                        self.previous[index].as_ref(),
+                        reference_errors.as_ref(),
+                        &mut observers,
+                    )
+                }
+            };
+            self.record(index, &key, &load, solution, events)?;
+        }
+        Ok(())
+    }
+
+    /// Steps 7–9: what the answer of solver `index` is, its row and its files.
+    fn record(
+        &mut self,
+        index: usize,
+        key: &SolveKey,
+        load: &[f64],
+        mut solution: Solution,
+        events: &mut dyn FnMut(RunEvent<'_>),
+    ) -> Result<(), RunError> {
+        let (structure, alpha) = (&self.prepared.structure, key.alpha);
+        // 7. What the answer is beyond the solver's own stop: no equilibrium, or an unstable
+        //    one (docs/method.md §8).
+        let verdict = assess(&mut solution, self.prepared, load, self.wants_eigenvalue);
+        self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
+            .then(|| solution.equilibrium.clone());
+        // 8. A non-finite answer (or a row it would give) is reported, never written.
+        let row = results::is_finite(&solution).then(|| {
+            SummaryRow::new(
+                key.method.name(),
+                alpha,
+                load,
+                structure,
+                &solution,
+                (verdict.min_tangent_eigenvalue, verdict.geometric_term),
+                self.solvers[index].setup_seconds,
+            )
+        });
+        let Some(row) = row.filter(SummaryRow::is_finite) else {
+            self.sinks.end(key, SolveEnd::NonFinite)?;
+            self.failures.push(format!(
+                "{} at alpha = {}: produced non-finite values after {} iterations; no row \
+                 and no files written for it",
+                key.method.name(),
+                alpha_label(alpha),
+                solution.info.iterations,
+            ));
+            return Ok(());
+        };
+        if !row.converged {
+            self.failures
+                .push(not_converged_message(&row, &solution, &verdict));
+        }
+        // 9. The files of this solve; with no answer, its row and no file that would look
+        //    like one.
+        let end = match row.status.no_answer() {
+            true => SolveEnd::NoAnswer { row: &row },
+            false => SolveEnd::Solved {
+                solution: &solution,
+                row: &row,
+            },
+        };
+        self.sinks.end(key, end)?;
+        events(RunEvent::Row(&row));
+        self.rows.push(row);
+        Ok(())
+    }
+
+    /// Step 10: the files of the whole sweep; the rows and the failures.
+    fn close(mut self) -> Result<(Vec<SummaryRow>, Vec<String>), RunError> {
+        self.sinks.close()?;
+        Ok((self.rows, self.failures))
+    }
+}
+
+/// `mechanisms.csv` (`node,mode,ux,uy,uz`) in the output directory, through its lock and
+/// staging like every result.
+fn write_mechanisms(dir: &Path, modes: &[crate::solvers::ModeRow]) -> Result<(), RunError> {
+    let mut out = OutputDir::open(dir)?;
+    let staging = out.staging().to_path_buf();
+    output::write_mechanisms(&staging, modes).map_err(|source| WriteError {
+        path: dir.join("mechanisms.csv"),
+        source,
+    })?;
+    out.commit()?;
+    out.finish().map_err(|source| WriteError {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    Ok(())
+}
+
+/// Whether `case` asks for any file.
+fn writes_files(case: &Case) -> bool {
+    let o = &case.output;
+    o.history
+        || o.tensions
+        || o.displacements
+        || o.forces
+        || o.reactions
+        || o.vtk
+        || o.plots
+        || o.stability
+        || o.summary
+        || o.homogenised
+}
+
+/// The sinks of the files `case` asks for, in the order they write: the per-solve files into
+/// the staging directory of `output`, published together, then the rows of the ledgers.
+fn sinks<'s>(
+    case: &Case,
+    root: &Path,
+    output: Option<&'s RefCell<OutputDir>>,
+    prepared: &'s Prepared,
+    solvers: &[SetUpSolver<'_>],
+) -> Sinks<'s> {
+    let mut sinks = Sinks::default();
+    let Some(output) = output else {
+        return sinks;
+    };
+    let staging = output.borrow().staging().to_path_buf();
+    let dir = staging.as_path();
+    let (structure, taut) = (&prepared.structure, &prepared.taut);
+    let out = &case.output;
+    let has_history = solvers
+        .iter()
+        .any(|s| output::history_column(s.solver.stopping_measure()).is_some());
+    sinks.add(
+        out.history && has_history,
+        HistorySink::new(root, dir, structure.n_cables()),
+    );
+    sinks.add(out.tensions, PerSolveSink::tensions(root, dir, structure));
+    sinks.add(
+        out.displacements,
+        PerSolveSink::displacements(root, dir, structure),
+    );
+    sinks.add(out.forces, PerSolveSink::forces(root, dir, structure));
+    sinks.add(out.reactions, PerSolveSink::reactions(root, dir, structure));
+    sinks.add(out.vtk, PerSolveSink::vtk(root, dir, structure));
+    if let Some(first) = solvers.first().filter(|_| out.plots) {
+        let settings = FigureSettings {
+            amplification: out.amplification,
+            max_plot_iterations: out.max_plot_iterations,
+        };
+        sinks.add(
+            true,
+            PlotsSink::new(root, dir, structure, first.method, settings),
+        );
+    }
+    sinks.add(true, PublishSink::new(output));
+    sinks.add(out.stability, StabilitySink::new(output, structure, taut));
+    sinks.add(out.summary, SummarySink::new(output));
+    sinks
+}

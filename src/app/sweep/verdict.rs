@@ -1,0 +1,129 @@
+//! What an answer is beyond its solver's own stop (docs/method.md §8): no equilibrium, an
+//! unstable one, or beyond the model; and the failure line of a row that did not converge.
+
+use crate::app::setup::Prepared;
+use crate::output::{alpha_label, SummaryRow};
+use crate::results;
+use crate::solvers::{Solution, Status};
+
+/// What the sweep found of an answer beyond its solver's stop.
+pub(super) struct Verdict {
+    /// The smallest tangent eigenvalue at the answer, when computed.
+    pub min_tangent_eigenvalue: Option<f64>,
+    /// The relative change the geometric term the model leaves out would make.
+    pub geometric_term: Option<f64>,
+    /// Why the answer is no equilibrium, when it is none.
+    pub no_equilibrium: Option<crate::solvers::NoEquilibrium>,
+}
+
+/// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
+/// energy decreases without bound (no equilibrium exists: [`Status::NoEquilibrium`]); with
+/// `eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer where it
+/// is negative is an unstable equilibrium ([`Status::Unstable`]).
+pub(super) fn assess(
+    solution: &mut Solution,
+    prepared: &Prepared,
+    load: &[f64],
+    eigenvalue: bool,
+) -> Verdict {
+    let s = &prepared.structure;
+    if !results::is_finite(solution) {
+        return Verdict {
+            min_tangent_eigenvalue: None,
+            geometric_term: None,
+            no_equilibrium: None,
+        };
+    }
+    // A converged answer is an equilibrium (r(U) within its tolerance): only the others are
+    // asked for a runaway.
+    let found = solution.info.no_equilibrium.clone().or_else(|| {
+        (!solution.info.status.converged())
+            .then(|| crate::solvers::no_equilibrium(s, &solution.equilibrium, load))
+            .flatten()
+    });
+    if let Some(none) = found {
+        solution.info.status = Status::NoEquilibrium;
+        return Verdict {
+            min_tangent_eigenvalue: None,
+            geometric_term: None,
+            no_equilibrium: Some(none),
+        };
+    }
+    let min_tangent_eigenvalue = (eigenvalue && !solution.info.status.no_answer())
+        .then(|| results::smallest_tangent_eigenvalue(s, &solution.equilibrium, &prepared.taut));
+    if solution.info.status.converged() && min_tangent_eigenvalue.is_some_and(|v| v < 0.0) {
+        solution.info.status = Status::Unstable;
+    }
+    // A model on the initial geometry whose answer moves a node by more than the structure's
+    // own size has left its domain: converged or not, no answer of it.
+    if s.model != crate::structure::GeometricModel::Large
+        && results::max_deflection(s, &solution.equilibrium) > s.size()
+    {
+        solution.info.status = Status::BeyondModel;
+    }
+    Verdict {
+        min_tangent_eigenvalue,
+        geometric_term: results::geometric_term(s, &solution.equilibrium, &prepared.taut),
+        no_equilibrium: None,
+    }
+}
+
+/// The failure line of a row that did not converge: how it ended, and for no equilibrium the
+/// cables that went slack and the nodes of the mode.
+pub(super) fn not_converged_message(
+    row: &SummaryRow,
+    solution: &Solution,
+    verdict: &Verdict,
+) -> String {
+    let head = format!("{} at alpha = {}", row.solver, alpha_label(row.alpha));
+    let ids = |ids: &[u64]| {
+        ids.iter()
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match (&verdict.no_equilibrium, row.status) {
+        (Some(none), _) => format!(
+            "{head}: no equilibrium: with cable(s) {} slack, a mechanism is left that the load \
+             works on (it moves nodes {}), so the energy decreases without bound; no \
+             displacement or tension file is written, and its row says converged = false, \
+             status = no_equilibrium. Add members or supports, prestress those cables, or model \
+             the geometric stiffness (`model.geometry`)",
+            ids(&none.slack_cables),
+            none.mode_nodes
+                .iter()
+                .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        (None, Status::LimitPoint) => format!(
+            "{head}: limit point: the load path could not be followed to this load (load \
+             increments halved below {} of the path from the last equilibrium); no \
+             displacement or tension file is written, and its row says converged = false, \
+             status = limit_point",
+            crate::solvers::newton::MIN_INCREMENT
+        ),
+        (None, Status::BeyondModel) => format!(
+            "{head}: beyond the model: the answer moves a node by {:.3e} m, more than the \
+             structure's own size; a model on the initial geometry does not describe that (a \
+             unit slip, such as E in GPa or coordinates in mm? `tensolve check` prints the \
+             magnitudes); no displacement or tension file is written, and its row says \
+             converged = false, status = beyond_model",
+            row.max_deflection
+        ),
+        (None, Status::Unstable) => format!(
+            "{head}: an unstable equilibrium: the residual criterion holds, but the tangent \
+             stiffness has a negative eigenvalue ({:.3e} N/m): a saddle of the energy, which a \
+             load path would not stay on; its row says converged = false, status = unstable",
+            row.min_tangent_eigenvalue.unwrap_or(f64::NAN)
+        ),
+        _ => format!(
+            "{head}: not converged after {} iterations ({:?}), {} = {:e}; its row says \
+             converged = false",
+            row.iterations,
+            solution.info.status,
+            solution.info.measure.short_name(),
+            row.stopping_value
+        ),
+    }
+}

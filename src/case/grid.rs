@@ -1,0 +1,77 @@
+//! `[grid]`, `[cables]`, `[bars]` and `prestress.lower_cable` of a module grid: its
+//! description, checked.
+
+use super::numbers::{number, positive, PHYSICAL_MAX};
+use super::raw::{RawCase, RawGrid};
+use super::CaseError;
+use crate::structure::{CableSpec, GridSpec, Material};
+
+/// `[grid]` of a raw case: the grid's description, checked.
+pub(super) fn grid_spec(raw: &RawCase, g: &RawGrid) -> Result<GridSpec, CaseError> {
+    let paper = GridSpec::default();
+    let [nx, ny] = g.modules.0;
+    if nx == 0 || ny == 0 {
+        return Err(CaseError::invalid(
+            "grid.modules",
+            format!("[{nx}, {ny}]"),
+            "give at least one module along each axis, e.g. [16, 16]",
+        ));
+    }
+    const MAX_MODULES: usize = 4_000_000;
+    if nx.saturating_mul(ny) > MAX_MODULES {
+        return Err(CaseError::invalid(
+            "grid.modules",
+            format!("[{nx}, {ny}]"),
+            format!("at most {MAX_MODULES} modules in all"),
+        ));
+    }
+    let length = g.length.unwrap_or(paper.length);
+    positive("grid.length", length, "the module side L in m")?;
+    let height = g.height.unwrap_or(paper.height);
+    positive("grid.height", height, "the module height H in m")?;
+    let cables = Material {
+        young: raw.cables.young.unwrap_or(paper.cables.material.young),
+        section: raw.cables.section.unwrap_or(paper.cables.material.section),
+    };
+    positive(
+        "cables.young",
+        cables.young,
+        "the cables' Young's modulus in Pa",
+    )?;
+    positive(
+        "cables.section",
+        cables.section,
+        "the cables' cross-section in m²",
+    )?;
+    let bars = Material {
+        young: raw.bars.young.unwrap_or(paper.bars.young),
+        section: raw.bars.section.unwrap_or(paper.bars.section),
+    };
+    positive("bars.young", bars.young, "the bars' Young's modulus in Pa")?;
+    positive(
+        "bars.section",
+        bars.section,
+        "the bars' cross-section in m²",
+    )?;
+    let p = raw.prestress.lower_cable.unwrap_or(paper.prestress);
+    if !(p.is_finite() && (0.0..=PHYSICAL_MAX).contains(&p)) {
+        return Err(CaseError::invalid(
+            "prestress.lower_cable",
+            number(p),
+            format!("give the lower cables' prestress in N as a number ≥ 0 and ≤ {PHYSICAL_MAX:e}"),
+        ));
+    }
+    Ok(GridSpec {
+        modules: [nx, ny],
+        length,
+        height,
+        module: g.module.unwrap_or(paper.module),
+        cables: CableSpec {
+            material: cables,
+            unilateral: raw.cables.unilateral.unwrap_or(paper.cables.unilateral),
+        },
+        bars,
+        prestress: p,
+        clamp: raw.supports.clamp.unwrap_or(paper.clamp),
+    })
+}

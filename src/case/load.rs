@@ -1,0 +1,157 @@
+//! `[load]`: the load pattern, point loads, self weight, and the load factors α.
+
+use super::nodes::select;
+use super::numbers::{bounded, shown, vector, PHYSICAL_MAX};
+use super::raw::RawLoad;
+use super::{CaseError, Load};
+use crate::structure::{Geometry, LoadPattern};
+use std::collections::HashMap;
+
+/// Largest load factor accepted.
+const ALPHA_MAX: f64 = 1e6;
+
+/// `[load]` of a structure of `geometry` (`grid`: a module grid, whose nodal load defaults to
+/// the paper's; a general structure's to none).
+pub(super) fn load(
+    raw: &RawLoad,
+    grid: bool,
+    geometry: &Geometry,
+    index_of: &HashMap<u64, usize>,
+) -> Result<Load, CaseError> {
+    let default_nodal = if grid {
+        LoadPattern::default().nodal
+    } else {
+        [0.0; 3]
+    };
+    let pattern = LoadPattern {
+        nodal: raw.nodal.map_or(default_nodal, |n| n.0),
+    };
+    for (c, &f) in pattern.nodal.iter().enumerate() {
+        let key = ["load.nodal[0]", "load.nodal[1]", "load.nodal[2]"][c];
+        bounded(key, f, PHYSICAL_MAX, "each nodal force component in N")?;
+    }
+    let mut points = Vec::new();
+    for (i, p) in raw.point.iter().flatten().enumerate() {
+        let key = format!("load.point[{i}]");
+        let nodes = select(&key, geometry, index_of, &p.nodes, &p.in_box)?;
+        let force = vector(
+            &format!("{key}.force"),
+            p.force,
+            PHYSICAL_MAX,
+            "each force component in N",
+        )?;
+        points.extend(nodes.into_iter().map(|n| (n, force)));
+    }
+    let gravity = match &raw.self_weight {
+        None => None,
+        Some(w) => Some(vector(
+            "load.self_weight.gravity",
+            w.gravity.unwrap_or([0.0, 0.0, -9.81]),
+            1e6,
+            "each gravity component in m/s²",
+        )?),
+    };
+    Ok(Load {
+        pattern,
+        points,
+        gravity,
+        alphas: alpha_values(&raw.alpha)?,
+    })
+}
+
+/// The load factors of `load.alpha`: a non-empty list of finite numbers, or a range
+/// `{ from, to, steps }` with `steps ≥ 1` values spaced evenly, both ends included.
+fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
+    const KEY: &str = "load.alpha";
+    let as_number = |v: &toml::Value| match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    };
+    let alphas = match value {
+        toml::Value::Array(items) => {
+            if items.is_empty() {
+                return Err(CaseError::invalid(
+                    KEY,
+                    "[]",
+                    "give at least one load factor, e.g. [0.5, 1.0]",
+                ));
+            }
+            items
+                .iter()
+                .map(|v| {
+                    as_number(v).ok_or_else(|| {
+                        CaseError::invalid(KEY, shown(v), "every load factor must be a number")
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?
+        }
+        toml::Value::Table(t) => {
+            for key in t.keys() {
+                if !matches!(key.as_str(), "from" | "to" | "steps") {
+                    return Err(CaseError::invalid(
+                        KEY,
+                        value,
+                        format!("unknown key `{key}` in the range: use {{ from, to, steps }}"),
+                    ));
+                }
+            }
+            let get = |k: &str| t.get(k).and_then(as_number);
+            let (Some(from), Some(to)) = (get("from"), get("to")) else {
+                return Err(CaseError::invalid(
+                    KEY,
+                    value,
+                    "a range needs numbers `from` and `to`, e.g. { from = 0.0, to = 1.0, steps = 41 }",
+                ));
+            };
+            let steps = match t.get("steps") {
+                Some(toml::Value::Integer(s)) if *s >= 1 && *s <= 1_000_000 => *s as usize,
+                _ => {
+                    return Err(CaseError::invalid(
+                        KEY,
+                        value,
+                        "a range needs an integer `steps` between 1 and 1000000 (the number of values)",
+                    ))
+                }
+            };
+            if steps == 1 {
+                vec![from]
+            } else {
+                // Rounded to 12 significant digits: 0.1 stays 0.1 (not 0.09999999999999999) in
+                // file names and tables.
+                (0..steps)
+                    .map(|i| from + (to - from) * i as f64 / (steps - 1) as f64)
+                    .map(|a| format!("{a:.11e}").parse().unwrap_or(a))
+                    .collect()
+            }
+        }
+        other => {
+            return Err(CaseError::invalid(
+                KEY,
+                shown(other),
+                "give a list such as [0.5, 1.0] or a range such as { from = 0.0, to = 1.0, steps = 41 }",
+            ))
+        }
+    };
+    for &a in &alphas {
+        bounded(KEY, a, ALPHA_MAX, "every load factor")?;
+    }
+    // −0 is the load factor 0 (one label, one file name: `alpha0`).
+    let alphas: Vec<f64> = alphas.into_iter().map(|a| a + 0.0).collect();
+    // Two load factors with one label would write to the same files and repeat a row.
+    let mut labels = std::collections::HashMap::new();
+    for (i, &a) in alphas.iter().enumerate() {
+        if let Some(j) = labels.insert(crate::output::alpha_label(a), i) {
+            return Err(CaseError::invalid(
+                KEY,
+                format!(
+                    "a list whose values {j} and {i} are both {}",
+                    crate::output::alpha_label(a)
+                ),
+                "give distinct load factors (a range needs `to` - `from` large enough for its \
+                 steps to differ in 12 significant digits)",
+            ));
+        }
+    }
+    Ok(alphas)
+}

@@ -1,0 +1,290 @@
+//! The progress display of the command line (the library reports events and never prints):
+//! a bar on a terminal, plain lines when stderr is not a terminal, nothing with `--quiet`; and
+//! the one-line forms of an iterate, a summary row and a bench series.
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+use tensolve::app::bench::Progress;
+use tensolve::app::sweep::RunEvent;
+use tensolve::output::{alpha_label, SummaryRow};
+use tensolve::solvers::{IterationRecord, Measure};
+
+/// Progress on stderr: a bar on a terminal (lines printed above it, a spinner and what is
+/// running beside it), plain lines when stderr is not a terminal, nothing with `--quiet`.
+pub enum Display {
+    Quiet,
+    Lines,
+    Bar(ProgressBar),
+}
+
+/// The bar's message is redrawn at most this often.
+const BAR_REFRESH: Duration = Duration::from_millis(100);
+/// Without a terminal, a running solve prints its iterate at most this often.
+const LINE_REFRESH: Duration = Duration::from_secs(10);
+/// Without a terminal, a set-up step longer than this prints what it did and how long it took.
+const LONG_STAGE: Duration = Duration::from_secs(1);
+
+/// What the progress display knows of the run: the set-up step or solve in progress.
+pub struct Reporter {
+    display: Display,
+    /// The set-up step in progress and when it began.
+    stage: Option<(String, Instant)>,
+    /// When the display last showed an iterate.
+    shown: Instant,
+    /// The last e reported in the solve in progress (LATIN against its reference).
+    last_error: Option<f64>,
+    /// Rows whose left-out geometric term is above its limit: how many, and the largest (value,
+    /// solver and α).
+    pub geometric: (usize, Option<(f64, String)>),
+}
+
+impl Reporter {
+    pub fn new(quiet: bool, ticks: usize) -> Reporter {
+        let display = if quiet {
+            Display::Quiet
+        } else if std::io::stderr().is_terminal() {
+            let bar = ProgressBar::new(ticks as u64);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner:.green} {bar:30.cyan/blue} {pos}/{len} solves [{elapsed}] {msg}",
+                )
+                .expect("valid template"),
+            );
+            // Redrawn on a timer too: a long set-up or solve sends nothing for seconds.
+            bar.enable_steady_tick(Duration::from_millis(120));
+            Display::Bar(bar)
+        } else {
+            Display::Lines
+        };
+        Reporter {
+            display,
+            stage: None,
+            shown: Instant::now(),
+            last_error: None,
+            geometric: (0, None),
+        }
+    }
+
+    pub fn line(&self, text: &str) {
+        match &self.display {
+            Display::Quiet => {}
+            Display::Lines => eprintln!("{text}"),
+            Display::Bar(bar) => bar.println(text),
+        }
+    }
+
+    /// What is running now (shown on the bar only).
+    pub fn status(&self, text: String) {
+        if let Display::Bar(bar) = &self.display {
+            bar.set_message(text);
+        }
+    }
+
+    pub fn tick(&self) {
+        if let Display::Bar(bar) = &self.display {
+            bar.inc(1);
+        }
+    }
+
+    pub fn finish(&mut self) {
+        self.end_stage();
+        if let Display::Bar(bar) = &self.display {
+            bar.finish_and_clear();
+        }
+    }
+
+    /// A set-up step began.
+    pub fn begin_stage(&mut self, text: &str) {
+        self.end_stage();
+        self.status(format!("{text} ..."));
+        self.stage = Some((text.to_string(), Instant::now()));
+    }
+
+    /// The step in progress ended: without a terminal, a long one is reported with its time.
+    pub fn end_stage(&mut self) {
+        if let Some((text, start)) = self.stage.take() {
+            let took = start.elapsed();
+            if matches!(self.display, Display::Lines) && took > LONG_STAGE {
+                self.line(&format!("{text}: {:.1} s", took.as_secs_f64()));
+            }
+        }
+    }
+
+    /// One event of `tensolve run`.
+    pub fn run_event(&mut self, event: RunEvent<'_>) {
+        match event {
+            RunEvent::Stage(text) => self.begin_stage(text),
+            RunEvent::SolveStart { solver, alpha } => {
+                self.end_stage();
+                self.last_error = None;
+                self.shown = Instant::now();
+                self.status(format!("{solver} alpha = {}: starting", alpha_label(alpha)));
+            }
+            RunEvent::Iteration {
+                solver,
+                alpha,
+                measure,
+                record,
+            } => {
+                self.last_error = record.error.or(self.last_error);
+                let refresh = match self.display {
+                    Display::Quiet => return,
+                    Display::Lines => LINE_REFRESH,
+                    Display::Bar(_) => BAR_REFRESH,
+                };
+                if self.shown.elapsed() < refresh {
+                    return;
+                }
+                self.shown = Instant::now();
+                let text = iterate_message(solver, alpha, measure, record);
+                match self.display {
+                    Display::Lines => self.line(&format!("  {text}")),
+                    _ => self.status(text),
+                }
+            }
+            RunEvent::Row(row) => {
+                if row.needs_large() {
+                    let value = row.geometric_term.unwrap_or(0.0);
+                    self.geometric.0 += 1;
+                    if self.geometric.1.as_ref().is_none_or(|(v, _)| value > *v) {
+                        let at = format!("{}, alpha {}", row.solver, alpha_label(row.alpha));
+                        self.geometric.1 = Some((value, at));
+                    }
+                }
+                let mut text = format_row(row);
+                if let Some(e) = self.last_error.take() {
+                    text.push_str(&format!(", e = {e:.1e}"));
+                }
+                self.line(&text);
+                self.tick();
+            }
+        }
+    }
+}
+
+/// `micro-macro alpha = 0.5: iteration 37, eta = 3.2e-4, e = 1.1e-3, 12 slack, 0.84 s`: a
+/// solve in progress, e when the solve is measured against a reference.
+fn iterate_message(solver: &str, alpha: f64, measure: Measure, record: &IterationRecord) -> String {
+    let mut text = format!(
+        "{solver} alpha = {}: iteration {}, {} = {:.1e}",
+        alpha_label(alpha),
+        record.iteration,
+        measure.short_name(),
+        record.stopping_value
+    );
+    if let Some(e) = record.error {
+        text.push_str(&format!(", e = {e:.1e}"));
+    }
+    text.push_str(&format!(
+        ", {} slack, {:.2} s",
+        record.slack_cables, record.elapsed_seconds
+    ));
+    text
+}
+
+fn format_row(r: &SummaryRow) -> String {
+    let mut line = format!(
+        "{:>11} alpha = {:<6} {} in {} it, {} / {} slack, {}r(U) {:.1e}, {:.1} ms",
+        r.solver,
+        alpha_label(r.alpha),
+        match (r.converged, r.at_roundoff) {
+            // A LATIN stop on Δη at round-off of the prestress: η is then a ratio of round-off
+            // to round-off (no load), not a measure of anything.
+            (true, true) if r.alpha == 0.0 => {
+                "converged (no load: Δη at round-off of the prestress)".to_string()
+            }
+            (true, true) => "converged (Δη at round-off of the prestress)".to_string(),
+            (true, false) => "converged".to_string(),
+            (false, _) => format!("NOT converged ({})", r.status),
+        },
+        r.iterations,
+        r.slack_cables,
+        r.cables,
+        // The stopping measure beside r(U), when it is another measure (and means something).
+        match r.measure {
+            _ if r.converged && r.at_roundoff => String::new(),
+            Measure::EquilibriumResidual => String::new(),
+            Measure::ComplementarityResidual =>
+                format!("complementarity {:.1e}, ", r.stopping_value),
+            Measure::Indicator => format!("eta {:.1e}, ", r.stopping_value),
+        },
+        r.equilibrium_residual,
+        1e3 * r.solve_seconds
+    );
+    if !r.status.no_answer()
+        && !r.updates_geometry
+        && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT
+    {
+        line.push_str(&format!(
+            "\n  warning: {} at alpha = {}: a member's ends moved apart by {:.0} % of its length \
+             (max deflection {:.3} m); the small-perturbation model (geometry not updated) is \
+             not valid beyond {:.0} %: read this row with care (summary.csv: \
+             small_displacement_ok = false)",
+            r.solver,
+            alpha_label(r.alpha),
+            100.0 * r.max_member_rotation,
+            r.max_deflection,
+            100.0 * tensolve::results::SMALL_DISPLACEMENT_LIMIT
+        ));
+    }
+    line
+}
+
+pub fn report_bench(reporter: &Reporter, progress: Progress) {
+    match progress {
+        Progress::Reference { alpha } => reporter.status(format!(
+            "reference (newton) at alpha = {}",
+            alpha_label(alpha)
+        )),
+        Progress::Solve { method, alpha } => reporter.status(format!(
+            "{} at alpha = {}",
+            method.name(),
+            alpha_label(alpha)
+        )),
+        Progress::Done(series) => {
+            let last = series.samples.last();
+            reporter.line(&format!(
+                "{:>11} alpha = {:<6} {:?} after {} it, e = {:.1e}, {:.1} ms (set-up {:.1} ms)",
+                series.method.name(),
+                alpha_label(series.alpha),
+                series.status,
+                last.map_or(0, |s| s.iteration),
+                last.map_or(f64::NAN, |s| s.error),
+                1e3 * last.map_or(0.0, |s| s.seconds),
+                1e3 * series.setup_seconds
+            ));
+            reporter.tick();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_iterate_shows_solver_alpha_iteration_measure_error_and_time() {
+        let record = IterationRecord {
+            iteration: 37,
+            stopping_value: 3.2e-4,
+            equilibrium_residual: Some(1e-6),
+            rebuilds: 0,
+            error: Some(1.1e-3),
+            slack_cables: 12,
+            elapsed_seconds: 0.84,
+        };
+        assert_eq!(
+            iterate_message("micro-macro", 0.5, Measure::Indicator, &record),
+            "micro-macro alpha = 0.5: iteration 37, eta = 3.2e-4, e = 1.1e-3, 12 slack, 0.84 s"
+        );
+        let record = IterationRecord {
+            error: None,
+            ..record
+        };
+        assert_eq!(
+            iterate_message("pcg-lcp", 1.0, Measure::ComplementarityResidual, &record),
+            "pcg-lcp alpha = 1: iteration 37, residual = 3.2e-4, 12 slack, 0.84 s"
+        );
+    }
+}
