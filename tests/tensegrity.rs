@@ -611,3 +611,31 @@ fn the_small_perturbation_check_is_not_the_large_models() {
     assert!(column("max_member_rotation").parse::<f64>().unwrap() > 0.1);
     assert_eq!(column("small_displacement_ok"), "");
 }
+
+/// Review turn 4, R13 and R11: the members table accepted `young = 1e-16` (the case file's
+/// `cables.young` refuses it: positive physical numbers lie in [1e-15, 1e15]), and a
+/// 500-digit cell was reported as "`inf` is not valid". Both are refused with the cell as
+/// written (cut to 40 characters).
+#[test]
+fn members_table_numbers_have_the_case_files_bounds_and_are_shown_as_written() {
+    let long = format!("1{}", "0".repeat(499));
+    for (young, shown) in [
+        ("1e-16", "`1e-16` is not valid".to_string()),
+        (
+            long.as_str(),
+            format!("`{}… (500 characters)` is not valid", &long[..40]),
+        ),
+    ] {
+        let (_dir, path) = simplex_variant(
+            "member-young",
+            |table| table.replacen("200000000000.0", young, 1).to_string(),
+            |case| case,
+        );
+        let out = tensolve(&["check", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        let message = stderr(&out);
+        assert!(message.contains(&shown), "{message}");
+        assert!(message.contains("column `young`"), "{message}");
+        assert!(message.contains("at least 1e-15"), "{message}");
+    }
+}

@@ -20,7 +20,7 @@ pub(super) const PHYSICAL_MAX: f64 = 1e15;
 /// Smallest magnitude accepted for a positive physical number: products of a few of them
 /// (k = EA/L, k², the stiffness's pivots) stay far from f64's underflow (1e-308), so a tiny
 /// modulus is refused here by name rather than as a "mechanism" (issue 13, E4).
-const PHYSICAL_MIN: f64 = 1e-15;
+pub(super) const PHYSICAL_MIN: f64 = 1e-15;
 
 /// A physical quantity: finite, between [`PHYSICAL_MIN`] and [`PHYSICAL_MAX`].
 pub(super) fn positive(key: &str, value: f64, what: &str) -> Result<(), CaseError> {

@@ -2,7 +2,7 @@
 //! (`member,a,b,kind,young,section,prestress[,density]`). Every row is checked and an error
 //! names the file, the line, the column, the value and the fix.
 
-use super::numbers::{number, PHYSICAL_MAX};
+use super::numbers::{PHYSICAL_MAX, PHYSICAL_MIN};
 use super::CaseError;
 use crate::structure::{length_and_direction, Geometry, LinkKind, Member};
 use std::collections::HashMap;
@@ -124,16 +124,25 @@ impl Table<'_> {
         let value: f64 = text
             .parse()
             .map_err(|_| self.error(line, column, text, format!("`{column}` must be a number")))?;
-        if !value.is_finite() || value.abs() > PHYSICAL_MAX || (positive && value <= 0.0) {
+        // The same bounds as the case file's physical numbers; the cell is shown as written
+        // (a 500-digit number is not `inf`).
+        if !value.is_finite() || value.abs() > PHYSICAL_MAX || (positive && value < PHYSICAL_MIN) {
             let what = if positive {
-                "> 0 and "
+                format!("> 0, at least {PHYSICAL_MIN:e} and ")
             } else {
-                "finite and of magnitude "
+                "finite and of magnitude ".to_string()
+            };
+            // Shown as written, cut to 40 characters (a cell may be thousands long).
+            let shown = match text.char_indices().nth(40) {
+                Some((cut, _)) => {
+                    format!("{}… ({} characters)", &text[..cut], text.chars().count())
+                }
+                None => text.to_string(),
             };
             return Err(self.error(
                 line,
                 column,
-                &number(value),
+                &shown,
                 format!("`{column}` must be {what}≤ {PHYSICAL_MAX:e}"),
             ));
         }
