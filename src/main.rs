@@ -313,7 +313,8 @@ fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Resu
     } else {
         Err(Failure {
             message: format!(
-                "{} column(s) differ between {} and {}",
+                "{} file(s) and {} column(s) differ between {} and {}",
+                report.files_differ.len(),
                 report.differences.len(),
                 run.display(),
                 golden.display()

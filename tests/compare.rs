@@ -1,6 +1,7 @@
 //! `tensolve compare`: the README's CI recipe on the stored run `tests/golden/small/` (its case
 //! is `tests/golden/small.toml`), and every exit status: 0 when the runs agree, 1 when a value,
-//! a slack count or a slack set differs (named in the report), 2 on bad input.
+//! a slack count, a slack set, a file or its columns differ (named in the report), 2 on a bad
+//! call (no such directory, a golden directory with no CSV, a bad flag).
 //!
 //! `TENSOLVE_BLESS=1 cargo test --test compare` rewrites the stored run from the current binary.
 
@@ -133,30 +134,81 @@ fn a_changed_slack_set_differs_unless_tolerated() {
 }
 
 #[test]
-fn bad_input_exits_2() {
+fn a_run_missing_a_file_or_with_other_columns_differs() {
     let golden = manifest_path("tests/golden/small");
-    // A golden file missing from the run.
+    // A golden file missing from the run: named, and the other files still compared.
     let run = Temp::dir("compare-missing");
     copy_dir(&golden, &run.0);
     std::fs::remove_file(run.0.join("history/micro-macro_alpha6.csv")).unwrap();
     let (code, text) = compare(&run.0, &golden, &[]);
-    assert_eq!(code, Some(2), "{text}");
+    assert_eq!(code, Some(1), "{text}");
     assert!(text.contains("history/micro-macro_alpha6.csv"), "{text}");
-    // Different columns.
-    let run = Temp::dir("compare-columns");
-    copy_dir(&golden, &run.0);
+    assert!(text.contains("in 38 files"), "{text}");
+    // Renamed and swapped columns.
     let summary = run.0.join("summary.csv");
-    let text = std::fs::read_to_string(&summary).unwrap();
-    std::fs::write(&summary, text.replacen("slack_cables", "slack_count", 1)).unwrap();
+    let original = std::fs::read_to_string(golden.join("summary.csv")).unwrap();
+    let renamed = original.replacen("slack_cables", "slack_count", 1);
+    let swapped = original.replacen("solver,alpha", "alpha,solver", 1);
+    for text in [renamed, swapped] {
+        std::fs::write(&summary, text).unwrap();
+        let (code, text) = compare(&run.0, &golden, &[]);
+        assert_eq!(code, Some(1), "{text}");
+        assert!(text.contains("columns differ"), "{text}");
+    }
+    // An empty summary.csv in the run.
+    std::fs::write(&summary, "").unwrap();
     let (code, text) = compare(&run.0, &golden, &[]);
-    assert_eq!(code, Some(2), "{text}");
-    assert!(text.contains("columns differ"), "{text}");
-    // No such directory; a bad tolerance.
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("summary.csv"), "{text}");
+}
+
+#[test]
+fn bad_input_exits_2() {
+    let golden = manifest_path("tests/golden/small");
+    // No such directory; a golden directory with no CSV; a bad tolerance.
     let (code, _) = compare(Path::new("/nonexistent/tensolve-run"), &golden, &[]);
     assert_eq!(code, Some(2));
+    let (code, _) = compare(&golden, Path::new("/nonexistent/tensolve-golden"), &[]);
+    assert_eq!(code, Some(2));
+    let empty = Temp::dir("compare-empty-golden");
+    std::fs::create_dir_all(&empty.0).unwrap();
+    let (code, text) = compare(&golden, &empty.0, &[]);
+    assert_eq!(code, Some(2), "{text}");
     let (code, text) = compare(&golden, &golden, &["--rtol=-1"]);
     assert_eq!(code, Some(2), "{text}");
     assert!(text.contains("--rtol"), "{text}");
+}
+
+/// Golden trees of links (Bazel runfiles, git-annex): a linked file or directory is read
+/// through its link and compared, never skipped.
+#[test]
+fn linked_golden_files_and_directories_are_compared() {
+    let golden = manifest_path("tests/golden/small");
+    let run = Temp::dir("compare-linked-run");
+    copy_dir(&golden, &run.0);
+    let file = "tensions/newton_alpha6.csv";
+    edit_cell(&run.0.join(file), 5, "tension", "9999");
+    // A golden file that is a link.
+    let linked = Temp::dir("compare-linked-file");
+    copy_dir(&golden, &linked.0);
+    std::fs::remove_file(linked.0.join(file)).unwrap();
+    std::os::unix::fs::symlink(golden.join(file), linked.0.join(file)).unwrap();
+    let (code, text) = compare(&run.0, &linked.0, &[]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.lines().any(|l| l.starts_with(file)), "{text}");
+    assert!(!text.contains("not in the golden directory"), "{text}");
+    // A golden directory that is a link.
+    let linked = Temp::dir("compare-linked-dir");
+    copy_dir(&golden, &linked.0);
+    std::fs::remove_dir_all(linked.0.join("tensions")).unwrap();
+    std::os::unix::fs::symlink(golden.join("tensions"), linked.0.join("tensions")).unwrap();
+    let (code, text) = compare(&run.0, &linked.0, &[]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.lines().any(|l| l.starts_with(file)), "{text}");
+    // Links in the run are read too: a run linking to the golden files agrees, every file.
+    let (code, text) = compare(&linked.0, &golden, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("in 39 files"), "{text}");
 }
 
 /// `tensolve compare … | head`: a reader that closed its end is a normal end of the report

@@ -930,3 +930,116 @@ fn r6_tables_are_read_bounded() {
         stderr(&out)
     );
 }
+
+// ---- Turn 4: removal through links, kills while a rerun removes, failed reruns ----
+
+#[test]
+fn r1_removal_never_follows_a_link() {
+    // A planted manifest naming a file through a link to a directory outside, a path that
+    // leaves the directory, and the lock: none of them is removed.
+    let dir = Temp::dir("r1-out");
+    let outside = Temp::dir("r1-outside");
+    std::fs::create_dir_all(&dir.0).unwrap();
+    std::fs::create_dir_all(&outside.0).unwrap();
+    std::fs::write(outside.0.join("x"), "precious\n").unwrap();
+    std::os::unix::fs::symlink(&outside.0, dir.0.join("ld")).unwrap();
+    let escape = format!("../{}/x", outside.0.file_name().unwrap().to_str().unwrap());
+    std::fs::write(
+        dir.0.join(".tensolve-manifest"),
+        format!(
+            "ld/x\n{escape}\n{}\n.tensolve.lock\n",
+            outside.0.join("x").display()
+        ),
+    )
+    .unwrap();
+    let case = Temp::file("r1", &small_case("[\"newton\"]", "[1.0]", ""));
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    assert_eq!(
+        std::fs::read_to_string(outside.0.join("x")).unwrap(),
+        "precious\n"
+    );
+    // A result directory moved elsewhere and linked back: the rerun removes nothing through
+    // the link (and refuses to write through it).
+    let elsewhere = Temp::dir("r1-elsewhere");
+    std::fs::rename(dir.0.join("forces"), &elsewhere.0).unwrap();
+    std::os::unix::fs::symlink(&elsewhere.0, dir.0.join("forces")).unwrap();
+    // A published file replaced by a link: the link goes, never its target.
+    let victim = Temp::dir("r1-victim");
+    std::fs::write(&victim.0, "precious\n").unwrap();
+    std::fs::remove_file(dir.0.join("tensions/newton_alpha1.csv")).unwrap();
+    std::os::unix::fs::symlink(&victim.0, dir.0.join("tensions/newton_alpha1.csv")).unwrap();
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 1, "{}", stderr(&out));
+    assert!(stderr(&out).contains("forces"), "{}", stderr(&out));
+    assert_eq!(
+        files(&elsewhere.0),
+        BTreeSet::from(["newton_alpha1.csv".to_string()])
+    );
+    assert_eq!(std::fs::read_to_string(&victim.0).unwrap(), "precious\n");
+}
+
+#[test]
+fn r4_a_kill_while_a_rerun_removes_the_previous_run_shows_no_file_without_its_row() {
+    // 1600 result files of a first run; the rerun is killed as soon as it has removed those
+    // of the tenth solve (the manifest lists them in the order they were published): every
+    // file left has its row.
+    let dir = Temp::dir("r4-out");
+    let case = Temp::file(
+        "r4",
+        "[grid]\nmodules = [2, 2]\n[load]\nalpha = { from = 0.01, to = 3.0, steps = 400 }\n\
+         [solver]\nmethods = [\"newton\"]\n",
+    );
+    assert_eq!(code(&run(&case, &dir.0)), 0);
+    let rows = summary(&dir.0);
+    assert_eq!(rows.len(), 400);
+    let first = dir
+        .0
+        .join(format!("displacements/newton_alpha{}.csv", rows[9][1]));
+    assert!(first.exists());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .args([
+            "run",
+            case.arg(),
+            "--out",
+            dir.0.to_str().unwrap(),
+            "--quiet",
+        ])
+        .args(["--set", "load.alpha=[0.5]"])
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while first.exists() && start.elapsed() < Duration::from_secs(60) {
+        std::hint::spin_loop();
+    }
+    child.kill().unwrap(); // SIGKILL: no handler runs
+    child.wait().unwrap();
+    assert!(!first.exists(), "the rerun never started removing");
+    assert_every_file_has_a_row(&dir.0);
+}
+
+#[test]
+fn r5_a_failed_rerun_leaves_nothing_of_the_previous_run() {
+    // The rerun cannot write its first file (`ulimit -f 0`, as on a full disk): it exits 1,
+    // and the previous run's rows and files are gone, not left looking like its own.
+    let dir = Temp::dir("r5-out");
+    let case = Temp::file("r5", &small_case("[\"newton\"]", "[0.5, 1.0]", ""));
+    assert_eq!(code(&run(&case, &dir.0)), 0);
+    assert_eq!(summary(&dir.0).len(), 2);
+    std::fs::write(dir.0.join("notes.txt"), "mine").unwrap();
+    let line = format!(
+        "trap '' XFSZ; ulimit -f 0; exec '{}' run '{}' --out '{}' --quiet --set 'load.alpha=[2.0]'",
+        env!("CARGO_BIN_EXE_tensolve"),
+        case.arg(),
+        dir.0.display()
+    );
+    let out = Command::new("sh").args(["-c", &line]).output().unwrap();
+    assert_eq!(code(&out), 1, "{}", stderr(&out));
+    assert!(stderr(&out).contains("could not write"), "{}", stderr(&out));
+    assert_eq!(
+        files(&dir.0),
+        BTreeSet::from(["notes.txt".to_string()]),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -3,7 +3,10 @@
 //! the run with the same columns; values are compared column by column, numbers within
 //! `|a − b| ≤ atol + rtol · max(|a|, |b|)`, everything else exactly. Timing columns (names
 //! ending in `seconds`) are left out. Slack counts and slack sets are exact unless a slack
-//! tolerance is given.
+//! tolerance is given. Links are followed when reading, in both directories (golden trees of
+//! links: Bazel runfiles, git-annex). A golden CSV missing from the run, or with other
+//! columns there, is a difference (exit 1); only a call that cannot be answered (no such
+//! directory, a golden directory with no CSV or an unreadable golden file) is an error (exit 2).
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -34,7 +37,7 @@ impl Default for CompareSettings {
 /// Why two directories cannot be compared (exit status 2).
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
-    /// A directory does not exist or holds no CSV.
+    /// A directory does not exist, cannot be read, or (golden) holds no CSV.
     #[error("{path}: {reason}")]
     Directory {
         /// The directory.
@@ -42,28 +45,8 @@ pub enum CompareError {
         /// What is wrong with it.
         reason: String,
     },
-    /// A golden CSV has no counterpart in the run.
-    #[error("{file} is in the golden directory {golden} but not in the run {run}: rerun the case, or store a new golden run")]
-    Missing {
-        /// The file, relative to both directories.
-        file: String,
-        /// The golden directory.
-        golden: PathBuf,
-        /// The run directory.
-        run: PathBuf,
-    },
-    /// The two files do not have the same columns.
-    #[error("{file}: columns differ (run: {run}; golden: {golden}): the two runs wrote different outputs")]
-    Columns {
-        /// The file.
-        file: String,
-        /// The run's header.
-        run: String,
-        /// The golden header.
-        golden: String,
-    },
-    /// A CSV could not be read.
-    #[error("{file}: {reason}")]
+    /// A golden CSV could not be read.
+    #[error("{file} in the golden directory: {reason}")]
     Unreadable {
         /// The file.
         file: String,
@@ -100,6 +83,9 @@ pub struct CompareReport {
     pub values: usize,
     /// CSVs of the run that the golden directory does not have (not compared).
     pub extra_in_run: Vec<String>,
+    /// Golden files the run does not have, has with other columns, or cannot be read: one
+    /// line each, starting with the file.
+    pub files_differ: Vec<String>,
     /// What differs.
     pub differences: Vec<Difference>,
 }
@@ -107,7 +93,7 @@ pub struct CompareReport {
 impl CompareReport {
     /// The runs agree within the tolerances.
     pub fn agree(&self) -> bool {
-        self.differences.is_empty()
+        self.differences.is_empty() && self.files_differ.is_empty()
     }
 }
 
@@ -119,6 +105,12 @@ impl fmt::Display for CompareReport {
         }
         if self.agree() {
             return writeln!(f, "the runs agree");
+        }
+        for line in &self.files_differ {
+            writeln!(f, "{line}")?;
+        }
+        if self.differences.is_empty() {
+            return Ok(());
         }
         writeln!(
             f,
@@ -159,21 +151,45 @@ pub fn compare(
         ..Default::default()
     };
     for file in &golden_files {
-        if !run_files.contains(file) {
-            return Err(CompareError::Missing {
+        // The golden file first: an unreadable or empty one is a bad call, not a difference.
+        let (golden_header, golden_rows) =
+            read(&golden.join(file)).map_err(|reason| CompareError::Unreadable {
                 file: file.clone(),
-                golden: golden.to_path_buf(),
-                run: run.to_path_buf(),
+                reason,
+            })?;
+        if golden_header.is_empty() {
+            return Err(CompareError::Unreadable {
+                file: file.clone(),
+                reason: "is empty (no header): store a run's CSV there".into(),
             });
         }
-        let (run_header, run_rows) = read(&run.join(file), file)?;
-        let (golden_header, golden_rows) = read(&golden.join(file), file)?;
+        if !run_files.contains(file) {
+            report.files_differ.push(format!(
+                "{file}: in the golden directory but not in the run: rerun the case, or store \
+                 a new golden run"
+            ));
+            continue;
+        }
+        let (run_header, run_rows) = match read(&run.join(file)) {
+            Ok(table) => table,
+            Err(reason) => {
+                report
+                    .files_differ
+                    .push(format!("{file}: cannot be read in the run: {reason}"));
+                continue;
+            }
+        };
         if run_header != golden_header {
-            return Err(CompareError::Columns {
-                file: file.clone(),
-                run: run_header.join(","),
-                golden: golden_header.join(","),
-            });
+            let run_header = match run_header.is_empty() {
+                true => "(empty file)".to_string(),
+                false => run_header.join(","),
+            };
+            report.files_differ.push(format!(
+                "{file}: columns differ (run: {run_header}; golden: {}): the two runs wrote \
+                 different outputs",
+                golden_header.join(",")
+            ));
+            continue;
         }
         report.files += 1;
         if run_rows.len() != golden_rows.len() {
@@ -263,8 +279,12 @@ fn differs(name: &str, a: &str, b: &str, s: &CompareSettings) -> Option<(f64, f6
     }
 }
 
-/// Every `*.csv` under `dir`, as paths relative to it with `/` separators, sorted.
+/// Every `*.csv` under `dir`, as paths relative to it with `/` separators, sorted. Links are
+/// followed (to files and directories, inside the tree or out of it), each directory visited
+/// once (a link back to an ancestor is no loop); a CSV link whose target is missing is listed,
+/// so that reading it says so.
 fn csv_files(dir: &Path) -> Result<Vec<String>, CompareError> {
+    use std::os::unix::fs::MetadataExt;
     if !dir.is_dir() {
         return Err(CompareError::Directory {
             path: dir.to_path_buf(),
@@ -272,20 +292,31 @@ fn csv_files(dir: &Path) -> Result<Vec<String>, CompareError> {
         });
     }
     let mut found = BTreeMap::new();
+    let mut visited = std::collections::BTreeSet::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
+        let meta = std::fs::metadata(&d).map_err(|e| CompareError::Directory {
+            path: d.clone(),
+            reason: e.to_string(),
+        })?;
+        if !visited.insert((meta.dev(), meta.ino())) {
+            continue;
+        }
         let entries = std::fs::read_dir(&d).map_err(|e| CompareError::Directory {
             path: d.clone(),
             reason: e.to_string(),
         })?;
         for entry in entries.flatten() {
             let path = entry.path();
-            let Ok(kind) = entry.file_type() else {
-                continue;
+            let csv = path.extension().is_some_and(|e| e == "csv");
+            // `metadata` follows a link; a broken one is kept when it names a CSV.
+            let (is_dir, is_file) = match std::fs::metadata(&path) {
+                Ok(m) => (m.is_dir(), m.is_file()),
+                Err(_) => (false, entry.file_type().is_ok_and(|k| k.is_symlink())),
             };
-            if kind.is_dir() {
+            if is_dir {
                 stack.push(path);
-            } else if kind.is_file() && path.extension().is_some_and(|e| e == "csv") {
+            } else if is_file && csv {
                 let relative = path.strip_prefix(dir).unwrap_or(&path);
                 let name: Vec<String> = relative
                     .components()
@@ -301,11 +332,10 @@ fn csv_files(dir: &Path) -> Result<Vec<String>, CompareError> {
 /// Header and rows of a CSV.
 type Table = (Vec<String>, Vec<Vec<String>>);
 
-fn read(path: &Path, file: &str) -> Result<Table, CompareError> {
-    let unreadable = |e: csv::Error| CompareError::Unreadable {
-        file: file.to_string(),
-        reason: e.to_string(),
-    };
+/// Header and rows of the CSV at `path` (an empty file: no header, no rows), or why it cannot
+/// be read.
+fn read(path: &Path) -> Result<Table, String> {
+    let unreadable = |e: csv::Error| e.to_string();
     let mut reader = csv::Reader::from_path(path).map_err(unreadable)?;
     let header: Vec<String> = reader
         .headers()

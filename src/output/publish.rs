@@ -1,7 +1,9 @@
 //! The commit protocol of an output directory. One run at a time writes into a directory (a
 //! lock); a solve's files are written into a private staging directory and published together
 //! at one commit point, before its `summary.csv` row; a manifest lists what the run wrote, so
-//! the next run removes exactly that and leaves every other file alone.
+//! the next run removes exactly that, when it opens the directory, and leaves every other file
+//! alone. Removal never follows a link: an entry is removed only through real directories, and
+//! a link is removed itself, never its target.
 //!
 //! | file | what |
 //! |---|---|
@@ -62,16 +64,17 @@ pub struct OutputDir {
     /// Held for the run's life; the OS releases it when the process ends.
     _lock: File,
     staging: Option<tempfile::TempDir>,
-    /// What the previous run published, removed at this run's first commit.
-    previous: Option<Vec<PathBuf>>,
-    manifest: Option<File>,
+    manifest: File,
     ledgers: std::collections::BTreeMap<PathBuf, Ledger>,
     published: BTreeSet<PathBuf>,
 }
 
 impl OutputDir {
     /// Create `root` if needed, lock it (refused when another run holds it), remove the
-    /// staging directories of a killed run, and create this run's staging directory.
+    /// staging directories of a killed run, create this run's staging directory, and remove
+    /// what the previous run published (before anything of this run is written: a run that
+    /// fails, or is killed, leaves nothing of another that would look like its own), then
+    /// start a new, empty manifest.
     pub fn open(root: &Path) -> Result<OutputDir, OpenError> {
         let io_err = |source| OpenError::Io {
             dir: root.to_path_buf(),
@@ -99,12 +102,22 @@ impl OutputDir {
             .prefix(STAGING_PREFIX)
             .tempdir_in(root)
             .map_err(io_err)?;
+        remove_previous(root, read_manifest(&root.join(MANIFEST_FILE))).map_err(io_err)?;
+        // Created exclusively in the staging directory and renamed into place: a planted
+        // link of the manifest's name is replaced, never written through. The old manifest
+        // stays until every file it lists is gone, so a kill above loses none of them.
+        let manifest = staging.path().join(MANIFEST_FILE);
+        let file = OpenOptions::new()
+            .append(true)
+            .create_new(true)
+            .open(&manifest)
+            .map_err(io_err)?;
+        std::fs::rename(&manifest, root.join(MANIFEST_FILE)).map_err(io_err)?;
         Ok(OutputDir {
             root: root.to_path_buf(),
             _lock: lock,
             staging: Some(staging),
-            previous: Some(read_manifest(&root.join(MANIFEST_FILE))),
-            manifest: None,
+            manifest: file,
             ledgers: Default::default(),
             published: BTreeSet::new(),
         })
@@ -130,7 +143,6 @@ impl OutputDir {
             return Ok(());
         }
         let manifest = self.root.join(MANIFEST_FILE);
-        self.begin().map_err(WriteError::at(&manifest))?;
         self.record(&staged).map_err(WriteError::at(&manifest))?;
         let mut done: Vec<PathBuf> = Vec::new();
         // A failure names the file under its final name (issue 13, M3), not the directory.
@@ -172,7 +184,6 @@ impl OutputDir {
             let text = format!("{header}\n{line}\n");
             file.write_all(text.as_bytes())?;
             file.sync_data()?;
-            self.begin()?;
             self.record(std::slice::from_ref(&rel))?;
             std::fs::rename(&staged, self.root.join(&rel))?;
             let len = text.len() as u64;
@@ -193,39 +204,15 @@ impl OutputDir {
         }
     }
 
-    /// The run ended: sync the ledgers, remove the previous run's files if nothing was
-    /// published (a run that wrote nothing leaves nothing of another), remove the staging
-    /// directory. The lock is released when `self` is dropped.
+    /// The run ended: sync the ledgers, remove the staging directory. The lock is released
+    /// when `self` is dropped.
     pub fn finish(mut self) -> io::Result<()> {
         for ledger in self.ledgers.values() {
             ledger.file.sync_data()?;
         }
-        self.begin()?;
         if let Some(staging) = self.staging.take() {
             staging.close()?;
         }
-        Ok(())
-    }
-
-    /// At the first publication: remove what the previous run published and start a new
-    /// manifest.
-    fn begin(&mut self) -> io::Result<()> {
-        let Some(previous) = self.previous.take() else {
-            return Ok(());
-        };
-        for rel in previous {
-            match std::fs::remove_file(self.root.join(&rel)) {
-                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
-                _ => {}
-            }
-        }
-        let manifest = self.staging().join(MANIFEST_FILE);
-        let file = OpenOptions::new()
-            .append(true)
-            .create_new(true)
-            .open(&manifest)?;
-        std::fs::rename(&manifest, self.root.join(MANIFEST_FILE))?;
-        self.manifest = Some(file);
         Ok(())
     }
 
@@ -241,7 +228,7 @@ impl OutputDir {
         if text.is_empty() {
             return Ok(());
         }
-        let manifest = self.manifest.as_mut().expect("begun");
+        let manifest = &mut self.manifest;
         manifest.write_all(text.as_bytes())?;
         manifest.sync_data()
     }
@@ -294,7 +281,8 @@ fn ensure_real_dir(root: &Path, rel: &Path) -> io::Result<()> {
 }
 
 /// The relative paths a manifest lists; a path that could leave the directory (absolute,
-/// `..`) is ignored, as is a manifest too large or unreadable.
+/// `..`) or names tensolve's own bookkeeping (`.tensolve*`) is ignored, as is a manifest too
+/// large or unreadable.
 fn read_manifest(path: &Path) -> Vec<PathBuf> {
     let Ok(file) = File::open(path) else {
         return Vec::new();
@@ -310,9 +298,83 @@ fn read_manifest(path: &Path) -> Vec<PathBuf> {
     text.lines()
         .map(PathBuf::from)
         .filter(|p| {
-            !p.as_os_str().is_empty() && p.components().all(|c| matches!(c, Component::Normal(_)))
+            !p.as_os_str().is_empty()
+                && p.components().all(|c| matches!(c, Component::Normal(_)))
+                && !p.to_string_lossy().starts_with(".tensolve")
         })
         .collect()
+}
+
+/// Remove the files the previous run published, `summary.csv` last: at every moment each
+/// result file still there has its row (a kill in between leaves rows whose files are gone,
+/// never a file without its row).
+fn remove_previous(root: &Path, mut previous: Vec<PathBuf>) -> io::Result<()> {
+    previous.sort_by_key(|rel| rel == Path::new("summary.csv"));
+    let root_dir = File::open(root)?;
+    for rel in previous {
+        remove_below(&root_dir, &rel)?;
+    }
+    Ok(())
+}
+
+/// Remove `rel` (normal components only) below the directory `root`, without following a
+/// link: each directory on the way is opened with `O_NOFOLLOW` relative to the one before
+/// (`openat`), so a link or a file in a directory's place ends the walk and the entry is left
+/// alone; the entry itself is removed only when it is a regular file or a link (`unlinkat`
+/// removes the link, never its target). Race-free: no path is resolved twice.
+fn remove_below(root: &File, rel: &Path) -> io::Result<()> {
+    use std::ffi::CString;
+    use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
+    use std::os::unix::ffi::OsStrExt;
+    let name = |part: &std::ffi::OsStr| {
+        CString::new(part.as_bytes()).map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))
+    };
+    let parts: Vec<&std::ffi::OsStr> = rel.iter().collect();
+    let Some((last, dirs)) = parts.split_last() else {
+        return Ok(());
+    };
+    let mut owned: Option<OwnedFd> = None;
+    for part in dirs {
+        let dir = owned.as_ref().map_or(root.as_raw_fd(), |d| d.as_raw_fd());
+        let part = name(part)?;
+        let flags = libc::O_RDONLY | libc::O_DIRECTORY | libc::O_NOFOLLOW | libc::O_CLOEXEC;
+        // SAFETY: `dir` is an open directory descriptor and `part` a NUL-terminated name.
+        let fd = unsafe { libc::openat(dir, part.as_ptr(), flags) };
+        if fd < 0 {
+            let e = io::Error::last_os_error();
+            return match e.raw_os_error() {
+                // Gone, a link (ELOOP) or not a directory: nothing of ours below it.
+                Some(libc::ENOENT | libc::ELOOP | libc::ENOTDIR) => Ok(()),
+                _ => Err(e),
+            };
+        }
+        // SAFETY: `fd` was just opened and is owned by nothing else.
+        owned = Some(unsafe { OwnedFd::from_raw_fd(fd) });
+    }
+    let dir = owned.as_ref().map_or(root.as_raw_fd(), |d| d.as_raw_fd());
+    let last = name(last)?;
+    // SAFETY: `stat` is plain data, filled by `fstatat` before it is read.
+    let mut stat: libc::stat = unsafe { std::mem::zeroed() };
+    // SAFETY: as above; `AT_SYMLINK_NOFOLLOW` describes a link itself.
+    if unsafe { libc::fstatat(dir, last.as_ptr(), &mut stat, libc::AT_SYMLINK_NOFOLLOW) } != 0 {
+        let e = io::Error::last_os_error();
+        return match e.kind() {
+            io::ErrorKind::NotFound => Ok(()),
+            _ => Err(e),
+        };
+    }
+    let kind = stat.st_mode & libc::S_IFMT;
+    if kind != libc::S_IFREG && kind != libc::S_IFLNK {
+        return Ok(());
+    }
+    // SAFETY: as above; flags 0 never removes a directory and never follows a link.
+    if unsafe { libc::unlinkat(dir, last.as_ptr(), 0) } != 0 {
+        let e = io::Error::last_os_error();
+        if e.kind() != io::ErrorKind::NotFound {
+            return Err(e);
+        }
+    }
+    Ok(())
 }
 
 /// Remove the staging directories a killed run left (only directories: a link of that name is
