@@ -21,6 +21,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     let index_of = index_of(&geometry);
     // 2. The supports of [[supports.fix]].
     fixes.extend(supports(&raw.supports, &geometry, &index_of)?);
+    check_every_free_node_used(&geometry, &fixes)?;
     // 3. The prestress: a self-stress state when asked for, then in equilibrium.
     prestress::apply(&raw.prestress, grid.is_some(), &mut geometry, &fixes, model)?;
     prestress::check_balanced(&geometry, &fixes)?;
@@ -157,4 +158,41 @@ fn supports(
         }));
     }
     Ok(fixes)
+}
+
+/// Refuse a node that no member touches and that some component leaves free: it has no
+/// stiffness at all (a zero mode per free component), and thousands of them made the
+/// mechanism check take minutes (review turn 4, R12). A held node without members (a net's
+/// corner anchor) is harmless.
+fn check_every_free_node_used(geometry: &Geometry, fixes: &[NodeFix]) -> Result<(), CaseError> {
+    let mut used = vec![false; geometry.nodes.len()];
+    for m in &geometry.members {
+        used[m.a] = true;
+        used[m.b] = true;
+    }
+    let mut held = vec![[false; 3]; geometry.nodes.len()];
+    for f in fixes {
+        for (h, &d) in held[f.node].iter_mut().zip(&f.dofs) {
+            *h |= d;
+        }
+    }
+    let unused: Vec<u64> = (0..geometry.nodes.len())
+        .filter(|&n| !used[n] && !held[n].iter().all(|&h| h))
+        .map(|n| geometry.node_ids[n])
+        .collect();
+    let Some(&first) = unused.first() else {
+        return Ok(());
+    };
+    let listed: Vec<String> = unused.iter().take(5).map(u64::to_string).collect();
+    let more = if unused.len() > 5 { ", …" } else { "" };
+    Err(CaseError::invalid(
+        "structure.nodes",
+        format!(
+            "a table whose node {first} belongs to no member ({} such free node(s): {}{more})",
+            unused.len(),
+            listed.join(", ")
+        ),
+        "a free node without members has no stiffness: remove it from the nodes table, \
+         connect it with members, or hold all its components (`supports.fix`)",
+    ))
 }
