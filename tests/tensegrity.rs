@@ -667,3 +667,26 @@ fn free_nodes_without_members_are_refused_by_name() {
         stderr(&out)
     );
 }
+
+/// Review turn 4, R11: keys refused for being given at all said "= given is not valid"; the
+/// message now shows the value as given.
+#[test]
+fn keys_refused_when_given_show_their_value() {
+    let case = manifest_path("cases/simplex.toml");
+    for (set, shown) in [
+        ("prestress.force=0", "`prestress.force` = 0 is not valid"),
+        ("prestress.member=4", "`prestress.member` = 4 is not valid"),
+        (
+            "cables.young=1e9",
+            "`cables.young` = 1000000000 is not valid",
+        ),
+        (
+            "supports.clamp=\"lower-all-edges\"",
+            "`supports.clamp` = \"lower-all-edges\" is not valid",
+        ),
+    ] {
+        let out = tensolve(&["check", case.to_str().unwrap(), "--set", set]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(stderr(&out).contains(shown), "{set}: {}", stderr(&out));
+    }
+}

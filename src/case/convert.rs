@@ -73,22 +73,25 @@ fn structure(
             (Some(spec), geometry, fixes)
         }
         (None, Some(st)) => {
-            let general_only = |key: &str, given: bool| {
-                if given {
+            let general_only = |key: &str, given: Option<String>| {
+                if let Some(value) = given {
                     Err(CaseError::invalid(
                         key.to_string(),
-                        "given",
+                        value,
                         "with [structure], members carry their own material and prestress in the members table, and supports are given by [[supports.fix]]: remove this key",
                     ))
                 } else {
                     Ok(())
                 }
             };
-            general_only("cables.young", raw.cables.young.is_some())?;
-            general_only("cables.section", raw.cables.section.is_some())?;
-            general_only("bars.young", raw.bars.young.is_some())?;
-            general_only("bars.section", raw.bars.section.is_some())?;
-            general_only("prestress.lower_cable", raw.prestress.lower_cable.is_some())?;
+            general_only("cables.young", raw.cables.young.map(|v| v.to_string()))?;
+            general_only("cables.section", raw.cables.section.map(|v| v.to_string()))?;
+            general_only("bars.young", raw.bars.young.map(|v| v.to_string()))?;
+            general_only("bars.section", raw.bars.section.map(|v| v.to_string()))?;
+            general_only(
+                "prestress.lower_cable",
+                raw.prestress.lower_cable.map(|v| v.to_string()),
+            )?;
             if raw
                 .output
                 .compare_modules
@@ -101,7 +104,21 @@ fn structure(
                     "it compares the module kinds of a [grid]; a [structure] has none: remove this key",
                 ));
             }
-            general_only("supports.clamp", raw.supports.clamp.is_some())?;
+            general_only(
+                "supports.clamp",
+                // As written: `LowerXEdges` is "lower-x-edges".
+                raw.supports.clamp.map(|c| {
+                    let kebab: String = format!("{c:?}")
+                        .chars()
+                        .enumerate()
+                        .flat_map(|(i, ch)| {
+                            let dash = (i > 0 && ch.is_uppercase()).then_some('-');
+                            dash.into_iter().chain(ch.to_lowercase())
+                        })
+                        .collect();
+                    format!("\"{kebab}\"")
+                }),
+            )?;
             let geometry = super::tables::load_geometry(
                 &base.join(&st.nodes),
                 &base.join(&st.members),

@@ -44,13 +44,13 @@ pub(super) fn apply(
 /// Without `from = "self-stress"`, `member` and `force` scale nothing: refused when given.
 fn refuse_scale_without_source(raw: &RawPrestress) -> Result<(), CaseError> {
     for (key, given) in [
-        ("prestress.member", raw.member.is_some()),
-        ("prestress.force", raw.force.is_some()),
+        ("prestress.member", raw.member.map(|m| m.to_string())),
+        ("prestress.force", raw.force.map(|f| f.to_string())),
     ] {
-        if given {
+        if let Some(value) = given {
             return Err(CaseError::invalid(
                 key,
-                "given",
+                value,
                 "it scales the self-stress state: add `from = \"self-stress\"`, or remove it",
             ));
         }
