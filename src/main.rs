@@ -249,7 +249,8 @@ fn bench_command(
         reporter.finish();
     }
     let prepared = prepared?;
-    bench::ensure_writable(&dir)?;
+    // Held until the files are written.
+    let _lock = bench::lock_writable(&dir)?;
     let measured = bench::measure(&case, &prepared, &mut |p| report_bench(&reporter, p));
     reporter.finish();
     let measured = measured?;

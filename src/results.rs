@@ -61,6 +61,13 @@ pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Whether `eq` is beyond the model: a model on the initial geometry (`linear`, `prestress`)
+/// whose answer moves a node by more than the structure's own size (the diagonal of its
+/// bounding box) has left its domain (a unit slip such as E in GPa, or a load far beyond it).
+pub fn beyond_model(s: &Structure, eq: &Equilibrium) -> bool {
+    s.model != crate::structure::GeometricModel::Large && max_deflection(s, eq) > s.size()
+}
+
 /// The small-perturbation model (docs/method.md §1: geometry not updated) is trusted while no
 /// member's ends move apart, relative to each other, by more than this fraction of its length
 /// (about its rotation, in radians).

@@ -329,3 +329,43 @@ fn bench_of_a_large_displacement_case_measures_e_on_the_exact_elongations() {
         assert!(*e <= 1e-8, "alpha {alpha}: final e = {e}");
     }
 }
+
+/// Review turn 4, R9: `bench` took no lock (a bench into a directory a running `run` held
+/// exited 0) and skipped the beyond-model judgement (E in GPa: every solve "Converged",
+/// exit 0, where `run` says beyond_model).
+#[test]
+fn bench_locks_its_directory_and_judges_answers_as_run_does() {
+    let case = Temp::file("bench-r9", SMALL);
+    let out = Temp(temp_path("bench-r9-out"));
+    std::fs::create_dir_all(&out.0).unwrap();
+    let lock = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(out.0.join(".tensolve.lock"))
+        .unwrap();
+    lock.try_lock().unwrap();
+    let o = tensolve(&["bench", case.arg(), "--out", out.arg(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("in use by another tensolve run"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.0.join("bench.csv").exists());
+    drop(lock);
+    let o = tensolve(&[
+        "bench",
+        case.arg(),
+        "--out",
+        out.arg(),
+        "--quiet",
+        "--set",
+        "cables.young=100",
+        "--set",
+        "bars.young=200",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("BeyondModel"), "{}", stderr(&o));
+}

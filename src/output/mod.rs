@@ -16,7 +16,7 @@ pub use atomic::{ensure_writable, write_atomic};
 pub use history::{history_column, history_header, HistoryWriter};
 pub use homogenised::{homogenised_path, write_homogenised};
 pub use plots::{FigureData, FigureSettings};
-pub use publish::{OpenError, OutputDir};
+pub use publish::{lock_directory, OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
     alpha_label, result_path, stability_line, summary_line, write_displacements, write_forces,

@@ -69,6 +69,31 @@ pub struct OutputDir {
     published: BTreeSet<PathBuf>,
 }
 
+/// Create `root` if needed and lock it for this process (`.tensolve.lock`, released when the
+/// process ends, even killed): refused as [`OpenError::Busy`] while another `run` or `bench`
+/// holds it. The lock is held as long as the returned file.
+pub fn lock_directory(root: &Path) -> Result<File, OpenError> {
+    let io_err = |source| OpenError::Io {
+        dir: root.to_path_buf(),
+        source,
+    };
+    std::fs::create_dir_all(root).map_err(io_err)?;
+    let lock = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(root.join(LOCK_FILE))
+        .map_err(io_err)?;
+    match lock.try_lock() {
+        Ok(()) => Ok(lock),
+        Err(TryLockError::WouldBlock) => Err(OpenError::Busy {
+            dir: root.to_path_buf(),
+        }),
+        Err(TryLockError::Error(e)) => Err(io_err(e)),
+    }
+}
+
 impl OutputDir {
     /// Create `root` if needed, lock it (refused when another run holds it), remove the
     /// staging directories of a killed run, create this run's staging directory, and remove
@@ -80,23 +105,7 @@ impl OutputDir {
             dir: root.to_path_buf(),
             source,
         };
-        std::fs::create_dir_all(root).map_err(io_err)?;
-        let lock = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(root.join(LOCK_FILE))
-            .map_err(io_err)?;
-        match lock.try_lock() {
-            Ok(()) => {}
-            Err(TryLockError::WouldBlock) => {
-                return Err(OpenError::Busy {
-                    dir: root.to_path_buf(),
-                })
-            }
-            Err(TryLockError::Error(e)) => return Err(io_err(e)),
-        }
+        let lock = lock_directory(root)?;
         remove_stale_staging(root).map_err(io_err)?;
         let staging = tempfile::Builder::new()
             .prefix(STAGING_PREFIX)

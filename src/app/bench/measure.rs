@@ -103,11 +103,20 @@ pub enum Progress<'a> {
     Done(&'a Series),
 }
 
+/// As `run` judges it: an answer on the initial geometry moving a node by more than the
+/// structure's size is beyond the model, converged or not (review turn 4, R9).
+fn mark_beyond_model(prepared: &Prepared, solution: &mut crate::solvers::Solution) {
+    if crate::results::beyond_model(&prepared.structure, &solution.equilibrium) {
+        solution.info.status = Status::BeyondModel;
+    }
+}
+
 /// The reference at one α: newton at its default (tight) settings; refused unless it
 /// converged.
 fn reference(prepared: &Prepared, load: &[f64], alpha: f64) -> Result<Reference, BenchError> {
     let mut newton = set_up(Method::Newton, &SolverChoice::default(), prepared)?;
-    let solution = newton.solver.solve(load, None, &mut Silent);
+    let mut solution = newton.solver.solve(load, None, &mut Silent);
+    mark_beyond_model(prepared, &mut solution);
     if !solution.info.status.converged() {
         return Err(BenchError::Reference {
             alpha: alpha_label(alpha),
@@ -160,7 +169,8 @@ fn measure_series(
     let mut solver = set_up(method, &case.solver, prepared)?;
     let setup_seconds = solver.setup_seconds;
     let mut recorder = Recorder::default();
-    let solution = solver.solver.solve(load, Some(reference), &mut recorder);
+    let mut solution = solver.solver.solve(load, Some(reference), &mut recorder);
+    mark_beyond_model(prepared, &mut solution);
     let mut samples: Vec<Sample> = recorder
         .records
         .iter()

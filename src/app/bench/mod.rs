@@ -52,6 +52,15 @@ pub enum BenchError {
         /// Why.
         reason: String,
     },
+    /// Another `run` or `bench` holds the output directory's lock.
+    #[error(
+        "output directory `{dir}` is in use by another tensolve run: wait for it, or pass \
+         `--out DIR` with another directory"
+    )]
+    Busy {
+        /// The directory.
+        dir: String,
+    },
     /// A file could not be written.
     #[error("could not write `{path}`: {reason}")]
     Write {
@@ -92,6 +101,7 @@ impl BenchError {
     pub fn exit_code(&self) -> i32 {
         match self {
             BenchError::Case(_) | BenchError::Setup(_) | BenchError::OutputDir { .. } => 2,
+            BenchError::Busy { .. } => 3,
             BenchError::Write { .. }
             | BenchError::Reference { .. }
             | BenchError::NotConverged { .. } => 1,
@@ -108,12 +118,23 @@ pub fn default_dir(case_path: &Path) -> PathBuf {
     Path::new("out").join(format!("{stem}-bench"))
 }
 
-/// Create `dir` and make sure a file can be written in it.
-pub fn ensure_writable(dir: &Path) -> Result<(), BenchError> {
+/// Create `dir`, make sure a file can be written in it, and lock it for the bench (as `run`
+/// does: two processes never write one directory); the lock lasts as long as the file.
+pub fn lock_writable(dir: &Path) -> Result<std::fs::File, BenchError> {
+    let lock = crate::output::lock_directory(dir).map_err(|e| match e {
+        crate::output::OpenError::Busy { dir } => BenchError::Busy {
+            dir: dir.display().to_string(),
+        },
+        other => BenchError::OutputDir {
+            dir: dir.display().to_string(),
+            reason: other.to_string(),
+        },
+    })?;
     crate::output::ensure_writable(dir).map_err(|e| BenchError::OutputDir {
         dir: dir.display().to_string(),
         reason: e.to_string(),
-    })
+    })?;
+    Ok(lock)
 }
 
 /// `bench.csv` and `bench.svg` under `dir`, each written atomically.

@@ -56,9 +56,7 @@ pub(super) fn assess(
     }
     // A model on the initial geometry whose answer moves a node by more than the structure's
     // own size has left its domain: converged or not, no answer of it.
-    if s.model != crate::structure::GeometricModel::Large
-        && results::max_deflection(s, &solution.equilibrium) > s.size()
-    {
+    if results::beyond_model(s, &solution.equilibrium) {
         solution.info.status = Status::BeyondModel;
     }
     Verdict {
