@@ -213,3 +213,33 @@ proptest! {
         check_converged_rows(&case, &dir.0, &format!("{name} {sets:?}"), |a| loads_at(&case, a));
     }
 }
+
+/// r(U) where no force acts at all (no load, no prestress, U = 0) is 0/0: it is defined as
+/// 0 (the unbalance itself, which is 0), never NaN and never 1 — and a run there says
+/// converged with r(U) = 0.
+#[test]
+fn the_residual_of_a_state_without_any_force_is_zero() {
+    let case = case::parse(
+        "[grid]\nmodules = [2, 2]\n[prestress]\nlower_cable = 0\n[load]\nalpha = [0.0]\n",
+    )
+    .unwrap();
+    let s = case.structure();
+    let zero = vec![0.0; s.n_free];
+    assert_eq!(
+        tensolve::solvers::displacement_residual(&s, &zero, &zero),
+        0.0
+    );
+    let text = "[grid]\nmodules = [2, 2]\n[prestress]\nlower_cable = 0\n[load]\nalpha = [0.0]\n\
+                [solver]\nmethods = [\"newton\", \"pcg-lcp\", \"mono-latin\", \"micro-macro\"]\n\
+                subdomains = [2, 2]\n";
+    let file = Temp::file("no-force", text);
+    let dir = Temp::dir("no-force-out");
+    let out = tensolve(&["run", file.arg(), "--out", dir.arg(), "--quiet"]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    let rows = summary_rows(&dir.0);
+    assert_eq!(rows.len(), 4);
+    for row in rows {
+        assert_eq!(row["converged"], "true", "{row:?}");
+        assert_eq!(number(&row, "equilibrium_residual"), 0.0, "{row:?}");
+    }
+}
