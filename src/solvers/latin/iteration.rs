@@ -1,0 +1,291 @@
+//! How the LATIN iterates (docs/method.md §4): the two iteration orders (relaxed on s, or
+//! Anderson-accelerated on the linear stage's input), the linear stage's input and its
+//! refinement of the macro solve, and the [`Solver`] state machine (`init`, `next_iter`,
+//! `progress`) the driver runs.
+
+use super::anderson::Anderson;
+use super::local_stage::LocalLaw;
+use super::state::{LatinState, SubState};
+use super::{Latin, SearchPolicy, StopOn};
+use crate::solvers::{Equilibrium, Measure, NoEquilibrium, Progress, Solver, Status};
+use crate::structure::Structure;
+use rayon::prelude::*;
+
+/// The two ways to iterate: on s with relaxation (the paper's order: local stage, then linear
+/// stage), or on the linear stage's input with Anderson acceleration (linear stage, then local
+/// stage, so that G is the whole map ŝ ↦ local(linear(ŝ))).
+impl Latin<'_> {
+    /// Whether the iteration runs on the linear stage's input (Anderson-accelerated when
+    /// `solver.anderson` > 0): always with inexact Newton status steps, whose line search
+    /// blends that input.
+    pub(super) fn accelerated(&self) -> bool {
+        self.settings.anderson > 0 || self.newton_steps()
+    }
+
+    /// Whether the status is updated by inexact Newton steps (docs/method.md §9).
+    pub(super) fn newton_steps(&self) -> bool {
+        self.settings.policy == SearchPolicy::Newton
+    }
+
+    /// The law of the local stage while iterating: linearised at the status `law_slack` with
+    /// inexact Newton steps, exact otherwise.
+    pub(super) fn local_law<'a>(&self, law_slack: &'a [bool]) -> LocalLaw<'a> {
+        if self.newton_steps() {
+            LocalLaw::Frozen(law_slack)
+        } else {
+            LocalLaw::Exact
+        }
+    }
+
+    /// Status-following l, when the policy asks for it: `true` when the operators changed.
+    pub(super) fn update_search(&mut self, state: &mut LatinState) -> bool {
+        let updated = self.settings.policy == SearchPolicy::Status && self.follow_status(state);
+        if updated {
+            state.rebuilds += 1;
+            state.relax = false;
+        }
+        updated
+    }
+
+    /// ŝ = local(s), new operators if the status asks for them, then s = linear(ŝ), relaxed
+    /// against the previous s with μ < 1.
+    pub(super) fn relaxed_iteration(&mut self, state: &mut LatinState) {
+        self.local_stage(&mut state.subs, LocalLaw::Exact);
+        self.update_search(state);
+        let mu = self.settings.relaxation;
+        let relaxation = (state.relax && mu < 1.0).then_some(mu);
+        let accuracy = self.macro_accuracy(state.residual);
+        self.linear_stage(&state.load, &mut state.subs, relaxation, accuracy);
+        state.relax = true;
+    }
+
+    /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; new
+    /// operators if the status asks for them; x⁺ from Anderson (restarted when the map changed:
+    /// new operators, or `restart` from a status step); then s = linear(x⁺) and ŝ = local(s).
+    pub(super) fn accelerated_iteration(&mut self, state: &mut LatinState, restart: bool) {
+        let restarted = self.update_search(state) || restart;
+        let g = self.linear_stage_input(&state.subs);
+        let next = state.anderson.step(&state.input, &g, restarted);
+        self.set_linear_stage_input(&mut state.subs, &next);
+        state.input = next;
+        let accuracy = self.macro_accuracy(state.residual);
+        self.linear_stage(&state.load, &mut state.subs, None, accuracy);
+        self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
+        state.relax = true;
+    }
+
+    /// How far the macro solve is refined (a fraction of its right-hand side): 1e-9 while
+    /// r(U) is above 100 times its tolerance, to the end after. 1e-9 takes 2 solves where
+    /// refining to the end took 3 to 5 (the regularised factor leaves 1e-8 to 1e-6, each step
+    /// gains three decades) and leaves the iteration counts unchanged, but on one-module
+    /// substructures a macro answer to 1e-10 held r(U) above 1e-7 for 1000 iterations.
+    pub(super) fn macro_accuracy(&self, residual: f64) -> f64 {
+        if residual > 100.0 * self.settings.residual_tolerance() {
+            1e-9
+        } else {
+            0.0
+        }
+    }
+
+    /// What a linear stage reads of ŝ, scaled to the energy norm: per link `(t̂ − l ê)/√l`,
+    /// per interface row `(F̂^m + d_m Û^m)/√d_m`.
+    pub(super) fn linear_stage_input(&self, subs: &[SubState]) -> Vec<f64> {
+        let sqrt_dm = self.dm.sqrt();
+        let parts: Vec<Vec<f64>> = self
+            .substructures
+            .par_iter()
+            .zip(subs.par_iter())
+            .with_min_len(self.chunk)
+            .map(|(sub, st)| {
+                let mut x = Vec::with_capacity(Self::input_len(st));
+                for (j, &i) in sub.links.iter().enumerate() {
+                    let l = self.search[i];
+                    x.push((st.t_hat[j] - l * st.e_hat[j]) / l.sqrt());
+                }
+                for side in &st.sides {
+                    x.extend(side.hat_load.iter().map(|v| v / sqrt_dm));
+                }
+                x
+            })
+            .collect();
+        parts.concat()
+    }
+
+    /// How many entries of the linear stage's input a substructure holds.
+    pub(super) fn input_len(st: &SubState) -> usize {
+        st.t_hat.len() + st.sides.iter().map(|s| s.hat_load.len()).sum::<usize>()
+    }
+
+    /// A ŝ that a linear stage reads as `x` (t̂ = √l x, ê = 0 on the links).
+    pub(super) fn set_linear_stage_input(&self, subs: &mut [SubState], x: &[f64]) {
+        let sqrt_dm = self.dm.sqrt();
+        let mut pieces = Vec::with_capacity(subs.len());
+        let mut rest = x;
+        for st in subs.iter() {
+            let (piece, tail) = rest.split_at(Self::input_len(st).min(rest.len()));
+            pieces.push(piece);
+            rest = tail;
+        }
+        self.substructures
+            .par_iter()
+            .zip(subs.par_iter_mut().zip(pieces.into_par_iter()))
+            .with_min_len(self.chunk)
+            .for_each(|(sub, (st, piece))| {
+                let mut x = piece.iter();
+                for (j, &i) in sub.links.iter().enumerate() {
+                    st.t_hat[j] = x.next().copied().unwrap_or(0.0) * self.search[i].sqrt();
+                    st.e_hat[j] = 0.0;
+                }
+                for side in st.sides.iter_mut() {
+                    for v in side.hat_load.iter_mut() {
+                        *v = x.next().copied().unwrap_or(0.0) * sqrt_dm;
+                    }
+                }
+            });
+    }
+}
+
+impl Solver for Latin<'_> {
+    type State = LatinState;
+
+    /// Iteration 0 is the first linear stage.
+    const INIT_IS_ITERATE: bool = true;
+
+    fn measure(&self) -> Measure {
+        Measure::Indicator
+    }
+
+    fn structure(&self) -> &Structure {
+        self.structure
+    }
+
+    fn max_iterations(&self) -> usize {
+        self.settings.max_iterations
+    }
+
+    /// Iteration 0: the linear stage from ŝ = 0, with l as set up (a previous solve's
+    /// status-following l is undone, so that every solve starts alike). With Anderson
+    /// acceleration it is followed by the local stage on it (ŝ = local(s)).
+    fn init(&mut self, load: &[f64]) -> LatinState {
+        if self.search_slack.iter().any(|&x| x) {
+            self.set_search(vec![false; self.structure.links.len()]);
+        }
+        let mut state = LatinState {
+            subs: self.substructures.iter().map(SubState::zero).collect(),
+            iteration: 0,
+            eta: f64::INFINITY,
+            residual: f64::INFINITY,
+            slack_cables: 0,
+            rebuilds: 0,
+            relax: false,
+            at_roundoff: false,
+            unloaded: load.iter().all(|&f| f == 0.0)
+                && self.structure.prescribed.iter().all(|&d| d == 0.0),
+            frozen_residual: f64::INFINITY,
+            law_slack: vec![false; self.structure.links.len()],
+            runaway: None,
+            step: None,
+            load: load.to_vec(),
+            input: Vec::new(),
+            anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
+            status_streak: vec![0; self.structure.links.len()],
+        };
+        self.linear_stage(&state.load, &mut state.subs, None, 1e-9);
+        if self.accelerated() {
+            state.input = self.linear_stage_input(&state.subs);
+            self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
+        }
+        state.relax = true;
+        self.measure_state(&mut state);
+        if self.newton_steps() {
+            state.step = Some(self.step_start(&state));
+        }
+        state
+    }
+
+    /// One iteration (docs/method.md §6): with status-following l, new operators when the cables'
+    /// status changed (relaxation and acceleration then restart: the old s was computed with
+    /// another l); then the linear stage, relaxed `s ← μ s_new + (1 − μ) s_old`, or with
+    /// Anderson acceleration on its input.
+    /// With inexact Newton status steps, an inner run that has reached its forcing tolerance
+    /// first ends in a status step, and the iteration is the first of the next inner run.
+    fn next_iter(&mut self, state: &mut LatinState) {
+        let stepped = self.newton_steps() && self.inner_run_done(state);
+        if self.accelerated() {
+            let restart = stepped && self.status_step(state).map_changed;
+            self.accelerated_iteration(state, restart);
+        } else {
+            self.relaxed_iteration(state);
+        }
+        state.iteration += 1;
+        self.measure_state(state);
+        if stepped {
+            state.step = Some(self.step_start(state));
+        }
+    }
+
+    fn progress(&self, state: &LatinState) -> Progress {
+        let eta_met = state.eta <= self.settings.tolerance;
+        let residual_met = state.residual <= self.settings.residual_tolerance();
+        let criterion = match self.settings.stop_on {
+            StopOn::Eta => eta_met,
+            StopOn::Residual => residual_met,
+            StopOn::Both => eta_met && residual_met,
+        };
+        let stop = if !(state.eta.is_finite() && state.residual.is_finite()) {
+            Some(Status::Stalled)
+        } else if criterion || (state.at_roundoff && state.unloaded) {
+            Some(Status::Converged)
+        } else if state.at_roundoff {
+            // Under a load, Δη at round-off with the criterion unmet: nothing left to gain.
+            Some(Status::Stalled)
+        } else {
+            None
+        };
+        Progress {
+            iteration: state.iteration,
+            stopping_value: state.eta,
+            equilibrium_residual: Some(state.residual),
+            rebuilds: state.rebuilds,
+            slack_cables: state.slack_cables,
+            at_roundoff: stop == Some(Status::Converged) && !criterion,
+            stop,
+        }
+    }
+
+    /// e of the linear stage, link by link (each link belongs to one substructure).
+    fn elongations(&self, state: &LatinState) -> Vec<f64> {
+        let mut e = vec![0.0; self.structure.links.len()];
+        for (sub, st) in self.substructures.iter().zip(&state.subs) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                e[i] = st.e[j];
+            }
+        }
+        e
+    }
+
+    fn runaway(&self, state: &LatinState) -> Option<NoEquilibrium> {
+        state.runaway.clone()
+    }
+
+    /// U of the linear stage (interface nodes averaged over the substructures holding them),
+    /// tensions of the local stage on it (which satisfy the cable law exactly; slack cables
+    /// carry exactly 0), the slack set by the shared classification of U.
+    fn iterate(&self, state: &LatinState) -> Equilibrium {
+        let s = self.structure;
+        let mut subs = state.subs.clone();
+        self.local_stage(&mut subs, LocalLaw::Exact);
+        let u = self.displacements(&state.subs);
+        let mut tensions = vec![0.0; s.links.len()];
+        for (sub, st) in self.substructures.iter().zip(&subs) {
+            for (j, &i) in sub.links.iter().enumerate() {
+                tensions[i] = if st.slack_hat[j] {
+                    0.0
+                } else {
+                    st.t_hat[j] + s.links[i].prestress
+                };
+            }
+        }
+        Equilibrium::classified(s, u, tensions)
+    }
+}
