@@ -106,18 +106,7 @@ fn structure(
             }
             general_only(
                 "supports.clamp",
-                // As written: `LowerXEdges` is "lower-x-edges".
-                raw.supports.clamp.map(|c| {
-                    let kebab: String = format!("{c:?}")
-                        .chars()
-                        .enumerate()
-                        .flat_map(|(i, ch)| {
-                            let dash = (i > 0 && ch.is_uppercase()).then_some('-');
-                            dash.into_iter().chain(ch.to_lowercase())
-                        })
-                        .collect();
-                    format!("\"{kebab}\"")
-                }),
+                raw.supports.clamp.map(|c| format!("\"{}\"", c.name())),
             )?;
             let geometry = super::tables::load_geometry(
                 &base.join(&st.nodes),

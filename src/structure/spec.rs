@@ -50,6 +50,19 @@ pub enum Clamp {
     None,
 }
 
+impl Clamp {
+    /// The name a case file gives it (`supports.clamp`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Clamp::LowerXEdges => "lower-x-edges",
+            Clamp::LowerYEdges => "lower-y-edges",
+            Clamp::LowerAllEdges => "lower-all-edges",
+            Clamp::LowerCorners => "lower-corners",
+            Clamp::None => "none",
+        }
+    }
+}
+
 /// Axial material of a family of members.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material {
