@@ -332,58 +332,46 @@ fn remove_previous(root: &Path, mut previous: Vec<PathBuf>) -> io::Result<()> {
 /// alone; the entry itself is removed only when it is a regular file or a link (`unlinkat`
 /// removes the link, never its target). Race-free: no path is resolved twice.
 fn remove_below(root: &File, rel: &Path) -> io::Result<()> {
-    use std::ffi::CString;
-    use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
-    use std::os::unix::ffi::OsStrExt;
-    let name = |part: &std::ffi::OsStr| {
-        CString::new(part.as_bytes()).map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))
-    };
+    use rustix::fs::{openat, statat, unlinkat, AtFlags, FileType, Mode, OFlags};
+    use rustix::io::Errno;
+    use std::os::fd::AsFd;
     let parts: Vec<&std::ffi::OsStr> = rel.iter().collect();
     let Some((last, dirs)) = parts.split_last() else {
         return Ok(());
     };
-    let mut owned: Option<OwnedFd> = None;
+    let mut dir: Option<std::os::fd::OwnedFd> = None;
     for part in dirs {
-        let dir = owned.as_ref().map_or(root.as_raw_fd(), |d| d.as_raw_fd());
-        let part = name(part)?;
-        let flags = libc::O_RDONLY | libc::O_DIRECTORY | libc::O_NOFOLLOW | libc::O_CLOEXEC;
-        // SAFETY: `dir` is an open directory descriptor and `part` a NUL-terminated name.
-        let fd = unsafe { libc::openat(dir, part.as_ptr(), flags) };
-        if fd < 0 {
-            let e = io::Error::last_os_error();
-            return match e.raw_os_error() {
-                // Gone, a link (ELOOP) or not a directory: nothing of ours below it.
-                Some(libc::ENOENT | libc::ELOOP | libc::ENOTDIR) => Ok(()),
-                _ => Err(e),
-            };
-        }
-        // SAFETY: `fd` was just opened and is owned by nothing else.
-        owned = Some(unsafe { OwnedFd::from_raw_fd(fd) });
-    }
-    let dir = owned.as_ref().map_or(root.as_raw_fd(), |d| d.as_raw_fd());
-    let last = name(last)?;
-    // SAFETY: `stat` is plain data, filled by `fstatat` before it is read.
-    let mut stat: libc::stat = unsafe { std::mem::zeroed() };
-    // SAFETY: as above; `AT_SYMLINK_NOFOLLOW` describes a link itself.
-    if unsafe { libc::fstatat(dir, last.as_ptr(), &mut stat, libc::AT_SYMLINK_NOFOLLOW) } != 0 {
-        let e = io::Error::last_os_error();
-        return match e.kind() {
-            io::ErrorKind::NotFound => Ok(()),
-            _ => Err(e),
+        let flags = OFlags::RDONLY | OFlags::DIRECTORY | OFlags::NOFOLLOW | OFlags::CLOEXEC;
+        let opened = match &dir {
+            Some(d) => openat(d, *part, flags, Mode::empty()),
+            None => openat(root, *part, flags, Mode::empty()),
         };
+        match opened {
+            Ok(fd) => dir = Some(fd),
+            // Gone, a link (ELOOP) or not a directory: nothing of ours below it.
+            Err(Errno::NOENT | Errno::LOOP | Errno::NOTDIR) => return Ok(()),
+            Err(e) => return Err(e.into()),
+        }
     }
-    let kind = stat.st_mode & libc::S_IFMT;
-    if kind != libc::S_IFREG && kind != libc::S_IFLNK {
+    let d = match &dir {
+        Some(d) => d.as_fd(),
+        None => root.as_fd(),
+    };
+    // The entry itself, not what a link points to.
+    let stat = match statat(d, *last, AtFlags::SYMLINK_NOFOLLOW) {
+        Ok(stat) => stat,
+        Err(Errno::NOENT) => return Ok(()),
+        Err(e) => return Err(e.into()),
+    };
+    let kind = FileType::from_raw_mode(stat.st_mode);
+    if kind != FileType::RegularFile && kind != FileType::Symlink {
         return Ok(());
     }
-    // SAFETY: as above; flags 0 never removes a directory and never follows a link.
-    if unsafe { libc::unlinkat(dir, last.as_ptr(), 0) } != 0 {
-        let e = io::Error::last_os_error();
-        if e.kind() != io::ErrorKind::NotFound {
-            return Err(e);
-        }
+    // Flags empty: never removes a directory, never follows a link (it removes the link).
+    match unlinkat(d, *last, AtFlags::empty()) {
+        Ok(()) | Err(Errno::NOENT) => Ok(()),
+        Err(e) => Err(e.into()),
     }
-    Ok(())
 }
 
 /// Remove the staging directories a killed run left (only directories: a link of that name is
