@@ -12,7 +12,6 @@ mod ordering;
 mod parallel;
 mod pattern;
 mod pcg;
-mod row_incidence;
 mod sparse_row;
 mod spd_solver;
 mod spectrum;
@@ -25,7 +24,6 @@ pub use ordering::NodeOrdering;
 pub use parallel::{par_dot, par_update, par_zip_map, CHUNK};
 pub use pattern::StiffnessPattern;
 pub use pcg::{preconditioned_cg, CgOutcome};
-pub use row_incidence::RowIncidence;
 pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{

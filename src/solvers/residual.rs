@@ -3,10 +3,9 @@
 //! every solver shares: newton stops on it, the LATIN solvers may, and every summary row
 //! reports it.
 
-use crate::linalg::{norm, SparseRow, CHUNK};
+use crate::linalg::{norm, SparseRow};
 use crate::structure::law::{self, GeometricModel};
 use crate::structure::Structure;
-use rayon::prelude::*;
 
 /// `r ← Bᵀτ − F` (the energy's gradient) and its relative size
 /// `‖r‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)` on the free dofs: the first of [`unbalances`].
@@ -27,8 +26,7 @@ pub fn unbalances(s: &Structure, tensions: &[f64], load: &[f64], r: &mut [f64]) 
 
 /// [`unbalances`] with the members' rows given (`B` on the initial geometry, or `∇ℓ` on the
 /// current one: docs/method.md §8) and, when the model has one, a geometric force `K_G U` added
-/// to `Bᵀτ` (counted in both scales as `|K_G U|`). `rows` have the pattern of `s.link_dofs`
-/// (the same dofs in the same slots).
+/// to `Bᵀτ` (counted in both scales as `|K_G U|`).
 pub fn unbalances_on(
     s: &Structure,
     rows: &[SparseRow],
@@ -37,44 +35,15 @@ pub fn unbalances_on(
     load: &[f64],
     r: &mut [f64],
 ) -> Unbalances {
+    r.iter_mut().for_each(|ri| *ri = 0.0);
     let mut added = vec![0.0; s.n_free];
     let mut all = vec![0.0; s.n_free];
-    match s.incidence() {
-        Some(incidence) => {
-            // Per dof, the links meeting there in link order: the serial scatter's sums, bit
-            // for bit, on any number of threads.
-            r.par_chunks_mut(CHUNK)
-                .zip(added.par_chunks_mut(CHUNK))
-                .zip(all.par_chunks_mut(CHUNK))
-                .enumerate()
-                .for_each(|(chunk, ((r, added), all))| {
-                    for (k, ((r, added), all)) in r
-                        .iter_mut()
-                        .zip(added.iter_mut())
-                        .zip(all.iter_mut())
-                        .enumerate()
-                    {
-                        let (mut sum, mut sum_added, mut sum_all) = (0.0, 0.0, 0.0);
-                        for (i, slot) in incidence.column(chunk * CHUNK + k) {
-                            let (c, t) = (rows[i].coef[slot], tensions[i]);
-                            sum += c * t;
-                            sum_added += (c * (t - s.links[i].prestress)).abs();
-                            sum_all += (c * t).abs();
-                        }
-                        (*r, *added, *all) = (sum, sum_added, sum_all);
-                    }
-                });
-        }
-        None => {
-            r.iter_mut().for_each(|ri| *ri = 0.0);
-            for ((&t, ld), link) in tensions.iter().zip(rows).zip(&s.links) {
-                let change = t - link.prestress;
-                for (d, c) in ld.iter() {
-                    r[d] += c * t;
-                    added[d] += (c * change).abs();
-                    all[d] += (c * t).abs();
-                }
-            }
+    for ((&t, ld), link) in tensions.iter().zip(rows).zip(&s.links) {
+        let change = t - link.prestress;
+        for (d, c) in ld.iter() {
+            r[d] += c * t;
+            added[d] += (c * change).abs();
+            all[d] += (c * t).abs();
         }
     }
     if let Some(g) = geometric_force {
@@ -135,7 +104,7 @@ fn small_unbalances(
 ) -> (Vec<f64>, Vec<f64>, Unbalances) {
     let trial = law::trial_tensions(s, u);
     let tensions: Vec<f64> = trial
-        .par_iter()
+        .iter()
         .zip(&s.links)
         .map(|(&t, l)| law::tension(l, t))
         .collect();
@@ -164,29 +133,12 @@ pub fn exact_and_frozen_residuals(
 ) -> (f64, f64) {
     let mut r = vec![0.0; s.n_free];
     let (trial, tensions, exact) = small_unbalances(s, u, load, &mut r);
-    // r += Bᵀ (τ_frozen − τ) on the cables where the two laws differ, per dof in link order
-    // (the serial scatter's sums on any number of threads).
-    let change: Vec<f64> = trial
-        .par_iter()
-        .zip(&tensions)
-        .zip(slack)
-        .map(|((&t, &tau), &slack)| (if slack { 0.0 } else { t }) - tau)
-        .collect();
-    match s.incidence() {
-        Some(incidence) => r.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, r)| {
-            for (k, r) in r.iter_mut().enumerate() {
-                for (i, slot) in incidence.column(chunk * CHUNK + k) {
-                    if change[i] != 0.0 {
-                        *r += s.link_dofs[i].coef[slot] * change[i];
-                    }
-                }
-            }
-        }),
-        None => {
-            for (row, &c) in s.link_dofs.iter().zip(&change) {
-                if c != 0.0 {
-                    row.scatter(c, &mut r);
-                }
+    for (i, row) in s.link_dofs.iter().enumerate() {
+        let frozen = if slack[i] { 0.0 } else { trial[i] };
+        let change = frozen - tensions[i];
+        if change != 0.0 {
+            for (d, c) in row.iter() {
+                r[d] += c * change;
             }
         }
     }

@@ -7,7 +7,6 @@
 
 use super::{Link, Structure, CLAMPED};
 use crate::linalg::{SparseRow, StiffnessPattern};
-use rayon::prelude::*;
 use serde::Deserialize;
 
 /// Which geometric effects the model keeps: the case key `model.geometry`.
@@ -127,7 +126,7 @@ pub fn trial_tensions(s: &Structure, u: &[f64]) -> Vec<f64> {
         GeometricModel::Large => CurrentGeometry::of(s, u).trial_tensions(s),
         _ => s
             .links
-            .par_iter()
+            .iter()
             .zip(&s.link_dofs)
             .map(|(l, ld)| trial_tension(l, ld.elongation(u)))
             .collect(),

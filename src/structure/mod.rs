@@ -24,7 +24,7 @@ pub use statics::{
     DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal,
 };
 
-use crate::linalg::{RowIncidence, SparseRow};
+use crate::linalg::SparseRow;
 
 /// A row of the compatibility operator B (docs/method.md §1): `e_i = n·(U_b − U_a)` on the link's free
 /// dofs. B is never formed as a matrix.
@@ -142,8 +142,6 @@ pub struct Structure {
     pub model: GeometricModel,
     /// `K_G(t0)`, the prestress's geometric stiffness, for the models that have it.
     pub geometric: Option<GeometricStiffness>,
-    /// `link_dofs` transposed, built at its first use ([`Structure::incidence`]).
-    incidence: std::sync::OnceLock<Option<RowIncidence>>,
 }
 
 impl Structure {
@@ -285,16 +283,7 @@ impl Structure {
             prestress_scale,
             model: GeometricModel::Linear,
             geometric: None,
-            incidence: std::sync::OnceLock::new(),
         }
-    }
-
-    /// Per free dof, the links whose row touches it (`link_dofs` transposed), for gathers
-    /// that threads share; built once, at the first call. `None` beyond 2²⁹ links.
-    pub fn incidence(&self) -> Option<&RowIncidence> {
-        self.incidence
-            .get_or_init(|| RowIncidence::new(&self.link_dofs, self.n_free))
-            .as_ref()
     }
 
     /// `Bᵀ t0` per node (free components only, prescribed ones zero), with each node's scale
