@@ -14,11 +14,12 @@ use std::process::ExitCode;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
+use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
 use tensolve::case;
-use tensolve::case::memory::{self, MemoryEstimate, Size, Workload};
 use tensolve::output::alpha_label;
 use tensolve::solvers::Method;
+use tensolve::structure::StructureSize;
 
 /// Static equilibrium of tensegrity grids whose cables can go slack.
 ///
@@ -238,7 +239,7 @@ fn bench_command(
     set: &[String],
 ) -> Result<(), BenchError> {
     let case = case::load_with(path, set)?;
-    let estimate = MemoryEstimate::new(Size::of(&case), &Workload::bench(&case));
+    let estimate = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::bench(&case));
     memory::ensure_fits(&estimate, "bench").map_err(BenchError::Case)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let mut reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
@@ -271,7 +272,7 @@ fn bench_title(path: &Path, alphas: &[f64]) -> String {
 fn check_command(path: PathBuf, set: &[String]) -> Result<(), RunError> {
     let case = case::load_with(&path, set)?;
     // What check itself allocates (a rank factorization, the LATIN set-ups) must fit first.
-    let own = MemoryEstimate::new(Size::of(&case), &Workload::check(&case));
+    let own = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::check(&case));
     memory::ensure_fits(&own, "check")?;
     let report = check(&case, path);
     print_ignoring_closed_pipe(&report.to_string());

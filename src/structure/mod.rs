@@ -10,6 +10,7 @@ pub mod law;
 mod spec;
 mod stability;
 mod statics;
+mod storage;
 mod supports;
 
 pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
@@ -23,6 +24,7 @@ pub use statics::{
     equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
     DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal,
 };
+pub use storage::{StructureSize, BASE_BYTES, BYTES_PER_LINK};
 
 use crate::linalg::SparseRow;
 
