@@ -68,13 +68,15 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
-    /// Time every solver of a case at every α against a newton reference: the energy error e
-    /// of every iterate against wall time (set-up included).
+    /// Time every solver of a case at every α against a reference: the energy error e of every
+    /// iterate against wall time (set-up included).
     ///
-    /// Writes `bench.csv` (solver, alpha, iteration, seconds, error_e) and `bench.svg` (e
-    /// against wall time, log-log) and prints, per solver and α, the wall time to reach
-    /// e <= 1e-2, 1e-3, 1e-4, 1e-6 and 1e-8. Exit status as for `run`: 2 on bad input, 1 when a
-    /// solver or the reference did not converge or a file could not be written.
+    /// The reference is solved by `solver.reference` (newton unless the case says pcg-lcp) at
+    /// its default settings; "none" is refused. Writes `bench.csv` (solver, alpha, iteration,
+    /// seconds, error_e) and `bench.svg` (e against wall time, log-log) and prints, per solver
+    /// and α, the wall time to reach e <= 1e-2, 1e-3, 1e-4, 1e-6 and 1e-8. Exit status as for
+    /// `run`: 2 on bad input (solver.reference = "none" included), 1 when a solver or the
+    /// reference did not converge or a file could not be written.
     Bench {
         /// The case file (TOML).
         case: PathBuf,
@@ -239,7 +241,10 @@ fn bench_command(
     set: &[String],
 ) -> Result<(), BenchError> {
     let case = case::load_with(path, set)?;
-    let estimate = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::bench(&case));
+    // Refused before anything else when there is no reference to measure e against.
+    let reference = bench::reference_method(&case)?;
+    let work = Workload::bench(&case, reference);
+    let estimate = MemoryEstimate::new(StructureSize::of(&case.geometry), &work);
     memory::ensure_fits(&estimate, "bench").map_err(BenchError::Case)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let mut reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());

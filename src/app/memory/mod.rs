@@ -194,16 +194,17 @@ impl Workload {
         }
     }
 
-    /// `tensolve bench` of `case`: one solver set up at a time, after a newton reference.
-    pub fn bench(case: &Case) -> Workload {
+    /// `tensolve bench` of `case`: one solver set up at a time, after a reference solved by
+    /// `reference` (the case's `solver.reference`).
+    pub fn bench(case: &Case, reference: Method) -> Workload {
         let largest = case
             .solver
             .methods
             .iter()
             .copied()
-            .chain([Method::Newton])
+            .chain([reference])
             .max_by(|a, b| a.factor_units().total_cmp(&b.factor_units()))
-            .unwrap_or(Method::Newton);
+            .unwrap_or(reference);
         Workload {
             methods: vec![largest],
             stability: false,
