@@ -3,12 +3,13 @@
 //! Data flows one way, and each module only uses those before it:
 //!
 //! ```text
-//! linalg → structure → solvers → results → output
-//!                 ↘       ↓                  ↓
-//!                   case ───────────────→  app (sweep, bench, check)
+//! host, linalg → structure → solvers → results → output
+//!                       ↘       ↓                  ↓
+//!                         case ───────────────→  app (sweep, bench, check)
 //! ```
 //!
-//! [`linalg`] is sparse linear algebra knowing nothing of the domain; [`structure`] builds
+//! [`host`] reads what the machine lets this process use (its memory); [`linalg`] is sparse
+//! linear algebra knowing nothing of the domain; [`structure`] builds
 //! nodes, links and supports from a plain [`structure::GridSpec`]; [`solvers`] holds the four
 //! solvers behind one [`solvers::Solver`] trait and one [`solvers::drive`]r; [`results`]
 //! checks and derives quantities from an answer; [`output`] writes files through one sink per
@@ -18,6 +19,7 @@
 
 pub mod app;
 pub mod case;
+pub mod host;
 pub mod linalg;
 pub mod output;
 pub mod results;

@@ -14,11 +14,12 @@ use std::process::ExitCode;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
+use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
 use tensolve::case;
-use tensolve::case::memory::{self, MemoryEstimate, Size, Workload};
 use tensolve::output::alpha_label;
 use tensolve::solvers::Method;
+use tensolve::structure::StructureSize;
 
 /// Static equilibrium of tensegrity grids whose cables can go slack.
 ///
@@ -67,13 +68,15 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
-    /// Time every solver of a case at every α against a newton reference: the energy error e
-    /// of every iterate against wall time (set-up included).
+    /// Time every solver of a case at every α against a reference: the energy error e of every
+    /// iterate against wall time (set-up included).
     ///
-    /// Writes `bench.csv` (solver, alpha, iteration, seconds, error_e) and `bench.svg` (e
-    /// against wall time, log-log) and prints, per solver and α, the wall time to reach
-    /// e <= 1e-2, 1e-3, 1e-4, 1e-6 and 1e-8. Exit status as for `run`: 2 on bad input, 1 when a
-    /// solver or the reference did not converge or a file could not be written.
+    /// The reference is solved by `solver.reference` (newton unless the case says pcg-lcp) at
+    /// its default settings; "none" is refused. Writes `bench.csv` (solver, alpha, iteration,
+    /// seconds, error_e) and `bench.svg` (e against wall time, log-log) and prints, per solver
+    /// and α, the wall time to reach e <= 1e-2, 1e-3, 1e-4, 1e-6 and 1e-8. Exit status as for
+    /// `run`: 2 on bad input (solver.reference = "none" included), 1 when a solver or the
+    /// reference did not converge or a file could not be written.
     Bench {
         /// The case file (TOML).
         case: PathBuf,
@@ -238,7 +241,10 @@ fn bench_command(
     set: &[String],
 ) -> Result<(), BenchError> {
     let case = case::load_with(path, set)?;
-    let estimate = MemoryEstimate::new(Size::of(&case), &Workload::bench(&case));
+    // Refused before anything else when there is no reference to measure e against.
+    let reference = bench::reference_method(&case)?;
+    let work = Workload::bench(&case, reference);
+    let estimate = MemoryEstimate::new(StructureSize::of(&case.geometry), &work);
     memory::ensure_fits(&estimate, "bench").map_err(BenchError::Case)?;
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let mut reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
@@ -271,7 +277,7 @@ fn bench_title(path: &Path, alphas: &[f64]) -> String {
 fn check_command(path: PathBuf, set: &[String]) -> Result<(), RunError> {
     let case = case::load_with(&path, set)?;
     // What check itself allocates (a rank factorization, the LATIN set-ups) must fit first.
-    let own = MemoryEstimate::new(Size::of(&case), &Workload::check(&case));
+    let own = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::check(&case));
     memory::ensure_fits(&own, "check")?;
     let report = check(&case, path);
     print_ignoring_closed_pipe(&report.to_string());

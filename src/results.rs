@@ -4,7 +4,7 @@
 use crate::linalg::{norm, smallest_eigenvalues};
 use crate::solvers::{relative_unbalance, Equilibrium, Solution, TautStiffness};
 use crate::structure::law::{self, CurrentGeometry};
-use crate::structure::{GeometricModel, LinkKind, Structure};
+use crate::structure::{GeometricModel, GridRole, Structure};
 
 /// Every number of a solution is finite (displacements, tensions, stopping measure).
 pub fn is_finite(solution: &Solution) -> bool {
@@ -185,12 +185,12 @@ pub fn reactions(
 /// "large"` is recommended.
 pub const GEOMETRIC_TERM_LIMIT: f64 = 0.01;
 
-/// Slack cables per kind, in the order of [`SLACK_KINDS`].
-pub fn slack_by_kind(s: &Structure, eq: &Equilibrium) -> [usize; SLACK_KINDS.len()] {
-    let mut counts = [0; SLACK_KINDS.len()];
-    for (l, &slack) in s.links.iter().zip(&eq.slack) {
+/// Slack cables per family, in the order of [`SLACK_FAMILIES`].
+pub fn slack_by_kind(s: &Structure, eq: &Equilibrium) -> [usize; SLACK_FAMILIES.len()] {
+    let mut counts = [0; SLACK_FAMILIES.len()];
+    for (i, &slack) in eq.slack.iter().enumerate() {
         if slack {
-            if let Some(k) = SLACK_KINDS.iter().position(|&k| k == l.kind) {
+            if let Some(k) = slack_family(s, i) {
                 counts[k] += 1;
             }
         }
@@ -198,14 +198,21 @@ pub fn slack_by_kind(s: &Structure, eq: &Equilibrium) -> [usize; SLACK_KINDS.len
     counts
 }
 
-/// The cable kinds `summary.csv` breaks the slack count down by (`slack_{name}` columns).
-pub const SLACK_KINDS: [LinkKind; 5] = [
-    LinkKind::LowerCable,
-    LinkKind::UpperCable,
-    LinkKind::BracingCable,
-    LinkKind::DiagonalCable,
-    LinkKind::Cable,
-];
+/// The cable families `summary.csv` breaks the slack count down by (`slack_{name}` columns):
+/// a grid's cables by their [`GridRole`], then a general structure's cables.
+pub const SLACK_FAMILIES: [&str; 5] = ["lower", "upper", "bracing", "diagonal", "cable"];
+
+/// The index in [`SLACK_FAMILIES`] of link `i`'s family; `None` for a bar.
+fn slack_family(s: &Structure, i: usize) -> Option<usize> {
+    match s.grid_role(i) {
+        Some(GridRole::LowerCable) => Some(0),
+        Some(GridRole::UpperCable) => Some(1),
+        Some(GridRole::BracingCable) => Some(2),
+        Some(GridRole::DiagonalCable) => Some(3),
+        Some(GridRole::Bar) => None,
+        None => s.links[i].kind.is_cable().then_some(4),
+    }
+}
 
 /// Largest cable tension, N (0 without cables).
 pub fn max_cable_tension(s: &Structure, eq: &Equilibrium) -> f64 {

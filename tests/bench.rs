@@ -158,6 +158,79 @@ fn bench_exit_codes() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("(not converged)"));
 }
 
+/// bench takes its reference from `solver.reference`, as `run` does: against pcg-lcp it
+/// measures every iterate's e, and the same e as against newton (both references are exact).
+#[test]
+fn bench_takes_its_reference_from_solver_reference() {
+    let case = Temp::file("bench-reference", SMALL);
+    let bench_against = |reference: &str| {
+        let out = Temp(temp_path(&format!("bench-reference-{reference}")));
+        let set = format!("solver.reference=\"{reference}\"");
+        let o = tensolve(&[
+            "bench",
+            case.arg(),
+            "--out",
+            out.arg(),
+            "--quiet",
+            "--set",
+            &set,
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{reference}: {}", stderr(&o));
+        read_bench_csv(&out.0.join("bench.csv"))
+    };
+    let newton = bench_against("newton");
+    let pcg_lcp = bench_against("pcg-lcp");
+    // The reference is the named solver's answer: at the case's default settings, that solver
+    // ends on it exactly.
+    let last_e = |rows: &BTreeMap<String, Vec<(usize, f64, f64)>>, solver: &str| {
+        rows[solver].last().expect("a row").2
+    };
+    assert_eq!(last_e(&newton, "newton"), 0.0);
+    assert_eq!(last_e(&pcg_lcp, "pcg-lcp"), 0.0);
+    assert_eq!(
+        newton.keys().collect::<Vec<_>>(),
+        pcg_lcp.keys().collect::<Vec<_>>()
+    );
+    for (solver, rows) in &newton {
+        let other = &pcg_lcp[solver];
+        assert_eq!(rows.len(), other.len(), "{solver}");
+        for (&(k, _, a), &(j, _, b)) in rows.iter().zip(other) {
+            assert_eq!(k, j, "{solver}");
+            assert!(b.is_finite() && b >= 0.0, "{solver} iteration {k}: e = {b}");
+            assert!(
+                (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + 1e-9,
+                "{solver} iteration {k}: e = {a:e} against newton, {b:e} against pcg-lcp"
+            );
+        }
+    }
+}
+
+/// bench measures e, so `solver.reference = "none"` is refused before anything is solved or
+/// written: exit 2, naming the key, the value and the fix.
+#[test]
+fn bench_refuses_a_case_without_reference() {
+    let case = Temp::file(
+        "bench-no-reference",
+        &SMALL.replace(
+            "subdomains = [2, 2]",
+            "subdomains = [2, 2]\nreference = \"none\"",
+        ),
+    );
+    let out = Temp(temp_path("bench-no-reference-out"));
+    let o = tensolve(&["bench", case.arg(), "--out", out.arg(), "--quiet"]);
+    let message = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{message}");
+    for part in [
+        "`solver.reference` = \"none\"",
+        "\"newton\"",
+        "\"pcg-lcp\"",
+        "`run`",
+    ] {
+        assert!(message.contains(part), "`{part}` in {message}");
+    }
+    assert!(!out.0.exists(), "nothing written: {message}");
+}
+
 /// A solve with an iteration cap, watched by an observer.
 type CappedSolve<'a> = dyn Fn(usize, &mut dyn Observer) -> Solution + 'a;
 

@@ -3,14 +3,16 @@
 mod common;
 
 use common::{paper_structure, P};
-use tensolve::structure::{LinkKind, Structure};
+use tensolve::structure::{GridRole, Structure};
 
 fn braced() -> Structure {
     paper_structure(&[("grid", "module", "braced".into())])
 }
 
-fn count(s: &Structure, kind: LinkKind) -> usize {
-    s.links.iter().filter(|l| l.kind == kind).count()
+fn count(s: &Structure, role: GridRole) -> usize {
+    (0..s.links.len())
+        .filter(|&i| s.grid_role(i) == Some(role))
+        .count()
 }
 
 #[test]
@@ -38,21 +40,21 @@ fn braced_grid_counts() {
 fn links_per_kind() {
     let s = paper_structure(&[]);
     for kind in [
-        LinkKind::LowerCable,
-        LinkKind::UpperCable,
-        LinkKind::BracingCable,
-        LinkKind::Bar,
+        GridRole::LowerCable,
+        GridRole::UpperCable,
+        GridRole::BracingCable,
+        GridRole::Bar,
     ] {
         assert_eq!(count(&s, kind), 1024, "{kind:?}");
     }
-    assert_eq!(count(&s, LinkKind::DiagonalCable), 0);
+    assert_eq!(count(&s, GridRole::DiagonalCable), 0);
     let b = braced();
     for kind in [
-        LinkKind::LowerCable,
-        LinkKind::UpperCable,
-        LinkKind::BracingCable,
-        LinkKind::DiagonalCable,
-        LinkKind::Bar,
+        GridRole::LowerCable,
+        GridRole::UpperCable,
+        GridRole::BracingCable,
+        GridRole::DiagonalCable,
+        GridRole::Bar,
     ] {
         assert_eq!(count(&b, kind), 1024, "braced {kind:?}");
     }
@@ -70,24 +72,24 @@ fn prestress_is_self_balanced() {
 }
 
 /// docs/method.md §2's table: t0 per link kind, for module side `l` and height `h`.
-fn expected_prestress(kind: LinkKind, l: f64, h: f64) -> f64 {
+fn expected_prestress(role: GridRole, l: f64, h: f64) -> f64 {
     let r = 4.0 * h * h / (l * l);
-    match kind {
-        LinkKind::LowerCable => P,
-        LinkKind::UpperCable => 2f64.sqrt() * P,
-        LinkKind::BracingCable => (1.0 + r).sqrt() * P,
-        LinkKind::Bar => -(5.0 + r).sqrt() * P,
-        LinkKind::DiagonalCable | LinkKind::Cable => 0.0,
+    match role {
+        GridRole::LowerCable => P,
+        GridRole::UpperCable => 2f64.sqrt() * P,
+        GridRole::BracingCable => (1.0 + r).sqrt() * P,
+        GridRole::Bar => -(5.0 + r).sqrt() * P,
+        GridRole::DiagonalCable => 0.0,
     }
 }
 
 fn assert_prestress_table(s: &Structure, l: f64, h: f64) {
     for (i, link) in s.links.iter().enumerate() {
-        let want = expected_prestress(link.kind, l, h);
+        let role = s.grid_role(i).expect("a grid's links have a role");
+        let want = expected_prestress(role, l, h);
         assert!(
             (link.prestress - want).abs() <= 1e-12 * P,
-            "link {i} ({:?}): t0 = {} N, docs/method.md §2 says {want} N",
-            link.kind,
+            "link {i} ({role:?}): t0 = {} N, docs/method.md §2 says {want} N",
             link.prestress
         );
     }

@@ -8,7 +8,7 @@ use common::temp_path;
 use std::path::{Path, PathBuf};
 use tensolve::app::sweep::{run, RunOptions};
 use tensolve::case::Case;
-use tensolve::output::{kind_code, write_vtu, VTK_LINE};
+use tensolve::output::{kind_code, link_code, write_vtu, VTK_LINE};
 use tensolve::solvers::Equilibrium;
 use tensolve::structure::LinkKind;
 
@@ -114,7 +114,9 @@ fn vtu_files_hold_the_structure_and_the_solved_tensions() {
                 );
             }
             let kinds: Vec<i32> = numbers(data_array(&doc, "kind"));
-            let expected: Vec<i32> = structure.links.iter().map(|l| kind_code(l.kind)).collect();
+            let expected: Vec<i32> = (0..structure.links.len())
+                .map(|i| link_code(&structure, i))
+                .collect();
             assert_eq!(kinds, expected);
 
             // The cables' tensions are those of the tensions CSV of the same solve.

@@ -1,13 +1,14 @@
 //! `tensolve check`: what a case describes, and whether every solver can be set up for it, as
 //! a report struct (tests read it directly; the command line prints its `Display`).
 
-use crate::case::memory::{self, Available, MemoryEstimate, Size, Workload};
+use super::memory::{MemoryEstimate, Workload};
 use crate::case::Case;
+use crate::host::{self, Available};
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
 use crate::structure::{
-    prestress_stability, GeometricModel, ModuleKind, PrestressStability, Structure,
+    prestress_stability, GeometricModel, ModuleKind, PrestressStability, Structure, StructureSize,
 };
 use std::fmt;
 use std::path::PathBuf;
@@ -172,8 +173,11 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         stiffness_regular: false,
         latin: Vec::new(),
         error: None,
-        memory: MemoryEstimate::new(Size::of(case), &Workload::run(case, &case.solver.methods)),
-        available: memory::available(),
+        memory: MemoryEstimate::new(
+            StructureSize::of(&case.geometry),
+            &Workload::run(case, &case.solver.methods),
+        ),
+        available: host::available(),
     };
     if let Err(e) = TautStiffness::new(&s) {
         report.error = Some(e);
@@ -394,12 +398,7 @@ impl CheckReport {
         writeln!(f, "solvers         {}", methods.join(", "))?;
         writeln!(f, "memory (run)    {}", self.memory)?;
         match &self.available {
-            Some(a) => writeln!(
-                f,
-                "  available     {} ({})",
-                memory::bytes_text(a.bytes),
-                a.source
-            )?,
+            Some(a) => writeln!(f, "  available     {a}")?,
             None => writeln!(f, "  available     unknown (no limit readable)")?,
         }
         Ok(())

@@ -151,109 +151,157 @@ pub fn compare(
         ..Default::default()
     };
     for file in &golden_files {
-        // The golden file first: an unreadable or empty one is a bad call, not a difference.
-        let (golden_header, golden_rows) =
-            read(&golden.join(file)).map_err(|reason| CompareError::Unreadable {
-                file: file.clone(),
-                reason,
-            })?;
-        if golden_header.is_empty() {
-            return Err(CompareError::Unreadable {
-                file: file.clone(),
-                reason: "is empty (no header): store a run's CSV there".into(),
-            });
-        }
-        if !run_files.contains(file) {
-            report.files_differ.push(format!(
-                "{file}: in the golden directory but not in the run: rerun the case, or store \
-                 a new golden run"
-            ));
-            continue;
-        }
-        let (run_header, run_rows) = match read(&run.join(file)) {
-            Ok(table) => table,
-            Err(reason) => {
-                report
-                    .files_differ
-                    .push(format!("{file}: cannot be read in the run: {reason}"));
+        // 1. The golden file first: an unreadable or empty one is a bad call, not a difference.
+        let (header, golden_rows) = read_golden(golden, file)?;
+        // 2. The run's: missing, unreadable or with other columns, the whole file differs.
+        let run_rows = match read_run(run, file, &run_files, &header) {
+            Ok(rows) => rows,
+            Err(why) => {
+                report.files_differ.push(why);
                 continue;
             }
         };
-        if run_header != golden_header {
-            let run_header = match run_header.is_empty() {
-                true => "(empty file)".to_string(),
-                false => run_header.join(","),
-            };
-            report.files_differ.push(format!(
-                "{file}: columns differ (run: {run_header}; golden: {}): the two runs wrote \
-                 different outputs",
-                golden_header.join(",")
-            ));
-            continue;
-        }
         report.files += 1;
-        if run_rows.len() != golden_rows.len() {
-            report.differences.push(Difference {
-                file: file.clone(),
-                column: "rows".into(),
-                rows: run_rows.len().abs_diff(golden_rows.len()),
-                first_row: run_rows.len().min(golden_rows.len()) + 1,
-                first: (run_rows.len().to_string(), golden_rows.len().to_string()),
-                max_abs: 0.0,
-                max_rel: 0.0,
-            });
+        // 3. Its rows: their count, then column by column, then the slack set.
+        let table = Compared {
+            file,
+            header: &header,
+            run: &run_rows,
+            golden: &golden_rows,
+        };
+        if let Some(d) = table.row_count_difference() {
+            report.differences.push(d);
             continue;
         }
-        for (c, name) in golden_header.iter().enumerate() {
-            if name.ends_with("seconds") {
-                continue;
+        for (c, name) in header.iter().enumerate() {
+            if !name.ends_with("seconds") {
+                report.values += run_rows.len();
+                report
+                    .differences
+                    .extend(table.column_difference(c, settings));
             }
-            let mut column: Option<Difference> = None;
-            for (r, (a, b)) in run_rows.iter().zip(&golden_rows).enumerate() {
-                report.values += 1;
-                let (a, b) = (&a[c], &b[c]);
-                let Some((abs, rel)) = differs(name, a, b, settings) else {
-                    continue;
-                };
-                let d = column.get_or_insert_with(|| Difference {
-                    file: file.clone(),
-                    column: name.clone(),
-                    rows: 0,
-                    first_row: r + 1,
-                    first: (a.clone(), b.clone()),
-                    max_abs: 0.0,
-                    max_rel: 0.0,
-                });
-                d.rows += 1;
-                d.max_abs = d.max_abs.max(abs);
-                d.max_rel = d.max_rel.max(rel);
-            }
-            report.differences.extend(column);
         }
-        // The slack set: cables at exactly zero tension (the solvers write 0 for slack ones).
-        if let Some(c) = golden_header.iter().position(|h| h == "tension") {
-            let mut set = None::<Difference>;
-            for (r, (a, b)) in run_rows.iter().zip(&golden_rows).enumerate() {
-                let slack = |v: &str| v.parse::<f64>().is_ok_and(|x| x == 0.0);
-                if slack(&a[c]) != slack(&b[c]) {
-                    let d = set.get_or_insert_with(|| Difference {
-                        file: file.clone(),
-                        column: "slack set".into(),
-                        rows: 0,
-                        first_row: r + 1,
-                        first: (a[c].clone(), b[c].clone()),
-                        max_abs: 0.0,
-                        max_rel: 0.0,
-                    });
-                    d.rows += 1;
-                }
-            }
-            report
-                .differences
-                .extend(set.filter(|d| d.rows as u64 > settings.slack_tolerance));
-        }
+        report.differences.extend(
+            table
+                .slack_set_difference()
+                .filter(|d| d.rows as u64 > settings.slack_tolerance),
+        );
     }
     Ok(report)
+}
+
+/// Header and rows of `golden`'s CSV `file`; an unreadable or empty one cannot be compared
+/// with (exit 2).
+fn read_golden(golden: &Path, file: &str) -> Result<Table, CompareError> {
+    let (header, rows) = read(&golden.join(file)).map_err(|reason| CompareError::Unreadable {
+        file: file.to_string(),
+        reason,
+    })?;
+    if header.is_empty() {
+        return Err(CompareError::Unreadable {
+            file: file.to_string(),
+            reason: "is empty (no header): store a run's CSV there".into(),
+        });
+    }
+    Ok((header, rows))
+}
+
+/// The rows of `run`'s CSV `file` (one of `run_files`) with the golden `header`, or why the
+/// whole file differs: missing from the run, unreadable there, or with other columns.
+fn read_run(
+    run: &Path,
+    file: &str,
+    run_files: &[String],
+    header: &[String],
+) -> Result<Vec<Vec<String>>, String> {
+    if !run_files.iter().any(|f| f == file) {
+        return Err(format!(
+            "{file}: in the golden directory but not in the run: rerun the case, or store a new \
+             golden run"
+        ));
+    }
+    let (run_header, run_rows) = read(&run.join(file))
+        .map_err(|reason| format!("{file}: cannot be read in the run: {reason}"))?;
+    if run_header != header {
+        let run_header = match run_header.is_empty() {
+            true => "(empty file)".to_string(),
+            false => run_header.join(","),
+        };
+        return Err(format!(
+            "{file}: columns differ (run: {run_header}; golden: {}): the two runs wrote \
+             different outputs",
+            header.join(",")
+        ));
+    }
+    Ok(run_rows)
+}
+
+/// One file of both directories, with the same columns.
+struct Compared<'a> {
+    file: &'a str,
+    header: &'a [String],
+    run: &'a [Vec<String>],
+    golden: &'a [Vec<String>],
+}
+
+impl Compared<'_> {
+    /// A difference in `column` first seen at row `r` (0-based) between `first`'s values.
+    fn difference(&self, column: &str, r: usize, first: (&str, &str)) -> Difference {
+        Difference {
+            file: self.file.to_string(),
+            column: column.to_string(),
+            rows: 0,
+            first_row: r + 1,
+            first: (first.0.to_string(), first.1.to_string()),
+            max_abs: 0.0,
+            max_rel: 0.0,
+        }
+    }
+
+    /// The row counts, when they differ (column `rows`).
+    fn row_count_difference(&self) -> Option<Difference> {
+        let (run, golden) = (self.run.len(), self.golden.len());
+        (run != golden).then(|| Difference {
+            rows: run.abs_diff(golden),
+            ..self.difference(
+                "rows",
+                run.min(golden),
+                (&run.to_string(), &golden.to_string()),
+            )
+        })
+    }
+
+    /// Column `c`'s rows that differ beyond `settings` ([`differs`]), if any.
+    fn column_difference(&self, c: usize, settings: &CompareSettings) -> Option<Difference> {
+        let name = &self.header[c];
+        let mut column: Option<Difference> = None;
+        for (r, (a, b)) in self.run.iter().zip(self.golden).enumerate() {
+            let (a, b) = (&a[c], &b[c]);
+            let Some((abs, rel)) = differs(name, a, b, settings) else {
+                continue;
+            };
+            let d = column.get_or_insert_with(|| self.difference(name, r, (a, b)));
+            d.rows += 1;
+            d.max_abs = d.max_abs.max(abs);
+            d.max_rel = d.max_rel.max(rel);
+        }
+        column
+    }
+
+    /// The slack set, when the file has a `tension` column: the cables at exactly zero tension
+    /// (the solvers write 0 for slack ones), the rows where one run has it and not the other.
+    fn slack_set_difference(&self) -> Option<Difference> {
+        let c = self.header.iter().position(|h| h == "tension")?;
+        let slack = |v: &str| v.parse::<f64>().is_ok_and(|x| x == 0.0);
+        let mut set = None::<Difference>;
+        for (r, (a, b)) in self.run.iter().zip(self.golden).enumerate() {
+            if slack(&a[c]) != slack(&b[c]) {
+                set.get_or_insert_with(|| self.difference("slack set", r, (&a[c], &b[c])))
+                    .rows += 1;
+            }
+        }
+        set
+    }
 }
 
 /// `Some((|a − b|, relative))` when two cells of column `name` differ beyond the tolerances.

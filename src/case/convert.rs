@@ -8,7 +8,8 @@ use super::nodes::{index_of, select};
 use super::numbers::{vector, PHYSICAL_MAX};
 use super::raw::{RawCase, RawSupports};
 use super::{load, output, prestress, solver, Case, CaseError};
-use crate::structure::{GeometricModel, Geometry, GridSpec, NodeFix};
+use crate::host::{available, bytes_text};
+use crate::structure::{GeometricModel, Geometry, GridSpec, NodeFix, StructureSize};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -59,16 +60,7 @@ fn structure(
     Ok(match (&raw.grid, &raw.structure) {
         (Some(g), None) => {
             let spec = grid_spec(raw, g)?;
-            // Refuse a grid whose structure alone does not fit before generating it.
-            let layout = crate::structure::GridLayout::new(spec.modules[0], spec.modules[1]);
-            let size = crate::case::memory::Size {
-                nodes: layout.n_nodes(),
-                links: spec.module.links_per_module() * spec.modules[0] * spec.modules[1],
-            };
-            crate::case::memory::ensure_fits(
-                &crate::case::memory::MemoryEstimate::structure(size),
-                "loading the case",
-            )?;
+            ensure_structure_fits(StructureSize::of_grid(&spec))?;
             let (geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
             (Some(spec), geometry, fixes)
         }
@@ -127,6 +119,26 @@ fn structure(
                     .into(),
             ))
         }
+    })
+}
+
+/// Refuse a grid whose structure alone (of `size`) does not fit in the memory this process
+/// may use, before generating it. The message is that of a command's refusal
+/// (`app::memory::ensure_fits`) for `loading the case`, with the structure its one part and no
+/// thread reserving address space.
+fn ensure_structure_fits(size: StructureSize) -> Result<(), CaseError> {
+    let Some(available) = available() else {
+        return Ok(());
+    };
+    let bytes = size.bytes();
+    if bytes <= available.bytes {
+        return Ok(());
+    }
+    let text = bytes_text(bytes);
+    Err(CaseError::TooLarge {
+        command: "loading the case".into(),
+        estimate: format!("about {text} (structure: {text})"),
+        available: available.to_string(),
     })
 }
 

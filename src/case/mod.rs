@@ -11,7 +11,6 @@ mod convert;
 mod error;
 mod grid;
 mod load;
-pub mod memory;
 mod nodes;
 mod numbers;
 mod output;

@@ -177,6 +177,7 @@ pub fn read_geometry(
         nodes,
         members,
         unilateral,
+        grid_roles: None,
     })
 }
 

@@ -233,8 +233,9 @@ fn format_row(r: &SummaryRow) -> String {
 
 pub fn report_bench(reporter: &Reporter, progress: Progress) {
     match progress {
-        Progress::Reference { alpha } => reporter.status(format!(
-            "reference (newton) at alpha = {}",
+        Progress::Reference { method, alpha } => reporter.status(format!(
+            "reference ({}) at alpha = {}",
+            method.name(),
             alpha_label(alpha)
         )),
         Progress::Solve { method, alpha } => reporter.status(format!(

@@ -23,4 +23,4 @@ pub use tables::{
     write_mechanisms, write_reactions, write_tensions, StabilityRow, SummaryRow, STABILITY_HEADER,
     SUMMARY_HEADER,
 };
-pub use vtk::{kind_code, vtu_path, write_vtu, VTK_LINE};
+pub use vtk::{kind_code, link_code, vtu_path, write_vtu, VTK_LINE};

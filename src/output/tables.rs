@@ -51,8 +51,8 @@ pub struct SummaryRow {
     pub equilibrium_residual: f64,
     /// Operator rebuilds during the solve (column `search_updates`).
     pub rebuilds: usize,
-    /// Slack cables per kind ([`results::SLACK_KINDS`]).
-    pub slack_by_kind: [usize; results::SLACK_KINDS.len()],
+    /// Slack cables per family ([`results::SLACK_FAMILIES`]).
+    pub slack_by_kind: [usize; results::SLACK_FAMILIES.len()],
     /// The largest relative displacement of a member's ends over its length.
     pub max_member_rotation: f64,
     /// The model updates the geometry (`large`): the small-perturbation check does not apply.
@@ -262,15 +262,16 @@ pub fn write_tensions(
         .links
         .iter()
         .zip(&eq.tensions)
-        .filter(|(l, _)| l.kind.is_cable())
+        .enumerate()
+        .filter(|(_, (l, _))| l.kind.is_cable())
         .enumerate();
     // A grid numbers its cables 0.. among cables; a general structure reports the members
     // and nodes by the ids of its tables.
     let general = s.layout.is_none();
-    let rows = cables.map(|(cable, (l, t))| {
+    let rows = cables.map(|(cable, (i, (l, t)))| {
         [
             if general { l.id } else { cable as u64 }.to_string(),
-            l.kind.name().to_string(),
+            s.kind_name(i).to_string(),
             s.node_ids[l.a].to_string(),
             s.node_ids[l.b].to_string(),
             t.to_string(),
@@ -310,7 +311,7 @@ pub fn write_forces(
     let rows = s.links.iter().enumerate().map(|(i, l)| {
         [
             l.id.to_string(),
-            l.kind.name().to_string(),
+            s.kind_name(i).to_string(),
             s.node_ids[l.a].to_string(),
             s.node_ids[l.b].to_string(),
             eq.tensions[i].to_string(),

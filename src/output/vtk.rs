@@ -10,21 +10,31 @@
 use super::tables::alpha_label;
 use super::write_atomic;
 use crate::solvers::Equilibrium;
-use crate::structure::{LinkKind, Structure};
+use crate::structure::{GridRole, LinkKind, Structure};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 /// VTK's cell type of a two-node line.
 pub const VTK_LINE: u8 = 3;
 
-/// The `kind` code of a link in the VTU files: 0 lower cable, 1 upper cable, 2 bracing cable,
-/// 3 diagonal cable (braced module), 4 bar, 5 cable of a general structure.
+/// The `kind` code of link `i` of `s` in the VTU files: 0 lower cable, 1 upper cable, 2
+/// bracing cable, 3 diagonal cable (braced module), 4 bar, 5 cable of a general structure. A
+/// grid's link has the code of its [`GridRole`], a general structure's that of its kind.
+pub fn link_code(s: &Structure, i: usize) -> i32 {
+    match s.grid_role(i) {
+        Some(GridRole::LowerCable) => 0,
+        Some(GridRole::UpperCable) => 1,
+        Some(GridRole::BracingCable) => 2,
+        Some(GridRole::DiagonalCable) => 3,
+        Some(GridRole::Bar) => kind_code(LinkKind::Bar),
+        None => kind_code(s.links[i].kind),
+    }
+}
+
+/// The `kind` code of a general structure's link in the VTU files ([`link_code`]): 4 bar, 5
+/// cable.
 pub fn kind_code(kind: LinkKind) -> i32 {
     match kind {
-        LinkKind::LowerCable => 0,
-        LinkKind::UpperCable => 1,
-        LinkKind::BracingCable => 2,
-        LinkKind::DiagonalCable => 3,
         LinkKind::Bar => 4,
         LinkKind::Cable => 5,
     }
@@ -108,7 +118,7 @@ fn write_grid(
     writeln!(w, "</PointData>")?;
     writeln!(w, r#"<CellData Scalars="tension">"#)?;
     data_array(w, "Float64", "tension", 1, eq.tensions.iter().map(float))?;
-    let kinds = s.links.iter().map(|l| kind_code(l.kind).to_string());
+    let kinds = (0..s.links.len()).map(|i| link_code(s, i).to_string());
     data_array(w, "Int32", "kind", 1, kinds)?;
     let slack = eq.slack.iter().map(|&b| u8::from(b).to_string());
     data_array(w, "UInt8", "slack", 1, slack)?;

@@ -2,7 +2,7 @@
 //! supports per node and direction, and loads per node. The module grid is one generator of
 //! this description ([`super::grid`]); a case's `[structure]` tables are another.
 
-use super::LinkKind;
+use super::{GridRole, LinkKind};
 
 /// One bar or cable as described.
 #[derive(Debug, Clone, PartialEq)]
@@ -13,7 +13,7 @@ pub struct Member {
     pub a: usize,
     /// End node.
     pub b: usize,
-    /// Bar, or which cable.
+    /// Bar or cable.
     pub kind: LinkKind,
     /// Young's modulus E, Pa.
     pub young: f64,
@@ -38,6 +38,9 @@ pub struct Geometry {
     pub members: Vec<Member>,
     /// Whether cables carry tension only.
     pub unilateral: bool,
+    /// Per member, its role in its module when the geometry is a generated module grid
+    /// ([`super::Structure::grid_parts`]); `None` for tables.
+    pub grid_roles: Option<Vec<GridRole>>,
 }
 
 /// Displacement components of one node held at prescribed values (`U|Γu = Ud`, docs/method.md §7).

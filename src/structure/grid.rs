@@ -3,6 +3,44 @@
 
 use super::{length_and_direction, Geometry, GridSpec, LinkKind, Member, ModuleKind};
 
+/// What a link of the module grid is in its module (docs/method.md §2): which family of
+/// cable, or the bar. It fixes the link's prestress, and output files name a grid's links by
+/// it; the solvers only see its [`LinkKind`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GridRole {
+    /// Cable along an edge of a module's lower square (between lower corners).
+    LowerCable,
+    /// Cable between the upper nodes of a module (edge midpoints at height H).
+    UpperCable,
+    /// Cable from a lower corner up to an upper node.
+    BracingCable,
+    /// The braced module's unprestressed diagonals.
+    DiagonalCable,
+    /// Bar from a lower corner to an upper node: compressed by the prestress.
+    Bar,
+}
+
+impl GridRole {
+    /// Bar or cable.
+    pub fn kind(self) -> LinkKind {
+        match self {
+            GridRole::Bar => LinkKind::Bar,
+            _ => LinkKind::Cable,
+        }
+    }
+
+    /// The name used in output files.
+    pub fn name(self) -> &'static str {
+        match self {
+            GridRole::LowerCable => "lower",
+            GridRole::UpperCable => "upper",
+            GridRole::BracingCable => "bracing",
+            GridRole::DiagonalCable => "diagonal",
+            GridRole::Bar => "bar",
+        }
+    }
+}
+
 /// Node numbering of an `nx × ny` grid: first the lower corners `(i, j)`, then the upper
 /// midpoints of edges along x (`(i + ½, j)`), then those of edges along y (`(i, j + ½)`).
 #[derive(Debug, Clone, Copy)]
@@ -60,8 +98,8 @@ pub fn module_nodes(layout: &GridLayout, i: usize, j: usize) -> [usize; 8] {
     ]
 }
 
-/// A link as generated: `(a, b, kind, module)`.
-pub(super) type RawLink = (usize, usize, LinkKind, usize);
+/// A link as generated: `(a, b, role, module)`.
+pub(super) type RawLink = (usize, usize, GridRole, usize);
 
 /// Node positions and links of the whole grid.
 pub(super) fn generate(
@@ -94,22 +132,22 @@ pub(super) fn generate(
             let n = module_nodes(layout, i, j);
             let (c, u) = (&n[..4], &n[4..]);
             for k in 0..4 {
-                links.push((c[k], c[(k + 1) % 4], LinkKind::LowerCable, m));
+                links.push((c[k], c[(k + 1) % 4], GridRole::LowerCable, m));
             }
             for k in 0..4 {
-                links.push((u[k], u[(k + 1) % 4], LinkKind::UpperCable, m));
+                links.push((u[k], u[(k + 1) % 4], GridRole::UpperCable, m));
             }
             for k in 0..4 {
-                links.push((c[k], u[k], LinkKind::BracingCable, m));
+                links.push((c[k], u[k], GridRole::BracingCable, m));
             }
             for k in 0..4 {
-                links.push((c[k], u[(k + 1) % 4], LinkKind::Bar, m));
+                links.push((c[k], u[(k + 1) % 4], GridRole::Bar, m));
             }
             if module == ModuleKind::Braced {
-                links.push((c[0], c[2], LinkKind::DiagonalCable, m));
-                links.push((c[1], c[3], LinkKind::DiagonalCable, m));
-                links.push((u[0], u[2], LinkKind::DiagonalCable, m));
-                links.push((u[1], u[3], LinkKind::DiagonalCable, m));
+                links.push((c[0], c[2], GridRole::DiagonalCable, m));
+                links.push((c[1], c[3], GridRole::DiagonalCable, m));
+                links.push((u[0], u[2], GridRole::DiagonalCable, m));
+                links.push((u[1], u[3], GridRole::DiagonalCable, m));
             }
         }
     }
@@ -117,17 +155,18 @@ pub(super) fn generate(
 }
 
 /// The grid of `spec` as a general description: its nodes (ids = indices), its members (ids =
-/// indices) with the prestress of docs/method.md §2, and its layout.
+/// indices) with the prestress of docs/method.md §2 and their roles, and its layout.
 pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
     let layout = GridLayout::new(spec.modules[0], spec.modules[1]);
     let (nodes, raw_links) = generate(&layout, spec.length, spec.height, spec.module);
     let p = spec.prestress;
+    let roles = raw_links.iter().map(|&(_, _, role, _)| role).collect();
     let members = raw_links
         .into_iter()
         .enumerate()
-        .map(|(id, (a, b, kind, module))| {
+        .map(|(id, (a, b, role, module))| {
             let (length, _) = length_and_direction(nodes[a], nodes[b]);
-            let material = if kind.is_cable() {
+            let material = if role.kind().is_cable() {
                 spec.cables.material
             } else {
                 spec.bars
@@ -135,17 +174,17 @@ pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
             // docs/method.md §2: force densities p/L (lower cables), 2p/L (the others), bars in
             // compression; the diagonals of the braced module carry none.
             let l = spec.length;
-            let density = match kind {
-                LinkKind::LowerCable => p / l,
-                LinkKind::UpperCable | LinkKind::BracingCable => 2.0 * p / l,
-                LinkKind::Bar => -2.0 * p / l,
-                LinkKind::DiagonalCable | LinkKind::Cable => 0.0,
+            let density = match role {
+                GridRole::LowerCable => p / l,
+                GridRole::UpperCable | GridRole::BracingCable => 2.0 * p / l,
+                GridRole::Bar => -2.0 * p / l,
+                GridRole::DiagonalCable => 0.0,
             };
             Member {
                 id: id as u64,
                 a,
                 b,
-                kind,
+                kind: role.kind(),
                 young: material.young,
                 section: material.section,
                 prestress: density * length,
@@ -159,6 +198,7 @@ pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
         nodes,
         members,
         unilateral: spec.cables.unilateral,
+        grid_roles: Some(roles),
     };
     (geometry, layout)
 }

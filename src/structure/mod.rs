@@ -10,10 +10,11 @@ pub mod law;
 mod spec;
 mod stability;
 mod statics;
+mod storage;
 mod supports;
 
 pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
-pub use grid::{module_nodes, GridLayout};
+pub use grid::{module_nodes, GridLayout, GridRole};
 pub use law::{GeometricModel, GeometricStiffness};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use stability::{
@@ -23,6 +24,7 @@ pub use statics::{
     equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
     DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal,
 };
+pub use storage::{StructureSize, BASE_BYTES, BYTES_PER_LINK};
 
 use crate::linalg::SparseRow;
 
@@ -33,20 +35,14 @@ pub type LinkDofs = SparseRow;
 /// Marks a clamped displacement component in [`Structure::dof_of`].
 pub const CLAMPED: usize = usize::MAX;
 
-/// What a link is. Cables are unilateral unless the case says otherwise.
+/// What a link is to every solver: a cable (unilateral unless the case says otherwise) or a
+/// bar (bilateral). A grid's links also have a role in their module ([`GridRole`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinkKind {
-    /// Cable along an edge of a module's lower square (between lower corners).
-    LowerCable,
-    /// Cable between the upper nodes of a module (edge midpoints at height H).
-    UpperCable,
-    /// Cable from a lower corner up to an upper node.
-    BracingCable,
-    /// The braced module's unprestressed diagonals.
-    DiagonalCable,
-    /// A cable of a general structure (`kind = cable` in a members table).
+    /// A cable (`kind = cable` in a members table; a grid's lower, upper, bracing and
+    /// diagonal cables).
     Cable,
-    /// Bar from a lower corner to an upper node: bilateral, compressed by the prestress.
+    /// A bar (`kind = bar` in a members table; a grid's bars, compressed by the prestress).
     Bar,
 }
 
@@ -56,13 +52,10 @@ impl LinkKind {
         self != LinkKind::Bar
     }
 
-    /// The name used in output files.
+    /// The name output files give a link of a general structure (a grid's links are named by
+    /// their [`GridRole`]: [`Structure::kind_name`]).
     pub fn name(self) -> &'static str {
         match self {
-            LinkKind::LowerCable => "lower",
-            LinkKind::UpperCable => "upper",
-            LinkKind::BracingCable => "bracing",
-            LinkKind::DiagonalCable => "diagonal",
             LinkKind::Cable => "cable",
             LinkKind::Bar => "bar",
         }
@@ -78,7 +71,7 @@ pub struct Link {
     pub a: usize,
     /// End node.
     pub b: usize,
-    /// Bar or which family of cable.
+    /// Bar or cable.
     pub kind: LinkKind,
     /// The module the link belongs to (links are never merged across modules).
     pub module: usize,
@@ -108,6 +101,9 @@ impl Link {
 pub struct Structure {
     /// Node numbering when the structure is a module grid; `None` for general structures.
     pub layout: Option<GridLayout>,
+    /// Per link, its role in its module when the structure is a generated module grid
+    /// ([`Geometry::grid_roles`]); `None` for general structures.
+    pub grid_roles: Option<Vec<GridRole>>,
     /// Node ids as the user knows them (the CSV's `node`; the index for grids).
     pub node_ids: Vec<u64>,
     /// Initial node positions, m.
@@ -269,6 +265,7 @@ impl Structure {
             .fold(0.0, |s: f64, m| s.max(m.prestress.abs()));
         Structure {
             layout: None,
+            grid_roles: geometry.grid_roles.clone(),
             node_ids: geometry.node_ids.clone(),
             nodes: geometry.nodes.clone(),
             links,
@@ -302,6 +299,20 @@ impl Structure {
             }
         }
         out
+    }
+
+    /// Link `i`'s role in its module, on a generated module grid.
+    pub fn grid_role(&self, i: usize) -> Option<GridRole> {
+        self.grid_roles.as_ref().map(|roles| roles[i])
+    }
+
+    /// The name output files give link `i` (the `kind` column): its grid role's on a module
+    /// grid (`lower`, `upper`, `bracing`, `diagonal`, `bar`), else its kind's (`cable`, `bar`).
+    pub fn kind_name(&self, i: usize) -> &'static str {
+        match self.grid_role(i) {
+            Some(role) => role.name(),
+            None => self.links[i].kind.name(),
+        }
     }
 
     /// Number of nodes, clamped ones included.

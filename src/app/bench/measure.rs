@@ -1,5 +1,6 @@
 //! The measurement: every solver of a case at every α, each iterate's (wall time, e) from one
-//! driven solve against a `newton` reference.
+//! driven solve against a reference solved by the case's reference solver
+//! (`solver.reference`).
 
 use super::BenchError;
 use crate::app::setup::{set_up, Prepared};
@@ -89,6 +90,8 @@ impl Bench {
 pub enum Progress<'a> {
     /// Solving the reference at α.
     Reference {
+        /// The reference solver.
+        method: Method,
         /// The load factor.
         alpha: f64,
     },
@@ -111,14 +114,29 @@ fn mark_beyond_model(prepared: &Prepared, solution: &mut crate::solvers::Solutio
     }
 }
 
-/// The reference at one α: newton at its default (tight) settings; refused unless it
+/// The solver bench measures e against: the case's `solver.reference`, as `run` takes it;
+/// `"none"` is refused ([`BenchError::NoReference`]), since e is what bench measures.
+pub fn reference_method(case: &Case) -> Result<Method, BenchError> {
+    case.solver
+        .reference
+        .method()
+        .ok_or(BenchError::NoReference)
+}
+
+/// The reference at one α: `method` at its default (tight) settings; refused unless it
 /// converged.
-fn reference(prepared: &Prepared, load: &[f64], alpha: f64) -> Result<Reference, BenchError> {
-    let mut newton = set_up(Method::Newton, &SolverChoice::default(), prepared)?;
-    let mut solution = newton.solver.solve(load, None, &mut Silent);
+fn reference(
+    prepared: &Prepared,
+    method: Method,
+    load: &[f64],
+    alpha: f64,
+) -> Result<Reference, BenchError> {
+    let mut solver = set_up(method, &SolverChoice::default(), prepared)?;
+    let mut solution = solver.solver.solve(load, None, &mut Silent);
     mark_beyond_model(prepared, &mut solution);
     if !solution.info.status.converged() {
         return Err(BenchError::Reference {
+            method,
             alpha: alpha_label(alpha),
             status: solution.info.status,
             residual: solution.info.stopping_value,
@@ -130,12 +148,14 @@ fn reference(prepared: &Prepared, load: &[f64], alpha: f64) -> Result<Reference,
     ))
 }
 
-/// Run every solver of the case at every α of it against a `newton` reference.
+/// Run every solver of the case at every α of it against a reference solved by the case's
+/// reference solver ([`reference_method`]; refused before any solve when there is none).
 pub fn measure(
     case: &Case,
     prepared: &Prepared,
     on_progress: &mut dyn FnMut(Progress),
 ) -> Result<Bench, BenchError> {
+    let reference_method = reference_method(case)?;
     let mut series = Vec::new();
     for &alpha in &case.load.alphas {
         let load: Vec<f64> = prepared
@@ -144,8 +164,11 @@ pub fn measure(
             .iter()
             .map(|f| alpha * f)
             .collect();
-        on_progress(Progress::Reference { alpha });
-        let reference = reference(prepared, &load, alpha)?;
+        on_progress(Progress::Reference {
+            method: reference_method,
+            alpha,
+        });
+        let reference = reference(prepared, reference_method, &load, alpha)?;
         for &method in &case.solver.methods {
             on_progress(Progress::Solve { method, alpha });
             let measured = measure_series(case, prepared, method, alpha, &load, &reference)?;

@@ -1,7 +1,9 @@
 //! `tensolve bench`: how fast each solver of a case gets close to the exact answer.
 //!
-//! For every α of the case a reference is solved once with `newton` at its own tight defaults
-//! (not timed). Then every solver of the case (`solver.methods`, with the case's tolerance and
+//! For every α of the case a reference is solved once with the case's reference solver
+//! (`solver.reference`, as for `run`: `newton` unless the case says `pcg-lcp`) at its own tight
+//! defaults (not timed). `solver.reference = "none"` is refused before anything is solved:
+//! bench measures e, which needs a reference. Then every solver of the case (`solver.methods`, with the case's tolerance and
 //! iteration cap) solves the same load once, and the driver reports each of its iterates with
 //! its energy error e against the reference ([`crate::solvers::Reference`]) and the time the
 //! solver had spent to reach it. Each iterate is recorded as (wall time, e), where the wall
@@ -18,13 +20,13 @@ mod measure;
 mod plot;
 mod table;
 
-pub use measure::{measure, Bench, Progress, Sample, Series};
+pub use measure::{measure, reference_method, Bench, Progress, Sample, Series};
 pub use plot::render_svg;
 pub use table::{Table, TableRow, THRESHOLDS};
 
 use crate::case::CaseError;
 use crate::output::{alpha_label, write_atomic};
-use crate::solvers::{SetupError, Status};
+use crate::solvers::{Method, SetupError, Status};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -69,12 +71,23 @@ pub enum BenchError {
         /// Why.
         reason: String,
     },
-    /// The newton reference did not converge, so e cannot be measured.
+    /// `solver.reference = "none"`: bench has nothing to measure e against.
     #[error(
-        "the reference (newton at its default settings) did not converge at alpha = {alpha} \
-         ({status:?}, residual {residual:e}), so e cannot be measured"
+        "`solver.reference` = \"none\" is not valid for `bench`: bench measures each \
+         iterate's energy error e against a reference solve at every alpha. Set it to \
+         \"newton\" or \"pcg-lcp\" (`--set 'solver.reference=\"newton\"'`), or use `run`, \
+         which leaves e empty without a reference"
+    )]
+    NoReference,
+    /// The reference did not converge, so e cannot be measured.
+    #[error(
+        "the reference ({} at its default settings) did not converge at alpha = {alpha} \
+         ({status:?}, residual {residual:e}), so e cannot be measured",
+        .method.name()
     )]
     Reference {
+        /// The reference solver (`solver.reference`).
+        method: Method,
         /// The load factor.
         alpha: String,
         /// How the reference solve ended.
@@ -96,11 +109,14 @@ pub enum BenchError {
 }
 
 impl BenchError {
-    /// As for `run`: 2 for bad input (the case, the structure, the output directory); 1 when
-    /// the bench could not produce what was asked.
+    /// As for `run`: 2 for bad input (the case, `solver.reference = "none"`, the structure,
+    /// the output directory); 1 when the bench could not produce what was asked.
     pub fn exit_code(&self) -> i32 {
         match self {
-            BenchError::Case(_) | BenchError::Setup(_) | BenchError::OutputDir { .. } => 2,
+            BenchError::Case(_)
+            | BenchError::NoReference
+            | BenchError::Setup(_)
+            | BenchError::OutputDir { .. } => 2,
             BenchError::Busy { .. } => 3,
             BenchError::Write { .. }
             | BenchError::Reference { .. }

@@ -8,9 +8,9 @@ mod verdict;
 
 pub use error::RunError;
 
+use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
 use super::setup::{prepare, set_up, Prepared, SetUpSolver};
-use crate::case::memory::{self, MemoryEstimate, Size, Workload};
 use crate::case::Case;
 use crate::output::{
     self, alpha_label,
@@ -21,6 +21,7 @@ use crate::results;
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
 };
+use crate::structure::StructureSize;
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use verdict::{assess, not_converged_message};
@@ -99,7 +100,10 @@ pub fn run(
     let dir = output_dir(case, options);
     let methods = methods(case, options)?;
     // 0. The memory the run needs, estimated before anything large is allocated.
-    let estimate = MemoryEstimate::new(Size::of(case), &Workload::run(case, &methods));
+    let estimate = MemoryEstimate::new(
+        StructureSize::of(&case.geometry),
+        &Workload::run(case, &methods),
+    );
     memory::ensure_fits(&estimate, "run")?;
     // 1. The structure and its mechanism check (K with every cable taut, factorized).
     events(RunEvent::Stage(

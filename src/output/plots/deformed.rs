@@ -22,7 +22,7 @@ use super::legend::{draw_colour_bar, draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::palette::{compression_colour, tension_colour};
 use super::{alpha_text, plot_error, tick_label};
 use crate::solvers::Equilibrium;
-use crate::structure::{module_nodes, Link, LinkKind, Structure};
+use crate::structure::{module_nodes, GridRole, Link, Structure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::io;
@@ -369,15 +369,16 @@ fn draw_oblique<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Where a link is drawn in the top view: its deformed ends pulled toward its module's
-/// deformed centre.
-fn top_ends(s: &Structure, deformed: &[[f64; 3]], link: &Link) -> [(f64, f64); 2] {
-    let shrink = match link.kind {
-        LinkKind::LowerCable => 0.10,
-        LinkKind::BracingCable => 0.25,
-        LinkKind::DiagonalCable => 0.15,
-        LinkKind::UpperCable => 0.04,
-        LinkKind::Bar | LinkKind::Cable => 0.0,
+/// Where link `i` is drawn in the top view: its deformed ends pulled toward its module's
+/// deformed centre, by how much depending on its grid role.
+fn top_ends(s: &Structure, deformed: &[[f64; 3]], i: usize) -> [(f64, f64); 2] {
+    let link = &s.links[i];
+    let shrink = match s.grid_role(i) {
+        Some(GridRole::LowerCable) => 0.10,
+        Some(GridRole::BracingCable) => 0.25,
+        Some(GridRole::DiagonalCable) => 0.15,
+        Some(GridRole::UpperCable) => 0.04,
+        Some(GridRole::Bar) | None => 0.0,
     };
     let Some(layout) = &s.layout else {
         // General structures: members drawn end to end.
@@ -448,7 +449,7 @@ fn draw_top<DB: DrawingBackend>(
     order.sort_by_key(|&i| s.links[i].kind.is_cable());
     for i in order {
         let link = &s.links[i];
-        let [a, b] = top_ends(s, deformed, link);
+        let [a, b] = top_ends(s, deformed, i);
         draw_link(
             &plot.strip_coord_spec(),
             to_pixel(a),

@@ -209,7 +209,7 @@ mod tests {
             );
         }
         // A bilateral cable (the linear case) behaves as a bar, even in compression.
-        let cable = link(LinkKind::LowerCable, k, 2000.0, false);
+        let cable = link(LinkKind::Cable, k, 2000.0, false);
         let (e_hat, t_hat, slack) = link_local_stage(&cable, k, -0.01, -5000.0);
         assert!(!slack);
         assert!(close(t_hat, k * e_hat, t_hat.abs()));
@@ -222,7 +222,7 @@ mod tests {
     /// Checks the unilateral law and the search direction on one local-stage result, and
     /// returns whether it is slack.
     fn check_cable(k: f64, t0: f64, l: f64, e: f64, t: f64) -> bool {
-        let cable = link(LinkKind::UpperCable, k, t0, true);
+        let cable = link(LinkKind::Cable, k, t0, true);
         let (e_hat, t_hat, slack) = link_local_stage(&cable, l, e, t);
         let scale = t.abs() + t0.abs() + l * e.abs();
         // Search direction: (t̂ − t) + l (ê − e) = 0.
@@ -282,7 +282,7 @@ mod tests {
     fn cable_local_stage_switches_at_zero_tension() {
         // With l = k the taut candidate is τ̂ = ½ (τ + t0 + k e): slack iff τ + t0 + k e ≤ 0.
         let (k, t0) = (1.0e5, 2000.0);
-        let cable = link(LinkKind::LowerCable, k, t0, true);
+        let cable = link(LinkKind::Cable, k, t0, true);
         let (_, t_hat, slack) = link_local_stage(&cable, k, -0.03, 999.0);
         assert!(!slack);
         assert!(close(t0 + t_hat, 0.5 * (2999.0 + 2000.0 - 3000.0), 1e4));
@@ -294,7 +294,7 @@ mod tests {
     #[test]
     fn frozen_local_stage_is_on_the_linearised_law_and_the_search_direction() {
         let (k, t0) = (1.0e5, 2000.0);
-        let cable = link(LinkKind::UpperCable, k, t0, true);
+        let cable = link(LinkKind::Cable, k, t0, true);
         let mut rng = Rng(11);
         for _ in 0..500 {
             let l = k * 10f64.powf(2.0 * rng.next());

@@ -84,7 +84,9 @@ pub struct Substructure {
 }
 
 impl Substructure {
-    /// `dense`: keep K_E⁻¹ dense (see [`SpdSolver::new`]). `local_dof` is a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
+    /// E's operators, built in the order of docs/method.md §4 "Linear stage". `dense`: keep
+    /// K_E⁻¹ dense (see [`SpdSolver::new`]). `local_dof` is a scratch map of length
+    /// `3·nodes`, all [`CLAMPED`] on entry and on exit.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         index: usize,
@@ -97,77 +99,16 @@ impl Substructure {
         dense: bool,
         local_dof: &mut [usize],
     ) -> Result<Substructure, SingularSubstructure> {
-        let mut dof_global = Vec::with_capacity(3 * topology.nodes.len());
-        let mut load_share = Vec::with_capacity(3 * topology.nodes.len());
-        // E's local dofs: the free components of its nodes (a node held on some components
-        // only keeps the others; held components stay out of E, like clamped nodes).
-        for &node in &topology.nodes {
-            for c in 0..3 {
-                let global = structure.dof_of[3 * node + c];
-                if global != CLAMPED {
-                    local_dof[3 * node + c] = dof_global.len();
-                    dof_global.push(global);
-                    load_share.push(1.0 / holders[node] as f64);
-                }
-            }
-        }
-        let link_dofs: Vec<LinkDofs> = topology
-            .links
-            .iter()
-            .map(|&i| structure.links[i].compatibility_row(local_dof))
-            .collect();
-        let geometric: Vec<(usize, LinkDofs, f64)> = if structure.geometric.is_some() {
-            topology
-                .links
-                .iter()
-                .enumerate()
-                .flat_map(|(j, &i)| {
-                    let l = &structure.links[i];
-                    let (p, q) = transverse_pair(l.direction);
-                    let w = l.prestress / l.length;
-                    [
-                        (j, l.row_along(p, local_dof), w),
-                        (j, l.row_along(q, local_dof), w),
-                    ]
-                })
-                .filter(|&(_, _, w)| w != 0.0)
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let mut sides = Vec::new();
-        let mut gamma_dofs = Vec::new();
-        let mut n_macro = 0;
-        for (k, iface) in interfaces.iter().enumerate() {
-            let Some(which) = iface.topology.sides.iter().position(|&e| e == index) else {
-                continue;
-            };
-            let rows = iface.basis.nrows();
-            let cols = iface.basis.ncols();
-            sides.push(Side {
-                interface: k,
-                which,
-                gamma_offset: gamma_dofs.len(),
-                macro_offset: n_macro,
-                rows,
-                cols,
-                basis: iface.basis.clone(),
-            });
-            for (&node, free) in iface.topology.nodes.iter().zip(&iface.free) {
-                for c in (0..3).filter(|&c| free[c]) {
-                    gamma_dofs.push(local_dof[3 * node + c]);
-                }
-            }
-            n_macro += cols;
-        }
-        for &node in &topology.nodes {
-            for c in 0..3 {
-                local_dof[3 * node + c] = CLAMPED;
-            }
-        }
-
-        let n = dof_global.len();
-        let pattern = StiffnessPattern::new(n, &link_dofs);
+        // 1. E's local dofs, numbered in `local_dof` until step 3 is done.
+        let (dof_global, load_share) = number_local_dofs(topology, structure, holders, local_dof);
+        // 2. B_E, one row `e = n·(U_b − U_a)` per link on E's dofs, and E's share of K_G(t0).
+        let link_dofs = compatibility_rows(topology, structure, local_dof);
+        let geometric = geometric_rows(topology, structure, local_dof);
+        // 3. C_E and R_E: E's interfaces, their rows in U_EΓ and their columns in u_E.
+        let (sides, gamma_dofs, n_macro) = interface_sides(index, interfaces, local_dof);
+        clear_local_dofs(topology, local_dof);
+        // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
+        let pattern = StiffnessPattern::new(dof_global.len(), &link_dofs);
         let values = stiffness(
             &pattern,
             &link_dofs,
@@ -195,41 +136,12 @@ impl Substructure {
             flexibility: DMatrix::zeros(0, 0),
             kernel: DMatrix::zeros(0, 0),
         };
+        // 5. Z_E = K_E⁻¹ C_Eᵀ R_E and K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
         sub.condense_operators(dm);
-        // Kernel from the rigid motions (docs/method.md §4), completed by the null space of K*_E.
-        let traces: Vec<InterfaceTrace<'_>> = sub
-            .sides
-            .iter()
-            .map(|s| {
-                let iface = &interfaces[s.interface];
-                InterfaceTrace {
-                    positions: iface
-                        .topology
-                        .nodes
-                        .iter()
-                        .map(|&node| structure.nodes[node])
-                        .collect(),
-                    free: &iface.free,
-                    basis: &s.basis,
-                }
-            })
-            .collect();
-        let all_positions: Vec<[f64; 3]> = topology
-            .nodes
-            .iter()
-            .chain(&topology.clamped_nodes)
-            .map(|&node| structure.nodes[node])
-            .collect();
-        // E's actual constraints: every held component of its nodes, clamped or partly held.
-        let held: Vec<([f64; 3], [bool; 3])> = topology
-            .nodes
-            .iter()
-            .chain(&topology.clamped_nodes)
-            .map(|&node| (structure.nodes[node], structure.held_components(node)))
-            .filter(|(_, held)| held.iter().any(|&h| h))
-            .collect();
-        let rigid = substructure_kernel(&all_positions, &held, &traces);
+        // 6. Q_E: the rigid motions with no micro trace, completed by the null space of K*_E.
+        let rigid = rigid_kernel(&sub.sides, topology, structure, interfaces);
         sub.kernel = complete_kernel(&sub.k_star, rigid, dm).ok_or(SingularSubstructure)?;
+        // 7. K⁺_E = (K*_E + Q_E Q_Eᵀ)⁻¹ − Q_E Q_Eᵀ and L_E = K⁺_E − I/d_m.
         sub.invert(dm)?;
         Ok(sub)
     }
@@ -354,6 +266,152 @@ impl Substructure {
         }
         out
     }
+}
+
+/// E's local dofs: the free components of its nodes, in node order (a node held on some
+/// components only keeps the others; held components stay out of E, like clamped nodes).
+/// Returns each one's global free dof and the share of a nodal load E carries
+/// (1 / substructures holding the node); `local_dof` maps `3·node + c` to it.
+fn number_local_dofs(
+    topology: &SubstructureTopology,
+    structure: &Structure,
+    holders: &[u8],
+    local_dof: &mut [usize],
+) -> (Vec<usize>, Vec<f64>) {
+    let mut dof_global = Vec::with_capacity(3 * topology.nodes.len());
+    let mut load_share = Vec::with_capacity(3 * topology.nodes.len());
+    for &node in &topology.nodes {
+        for c in 0..3 {
+            let global = structure.dof_of[3 * node + c];
+            if global != CLAMPED {
+                local_dof[3 * node + c] = dof_global.len();
+                dof_global.push(global);
+                load_share.push(1.0 / holders[node] as f64);
+            }
+        }
+    }
+    (dof_global, load_share)
+}
+
+/// Undo [`number_local_dofs`]: `local_dof` all [`CLAMPED`] again.
+fn clear_local_dofs(topology: &SubstructureTopology, local_dof: &mut [usize]) {
+    for &node in &topology.nodes {
+        for c in 0..3 {
+            local_dof[3 * node + c] = CLAMPED;
+        }
+    }
+}
+
+/// B_E: per link of E, its row `e = n·(U_b − U_a)` on E's local dofs.
+fn compatibility_rows(
+    topology: &SubstructureTopology,
+    structure: &Structure,
+    local_dof: &[usize],
+) -> Vec<LinkDofs> {
+    topology
+        .links
+        .iter()
+        .map(|&i| structure.links[i].compatibility_row(local_dof))
+        .collect()
+}
+
+/// E's share of `K_G(t0) = Σ (t0/L)(I − n nᵀ)` (docs/method.md §8), with `I − n nᵀ = p pᵀ +
+/// q qᵀ`, when the model has the prestress's geometric stiffness: per link of E (its index j
+/// in E) its two transverse rows p, q on E's dofs and `t0 / L`, links without prestress left
+/// out. Empty without it.
+fn geometric_rows(
+    topology: &SubstructureTopology,
+    structure: &Structure,
+    local_dof: &[usize],
+) -> Vec<(usize, LinkDofs, f64)> {
+    if structure.geometric.is_none() {
+        return Vec::new();
+    }
+    topology
+        .links
+        .iter()
+        .enumerate()
+        .flat_map(|(j, &i)| {
+            let l = &structure.links[i];
+            let (p, q) = transverse_pair(l.direction);
+            let w = l.prestress / l.length;
+            [
+                (j, l.row_along(p, local_dof), w),
+                (j, l.row_along(q, local_dof), w),
+            ]
+        })
+        .filter(|&(_, _, w)| w != 0.0)
+        .collect()
+}
+
+/// E's view of the interfaces it touches (substructure `index`), by increasing interface
+/// index: its [`Side`]s, the local dof of each row of U_EΓ (C_E as an index map: an
+/// interface node's free components) and the number of macro dofs (columns of R_E).
+fn interface_sides(
+    index: usize,
+    interfaces: &[Interface],
+    local_dof: &[usize],
+) -> (Vec<Side>, Vec<usize>, usize) {
+    let mut sides = Vec::new();
+    let mut gamma_dofs = Vec::new();
+    let mut n_macro = 0;
+    for (k, iface) in interfaces.iter().enumerate() {
+        let Some(which) = iface.topology.sides.iter().position(|&e| e == index) else {
+            continue;
+        };
+        let rows = iface.basis.nrows();
+        let cols = iface.basis.ncols();
+        sides.push(Side {
+            interface: k,
+            which,
+            gamma_offset: gamma_dofs.len(),
+            macro_offset: n_macro,
+            rows,
+            cols,
+            basis: iface.basis.clone(),
+        });
+        for (&node, free) in iface.topology.nodes.iter().zip(&iface.free) {
+            for c in (0..3).filter(|&c| free[c]) {
+                gamma_dofs.push(local_dof[3 * node + c]);
+            }
+        }
+        n_macro += cols;
+    }
+    (sides, gamma_dofs, n_macro)
+}
+
+/// `orth(R_Eᵀ C_E ρ)` over the rigid motions ρ of E that vanish on every held component of
+/// its nodes (clamped or partly held: E's actual constraints) and have no micro trace on its
+/// interfaces (docs/method.md §4; [`substructure_kernel`]).
+fn rigid_kernel(
+    sides: &[Side],
+    topology: &SubstructureTopology,
+    structure: &Structure,
+    interfaces: &[Interface],
+) -> DMatrix<f64> {
+    let traces: Vec<InterfaceTrace<'_>> = sides
+        .iter()
+        .map(|s| {
+            let iface = &interfaces[s.interface];
+            InterfaceTrace {
+                positions: iface
+                    .topology
+                    .nodes
+                    .iter()
+                    .map(|&node| structure.nodes[node])
+                    .collect(),
+                free: &iface.free,
+                basis: &s.basis,
+            }
+        })
+        .collect();
+    let all_nodes = || topology.nodes.iter().chain(&topology.clamped_nodes);
+    let all_positions: Vec<[f64; 3]> = all_nodes().map(|&node| structure.nodes[node]).collect();
+    let held: Vec<([f64; 3], [bool; 3])> = all_nodes()
+        .map(|&node| (structure.nodes[node], structure.held_components(node)))
+        .filter(|(_, held)| held.iter().any(|&h| h))
+        .collect();
+    substructure_kernel(&all_positions, &held, &traces)
 }
 
 /// The values of `K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E` on `pattern` (`links`: E's global

@@ -106,7 +106,7 @@ mod tests {
             a: 0,
             b: 1,
             kind: if unilateral {
-                LinkKind::LowerCable
+                LinkKind::Cable
             } else {
                 LinkKind::Bar
             },

@@ -1,27 +1,27 @@
-//! The memory a case needs, estimated from its size before anything large is allocated, and
-//! the memory this process may use (issue 13, C1: a 500 × 500 grid passed validation, then
-//! died with "memory allocation failed").
+//! The memory a command needs, estimated from the case's size before anything large is
+//! allocated (issue 13, C1: a 500 × 500 grid passed validation, then died with "memory
+//! allocation failed"), and the refusal when it does not fit in what this process may use
+//! ([`crate::host::available`]).
 //!
 //! The estimate is a formula in the structure's size, calibrated against the peak resident
 //! memory of `tensolve run` (`/usr/bin/time -v`) on 16 × 16 to 256 × 256 grids, one solver at
-//! a time (README, "Limits and diagnostics"). It counts the structure and the sparse factors
-//! each solver holds; nothing else grows with the structure.
+//! a time (README, "Limits and diagnostics"). It counts the structure
+//! ([`StructureSize::bytes`]) and the sparse factors each solver holds; nothing else grows
+//! with the structure.
+//!
+//! | file | what |
+//! |---|---|
+//! | `mod.rs` | [`Workload`], what a command does; [`MemoryEstimate`], what it needs |
+//! | `fit.rs` | [`ensure_fits`]: refuse, or fewer rayon workers |
 
+mod fit;
+
+pub use fit::ensure_fits;
+
+use crate::case::Case;
+use crate::host::bytes_text;
 use crate::solvers::Method;
-
-mod available;
-
-use available::workers_that_fit;
-pub use available::{available, Available};
-
-/// Bytes per link for the structure and everything sized by it: the case's geometry, the
-/// structure's links and compatibility rows, the stiffness pattern and values, a solver's
-/// vectors (fitted: peak RSS of `pcg-lcp` minus one factor, 1.1–1.2 kB per dof on 64 × 64 to
-/// 256 × 256 grids, which have 16/9 links per dof; rounded up).
-pub const BYTES_PER_LINK: u64 = 700;
-
-/// The process before any structure: binary, runtime, small buffers.
-pub const BASE_BYTES: u64 = 32 << 20;
+use crate::structure::StructureSize;
 
 /// Entries of a sparse Cholesky factor per dof and per `log2(dofs)` under nested dissection:
 /// 124 M entries on 256 × 256 modules (592 899 dofs, log2 = 19.2) is 10.9.
@@ -39,35 +39,14 @@ pub const BYTES_PER_FACTOR_ENTRY: f64 = 10.0;
 /// counted as nested dissection.
 pub const AMD_FILL_RATIO: f64 = 1.6;
 
-/// The size of a structure, as the estimate needs it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Size {
-    /// Nodes.
-    pub nodes: usize,
-    /// Links (bars and cables).
-    pub links: usize,
-}
-
-impl Size {
-    /// Dofs, held ones included (an upper bound of the free dofs).
-    pub fn dofs(&self) -> usize {
-        3 * self.nodes
-    }
-
-    /// Bytes of the structure and what is sized by it: [`BASE_BYTES`] + [`BYTES_PER_LINK`] ·
-    /// links.
-    pub fn structure_bytes(&self) -> u64 {
-        BASE_BYTES + BYTES_PER_LINK * self.links as u64
-    }
-
-    /// Bytes of one sparse Cholesky factor of the stiffness: `11 · d · log2(d)` entries of
-    /// 10 bytes for `d` dofs (nested dissection), [`AMD_FILL_RATIO`] times that with `amd`.
-    pub fn factor_bytes(&self, amd: bool) -> u64 {
-        let d = self.dofs().max(2) as f64;
-        let entries = FACTOR_ENTRIES_PER_DOF_LOG2 * d * d.log2();
-        let fill = if amd { AMD_FILL_RATIO } else { 1.0 };
-        (fill * entries * BYTES_PER_FACTOR_ENTRY) as u64
-    }
+/// Bytes of one sparse Cholesky factor of the stiffness of a structure of `size`:
+/// `11 · d · log2(d)` entries of 10 bytes for `d` dofs (nested dissection), [`AMD_FILL_RATIO`]
+/// times that with `amd`.
+pub fn factor_bytes(size: StructureSize, amd: bool) -> u64 {
+    let d = size.dofs().max(2) as f64;
+    let entries = FACTOR_ENTRIES_PER_DOF_LOG2 * d * d.log2();
+    let fill = if amd { AMD_FILL_RATIO } else { 1.0 };
+    (fill * entries * BYTES_PER_FACTOR_ENTRY) as u64
 }
 
 /// What a command will do with the structure.
@@ -92,18 +71,18 @@ pub struct MemoryEstimate {
     pub parts: Vec<(String, u64)>,
     /// Threads that run dense kernels (the main thread when a solver is set up, and rayon's
     /// workers for LATIN's parallel stages), for the address space each reserves (see
-    /// [`Available::dense_buffer`]).
+    /// [`crate::host::Available::dense_buffer`]).
     pub dense_threads: usize,
-    /// rayon's worker threads, for their malloc arenas (see [`Available::arena`]).
+    /// rayon's worker threads, for their malloc arenas (see [`crate::host::Available::arena`]).
     pub worker_threads: usize,
 }
 
 impl MemoryEstimate {
     /// The structure of `size` under `work`: the structure, the taut stiffness's factor, and
     /// every solver's own factors.
-    pub fn new(size: Size, work: &Workload) -> MemoryEstimate {
-        let factor = size.factor_bytes(false);
-        let mut parts = vec![("structure".to_string(), size.structure_bytes())];
+    pub fn new(size: StructureSize, work: &Workload) -> MemoryEstimate {
+        let factor = factor_bytes(size, false);
+        let mut parts = vec![("structure".to_string(), size.bytes())];
         let mut units = 1.0; // K with every cable taut (the mechanism check), always factorized
         let mut latin = false;
         for &m in &work.methods {
@@ -122,7 +101,7 @@ impl MemoryEstimate {
                 .filter(|m| m.is_latin())
                 .map(|&m| m.factor_units())
                 .sum::<f64>();
-            parts.push(("second grid (Figure 12)".into(), size.structure_bytes()));
+            parts.push(("second grid (Figure 12)".into(), size.bytes()));
         }
         let names: Vec<&str> = ["K with every cable taut"]
             .into_iter()
@@ -138,7 +117,7 @@ impl MemoryEstimate {
         ));
         if work.rank_factorization {
             // Freed before the solvers' set-up: counted when larger than what follows it.
-            let rank = size.factor_bytes(true);
+            let rank = factor_bytes(size, true);
             let later = (units * factor as f64) as u64;
             if rank > later {
                 parts.push((
@@ -152,16 +131,6 @@ impl MemoryEstimate {
             parts,
             dense_threads: 1 + worker_threads,
             worker_threads,
-        }
-    }
-
-    /// The structure of `size` alone: what loading and checking the case allocates before
-    /// any solver (the geometry and its structure).
-    pub fn structure(size: Size) -> MemoryEstimate {
-        MemoryEstimate {
-            parts: vec![("structure".to_string(), size.structure_bytes())],
-            dense_threads: 0,
-            worker_threads: 0,
         }
     }
 
@@ -187,21 +156,11 @@ impl std::fmt::Display for MemoryEstimate {
     }
 }
 
-impl Size {
-    /// The size of the structure `case` describes.
-    pub fn of(case: &super::Case) -> Size {
-        Size {
-            nodes: case.geometry.nodes.len(),
-            links: case.geometry.members.len(),
-        }
-    }
-}
-
 impl Workload {
     /// `tensolve run` of `case` with `methods`: those solvers set up together, LATIN's own
     /// reference solver when it is not one of them at its default settings, and the outputs
     /// that factorize again.
-    pub fn run(case: &super::Case, methods: &[Method]) -> Workload {
+    pub fn run(case: &Case, methods: &[Method]) -> Workload {
         let mut all = methods.to_vec();
         if let Some(reference) = case.solver.reference.method() {
             let shared = methods.contains(&reference) && case.solver.is_default(reference);
@@ -219,7 +178,7 @@ impl Workload {
 
     /// `tensolve check` of `case`: the rank factorization, then the taut stiffness and the
     /// LATIN solvers' set-up.
-    pub fn check(case: &super::Case) -> Workload {
+    pub fn check(case: &Case) -> Workload {
         let latin = case
             .solver
             .methods
@@ -235,16 +194,17 @@ impl Workload {
         }
     }
 
-    /// `tensolve bench` of `case`: one solver set up at a time, after a newton reference.
-    pub fn bench(case: &super::Case) -> Workload {
+    /// `tensolve bench` of `case`: one solver set up at a time, after a reference solved by
+    /// `reference` (the case's `solver.reference`).
+    pub fn bench(case: &Case, reference: Method) -> Workload {
         let largest = case
             .solver
             .methods
             .iter()
             .copied()
-            .chain([Method::Newton])
+            .chain([reference])
             .max_by(|a, b| a.factor_units().total_cmp(&b.factor_units()))
-            .unwrap_or(Method::Newton);
+            .unwrap_or(reference);
         Workload {
             methods: vec![largest],
             stability: false,
@@ -264,72 +224,13 @@ fn rayon_threads() -> usize {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
-/// `1.23 GB` (decimal units, as `free` and `/usr/bin/time` users read them).
-pub fn bytes_text(bytes: u64) -> String {
-    let b = bytes as f64;
-    if b >= 1e9 {
-        format!("{:.2} GB", b / 1e9)
-    } else {
-        format!("{:.0} MB", (b / 1e6).max(1.0))
-    }
-}
-
-/// Refuse `estimate` of what `command` needs when it is larger than what is available. Under
-/// an address-space limit whose only excess is rayon's workers (each reserving a dense kernel
-/// buffer and a malloc arena), first size rayon's global pool to as many workers as fit: the
-/// LATIN stages then run on fewer threads, with the same results.
-pub fn ensure_fits(estimate: &MemoryEstimate, command: &str) -> Result<(), super::CaseError> {
-    let Some(available) = available() else {
-        return Ok(());
-    };
-    let main_thread = (estimate.dense_threads - estimate.worker_threads) as u64;
-    let threads = |workers: usize| available.threads_bytes(main_thread, workers);
-    match workers_that_fit(
-        estimate.total(),
-        &available,
-        main_thread,
-        estimate.worker_threads,
-    ) {
-        Some(w) if w == estimate.worker_threads => return Ok(()),
-        // Building the pool fails only when it already runs with every worker: then refuse.
-        Some(w)
-            if rayon::ThreadPoolBuilder::new()
-                .num_threads(w)
-                .build_global()
-                .is_ok() =>
-        {
-            return Ok(())
-        }
-        _ => {}
-    }
-    // Refused even with the fewest workers: say what the threads take then.
-    let fewest = estimate.worker_threads.min(1);
-    let threads = match (threads(fewest), fewest) {
-        (0, _) => String::new(),
-        (bytes, 0) => format!(
-            ", and {} of address space for the main thread's dense kernels (twice the L3 cache)",
-            bytes_text(bytes)
-        ),
-        (bytes, _) => format!(
-            ", and {} of address space for the main thread and one rayon worker (the fewest): \
-             twice the L3 cache each for dense kernels, and the worker's malloc arena",
-            bytes_text(bytes)
-        ),
-    };
-    Err(super::CaseError::TooLarge {
-        command: command.to_string(),
-        estimate: format!("{estimate}{threads}"),
-        available: format!("{} ({})", bytes_text(available.bytes), available.source),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn grid(n: usize) -> Size {
+    fn grid(n: usize) -> StructureSize {
         let layout = crate::structure::GridLayout::new(n, n);
-        Size {
+        StructureSize {
             nodes: layout.n_nodes(),
             links: crate::structure::ModuleKind::Standard.links_per_module() * n * n,
         }
@@ -403,33 +304,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    /// Under an address-space limit, workers are dropped until they fit, down to one.
-    #[test]
-    fn workers_are_as_many_as_the_address_space_allows() {
-        let mb = 1 << 20;
-        let limit = |bytes: u64| Available {
-            bytes,
-            dense_buffer: 64 * mb,
-            arena: 128 * mb,
-            source: String::new(),
-        };
-        // 100 MB + main 64 MB + w · (64 + 128) MB.
-        assert_eq!(workers_that_fit(100 * mb, &limit(548 * mb), 1, 2), Some(2));
-        assert_eq!(workers_that_fit(100 * mb, &limit(547 * mb), 1, 2), Some(1));
-        assert_eq!(workers_that_fit(100 * mb, &limit(356 * mb), 1, 2), Some(1));
-        assert_eq!(workers_that_fit(100 * mb, &limit(355 * mb), 1, 2), None);
-        assert_eq!(workers_that_fit(100 * mb, &limit(164 * mb), 1, 0), Some(0));
-        assert_eq!(workers_that_fit(100 * mb, &limit(163 * mb), 1, 0), None);
-        // Resident-memory limits reserve nothing per thread.
-        let resident = Available {
-            bytes: 100 * mb,
-            dense_buffer: 0,
-            arena: 0,
-            source: String::new(),
-        };
-        assert_eq!(workers_that_fit(100 * mb, &resident, 1, 64), Some(64));
     }
 
     /// More modules, more solvers or more outputs never need less memory.

@@ -1,8 +1,9 @@
-//! The memory this process may still use: `/proc/meminfo`, the cgroup's limit, and the
-//! address-space and data-segment limits, with what an address-space limit costs per thread
-//! (the dense kernels' buffers, malloc arenas).
-
-use super::bytes_text;
+//! What the machine lets this process use: the memory it may still take (`/proc/meminfo`,
+//! the cgroup's limit, the address-space and data-segment limits), with what an
+//! address-space limit costs per thread (the dense kernels' buffers, malloc arenas).
+//!
+//! Knows nothing of the program above it: `case` refuses a grid whose structure alone does
+//! not fit before generating it, `app::memory` a command whose estimate does not fit.
 
 /// The address space glibc maps for a thread's malloc arena (64 MiB, mapped twice as large
 /// while it is aligned).
@@ -206,22 +207,24 @@ fn l3_cache_bytes() -> u64 {
 
 impl Available {
     /// Address space of `main` threads and `workers` rayon workers running dense kernels.
-    pub(super) fn threads_bytes(&self, main: u64, workers: usize) -> u64 {
+    pub fn threads_bytes(&self, main: u64, workers: usize) -> u64 {
         self.dense_buffer * (main + workers as u64) + self.arena * workers as u64
     }
 }
 
-/// How many of `workers` rayon workers fit beside `total` bytes: all of them, else the most
-/// (at least one) that do, else `None`.
-pub(super) fn workers_that_fit(
-    total: u64,
-    available: &Available,
-    main: u64,
-    workers: usize,
-) -> Option<usize> {
-    let fits = |w: usize| total + available.threads_bytes(main, w) <= available.bytes;
-    if fits(workers) {
-        return Some(workers);
+/// `1.23 GB (MemAvailable 1.23 GB)`: the bytes, and which limit says so.
+impl std::fmt::Display for Available {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({})", bytes_text(self.bytes), self.source)
     }
-    (1..workers).rev().find(|&w| fits(w))
+}
+
+/// `1.23 GB` (decimal units, as `free` and `/usr/bin/time` users read them).
+pub fn bytes_text(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= 1e9 {
+        format!("{:.2} GB", b / 1e9)
+    } else {
+        format!("{:.0} MB", (b / 1e6).max(1.0))
+    }
 }
