@@ -15,9 +15,11 @@ use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
+use tensolve::app::ranks::{load_case, Ranks};
 use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
 use tensolve::case;
 use tensolve::output::alpha_label;
+use tensolve::solvers::latin::RankLayout;
 use tensolve::solvers::Method;
 use tensolve::structure::StructureSize;
 
@@ -150,7 +152,14 @@ impl From<BenchError> for Failure {
 fn main() -> ExitCode {
     tensolve::app::allocator::retain_freed_memory();
     let cli = Cli::parse();
+    let ranks = Ranks::init();
     let result = match cli.command {
+        Command::Run { case, set, .. } if ranks.size() > 1 => {
+            refuse_on_ranks(&ranks, "run", &case, &set)
+        }
+        Command::Bench { case, set, .. } if ranks.size() > 1 => {
+            refuse_on_ranks(&ranks, "bench", &case, &set)
+        }
         Command::Run {
             case,
             out,
@@ -158,7 +167,7 @@ fn main() -> ExitCode {
             quiet,
             set,
         } => run_command(case, out, solvers, quiet, &set).map_err(Failure::from),
-        Command::Check { case, set } => check_command(case, &set).map_err(Failure::from),
+        Command::Check { case, set } => check_command(&ranks, case, &set),
         Command::Bench {
             case,
             out,
@@ -171,23 +180,62 @@ fn main() -> ExitCode {
             rtol,
             atol,
             slack_tolerance,
-        } => compare_command(
-            &run,
-            &golden,
-            CompareSettings {
-                rtol,
-                atol,
-                slack_tolerance,
-            },
-        ),
+        } => root_only(&ranks, || {
+            compare_command(
+                &run,
+                &golden,
+                CompareSettings {
+                    rtol,
+                    atol,
+                    slack_tolerance,
+                },
+            )
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", e.message);
+            // Every rank exits with the same status; rank 0 alone says why.
+            if ranks.is_root() {
+                eprintln!("error: {}", e.message);
+            }
             ExitCode::from(e.exit_code as u8)
         }
     }
+}
+
+/// `command` on rank 0 alone; the other ranks exit with its status.
+fn root_only(ranks: &Ranks, command: impl FnOnce() -> Result<(), Failure>) -> Result<(), Failure> {
+    let outcome = if ranks.is_root() { command() } else { Ok(()) };
+    let code = outcome.as_ref().err().map_or(0, |e| e.exit_code as u8);
+    match ranks.broadcast(vec![code]).first().copied().unwrap_or(1) {
+        0 => Ok(()),
+        _ if ranks.is_root() => outcome,
+        code => Err(Failure {
+            message: String::new(),
+            exit_code: i32::from(code),
+        }),
+    }
+}
+
+/// `run` and `bench` on several MPI ranks: the case is loaded as everywhere (its errors come
+/// first, from rank 0), then refused, since the solve is not yet distributed (issue 25).
+fn refuse_on_ranks(
+    ranks: &Ranks,
+    command: &str,
+    path: &Path,
+    set: &[String],
+) -> Result<(), Failure> {
+    load_case(ranks, path, set).map_err(RunError::from)?;
+    Err(Failure {
+        message: format!(
+            "`tensolve {command}` on {} MPI ranks: the micro-macro solve is not yet \
+             distributed over ranks (`tensolve check` under mpirun prints the layout it will \
+             take); run on one rank (without mpirun, or `mpirun -n 1`)",
+            ranks.size()
+        ),
+        exit_code: 2,
+    })
 }
 
 fn run_command(
@@ -274,13 +322,33 @@ fn bench_title(path: &Path, alphas: &[f64]) -> String {
     format!("{stem}: e against wall time, α = {}", alphas.join(", "))
 }
 
-fn check_command(path: PathBuf, set: &[String]) -> Result<(), RunError> {
-    let case = case::load_with(&path, set)?;
+fn check_command(ranks: &Ranks, path: PathBuf, set: &[String]) -> Result<(), Failure> {
+    // Every rank loads the same case (rank 0's bytes); rank 0 alone checks and prints.
+    let case = load_case(ranks, &path, set).map_err(RunError::from)?;
+    root_only(ranks, || {
+        check_case(ranks, case, path).map_err(Failure::from)
+    })
+}
+
+fn check_case(ranks: &Ranks, case: case::Case, path: PathBuf) -> Result<(), RunError> {
     // What check itself allocates (a rank factorization, the LATIN set-ups) must fit first.
     let own = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::check(&case));
     memory::ensure_fits(&own, "check")?;
+    let layout = (ranks.size() > 1)
+        .then(|| case.solver.latin_settings(Method::MicroMacro))
+        .flatten()
+        .filter(|_| case.solver.methods.contains(&Method::MicroMacro))
+        .map(|settings| RankLayout::new(&case.structure(), &settings, ranks.size()));
     let report = check(&case, path);
     print_ignoring_closed_pipe(&report.to_string());
+    if let Some(layout) = layout {
+        print_ignoring_closed_pipe(&layout.describe());
+    } else if ranks.size() > 1 {
+        print_ignoring_closed_pipe(&format!(
+            "ranks: {} (no micro-macro solver in the case: nothing to distribute)\n",
+            ranks.size()
+        ));
+    }
     match report.error {
         Some(e) => Err(e.into()),
         // A case `run` would refuse for its memory is not valid here either.

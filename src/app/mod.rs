@@ -8,6 +8,7 @@ pub mod bench;
 pub mod check;
 pub mod compare;
 pub mod memory;
+pub mod ranks;
 pub mod reference;
 pub mod setup;
 pub mod sweep;

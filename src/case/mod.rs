@@ -5,7 +5,8 @@
 //!
 //! Inside, one way only: `numbers` (the checks of a number) and `raw` under everything;
 //! `tables`, `nodes`, `grid`, `prestress`, `load`, `solver` and `output` each
-//! convert one part of the file; `convert` calls them in file order.
+//! convert one part of the file; `convert` calls them in file order. Every file is read
+//! through `read_text`, whose bytes `sources` can record (MPI rank 0) or replay (the others).
 
 mod convert;
 mod error;
@@ -17,6 +18,7 @@ mod output;
 mod prestress;
 mod raw;
 mod solver;
+pub mod sources;
 mod tables;
 mod typed;
 
@@ -81,24 +83,26 @@ pub(crate) fn read_text(
     why: &str,
 ) -> Result<String, CaseError> {
     use std::io::Read;
-    let io = |reason: String| CaseError::Io {
+    let read = || -> Result<String, String> {
+        let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+        let mut bytes = Vec::new();
+        file.take(limit + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| e.to_string())?;
+        if bytes.len() as u64 > limit {
+            return Err(format!("it is larger than {} MiB; {why}", limit >> 20));
+        }
+        String::from_utf8(bytes).map_err(|e| {
+            format!(
+                "it is not UTF-8 text (invalid byte at offset {})",
+                e.utf8_error().valid_up_to()
+            )
+        })
+    };
+    sources::read_through(path, read).map_err(|reason| CaseError::Io {
         what,
         path: path.display().to_string(),
         reason,
-    };
-    let file = std::fs::File::open(path).map_err(|e| io(e.to_string()))?;
-    let mut bytes = Vec::new();
-    file.take(limit + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| io(e.to_string()))?;
-    if bytes.len() as u64 > limit {
-        return Err(io(format!("it is larger than {} MiB; {why}", limit >> 20)));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        io(format!(
-            "it is not UTF-8 text (invalid byte at offset {})",
-            e.utf8_error().valid_up_to()
-        ))
     })
 }
 

@@ -33,6 +33,7 @@ mod local_stage;
 mod macro_basis;
 mod macro_problem;
 pub(crate) mod partition;
+mod ranks;
 mod settings;
 mod state;
 mod status_step;
@@ -44,6 +45,7 @@ pub(crate) use interfaces::Interface;
 #[cfg(test)]
 use macro_basis::macro_basis;
 pub(crate) use partition::Partition;
+pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW};
 pub use settings::{
     LatinSettings, SearchDirection, SearchPolicy, StopOn, WeakInterfaces, PAPER_DM,
 };

@@ -1,0 +1,97 @@
+//! The processes a command runs on: one, or the ranks of an MPI job (`--features mpi`, started
+//! by `mpirun -n P`). Rank 0 reads the case and broadcasts the bytes it read, so that the ranks
+//! can never disagree on it ([`load_case`]); rank 0 alone prints and writes.
+//!
+//! Without the feature a command runs on one process and this module is a stand-in of size 1.
+
+use crate::case::{self, sources, Case, CaseError};
+use std::path::Path;
+
+/// The processes of this command.
+pub struct Ranks {
+    #[cfg(feature = "mpi")]
+    world: Option<mpi::topology::SimpleCommunicator>,
+    #[cfg(feature = "mpi")]
+    _universe: Option<mpi::environment::Universe>,
+}
+
+impl Ranks {
+    /// Join the MPI job when built with MPI (a process started without `mpirun` is a job of
+    /// one); otherwise one process.
+    pub fn init() -> Ranks {
+        #[cfg(feature = "mpi")]
+        {
+            let universe = mpi::initialize();
+            let world = universe.as_ref().map(|u| u.world());
+            Ranks {
+                world,
+                _universe: universe,
+            }
+        }
+        #[cfg(not(feature = "mpi"))]
+        Ranks {}
+    }
+
+    /// This process's rank, 0 … size − 1.
+    pub fn rank(&self) -> usize {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            use mpi::traits::Communicator;
+            return world.rank() as usize;
+        }
+        0
+    }
+
+    /// How many ranks the job has.
+    pub fn size(&self) -> usize {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            use mpi::traits::Communicator;
+            return world.size() as usize;
+        }
+        1
+    }
+
+    /// Whether this is rank 0, the one that prints and writes.
+    pub fn is_root(&self) -> bool {
+        self.rank() == 0
+    }
+
+    /// Rank 0's `bytes` on every rank (the others' are ignored).
+    pub fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8> {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            use mpi::traits::{Communicator, Root};
+            let root = world.process_at_rank(0);
+            let mut len = bytes.len() as u64;
+            root.broadcast_into(&mut len);
+            let mut out = if self.is_root() {
+                bytes
+            } else {
+                vec![0u8; len as usize]
+            };
+            root.broadcast_into(&mut out[..]);
+            return out;
+        }
+        bytes
+    }
+}
+
+/// The case at `path` with `overrides`, the same on every rank: rank 0 reads it (and its
+/// tables) from its disk and broadcasts what it read, refusals included; the other ranks load
+/// it from those bytes without touching their own disks, and so reach rank 0's case or rank
+/// 0's error.
+pub fn load_case(ranks: &Ranks, path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
+    if ranks.size() == 1 {
+        return case::load_with(path, overrides);
+    }
+    if ranks.is_root() {
+        let (case, records) = sources::load_recording(path, overrides);
+        ranks.broadcast(sources::encode(&records));
+        case
+    } else {
+        let bytes = ranks.broadcast(Vec::new());
+        let records = sources::decode(&bytes).unwrap_or_default();
+        sources::load_replaying(path, overrides, records)
+    }
+}
