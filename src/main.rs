@@ -15,7 +15,7 @@ use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
-use tensolve::app::ranks::{load_case, Ranks};
+use tensolve::app::ranks::{case_digest, load_case, Ranks};
 use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
 use tensolve::case;
 use tensolve::output::alpha_label;
@@ -325,6 +325,14 @@ fn bench_title(path: &Path, alphas: &[f64]) -> String {
 fn check_command(ranks: &Ranks, path: PathBuf, set: &[String]) -> Result<(), Failure> {
     // Every rank loads the same case (rank 0's bytes); rank 0 alone checks and prints.
     let case = load_case(ranks, &path, set).map_err(RunError::from)?;
+    if !ranks.same_on_every_rank(case_digest(&case)) {
+        return Err(Failure {
+            message: "the MPI ranks loaded different cases from rank 0's bytes (a defect: \
+                      please report it)"
+                .into(),
+            exit_code: 1,
+        });
+    }
     root_only(ranks, || {
         check_case(ranks, case, path).map_err(Failure::from)
     })
@@ -343,6 +351,12 @@ fn check_case(ranks: &Ranks, case: case::Case, path: PathBuf) -> Result<(), RunE
     print_ignoring_closed_pipe(&report.to_string());
     if let Some(layout) = layout {
         print_ignoring_closed_pipe(&layout.describe());
+        print_ignoring_closed_pipe(&format!(
+            "  every rank loaded the same case (from rank 0's bytes; digest {:016x} on all {} \
+             ranks)\n",
+            case_digest(&case),
+            ranks.size()
+        ));
     } else if ranks.size() > 1 {
         print_ignoring_closed_pipe(&format!(
             "ranks: {} (no micro-macro solver in the case: nothing to distribute)\n",

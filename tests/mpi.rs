@@ -94,6 +94,13 @@ fn check_prints_the_rank_layout_once() {
         }
         assert_eq!(held, links, "every link on one rank:\n{layout}");
         assert_eq!(layout.matches("  rank ").count(), ranks, "{layout}");
+        // The digest rank 0 prints is this process's digest of the case read from the disk,
+        // and every rank had it (or check would have failed).
+        let digest = tensolve::app::ranks::case_digest(&tensolve::case::load(&case).unwrap());
+        assert!(
+            layout.contains(&format!("digest {digest:016x} on all {ranks} ranks")),
+            "{digest:016x} in {layout}"
+        );
     }
 }
 

@@ -77,6 +77,33 @@ impl Ranks {
     }
 }
 
+impl Ranks {
+    /// Whether every rank passed the same `value` (all ranks learn the answer).
+    pub fn same_on_every_rank(&self, value: u64) -> bool {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::CommunicatorCollectives;
+            let (mut low, mut high) = (0u64, 0u64);
+            world.all_reduce_into(&value, &mut low, SystemOperation::min());
+            world.all_reduce_into(&value, &mut high, SystemOperation::max());
+            return low == high;
+        }
+        let _ = value;
+        true
+    }
+}
+
+/// A digest of everything `case` holds (its settings, structure and tables as loaded): equal
+/// on two processes of one build when they loaded the same case.
+pub fn case_digest(case: &Case) -> u64 {
+    use std::hash::{Hash, Hasher};
+    // SipHash with fixed keys: the same on every process of this build.
+    let mut hasher = std::hash::DefaultHasher::new();
+    format!("{case:?}").hash(&mut hasher);
+    hasher.finish()
+}
+
 /// The case at `path` with `overrides`, the same on every rank: rank 0 reads it (and its
 /// tables) from its disk and broadcasts what it read, refusals included; the other ranks load
 /// it from those bytes without touching their own disks, and so reach rank 0's case or rank
