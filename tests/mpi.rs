@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{code, manifest_path, Temp};
+use common::{code, manifest_path, tensolve, Temp};
 use std::process::{Command, Output};
 
 /// `tensolve args` on `ranks` MPI ranks (oversubscribed: this machine may have fewer cores).
@@ -50,10 +50,7 @@ fn number_after(text: &str, key: &str) -> usize {
 #[test]
 fn check_prints_the_rank_layout_once() {
     let case = manifest_path("cases/scale-16-latin.toml");
-    let alone = Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(["check", case.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let alone = tensolve(&["check", case.to_str().unwrap()]);
     assert_eq!(code(&alone), 0, "{}", text(&alone.stderr));
     let alone = without_available(text(&alone.stdout));
     assert!(
@@ -110,10 +107,7 @@ fn check_prints_the_rank_layout_once() {
 #[test]
 fn a_case_with_tables_checks_alike_on_three_ranks() {
     let case = manifest_path("cases/prism4.toml");
-    let alone = Command::new(env!("CARGO_BIN_EXE_tensolve"))
-        .args(["check", case.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let alone = tensolve(&["check", case.to_str().unwrap()]);
     assert_eq!(code(&alone), 0, "{}", text(&alone.stderr));
     let o = mpirun(3, &["check", case.to_str().unwrap()]);
     assert_eq!(code(&o), 0, "{}", text(&o.stderr));
