@@ -16,7 +16,7 @@ use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
-use tensolve::app::sweep::{output_dir, run, RunError, RunOptions};
+use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions};
 use tensolve::case;
 use tensolve::output::alpha_label;
 use tensolve::solvers::latin::RankLayout;
@@ -154,9 +154,6 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let ranks = Ranks::init();
     let result = match cli.command {
-        Command::Run { case, set, .. } if ranks.size() > 1 => {
-            refuse_on_ranks(&ranks, "run", &case, &set)
-        }
         Command::Bench { case, set, .. } if ranks.size() > 1 => {
             refuse_on_ranks(&ranks, "bench", &case, &set)
         }
@@ -166,7 +163,7 @@ fn main() -> ExitCode {
             solvers,
             quiet,
             set,
-        } => run_command(case, out, solvers, quiet, &set).map_err(Failure::from),
+        } => run_command(&ranks, case, out, solvers, quiet, &set).map_err(Failure::from),
         Command::Check { case, set } => check_command(&ranks, case, &set),
         Command::Bench {
             case,
@@ -192,16 +189,19 @@ fn main() -> ExitCode {
             )
         }),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            // Every rank exits with the same status; rank 0 alone says why.
-            if ranks.is_root() {
-                eprintln!("error: {}", e.message);
-            }
-            ExitCode::from(e.exit_code as u8)
+    // Every rank exits with the worst status of any; rank 0 says why, or the rank that failed
+    // where rank 0 did not.
+    let code = result.as_ref().err().map_or(0, |e| e.exit_code as u8);
+    let root_code = ranks.broadcast(vec![code]).first().copied().unwrap_or(code);
+    let worst = ranks.max(u64::from(code)) as u8;
+    if let Err(e) = &result {
+        if ranks.is_root() {
+            eprintln!("error: {}", e.message);
+        } else if root_code == 0 && !e.message.is_empty() {
+            eprintln!("error (MPI rank {}): {}", ranks.rank(), e.message);
         }
     }
+    ExitCode::from(worst)
 }
 
 /// `command` on rank 0 alone; the other ranks exit with its status.
@@ -218,8 +218,8 @@ fn root_only(ranks: &Ranks, command: impl FnOnce() -> Result<(), Failure>) -> Re
     }
 }
 
-/// `run` and `bench` on several MPI ranks: the case is loaded as everywhere (its errors come
-/// first, from rank 0), then refused, since the solve is not yet distributed (issue 25).
+/// `bench` on several MPI ranks: the case is loaded as everywhere (its errors come first, from
+/// rank 0), then refused: bench measures one process (`run` on P ranks reports its time).
 fn refuse_on_ranks(
     ranks: &Ranks,
     command: &str,
@@ -229,9 +229,9 @@ fn refuse_on_ranks(
     load_case(ranks, path, set).map_err(RunError::from)?;
     Err(Failure {
         message: format!(
-            "`tensolve {command}` on {} MPI ranks: the micro-macro solve is not yet \
-             distributed over ranks (`tensolve check` under mpirun prints the layout it will \
-             take); run on one rank (without mpirun, or `mpirun -n 1`)",
+            "`tensolve {command}` on {} MPI ranks: bench measures one process; run it \
+             without mpirun (or `mpirun -n 1`), and `tensolve run` under mpirun for the \
+             time of a solve shared by ranks",
             ranks.size()
         ),
         exit_code: 2,
@@ -239,13 +239,15 @@ fn refuse_on_ranks(
 }
 
 fn run_command(
+    ranks: &Ranks,
     path: PathBuf,
     out: Option<PathBuf>,
     solvers: Vec<Method>,
     quiet: bool,
     set: &[String],
 ) -> Result<(), RunError> {
-    let case = case::load_with(&path, set)?;
+    let case = load_case(ranks, &path, set)?;
+    let quiet = quiet || !ranks.is_root();
     let options = RunOptions {
         out_dir: out,
         methods: (!solvers.is_empty()).then_some(solvers),
@@ -258,7 +260,19 @@ fn run_command(
         .len()
         * case.load.alphas.len();
     let mut reporter = Reporter::new(quiet, solves);
-    let result = run(&case, &options, &mut |event| reporter.run_event(event));
+    let exchange = ranks.exchange();
+    let result = run_on(&case, &options, &exchange, &mut |event| {
+        reporter.run_event(event)
+    });
+    if ranks.size() > 1 {
+        reporter.line(&format!(
+            "MPI: {} ranks; rank 0 received {} values ({}) in {} collective calls",
+            ranks.size(),
+            exchange.values_received(),
+            tensolve::host::bytes_text(8 * exchange.values_received()),
+            exchange.calls()
+        ));
+    }
     reporter.finish();
     if let (count, Some((largest, at))) = &reporter.geometric {
         reporter.line(&format!(

@@ -5,7 +5,9 @@
 //! Without the feature a command runs on one process and this module is a stand-in of size 1.
 
 use crate::case::{self, sources, Case, CaseError};
+use crate::solvers::latin::Exchange;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The processes of this command.
 pub struct Ranks {
@@ -80,6 +82,17 @@ impl Ranks {
 impl Ranks {
     /// Whether every rank passed the same `value` (all ranks learn the answer).
     pub fn same_on_every_rank(&self, value: u64) -> bool {
+        let (low, high) = self.min_max(value);
+        low == high
+    }
+
+    /// The largest `value` any rank passed (all ranks learn it).
+    pub fn max(&self, value: u64) -> u64 {
+        self.min_max(value).1
+    }
+
+    /// The smallest and largest `value` the ranks passed.
+    fn min_max(&self, value: u64) -> (u64, u64) {
         #[cfg(feature = "mpi")]
         if let Some(world) = &self.world {
             use mpi::collective::SystemOperation;
@@ -87,10 +100,101 @@ impl Ranks {
             let (mut low, mut high) = (0u64, 0u64);
             world.all_reduce_into(&value, &mut low, SystemOperation::min());
             world.all_reduce_into(&value, &mut high, SystemOperation::max());
-            return low == high;
+            return (low, high);
         }
-        let _ = value;
-        true
+        (value, value)
+    }
+}
+
+/// The ranks' collective operations for a solve they share ([`Exchange`]), counting what they
+/// gather. Every call goes to `MPI_COMM_WORLD` from the thread that drives the solve.
+pub struct RankExchange {
+    rank: usize,
+    size: usize,
+    /// Values this rank received from the others, over all gathers.
+    received: AtomicU64,
+    /// Collective calls made.
+    calls: AtomicU64,
+}
+
+impl Ranks {
+    /// The collective operations of these ranks, for a solve they share.
+    pub fn exchange(&self) -> RankExchange {
+        RankExchange {
+            rank: self.rank(),
+            size: self.size(),
+            received: AtomicU64::new(0),
+            calls: AtomicU64::new(0),
+        }
+    }
+}
+
+impl RankExchange {
+    /// Values (f64) this rank received from the other ranks so far.
+    pub fn values_received(&self) -> u64 {
+        self.received.load(Ordering::Relaxed)
+    }
+
+    /// Collective calls made so far.
+    pub fn calls(&self) -> u64 {
+        self.calls.load(Ordering::Relaxed)
+    }
+}
+
+impl Exchange for RankExchange {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn size(&self) -> usize {
+        self.size
+    }
+
+    fn all_gather(&self, mine: &[f64]) -> Vec<f64> {
+        self.calls.fetch_add(1, Ordering::Relaxed);
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::datatype::PartitionMut;
+            use mpi::traits::CommunicatorCollectives;
+            let world = mpi::topology::SimpleCommunicator::world();
+            let count = mpi::Count::try_from(mine.len())
+                .expect("a rank's share of a gather fits MPI's count (2³¹ values)");
+            let mut counts = vec![0 as mpi::Count; self.size];
+            world.all_gather_into(&count, &mut counts[..]);
+            let displacements: Vec<mpi::Count> = counts
+                .iter()
+                .scan(0, |next, &c| {
+                    let at = *next;
+                    *next += c;
+                    Some(at)
+                })
+                .collect();
+            let total: usize = counts.iter().map(|&c| c as usize).sum();
+            let mut all = vec![0.0f64; total];
+            {
+                let mut partition =
+                    PartitionMut::new(&mut all[..], &counts[..], &displacements[..]);
+                world.all_gather_varcount_into(mine, &mut partition);
+            }
+            self.received
+                .fetch_add((total - mine.len()) as u64, Ordering::Relaxed);
+            return all;
+        }
+        mine.to_vec()
+    }
+
+    fn all(&self, value: bool) -> bool {
+        self.calls.fetch_add(1, Ordering::Relaxed);
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::CommunicatorCollectives;
+            let world = mpi::topology::SimpleCommunicator::world();
+            let mut every = 0i32;
+            world.all_reduce_into(&i32::from(value), &mut every, SystemOperation::min());
+            return every == 1;
+        }
+        value
     }
 }
 

@@ -2,7 +2,7 @@
 //! then each solver asked for, with the set-up time it is charged.
 
 use crate::case::{Case, SolverChoice};
-use crate::solvers::latin::{Homogenised, Latin};
+use crate::solvers::latin::{Exchange, Homogenised, Latin, OneProcess};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{AnySolver, Method, Settings, SetupError, TautStiffness};
@@ -72,6 +72,17 @@ pub fn set_up<'s>(
     choice: &SolverChoice,
     prepared: &'s Prepared,
 ) -> Result<SetUpSolver<'s>, SetupError> {
+    set_up_on(method, choice, prepared, &OneProcess)
+}
+
+/// [`set_up`] on the processes of `exchange`: micro-macro shares its substructures among them
+/// ([`Latin::on_ranks`]); every other solver is set up whole on each.
+pub fn set_up_on<'s>(
+    method: Method,
+    choice: &SolverChoice,
+    prepared: &'s Prepared,
+    exchange: &'s dyn Exchange,
+) -> Result<SetUpSolver<'s>, SetupError> {
     let (structure, taut) = (&prepared.structure, &prepared.taut);
     if !method.supports(structure.model) {
         return Err(SetupError::ModelNotSupported {
@@ -93,9 +104,11 @@ pub fn set_up<'s>(
             Box::new(PcgLcp::new(structure, taut, settings)),
             prepared.taut_seconds,
         ),
-        Settings::MonoLatin(settings) | Settings::MicroMacro(settings) => {
-            (Box::new(Latin::new(structure, settings)?), 0.0)
-        }
+        Settings::MonoLatin(settings) => (Box::new(Latin::new(structure, settings)?), 0.0),
+        Settings::MicroMacro(settings) => (
+            Box::new(Latin::on_ranks(structure, settings, exchange)?),
+            0.0,
+        ),
     };
     Ok(SetUpSolver {
         method,

@@ -10,7 +10,7 @@ pub use error::RunError;
 
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
-use super::setup::{prepare, set_up, Prepared, SetUpSolver};
+use super::setup::{prepare, set_up_on, Prepared, SetUpSolver};
 use crate::case::Case;
 use crate::output::{
     self, alpha_label,
@@ -18,6 +18,7 @@ use crate::output::{
     FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
+use crate::solvers::latin::{Exchange, OneProcess};
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
 };
@@ -97,6 +98,19 @@ pub fn run(
     options: &RunOptions,
     events: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<Vec<SummaryRow>, RunError> {
+    run_on(case, options, &OneProcess, events)
+}
+
+/// [`run`] on the processes of `exchange` (MPI ranks: every one calls it alike): micro-macro's
+/// substructures are shared among them ([`crate::solvers::latin::Exchange`]), the other
+/// solvers run alike on each, and rank 0 alone writes files.
+pub fn run_on(
+    case: &Case,
+    options: &RunOptions,
+    exchange: &dyn Exchange,
+    events: &mut dyn FnMut(RunEvent<'_>),
+) -> Result<Vec<SummaryRow>, RunError> {
+    let writes = exchange.rank() == 0;
     let dir = output_dir(case, options);
     let methods = methods(case, options)?;
     // 0. The memory the run needs, estimated before anything large is allocated.
@@ -109,15 +123,15 @@ pub fn run(
     events(RunEvent::Stage(
         "building the structure and factorising its taut stiffness",
     ));
-    let prepared = prepare_or_locate_mechanisms(case, &dir)?;
+    let prepared = prepare_or_locate_mechanisms(case, &dir, writes)?;
     // 2. Every solver asked for, set up once.
-    let mut solvers = set_up_all(case, &methods, &prepared, events)?;
+    let mut solvers = set_up_all(case, &methods, &prepared, exchange, events)?;
     // 3. Where LATIN's error e is measured from.
     events(RunEvent::Stage("setting up the reference solver"));
     let reference = ReferenceSource::new(case, &solvers, &prepared)?;
     // 4. The output directory, once the case is known solvable: locked for this run, with a
     //    private staging directory; then the sinks of the files asked for.
-    let out = writes_files(case)
+    let out = (writes && writes_files(case))
         .then(|| OutputDir::open(&dir).map(RefCell::new))
         .transpose()?;
     let sinks = sinks(case, &dir, out.as_ref(), &prepared, &solvers);
@@ -168,21 +182,27 @@ fn set_up_all<'s>(
     case: &Case,
     methods: &[Method],
     prepared: &'s Prepared,
+    exchange: &'s dyn Exchange,
     events: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<Vec<SetUpSolver<'s>>, RunError> {
     let mut solvers = Vec::with_capacity(methods.len());
     for &method in methods {
         events(RunEvent::Stage(&format!("setting up {}", method.name())));
-        solvers.push(set_up(method, &case.solver, prepared)?);
+        solvers.push(set_up_on(method, &case.solver, prepared, exchange)?);
     }
     Ok(solvers)
 }
 
 /// The structure of `case` and its taut stiffness; a refused mechanism's modes, node by node,
-/// are written to `mechanisms.csv` under `dir` before the refusal is returned.
-fn prepare_or_locate_mechanisms(case: &Case, dir: &Path) -> Result<Prepared, RunError> {
+/// are written to `mechanisms.csv` under `dir` before the refusal is returned (by the process
+/// that `writes`).
+fn prepare_or_locate_mechanisms(
+    case: &Case,
+    dir: &Path,
+    writes: bool,
+) -> Result<Prepared, RunError> {
     prepare(case).or_else(|refused| {
-        if !refused.modes().is_empty() {
+        if writes && !refused.modes().is_empty() {
             write_mechanisms(dir, refused.modes())?;
         }
         Err(refused.into())

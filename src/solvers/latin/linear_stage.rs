@@ -48,7 +48,7 @@ impl Substructure {
                 f[self.gamma_dofs[side.gamma_offset + r]] += v;
             }
         }
-        self.factor.solve_in_place(&mut f);
+        self.ops().factor.solve_in_place(&mut f);
         let mut g = self.project(&f);
         g.iter_mut().for_each(|x| *x *= inputs.dm);
         Condensed { y: f, g }
@@ -69,12 +69,12 @@ impl Substructure {
         let dm = inputs.dm;
         let mut u_e = vec![0.0; self.n_macro];
         gemv(&mut u_e, &self.flexibility, f_e, false);
-        gemv(&mut u_e, &self.k_plus, &condensed.g, true);
+        gemv(&mut u_e, &self.ops().k_plus, &condensed.g, true);
         gemv(&mut u_e, &self.kernel, a_e, true);
         // U_E = y_E + d_m Z_E (u_E + f_E/d_m).
         let star: Vec<f64> = u_e.iter().zip(f_e).map(|(u, f)| dm * u + f).collect();
         st.u.copy_from_slice(&condensed.y);
-        gemv(&mut st.u, &self.z, &star, true);
+        gemv(&mut st.u, &self.ops().z, &star, true);
         // e_E = B_E U_E, t_E = t̂_E + l(e_E − ê_E).
         for (j, &i) in self.links.iter().enumerate() {
             st.e[j] = self.link_dofs[j].elongation(&st.u);
@@ -115,27 +115,39 @@ impl Latin<'_> {
             search: &self.search,
             dm: self.dm,
         };
-        let condensed: Vec<Condensed> = self
-            .substructures
+        // 1. The substructures this process holds, condensed: y_E, g_E and E's part of the
+        //    macro right-hand side.
+        let held = self.held.clone();
+        let macro_problem = &self.macro_problem;
+        let (condensed, pieces): (Vec<Condensed>, Vec<Vec<f64>>) = self.substructures[held.clone()]
             .par_iter()
-            .zip(state.par_iter())
+            .zip(state[held.clone()].par_iter())
             .with_min_len(self.chunk)
-            .map(|(sub, st)| sub.condense(&inputs, st))
-            .collect();
+            .map(|(sub, st)| {
+                let c = sub.condense(&inputs, st);
+                let piece = macro_problem.rhs_piece(sub, &c.g);
+                (c, piece)
+            })
+            .unzip();
+        // 2. Every substructure's part (gathered from the ranks), summed in their order.
+        let pieces = self.gather_pieces(pieces);
         let mut rhs = self.macro_problem.zero_rhs();
-        for (e, (sub, c)) in self.substructures.iter().zip(&condensed).enumerate() {
+        for (e, (sub, piece)) in self.substructures.iter().zip(&pieces).enumerate() {
             self.macro_problem
-                .add_rhs(e, sub, &self.interfaces, &c.g, &mut rhs);
+                .add_rhs(e, sub, &self.interfaces, piece, &mut rhs);
         }
+        // 3. The macro problem, solved on every rank.
         let solution = self.macro_problem.solve_rhs(rhs, accuracy);
-        let (macro_problem, interfaces) = (&self.macro_problem, &self.interfaces);
-        self.substructures
+        // 4. The held substructures recovered, relaxed when asked.
+        let interfaces = &self.interfaces;
+        self.substructures[held.clone()]
             .par_iter()
-            .zip(state.par_iter_mut())
+            .zip(state[held.clone()].par_iter_mut())
             .zip(condensed.into_par_iter())
             .with_min_len(self.chunk)
             .enumerate()
-            .for_each(|(e, ((sub, st), condensed))| {
+            .for_each(|(k, ((sub, st), condensed))| {
+                let e = held.start + k;
                 let previous = relaxation.map(|mu| (mu, Relaxed::of(st)));
                 let (f_e, a_e) = macro_problem.answer(e, sub, interfaces, &solution);
                 sub.recover(&inputs, &f_e, a_e, condensed, st);
@@ -143,6 +155,63 @@ impl Latin<'_> {
                     previous.blend_into(st, mu);
                 }
             });
+        // 5. What the linear stage wrote of the others' substructures.
+        self.share_linear_stage(state);
+    }
+
+    /// Every substructure's part of the macro right-hand side, from the `held` ones' parts on
+    /// each rank (on one process: `held` itself).
+    fn gather_pieces(&self, held: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        if self.exchange.size() == 1 {
+            return held;
+        }
+        let all = self.exchange.all_gather(&held.concat());
+        let mut rest = all.as_slice();
+        self.substructures
+            .iter()
+            .map(|sub| {
+                let (piece, tail) = rest.split_at(sub.n_macro + sub.kernel.ncols());
+                rest = tail;
+                piece.to_vec()
+            })
+            .collect()
+    }
+
+    /// The fields of s a linear stage writes (e, t, U_E, the sides' U and F) of every
+    /// substructure, from the rank that holds it onto every rank.
+    fn share_linear_stage(&self, state: &mut [SubState]) {
+        if self.exchange.size() == 1 {
+            return;
+        }
+        let mut mine = Vec::new();
+        for st in &state[self.held.clone()] {
+            mine.extend_from_slice(&st.e);
+            mine.extend_from_slice(&st.t);
+            mine.extend_from_slice(&st.u);
+            for side in &st.sides {
+                mine.extend_from_slice(&side.u);
+                mine.extend_from_slice(&side.f);
+            }
+        }
+        let all = self.exchange.all_gather(&mine);
+        let mut rest = all.as_slice();
+        let mut take = |into: &mut [f64], write: bool| {
+            let (values, tail) = rest.split_at(into.len());
+            if write {
+                into.copy_from_slice(values);
+            }
+            rest = tail;
+        };
+        for (e, st) in state.iter_mut().enumerate() {
+            let write = !self.held.contains(&e);
+            take(&mut st.e, write);
+            take(&mut st.t, write);
+            take(&mut st.u, write);
+            for side in &mut st.sides {
+                take(&mut side.u, write);
+                take(&mut side.f, write);
+            }
+        }
     }
 }
 

@@ -194,36 +194,43 @@ impl MacroProblem {
         vec![0.0; self.n]
     }
 
-    /// Substructure E's part of the right-hand side, added to `rhs` (a sum over the
-    /// substructures, in any order): `b_f −= c_Eᵀ (K⁺_E g_E + γ Q_E Q_Eᵀ g_E)`,
+    /// Substructure E's part of the right-hand side in E's own macro dofs, computed where E
+    /// is held: `K⁺_E g_E + γ Q_E Q_Eᵀ g_E` on its macro dofs, then `Q_Eᵀ g_E`.
+    pub fn rhs_piece(&self, sub: &Substructure, g: &[f64]) -> Vec<f64> {
+        let gamma = AUGMENTATION / self.dm;
+        let mut kg = vec![0.0; sub.n_macro];
+        gemv(&mut kg, &sub.ops().k_plus, g, false);
+        let mut qg = vec![0.0; sub.kernel.ncols()];
+        gemv_transposed(&mut qg, &sub.kernel, g, false);
+        let mut nb = vec![0.0; sub.n_macro];
+        gemv(&mut nb, &sub.kernel, &qg, false);
+        let mut piece: Vec<f64> = kg.iter().zip(&nb).map(|(k, n)| k + gamma * n).collect();
+        piece.extend_from_slice(&qg);
+        piece
+    }
+
+    /// Substructure E's `piece` ([`Self::rhs_piece`]) added to `rhs` (a sum over the
+    /// substructures, in their order on every rank): `b_f −= c_Eᵀ (K⁺_E g_E + γ Q_E Q_Eᵀ g_E)`,
     /// `b_a,E = −Q_Eᵀ g_E`.
     pub fn add_rhs(
         &self,
         e: usize,
         sub: &Substructure,
         interfaces: &[Interface],
-        g: &[f64],
+        piece: &[f64],
         rhs: &mut [f64],
     ) {
-        let gamma = AUGMENTATION / self.dm;
-        // b_f = −Σ c_Eᵀ K⁺_E g_E + γ N b_a, b_a = −(Q_Eᵀ g_E)_E.
-        let mut kg = vec![0.0; sub.n_macro];
-        gemv(&mut kg, &sub.k_plus, g, false);
-        let mut qg = vec![0.0; sub.kernel.ncols()];
-        gemv_transposed(&mut qg, &sub.kernel, g, false);
-        let mut nb = vec![0.0; sub.n_macro];
-        gemv(&mut nb, &sub.kernel, &qg, false);
+        let (forces, kernel) = piece.split_at(sub.n_macro);
         for side in &sub.sides {
             let row0 = interfaces[side.interface].macro_offset;
             for i in 0..side.cols {
-                let r = side.macro_offset + i;
-                rhs[row0 + i] -= side.sign() * (kg[r] + gamma * nb[r]);
+                rhs[row0 + i] -= side.sign() * forces[side.macro_offset + i];
             }
         }
         let kernel_rows = self.kernel_offset[e]..self.kernel_offset[e] + sub.kernel.ncols();
         rhs[kernel_rows]
             .iter_mut()
-            .zip(&qg)
+            .zip(kernel)
             .for_each(|(r, q)| *r -= q);
     }
 

@@ -22,8 +22,10 @@
 //! | `linear_stage`, `local_stage`, `indicator` | the two stages and η |
 //! | `iteration` | the two iteration orders and the `Solver` state machine |
 //! | `anderson` | Anderson acceleration of the fixed point ŝ ↦ local(linear(ŝ)) |
+//! | `exchange`, `ranks` | a solve shared by MPI ranks: what is gathered, the layout |
 
 mod anderson;
+mod exchange;
 mod indicator;
 mod interfaces;
 mod iteration;
@@ -41,6 +43,7 @@ mod substructure;
 #[cfg(test)]
 mod tests;
 
+pub use exchange::{block, Exchange, OneProcess};
 pub(crate) use interfaces::Interface;
 #[cfg(test)]
 use macro_basis::macro_basis;
@@ -58,6 +61,7 @@ use crate::structure::law;
 use crate::structure::{Structure, CLAMPED};
 use interfaces::Interfaces;
 use macro_problem::MacroProblem;
+use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 /// What `tensolve check` prints about a partition.
@@ -140,6 +144,11 @@ pub struct Latin<'s> {
     /// Substructures per parallel task: all of them (one task, no threads) when the work of
     /// an iteration is too small to pay for the scheduling.
     chunk: usize,
+    /// The processes sharing the solve ([`OneProcess`] unless set up by [`Latin::on_ranks`]).
+    exchange: &'s dyn Exchange,
+    /// The substructures this process holds (their operators, their halves of the linear
+    /// stage): all of them on one process.
+    held: std::ops::Range<usize>,
 }
 
 /// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
@@ -204,6 +213,17 @@ impl<'s> Latin<'s> {
     /// problem; settings the structure cannot take are refused first
     /// ([`LatinSettings::validate`]).
     pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
+        Self::on_ranks(structure, settings, &OneProcess)
+    }
+
+    /// Set up on the processes of `exchange` (every one calls it alike): each builds the
+    /// operators of its block of substructures ([`block`]), L_E and Q_E of the others are
+    /// gathered, the macro problem is factorised on every rank ([`exchange`]).
+    pub fn on_ranks(
+        structure: &'s Structure,
+        settings: LatinSettings,
+        exchange: &'s dyn Exchange,
+    ) -> Result<Self, SetupError> {
         settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let dm = settings
@@ -248,6 +268,11 @@ impl<'s> Latin<'s> {
                 .map(|(l, k)| l.prestress * l.prestress / k)
                 .sum::<f64>())
         .sqrt();
+        let held = block(
+            exchange.rank(),
+            exchange.size(),
+            partition.substructures.len(),
+        );
         let (substructures, macro_problem) = operators(
             structure,
             &partition,
@@ -256,6 +281,7 @@ impl<'s> Latin<'s> {
             &base_search,
             dm,
             dense_bytes <= DENSE_BUDGET_BYTES,
+            (exchange, held.clone()),
         )?;
         let mut latin = Latin {
             structure,
@@ -277,6 +303,8 @@ impl<'s> Latin<'s> {
             } else {
                 1
             },
+            exchange,
+            held,
         };
         let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
         for sub in &latin.substructures {
@@ -373,20 +401,39 @@ impl<'s> Latin<'s> {
             })
             .collect();
         // Only l changed: each substructure keeps its pattern, symbolic analysis and kernel.
+        // Each rank rebuilds those it holds; the rebuild stands only if it succeeded on all.
         let (dm, dense) = (self.dm, self.dense);
-        let Ok(rebuilt) = changed
+        let held: Vec<usize> = changed
+            .iter()
+            .copied()
+            .filter(|e| self.held.contains(e))
+            .collect();
+        let rebuilt = held
             .par_iter()
             .map(|&e| self.substructures[e].with_search(&search, dm, dense))
-            .collect::<Result<Vec<Substructure>, _>>()
-        else {
+            .collect::<Result<Vec<Substructure>, _>>();
+        if !self.exchange.all(rebuilt.is_ok()) {
+            return false;
+        }
+        let Ok(rebuilt) = rebuilt else {
             return false;
         };
         let mut substructures = std::mem::take(&mut self.substructures);
-        let previous: Vec<Substructure> = changed
+        let previous: Vec<(usize, Substructure)> = held
             .iter()
             .zip(rebuilt)
-            .map(|(&e, sub)| std::mem::replace(&mut substructures[e], sub))
+            .map(|(&e, sub)| (e, std::mem::replace(&mut substructures[e], sub)))
             .collect();
+        // L_E and Q_E of the others' rebuilt substructures (the previous ones kept to undo).
+        let remote: Vec<(usize, DMatrix<f64>, DMatrix<f64>)> = changed
+            .iter()
+            .filter(|e| !self.held.contains(e))
+            .map(|&e| {
+                let sub = &substructures[e];
+                (e, sub.flexibility.clone(), sub.kernel.clone())
+            })
+            .collect();
+        share_homogenised(&mut substructures, &changed, self.exchange, &self.held);
         match self
             .macro_problem
             .refactor(&substructures, &self.interfaces)
@@ -399,8 +446,12 @@ impl<'s> Latin<'s> {
                 true
             }
             Err(_) => {
-                for (&e, sub) in changed.iter().zip(previous) {
+                for (e, sub) in previous {
                     substructures[e] = sub;
+                }
+                for (e, flexibility, kernel) in remote {
+                    substructures[e].flexibility = flexibility;
+                    substructures[e].kernel = kernel;
                 }
                 self.substructures = substructures;
                 false
@@ -506,8 +557,10 @@ impl<'s> Latin<'s> {
     }
 }
 
-/// Every substructure's operators for the search direction `search` (in parallel), and the
-/// macro problem they make.
+/// The substructures of the partition for the search direction `search`: those of the block
+/// `held` this process holds with their operators (in parallel), the others with L_E and Q_E
+/// gathered from the processes of `exchange` that hold them; and the macro problem they make.
+#[allow(clippy::too_many_arguments)]
 fn operators(
     structure: &Structure,
     partition: &Partition,
@@ -516,25 +569,78 @@ fn operators(
     search: &[f64],
     dm: f64,
     dense: bool,
+    (exchange, held): (&dyn Exchange, std::ops::Range<usize>),
 ) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
-    // Every substructure's operators, in parallel (a scratch dof map per task).
-    let substructures = (0..partition.substructures.len())
+    // Every substructure, in parallel (a scratch dof map per task).
+    let built: Vec<Result<Substructure, usize>> = (0..partition.substructures.len())
         .into_par_iter()
         .map_init(
             || vec![CLAMPED; 3 * structure.n_nodes()],
             |scratch, e| {
                 let topo = &partition.substructures[e];
+                if !held.contains(&e) {
+                    return Ok(Substructure::remote(
+                        e, topo, structure, interfaces, holders, scratch,
+                    ));
+                }
                 Substructure::new(
                     e, topo, structure, interfaces, holders, search, dm, dense, scratch,
                 )
-                .map_err(|_| SetupError::SingularSubstructure {
-                    index: e,
-                    prestress: structure.geometric.is_some(),
-                })
+                .map_err(|_| e)
             },
         )
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect();
+    // The first substructure left without stiffness on any rank.
+    let failed = built.iter().find_map(|b| b.as_ref().err().copied());
+    if !exchange.all(failed.is_none()) {
+        let mine = [failed.map_or(f64::INFINITY, |e| e as f64)];
+        let first = exchange
+            .all_gather(&mine)
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        return Err(SetupError::SingularSubstructure {
+            index: first as usize,
+            prestress: structure.geometric.is_some(),
+        });
+    }
+    let mut substructures: Vec<Substructure> = built.into_iter().flatten().collect();
+    let all: Vec<usize> = (0..substructures.len()).collect();
+    share_homogenised(&mut substructures, &all, exchange, &held);
     let macro_problem = MacroProblem::new(&substructures, interfaces, dm)
         .map_err(|_| SetupError::SingularMacroProblem)?;
     Ok((substructures, macro_problem))
+}
+
+/// L_E and Q_E of the substructures `which` (increasing) from the ranks that hold them onto
+/// every rank: per substructure the kernel's columns, L_E, then Q_E (column-major).
+fn share_homogenised(
+    substructures: &mut [Substructure],
+    which: &[usize],
+    exchange: &dyn Exchange,
+    held: &std::ops::Range<usize>,
+) {
+    if exchange.size() == 1 {
+        return;
+    }
+    let mut mine = Vec::new();
+    for &e in which.iter().filter(|e| held.contains(e)) {
+        let sub = &substructures[e];
+        mine.push(sub.kernel.ncols() as f64);
+        mine.extend_from_slice(sub.flexibility.as_slice());
+        mine.extend_from_slice(sub.kernel.as_slice());
+    }
+    let all = exchange.all_gather(&mine);
+    let mut rest = all.as_slice();
+    for &e in which {
+        let m = substructures[e].n_macro;
+        let columns = rest[0] as usize;
+        let (flexibility, tail) = rest[1..].split_at(m * m);
+        let (kernel, tail) = tail.split_at(m * columns);
+        rest = tail;
+        if !held.contains(&e) {
+            let sub = &mut substructures[e];
+            sub.flexibility = DMatrix::from_column_slice(m, m, flexibility);
+            sub.kernel = DMatrix::from_column_slice(m, columns, kernel);
+        }
+    }
 }

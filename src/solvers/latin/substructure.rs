@@ -63,6 +63,17 @@ pub struct Substructure {
     pub gamma_dofs: Vec<usize>,
     /// E's macro dofs: Σ over its sides of the columns of R (columns of R_E).
     pub n_macro: usize,
+    /// E's operators on its own dofs: on the rank that holds E (every substructure on one
+    /// process); `None` on the others, which know E's indexing, L_E and Q_E only.
+    pub ops: Option<LocalOperators>,
+    /// `L_E = K⁺_E − I/d_m`, the homogenised flexibility.
+    pub flexibility: DMatrix<f64>,
+    /// `Q_E`: orthonormal columns spanning the kernel of K*_E (`n_macro` rows).
+    pub kernel: DMatrix<f64>,
+}
+
+/// E's operators on its own dofs, built by the rank that holds E.
+pub struct LocalOperators {
     /// The pattern of K_E (fixed by E's links).
     pattern: StiffnessPattern,
     /// With the prestress's geometric stiffness (`model.geometry = "prestress"`): per link of
@@ -73,14 +84,12 @@ pub struct Substructure {
     pub factor: SpdSolver,
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × `n_macro`).
     pub z: DMatrix<f64>,
-    /// `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, symmetrised.
+    /// `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, symmetrised (kept for the invariant tests of its
+    /// kernel).
+    #[cfg_attr(not(test), allow(dead_code))]
     pub k_star: DMatrix<f64>,
     /// `K⁺_E = (K*_E + Q_E Q_Eᵀ)⁻¹ − Q_E Q_Eᵀ`, the pseudo-inverse of K*_E.
     pub k_plus: DMatrix<f64>,
-    /// `L_E = K⁺_E − I/d_m`, the homogenised flexibility.
-    pub flexibility: DMatrix<f64>,
-    /// `Q_E`: orthonormal columns spanning the kernel of K*_E (`n_macro` rows).
-    pub kernel: DMatrix<f64>,
 }
 
 impl Substructure {
@@ -99,6 +108,63 @@ impl Substructure {
         dense: bool,
         local_dof: &mut [usize],
     ) -> Result<Substructure, SingularSubstructure> {
+        // 1.–3. E's local dofs, B_E and its share of K_G(t0), C_E and R_E.
+        let (mut sub, geometric) =
+            Self::indexed(index, topology, structure, interfaces, holders, local_dof);
+        // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
+        let pattern = StiffnessPattern::new(sub.n_dofs(), &sub.link_dofs);
+        let values = stiffness(
+            &pattern,
+            &sub.link_dofs,
+            &geometric,
+            &sub.gamma_dofs,
+            &sub.links,
+            search,
+            dm,
+        );
+        let factor = SpdSolver::new(&pattern, &values, dense).map_err(|_| SingularSubstructure)?;
+        // 5. Z_E = K_E⁻¹ C_Eᵀ R_E and K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
+        let (z, k_star) = sub.condense_operators(&factor, dm);
+        // 6. Q_E: the rigid motions with no micro trace, completed by the null space of K*_E.
+        let rigid = rigid_kernel(&sub.sides, topology, structure, interfaces);
+        sub.kernel = complete_kernel(&k_star, rigid, dm).ok_or(SingularSubstructure)?;
+        // 7. K⁺_E = (K*_E + Q_E Q_Eᵀ)⁻¹ − Q_E Q_Eᵀ and L_E = K⁺_E − I/d_m.
+        let (k_plus, flexibility) = invert(&k_star, &sub.kernel, dm)?;
+        sub.flexibility = flexibility;
+        sub.ops = Some(LocalOperators {
+            pattern,
+            geometric,
+            factor,
+            z,
+            k_star,
+            k_plus,
+        });
+        Ok(sub)
+    }
+
+    /// E as a rank that does not hold it knows it: its indexing (steps 1–3 of [`Self::new`]),
+    /// no operators; L_E and Q_E are set from the rank that holds it.
+    pub fn remote(
+        index: usize,
+        topology: &SubstructureTopology,
+        structure: &Structure,
+        interfaces: &[Interface],
+        holders: &[u8],
+        local_dof: &mut [usize],
+    ) -> Substructure {
+        Self::indexed(index, topology, structure, interfaces, holders, local_dof).0
+    }
+
+    /// Steps 1–3 of [`Self::new`]: E with its indexing and no operators, and its share of
+    /// K_G(t0) on its dofs. `local_dof` is all [`CLAMPED`] on entry and on exit.
+    fn indexed(
+        index: usize,
+        topology: &SubstructureTopology,
+        structure: &Structure,
+        interfaces: &[Interface],
+        holders: &[u8],
+        local_dof: &mut [usize],
+    ) -> (Substructure, Vec<(usize, LinkDofs, f64)>) {
         // 1. E's local dofs, numbered in `local_dof` until step 3 is done.
         let (dof_global, load_share) = number_local_dofs(topology, structure, holders, local_dof);
         // 2. B_E, one row `e = n·(U_b − U_a)` per link on E's dofs, and E's share of K_G(t0).
@@ -107,19 +173,7 @@ impl Substructure {
         // 3. C_E and R_E: E's interfaces, their rows in U_EΓ and their columns in u_E.
         let (sides, gamma_dofs, n_macro) = interface_sides(index, interfaces, local_dof);
         clear_local_dofs(topology, local_dof);
-        // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
-        let pattern = StiffnessPattern::new(dof_global.len(), &link_dofs);
-        let values = stiffness(
-            &pattern,
-            &link_dofs,
-            &geometric,
-            &gamma_dofs,
-            &topology.links,
-            search,
-            dm,
-        );
-        let factor = SpdSolver::new(&pattern, &values, dense).map_err(|_| SingularSubstructure)?;
-        let mut sub = Substructure {
+        let sub = Substructure {
             links: topology.links.clone(),
             dof_global,
             load_share,
@@ -127,23 +181,18 @@ impl Substructure {
             sides,
             gamma_dofs,
             n_macro,
-            pattern,
-            geometric,
-            factor,
-            z: DMatrix::zeros(0, 0),
-            k_star: DMatrix::zeros(0, 0),
-            k_plus: DMatrix::zeros(0, 0),
+            ops: None,
             flexibility: DMatrix::zeros(0, 0),
             kernel: DMatrix::zeros(0, 0),
         };
-        // 5. Z_E = K_E⁻¹ C_Eᵀ R_E and K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
-        sub.condense_operators(dm);
-        // 6. Q_E: the rigid motions with no micro trace, completed by the null space of K*_E.
-        let rigid = rigid_kernel(&sub.sides, topology, structure, interfaces);
-        sub.kernel = complete_kernel(&sub.k_star, rigid, dm).ok_or(SingularSubstructure)?;
-        // 7. K⁺_E = (K*_E + Q_E Q_Eᵀ)⁻¹ − Q_E Q_Eᵀ and L_E = K⁺_E − I/d_m.
-        sub.invert(dm)?;
-        Ok(sub)
+        (sub, geometric)
+    }
+
+    /// E's operators, on the rank that holds E.
+    pub fn ops(&self) -> &LocalOperators {
+        self.ops
+            .as_ref()
+            .expect("a substructure's operators are used only on the rank that holds it")
     }
 
     /// E with the search directions `search`: its indexing, the pattern of K_E and its
@@ -155,28 +204,31 @@ impl Substructure {
         dm: f64,
         dense: bool,
     ) -> Result<Substructure, SingularSubstructure> {
+        let old = self.ops();
         let values = stiffness(
-            &self.pattern,
+            &old.pattern,
             &self.link_dofs,
-            &self.geometric,
+            &old.geometric,
             &self.gamma_dofs,
             &self.links,
             search,
             dm,
         );
-        let factor = match &self.factor {
-            SpdSolver::Sparse(old) => {
-                let mut factor = old.share_symbolic();
+        let factor = match &old.factor {
+            SpdSolver::Sparse(old_factor) => {
+                let mut factor = old_factor.share_symbolic();
                 factor
-                    .factorize(&self.pattern, &values)
+                    .factorize(&old.pattern, &values)
                     .map_err(|_| SingularSubstructure)?;
                 SpdSolver::Sparse(factor)
             }
             SpdSolver::Dense(_) => {
-                SpdSolver::new(&self.pattern, &values, dense).map_err(|_| SingularSubstructure)?
+                SpdSolver::new(&old.pattern, &values, dense).map_err(|_| SingularSubstructure)?
             }
         };
-        let mut sub = Substructure {
+        let (z, k_star) = self.condense_operators(&factor, dm);
+        let (k_plus, flexibility) = invert(&k_star, &self.kernel, dm)?;
+        Ok(Substructure {
             links: self.links.clone(),
             dof_global: self.dof_global.clone(),
             load_share: self.load_share.clone(),
@@ -184,23 +236,22 @@ impl Substructure {
             sides: self.sides.clone(),
             gamma_dofs: self.gamma_dofs.clone(),
             n_macro: self.n_macro,
-            pattern: self.pattern.clone(),
-            geometric: self.geometric.clone(),
-            factor,
-            z: DMatrix::zeros(0, 0),
-            k_star: DMatrix::zeros(0, 0),
-            k_plus: DMatrix::zeros(0, 0),
-            flexibility: DMatrix::zeros(0, 0),
+            ops: Some(LocalOperators {
+                pattern: old.pattern.clone(),
+                geometric: old.geometric.clone(),
+                factor,
+                z,
+                k_star,
+                k_plus,
+            }),
+            flexibility,
             kernel: self.kernel.clone(),
-        };
-        sub.condense_operators(dm);
-        sub.invert(dm)?;
-        Ok(sub)
+        })
     }
 
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` and `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E` (symmetrised) from the
     /// factor of K_E.
-    fn condense_operators(&mut self, dm: f64) {
+    fn condense_operators(&self, factor: &SpdSolver, dm: f64) -> (DMatrix<f64>, DMatrix<f64>) {
         // Z_E column by column of the block-diagonal R_E.
         let n_macro = self.n_macro;
         let mut z = DMatrix::<f64>::zeros(self.n_dofs(), n_macro);
@@ -213,7 +264,7 @@ impl Substructure {
                 }
             }
         }
-        self.factor.solve_columns(&mut z);
+        factor.solve_columns(&mut z);
         let mut k_star = DMatrix::<f64>::identity(n_macro, n_macro) * dm;
         for j in 0..n_macro {
             let rz = self.project(z.column(j).as_slice());
@@ -221,21 +272,8 @@ impl Substructure {
                 k_star[(i, j)] -= dm * dm * rz[i];
             }
         }
-        self.k_star = (&k_star + k_star.transpose()) * 0.5;
-        self.z = z;
-    }
-
-    /// `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and `L_E = K⁺_E − I/d_m`, with the kernel Q_E set.
-    fn invert(&mut self, dm: f64) -> Result<(), SingularSubstructure> {
-        let qqt = &self.kernel * self.kernel.transpose();
-        let k_plus = match (&self.k_star + &qqt).cholesky() {
-            Some(c) => c.inverse() - &qqt,
-            None => return Err(SingularSubstructure),
-        };
-        let n_macro = self.n_macro;
-        self.flexibility = &k_plus - DMatrix::<f64>::identity(n_macro, n_macro) / dm;
-        self.k_plus = k_plus;
-        Ok(())
+        let k_star = (&k_star + k_star.transpose()) * 0.5;
+        (z, k_star)
     }
 
     /// Number of E's free dofs (the free components of the nodes it touches).
@@ -266,6 +304,22 @@ impl Substructure {
         }
         out
     }
+}
+
+/// `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and `L_E = K⁺_E − I/d_m`, Q the kernel of K*_E.
+fn invert(
+    k_star: &DMatrix<f64>,
+    kernel: &DMatrix<f64>,
+    dm: f64,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), SingularSubstructure> {
+    let qqt = kernel * kernel.transpose();
+    let k_plus = match (k_star + &qqt).cholesky() {
+        Some(c) => c.inverse() - &qqt,
+        None => return Err(SingularSubstructure),
+    };
+    let n_macro = k_star.nrows();
+    let flexibility = &k_plus - DMatrix::<f64>::identity(n_macro, n_macro) / dm;
+    Ok((k_plus, flexibility))
 }
 
 /// E's local dofs: the free components of its nodes, in node order (a node held on some

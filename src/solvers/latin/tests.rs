@@ -150,7 +150,7 @@ fn check_kernels(latin: &Latin<'_>, what: &str) -> (usize, f64, f64) {
     let mut gap = f64::INFINITY;
     let mut worst_null: f64 = 0.0;
     for (e, sub) in latin.substructures.iter().enumerate() {
-        let ev = sub.k_star.clone().symmetric_eigenvalues();
+        let ev = sub.ops().k_star.clone().symmetric_eigenvalues();
         let null = ev.iter().filter(|&&x| x < 1e-6 * DM).count();
         assert_eq!(
             null,
@@ -181,7 +181,7 @@ fn check_kernels(latin: &Latin<'_>, what: &str) -> (usize, f64, f64) {
                 (qtq - id).norm() < 1e-10,
                 "{what}: substructure {e}: Q not orthonormal"
             );
-            let kq = (&sub.k_star * q).norm() / DM;
+            let kq = (&sub.ops().k_star * q).norm() / DM;
             assert!(
                 kq < 1e-8,
                 "{what}: substructure {e}: |K*_E Q| / dm = {kq:e}"
