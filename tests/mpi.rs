@@ -1,7 +1,8 @@
 //! Under MPI (`cargo test --release --features mpi --test mpi`, with Debian's OpenMPI): the
 //! binary started by `mpirun` on several ranks. Rank 0 reads the case and the others load its
 //! bytes; rank 0 alone prints; every rank exits with the same status; `check` prints the rank
-//! layout; `run` is refused on several ranks until the solve is distributed (issue 25).
+//! layout; `run` shares micro-macro's substructures among the ranks and gives the threaded
+//! run's numbers bit for bit (issue 25).
 #![cfg(feature = "mpi")]
 
 mod common;
@@ -144,35 +145,134 @@ fn a_bad_case_fails_everywhere_with_one_message() {
     assert!(err.contains("/nonexistent/case.toml"), "{err}");
 }
 
-/// `run` on two ranks is refused before anything is written (the solve is not distributed
-/// yet); on one rank under mpirun it runs as without MPI.
+/// A CSV file with the columns whose name ends in `_seconds` (times) left out, row by row.
+fn without_times(path: &std::path::Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let keep: Vec<bool> = header.iter().map(|h| !h.ends_with("_seconds")).collect();
+    std::iter::once(header.join(","))
+        .chain(lines.map(str::to_string))
+        .map(|line| {
+            line.split(',')
+                .zip(&keep)
+                .filter(|(_, &k)| k)
+                .map(|(v, _)| v.to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// Every file under `dir` (relative paths, sorted), figures left out.
+fn files_under(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_none_or(|x| x != "svg") {
+                files.push(path.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// micro-macro on 1, 2 and 4 ranks against the threaded run of the same binary without
+/// mpirun: the same files, and in them the same numbers bit for bit (times aside): summary
+/// (iterations, slack sets' counts, e, η, r(U)), histories and displacements. Each rank
+/// computes its substructures' halves of the linear stage, and the macro right-hand side is
+/// summed in the substructures' order on every rank, as on one process.
+fn ranks_agree_with_threads(case: &str, alpha: &str) {
+    let case = manifest_path(case);
+    let args = |out: &Temp| {
+        vec![
+            "run".to_string(),
+            case.to_str().unwrap().to_string(),
+            "--out".into(),
+            out.arg().to_string(),
+            "--quiet".into(),
+            "--solver".into(),
+            "micro-macro".into(),
+            "--set".into(),
+            format!("load.alpha=[{alpha}]"),
+            "--set".into(),
+            "output.displacements=true".into(),
+            "--set".into(),
+            "output.plots=false".into(),
+        ]
+    };
+    let threads = Temp::dir("mpi-threads");
+    let a = args(&threads);
+    let o = tensolve(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code(&o), 0, "{}", text(&o.stderr));
+    let expected = files_under(&threads.0);
+    assert!(expected.len() >= 3, "{expected:?}");
+    for ranks in [1, 2, 4] {
+        let out = Temp::dir("mpi-ranks");
+        let a = args(&out);
+        let o = mpirun(ranks, &a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert_eq!(code(&o), 0, "{ranks} ranks: {}", text(&o.stderr));
+        assert_eq!(
+            files_under(&out.0),
+            expected,
+            "{ranks} ranks: the same files"
+        );
+        for file in &expected {
+            assert_eq!(
+                without_times(&out.0.join(file)),
+                without_times(&threads.0.join(file)),
+                "{ranks} ranks: {}",
+                file.display()
+            );
+        }
+    }
+}
+
 #[test]
-fn run_is_refused_on_several_ranks_and_runs_on_one() {
+fn the_paper_case_on_ranks_is_the_threaded_run() {
+    ranks_agree_with_threads("cases/paper.toml", "0.5, 1.0");
+}
+
+#[test]
+fn scale_16_on_ranks_is_the_threaded_run() {
+    ranks_agree_with_threads("cases/scale-16-latin.toml", "2.4");
+}
+
+#[test]
+fn scale_64_on_ranks_is_the_threaded_run() {
+    ranks_agree_with_threads("cases/scale-64-latin.toml", "0.15");
+}
+
+/// A solve that cannot be set up fails on every rank, with one message and nothing written;
+/// `bench` is refused on several ranks.
+#[test]
+fn a_refused_set_up_fails_everywhere_and_bench_is_refused() {
     let case = manifest_path("cases/scale-16-latin.toml");
-    let out = Temp::dir("mpi-run");
+    let out = Temp::dir("mpi-refused");
     let o = mpirun(
         2,
-        &["run", case.to_str().unwrap(), "--out", out.arg(), "--quiet"],
+        &[
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.arg(),
+            "--quiet",
+            "--set",
+            "solver.subdomains=[40, 4]",
+        ],
     );
     let err = text(&o.stderr);
-    assert_eq!(code(&o), 2, "{err}");
-    assert_eq!(err.matches("error: ").count(), 1, "{err}");
-    assert!(
-        err.contains("on 2 MPI ranks") && err.contains("mpirun -n 1"),
-        "{err}"
-    );
+    assert_ne!(code(&o), 0, "{err}");
+    assert_eq!(err.matches("error").count(), 1, "{err}");
+    assert!(err.contains("solver.subdomains"), "{err}");
     assert!(!out.0.exists(), "nothing written");
 
-    let o = mpirun(
-        1,
-        &["run", case.to_str().unwrap(), "--out", out.arg(), "--quiet"],
-    );
-    assert_eq!(code(&o), 0, "{}", text(&o.stderr));
-    let summary = std::fs::read_to_string(out.0.join("summary.csv")).expect("summary");
-    let rows: Vec<&str> = summary.lines().skip(1).collect();
-    assert_eq!(rows.len(), 2, "{summary}");
-    assert!(
-        rows.iter().all(|r| r.split(',').nth(2) == Some("true")),
-        "{summary}"
-    );
+    let o = mpirun(2, &["bench", case.to_str().unwrap(), "--quiet"]);
+    let err = text(&o.stderr);
+    assert_eq!(code(&o), 2, "{err}");
+    assert!(err.contains("on 2 MPI ranks"), "{err}");
 }
