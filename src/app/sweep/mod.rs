@@ -114,11 +114,7 @@ pub fn run_on(
     let dir = output_dir(case, options);
     let methods = methods(case, options)?;
     // 0. The memory the run needs, estimated before anything large is allocated.
-    let estimate = MemoryEstimate::new(
-        StructureSize::of(&case.geometry),
-        &Workload::run(case, &methods),
-    );
-    memory::ensure_fits(&estimate, "run")?;
+    memory::ensure_fits(&run_estimate(case, &methods), "run")?;
     // 1. The structure and its mechanism check (K with every cable taut, factorized).
     events(RunEvent::Stage(
         "building the structure and factorising its taut stiffness",
@@ -165,6 +161,14 @@ pub fn run_on(
         true => Ok(rows),
         false => Err(RunError::not_converged(&failures)),
     }
+}
+
+/// What running `methods` on `case` needs ([`MemoryEstimate`]).
+fn run_estimate(case: &Case, methods: &[Method]) -> MemoryEstimate {
+    MemoryEstimate::new(
+        StructureSize::of(&case.geometry),
+        &Workload::run(case, methods),
+    )
 }
 
 /// The solvers of the run: `--solver`, else `solver.methods`, each named once.

@@ -22,7 +22,8 @@
 //! | `linear_stage`, `local_stage`, `indicator` | the two stages and η |
 //! | `iteration` | the two iteration orders and the `Solver` state machine |
 //! | `anderson` | Anderson acceleration of the fixed point ŝ ↦ local(linear(ŝ)) |
-//! | `exchange`, `ranks` | a solve shared by MPI ranks: what is gathered, the layout |
+//! | `exchange`, `operators`, `ranks` | a solve shared by MPI ranks: what is gathered, the set-up of each rank's operators, the layout |
+//! | `search` | status-following search directions and operator rebuilds |
 
 mod anderson;
 mod exchange;
@@ -34,8 +35,10 @@ mod linear_stage;
 mod local_stage;
 mod macro_basis;
 mod macro_problem;
+mod operators;
 pub(crate) mod partition;
 mod ranks;
+mod search;
 mod settings;
 mod state;
 mod status_step;
@@ -57,12 +60,9 @@ pub(crate) use state::{SideState, SubState};
 pub(crate) use substructure::Substructure;
 
 use super::{displacement_residual, SetupError};
-use crate::structure::law;
-use crate::structure::{Structure, CLAMPED};
+use crate::structure::Structure;
 use interfaces::Interfaces;
 use macro_problem::MacroProblem;
-use nalgebra::DMatrix;
-use rayon::prelude::*;
 
 /// What `tensolve check` prints about a partition.
 #[derive(Debug, Clone)]
@@ -273,7 +273,7 @@ impl<'s> Latin<'s> {
             exchange.size(),
             partition.substructures.len(),
         );
-        let (substructures, macro_problem) = operators(
+        let (substructures, macro_problem) = operators::build(
             structure,
             &partition,
             &interfaces.list,
@@ -314,149 +314,6 @@ impl<'s> Latin<'s> {
         }
         latin.side_slots = side_slots;
         Ok(latin)
-    }
-
-    /// Status-following l (docs/method.md §6): l for bars and taut cables, ε·l for slack ones, when at
-    /// least `update_threshold` cables changed status since the operators were built; then
-    /// the operators are rebuilt for it. A cable's status is read from the linear stage's
-    /// trial tension `τ = t0 + k e` (newton's active set; the slack set of ŝ would keep a
-    /// taut cable held at ε·l slack, since with l ≪ k its local stage barely moves), with a
-    /// band: it goes slack below −δ and taut above +δ, δ = `STATUS_BAND` × the RMS trial
-    /// tension of the cables, so that cables near zero tension do not flip back and forth
-    /// (l is a search direction: any choice converges, only the rate changes). A cable's l
-    /// changes only once its status has differed for [`STATUS_PERSISTENCE`] linear stages in a
-    /// row. `true` when rebuilt.
-    fn follow_status(&mut self, state: &mut LatinState) -> bool {
-        let links = &self.structure.links;
-        let (trial, rms) = self.trial_tensions(&state.subs);
-        let band = STATUS_BAND * rms;
-        let mut slack = self.search_slack.clone();
-        for (i, (l, &tau)) in links.iter().zip(&trial).enumerate() {
-            let was_slack = self.search_slack[i];
-            let is_slack = l.unilateral && if was_slack { tau <= band } else { tau < -band };
-            let streak = &mut state.status_streak[i];
-            *streak = if is_slack == was_slack {
-                0
-            } else {
-                streak.saturating_add(1)
-            };
-            if *streak >= STATUS_PERSISTENCE {
-                slack[i] = is_slack;
-            }
-        }
-        let changed = slack
-            .iter()
-            .zip(&self.search_slack)
-            .filter(|(a, b)| a != b)
-            .count();
-        if changed < self.settings.update_threshold.max(1) {
-            return false;
-        }
-        let rebuilt = self.set_search(slack);
-        if rebuilt {
-            // The cables whose l just changed start counting afresh.
-            for streak in &mut state.status_streak {
-                if *streak >= STATUS_PERSISTENCE {
-                    *streak = 0;
-                }
-            }
-        }
-        rebuilt
-    }
-
-    /// Every link's trial tension `t0 + k e` from the linear stage's e, and the RMS of the
-    /// cables' (the scale of the status bands).
-    fn trial_tensions(&self, subs: &[SubState]) -> (Vec<f64>, f64) {
-        let links = &self.structure.links;
-        let mut trial = vec![0.0; links.len()];
-        for (sub, st) in self.substructures.iter().zip(subs) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                trial[i] = law::trial_tension(&links[i], st.e[j]);
-            }
-        }
-        let (sum2, cables) = links
-            .iter()
-            .zip(&trial)
-            .filter(|(l, _)| l.unilateral)
-            .fold((0.0, 0usize), |(s, n), (_, t)| (s + t * t, n + 1));
-        (trial, (sum2 / cables.max(1) as f64).sqrt())
-    }
-
-    /// New operators with ε·l on the cables of `slack`: the substructures where l changed,
-    /// then the macro problem. On failure (a substructure left without stiffness) the previous
-    /// ones are kept. `true` when rebuilt.
-    fn set_search(&mut self, slack: Vec<bool>) -> bool {
-        let mut search = self.base_search.clone();
-        for (l, &is_slack) in search.iter_mut().zip(&slack) {
-            if is_slack {
-                *l *= SLACK_SEARCH_FACTOR;
-            }
-        }
-        let changed: Vec<usize> = (0..self.substructures.len())
-            .filter(|&e| {
-                self.substructures[e]
-                    .links
-                    .iter()
-                    .any(|&i| search[i] != self.search[i])
-            })
-            .collect();
-        // Only l changed: each substructure keeps its pattern, symbolic analysis and kernel.
-        // Each rank rebuilds those it holds; the rebuild stands only if it succeeded on all.
-        let (dm, dense) = (self.dm, self.dense);
-        let held: Vec<usize> = changed
-            .iter()
-            .copied()
-            .filter(|e| self.held.contains(e))
-            .collect();
-        let rebuilt = held
-            .par_iter()
-            .map(|&e| self.substructures[e].with_search(&search, dm, dense))
-            .collect::<Result<Vec<Substructure>, _>>();
-        if !self.exchange.all(rebuilt.is_ok()) {
-            return false;
-        }
-        let Ok(rebuilt) = rebuilt else {
-            return false;
-        };
-        let mut substructures = std::mem::take(&mut self.substructures);
-        let previous: Vec<(usize, Substructure)> = held
-            .iter()
-            .zip(rebuilt)
-            .map(|(&e, sub)| (e, std::mem::replace(&mut substructures[e], sub)))
-            .collect();
-        // L_E and Q_E of the others' rebuilt substructures (the previous ones kept to undo).
-        let remote: Vec<(usize, DMatrix<f64>, DMatrix<f64>)> = changed
-            .iter()
-            .filter(|e| !self.held.contains(e))
-            .map(|&e| {
-                let sub = &substructures[e];
-                (e, sub.flexibility.clone(), sub.kernel.clone())
-            })
-            .collect();
-        share_homogenised(&mut substructures, &changed, self.exchange, &self.held);
-        match self
-            .macro_problem
-            .refactor(&substructures, &self.interfaces)
-        {
-            Ok(macro_problem) => {
-                self.substructures = substructures;
-                self.macro_problem = macro_problem;
-                self.search = search;
-                self.search_slack = slack;
-                true
-            }
-            Err(_) => {
-                for (e, sub) in previous {
-                    substructures[e] = sub;
-                }
-                for (e, flexibility, kernel) in remote {
-                    substructures[e].flexibility = flexibility;
-                    substructures[e].kernel = kernel;
-                }
-                self.substructures = substructures;
-                false
-            }
-        }
     }
 
     /// U of the linear stage on the free dofs, interface nodes averaged over the
@@ -553,94 +410,6 @@ impl<'s> Latin<'s> {
                 .max()
                 .unwrap_or(0),
             dm: self.dm,
-        }
-    }
-}
-
-/// The substructures of the partition for the search direction `search`: those of the block
-/// `held` this process holds with their operators (in parallel), the others with L_E and Q_E
-/// gathered from the processes of `exchange` that hold them; and the macro problem they make.
-#[allow(clippy::too_many_arguments)]
-fn operators(
-    structure: &Structure,
-    partition: &Partition,
-    interfaces: &[Interface],
-    holders: &[u8],
-    search: &[f64],
-    dm: f64,
-    dense: bool,
-    (exchange, held): (&dyn Exchange, std::ops::Range<usize>),
-) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
-    // Every substructure, in parallel (a scratch dof map per task).
-    let built: Vec<Result<Substructure, usize>> = (0..partition.substructures.len())
-        .into_par_iter()
-        .map_init(
-            || vec![CLAMPED; 3 * structure.n_nodes()],
-            |scratch, e| {
-                let topo = &partition.substructures[e];
-                if !held.contains(&e) {
-                    return Ok(Substructure::remote(
-                        e, topo, structure, interfaces, holders, scratch,
-                    ));
-                }
-                Substructure::new(
-                    e, topo, structure, interfaces, holders, search, dm, dense, scratch,
-                )
-                .map_err(|_| e)
-            },
-        )
-        .collect();
-    // The first substructure left without stiffness on any rank.
-    let failed = built.iter().find_map(|b| b.as_ref().err().copied());
-    if !exchange.all(failed.is_none()) {
-        let mine = [failed.map_or(f64::INFINITY, |e| e as f64)];
-        let first = exchange
-            .all_gather(&mine)
-            .into_iter()
-            .fold(f64::INFINITY, f64::min);
-        return Err(SetupError::SingularSubstructure {
-            index: first as usize,
-            prestress: structure.geometric.is_some(),
-        });
-    }
-    let mut substructures: Vec<Substructure> = built.into_iter().flatten().collect();
-    let all: Vec<usize> = (0..substructures.len()).collect();
-    share_homogenised(&mut substructures, &all, exchange, &held);
-    let macro_problem = MacroProblem::new(&substructures, interfaces, dm)
-        .map_err(|_| SetupError::SingularMacroProblem)?;
-    Ok((substructures, macro_problem))
-}
-
-/// L_E and Q_E of the substructures `which` (increasing) from the ranks that hold them onto
-/// every rank: per substructure the kernel's columns, L_E, then Q_E (column-major).
-fn share_homogenised(
-    substructures: &mut [Substructure],
-    which: &[usize],
-    exchange: &dyn Exchange,
-    held: &std::ops::Range<usize>,
-) {
-    if exchange.size() == 1 {
-        return;
-    }
-    let mut mine = Vec::new();
-    for &e in which.iter().filter(|e| held.contains(e)) {
-        let sub = &substructures[e];
-        mine.push(sub.kernel.ncols() as f64);
-        mine.extend_from_slice(sub.flexibility.as_slice());
-        mine.extend_from_slice(sub.kernel.as_slice());
-    }
-    let all = exchange.all_gather(&mine);
-    let mut rest = all.as_slice();
-    for &e in which {
-        let m = substructures[e].n_macro;
-        let columns = rest[0] as usize;
-        let (flexibility, tail) = rest[1..].split_at(m * m);
-        let (kernel, tail) = tail.split_at(m * columns);
-        rest = tail;
-        if !held.contains(&e) {
-            let sub = &mut substructures[e];
-            sub.flexibility = DMatrix::from_column_slice(m, m, flexibility);
-            sub.kernel = DMatrix::from_column_slice(m, columns, kernel);
         }
     }
 }
