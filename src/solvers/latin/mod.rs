@@ -218,7 +218,7 @@ impl<'s> Latin<'s> {
 
     /// Set up on the processes of `exchange` (every one calls it alike): each builds the
     /// operators of its block of substructures ([`block`]), L_E and Q_E of the others are
-    /// gathered, the macro problem is factorised on every rank ([`exchange`]).
+    /// gathered, the macro problem is factorised on every rank (see [`Exchange`]).
     pub fn on_ranks(
         structure: &'s Structure,
         settings: LatinSettings,
