@@ -69,6 +69,23 @@ impl Latin<'_> {
         ((0.5 * delta).sqrt(), (0.5 * size).sqrt())
     }
 
+    /// r(U) of the linear stage's U (`u`, [`Latin::displacements`]) under the exact law, and
+    /// with inexact Newton status steps the residual under the law linearised at `law_slack`.
+    /// It reads only U, so it may run beside the local stage.
+    pub(super) fn residuals(
+        &self,
+        u: &[f64],
+        load: &[f64],
+        law_slack: &[bool],
+    ) -> (f64, Option<f64>) {
+        if self.newton_steps() {
+            let (exact, frozen) = exact_and_frozen_residuals(self.structure, u, load, law_slack);
+            (exact, Some(frozen))
+        } else {
+            (displacement_residual(self.structure, u, load), None)
+        }
+    }
+
     /// η, the equilibrium residual r(U), the round-off stop and the slack count of `state`
     /// after a linear stage.
     pub(super) fn measure_state(&self, state: &mut LatinState) {
@@ -82,13 +99,15 @@ impl Latin<'_> {
             LOADED_ROUNDOFF
         };
         state.at_roundoff = distance <= floor * self.prestress_scale;
-        // r(U) of the linear stage's U under the exact law (docs/method.md §6).
-        let u = self.displacements(&state.subs);
-        if self.newton_steps() {
-            (state.residual, state.frozen_residual) =
-                exact_and_frozen_residuals(self.structure, &u, &state.load, &state.law_slack);
-        } else {
-            state.residual = displacement_residual(self.structure, &u, &state.load);
+        // r(U) of the linear stage's U under the exact law (docs/method.md §6), unless the
+        // iteration measured it beside its local stage.
+        let residuals = state.measured.take().unwrap_or_else(|| {
+            let u = self.displacements(&state.subs);
+            self.residuals(&u, &state.load, &state.law_slack)
+        });
+        state.residual = residuals.0;
+        if let Some(frozen) = residuals.1 {
+            state.frozen_residual = frozen;
         }
 
         state.slack_cables = state

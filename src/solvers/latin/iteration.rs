@@ -70,8 +70,22 @@ impl Latin<'_> {
         state.input = next;
         let accuracy = self.macro_accuracy(state.residual);
         self.linear_stage(&state.load, &mut state.subs, None, accuracy);
-        self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
+        self.local_stage_measuring(state);
         state.relax = true;
+    }
+
+    /// ŝ = local(s) on the iteration's law, and beside it (on another thread: the local stage
+    /// is parallel over the substructures, r(U) one pass over the links) the residuals of s's
+    /// U, kept for [`Latin::measure_state`]: the same numbers as one after the other.
+    pub(super) fn local_stage_measuring(&self, state: &mut LatinState) {
+        let u = self.displacements(&state.subs);
+        let law = self.local_law(&state.law_slack);
+        let (subs, load, law_slack) = (&mut state.subs, &state.load, &state.law_slack);
+        let ((), residuals) = rayon::join(
+            || self.local_stage(subs, law),
+            || self.residuals(&u, load, law_slack),
+        );
+        state.measured = Some(residuals);
     }
 
     /// How far the macro solve is refined (a fraction of its right-hand side): 1e-9 while
@@ -189,6 +203,7 @@ impl Solver for Latin<'_> {
             input: Vec::new(),
             anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
             status_streak: vec![0; self.structure.links.len()],
+            measured: None,
         };
         self.linear_stage(&state.load, &mut state.subs, None, 1e-9);
         if self.accelerated() {
