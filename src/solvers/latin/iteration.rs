@@ -208,7 +208,7 @@ impl Solver for Latin<'_> {
         self.linear_stage(&state.load, &mut state.subs, None, 1e-9);
         if self.accelerated() {
             state.input = self.linear_stage_input(&state.subs);
-            self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
+            self.local_stage_measuring(&mut state);
         }
         state.relax = true;
         self.measure_state(&mut state);
