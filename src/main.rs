@@ -132,9 +132,13 @@ struct Failure {
 }
 
 impl From<RunError> for Failure {
+    /// A failure on another MPI rank says nothing here: that rank says why.
     fn from(e: RunError) -> Self {
         Failure {
-            message: e.to_string(),
+            message: match e {
+                RunError::OnAnotherRank => String::new(),
+                _ => e.to_string(),
+            },
             exit_code: e.exit_code(),
         }
     }
@@ -189,16 +193,19 @@ fn main() -> ExitCode {
             )
         }),
     };
-    // Every rank exits with the worst status of any; rank 0 says why, or the rank that failed
-    // where rank 0 did not.
-    let code = result.as_ref().err().map_or(0, |e| e.exit_code as u8);
-    let root_code = ranks.broadcast(vec![code]).first().copied().unwrap_or(code);
+    // Every rank exits with the worst status of any. Rank 0 says why; where it has nothing to
+    // say (it did not fail, or failed only because another rank did), the rank that failed.
+    let (code, message) = match &result {
+        Ok(()) => (0u8, ""),
+        Err(e) => (e.exit_code as u8, e.message.as_str()),
+    };
+    let root_said = ranks.broadcast(vec![u8::from(!message.is_empty())]).first() == Some(&1);
     let worst = ranks.max(u64::from(code)) as u8;
-    if let Err(e) = &result {
+    if !message.is_empty() {
         if ranks.is_root() {
-            eprintln!("error: {}", e.message);
-        } else if root_code == 0 && !e.message.is_empty() {
-            eprintln!("error (MPI rank {}): {}", ranks.rank(), e.message);
+            eprintln!("error: {message}");
+        } else if !root_said {
+            eprintln!("error (MPI rank {}): {message}", ranks.rank());
         }
     }
     ExitCode::from(worst)

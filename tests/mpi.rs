@@ -10,10 +10,18 @@ mod common;
 use common::{code, manifest_path, tensolve, Temp};
 use std::process::{Command, Output};
 
-/// `tensolve args` on `ranks` MPI ranks (oversubscribed: this machine may have fewer cores).
+/// `tensolve args` on `ranks` MPI ranks (oversubscribed: this machine may have fewer cores),
+/// killed after 5 minutes (exit 124), so that ranks left waiting on each other fail a test
+/// instead of hanging it.
 fn mpirun(ranks: usize, args: &[&str]) -> Output {
-    Command::new("mpirun")
-        .args(["--oversubscribe", "--allow-run-as-root", "-n"])
+    Command::new("timeout")
+        .args([
+            "300",
+            "mpirun",
+            "--oversubscribe",
+            "--allow-run-as-root",
+            "-n",
+        ])
         .arg(ranks.to_string())
         .arg(env!("CARGO_BIN_EXE_tensolve"))
         .args(args)
@@ -275,4 +283,27 @@ fn a_refused_set_up_fails_everywhere_and_bench_is_refused() {
     let err = text(&o.stderr);
     assert_eq!(code(&o), 2, "{err}");
     assert!(err.contains("on 2 MPI ranks"), "{err}");
+}
+
+/// Rank 0 alone writes: when it cannot open the output directory, every rank stops there (none
+/// waits in the solve's collectives) and exits non-zero, with rank 0's message once.
+#[test]
+fn an_output_directory_rank_0_cannot_write_stops_every_rank() {
+    let case = manifest_path("cases/scale-16-latin.toml");
+    let o = mpirun(
+        2,
+        &[
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            "/proc/tensolve-cannot-write-here",
+            "--quiet",
+            "--solver",
+            "micro-macro",
+        ],
+    );
+    let err = text(&o.stderr);
+    assert_eq!(code(&o), 2, "{err}");
+    assert_eq!(err.matches("error: ").count(), 1, "{err}");
+    assert!(err.contains("not writable"), "{err}");
 }

@@ -40,6 +40,10 @@ pub enum RunError {
         /// Which, and how they ended.
         list: String,
     },
+    /// Another MPI rank failed where this one did not (that rank says why): every rank stops
+    /// at the same step, so that none waits alone in a collective.
+    #[error("another MPI rank failed")]
+    OnAnotherRank,
 }
 
 impl RunError {
@@ -50,9 +54,23 @@ impl RunError {
         match self {
             RunError::Case(_) | RunError::Setup(_) | RunError::OutputDir { .. } => 2,
             RunError::Busy(_) => 3,
-            RunError::Write { .. } | RunError::NotConverged { .. } => 1,
+            RunError::Write { .. } | RunError::NotConverged { .. } | RunError::OnAnotherRank => 1,
         }
     }
+}
+
+/// `result` where it holds on every rank of `exchange`; otherwise an error on every rank: its
+/// own where it failed, [`RunError::OnAnotherRank`] where it did not. A step that can fail on
+/// some ranks only (rank 0's files, each rank's memory) goes through it before the next
+/// collective operation.
+pub fn on_every_rank<T>(
+    exchange: &dyn crate::solvers::latin::Exchange,
+    result: Result<T, RunError>,
+) -> Result<T, RunError> {
+    if exchange.all(result.is_ok()) {
+        return result;
+    }
+    Err(result.err().unwrap_or(RunError::OnAnotherRank))
 }
 
 impl RunError {

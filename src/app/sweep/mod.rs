@@ -6,6 +6,7 @@ mod error;
 mod figure12;
 mod verdict;
 
+use error::on_every_rank;
 pub use error::RunError;
 
 use super::memory::{self, MemoryEstimate, Workload};
@@ -114,7 +115,8 @@ pub fn run_on(
     let dir = output_dir(case, options);
     let methods = methods(case, options)?;
     // 0. The memory the run needs, estimated before anything large is allocated.
-    memory::ensure_fits(&run_estimate(case, &methods), "run")?;
+    let fits = memory::ensure_fits(&run_estimate(case, &methods), "run").map_err(RunError::from);
+    on_every_rank(exchange, fits)?;
     // 1. The structure and its mechanism check (K with every cable taut, factorized).
     events(RunEvent::Stage(
         "building the structure and factorising its taut stiffness",
@@ -127,17 +129,16 @@ pub fn run_on(
     let reference = ReferenceSource::new(case, &solvers, &prepared)?;
     // 4. The output directory, once the case is known solvable: locked for this run, with a
     //    private staging directory; then the sinks of the files asked for.
-    let out = (writes && writes_files(case))
-        .then(|| OutputDir::open(&dir).map(RefCell::new))
-        .transpose()?;
+    let out = on_every_rank(exchange, open_output(case, &dir, writes))?;
     let sinks = sinks(case, &dir, out.as_ref(), &prepared, &solvers);
     // 5. The homogenised substructure operators, when asked (set-up products, written once).
-    if let Some(out) = out.as_ref().filter(|_| case.output.homogenised) {
-        events(RunEvent::Stage("writing the homogenised operators"));
-        write_homogenised(&dir, out, &mut solvers)?;
-    }
+    let homogenised = match out.as_ref().filter(|_| case.output.homogenised) {
+        Some(out) => write_homogenised(&dir, out, &mut solvers, events),
+        None => Ok(()),
+    };
+    on_every_rank(exchange, homogenised)?;
     // 6. Every α, every solver (steps 7–9 in `Sweep`); 10. the files of the whole sweep.
-    let mut sweep = Sweep::new(case, &prepared, solvers, reference, sinks);
+    let mut sweep = Sweep::new(case, &prepared, solvers, reference, sinks, exchange);
     for &alpha in &case.load.alphas {
         sweep.solve_alpha(alpha, events)?;
     }
@@ -161,6 +162,19 @@ pub fn run_on(
         true => Ok(rows),
         false => Err(RunError::not_converged(&failures)),
     }
+}
+
+/// The output directory `dir`, locked for this run with a private staging directory, when
+/// this process `writes` and the case asks for files.
+fn open_output(
+    case: &Case,
+    dir: &Path,
+    writes: bool,
+) -> Result<Option<RefCell<OutputDir>>, RunError> {
+    (writes && writes_files(case))
+        .then(|| OutputDir::open(dir).map(RefCell::new))
+        .transpose()
+        .map_err(RunError::from)
 }
 
 /// What running `methods` on `case` needs ([`MemoryEstimate`]).
@@ -219,7 +233,9 @@ fn write_homogenised(
     root: &Path,
     out: &RefCell<OutputDir>,
     solvers: &mut [SetUpSolver<'_>],
+    events: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<(), RunError> {
+    events(RunEvent::Stage("writing the homogenised operators"));
     for set_up in solvers {
         let operators = set_up.solver.homogenised();
         let staging = out.borrow().staging().to_path_buf();
@@ -246,6 +262,9 @@ struct Sweep<'s> {
     wants_eigenvalue: bool,
     rows: Vec<SummaryRow>,
     failures: Vec<String>,
+    /// The processes of the run: a solve's files, written by rank 0 alone, are agreed on
+    /// before the next solve's collectives.
+    exchange: &'s dyn Exchange,
 }
 
 impl<'s> Sweep<'s> {
@@ -255,9 +274,11 @@ impl<'s> Sweep<'s> {
         solvers: Vec<SetUpSolver<'s>>,
         reference: ReferenceSource<'s>,
         sinks: Sinks<'s>,
+        exchange: &'s dyn Exchange,
     ) -> Self {
         let model = prepared.structure.model;
         Sweep {
+            exchange,
             prepared,
             previous: vec![None; solvers.len()],
             solvers,
@@ -297,7 +318,10 @@ impl<'s> Sweep<'s> {
                 alpha,
                 measure: set_up.solver.stopping_measure(),
             };
-            self.sinks.start(&key)?;
+            on_every_rank(
+                self.exchange,
+                self.sinks.start(&key).map_err(RunError::from),
+            )?;
             events(RunEvent::SolveStart {
                 solver: key.method.name(),
                 alpha,
@@ -320,7 +344,8 @@ impl<'s> Sweep<'s> {
                     )
                 }
             };
-            self.record(index, &key, &load, solution, events)?;
+            let recorded = self.record(index, &key, &load, solution, events);
+            on_every_rank(self.exchange, recorded)?;
         }
         Ok(())
     }
