@@ -2,10 +2,13 @@
 //! partition, row by row, so that most interfaces stay inside a rank; what each rank holds and
 //! what crosses between ranks at each iteration. Topology only: nothing is factorized.
 //!
-//! Per iteration a rank sends, for every interface it shares with another rank, three values
-//! per interface row (a free component of an interface node): its side's U and F (the
-//! interface's local stage needs both sides) and its partial sums of r(U) on the shared dofs.
-//! The macro right-hand side (one value per macro force) is reduced over all ranks.
+//! Today the solve all-gathers the fields of s each linear stage writes and the parts of the
+//! macro right-hand side (`exchange.rs`): a rank receives those of every other rank's
+//! substructures. Once the exchange is point to point, a rank will send, for every interface it
+//! shares with another rank, three values per interface row (a free component of an interface
+//! node): its side's U and F (the interface's local stage needs both sides) and its partial
+//! sums of r(U) on the shared dofs; the macro right-hand side (one value per macro force)
+//! reduced over all ranks.
 
 use super::interfaces::Interfaces;
 use super::{LatinSettings, Partition};
@@ -24,8 +27,14 @@ pub struct RankShare {
     pub links: usize,
     /// Ranks it shares an interface with, increasing.
     pub neighbours: Vec<usize>,
-    /// Values it sends per iteration to its neighbours (as many as it receives).
+    /// Values it sends per iteration to its neighbours (as many as it receives) once the
+    /// exchange is point to point.
     pub values_sent: usize,
+    /// Values it receives per iteration in the solve's all-gathers today: the fields of s the
+    /// linear stage writes (e and t per link, U_E per dof, U and F per interface row) and the
+    /// macro right-hand side's parts (one per macro dof; kernel amplitudes left out) of every
+    /// other rank's substructures.
+    pub values_gathered: usize,
 }
 
 /// The layout of a micro-macro partition over P ranks.
@@ -66,6 +75,7 @@ impl RankLayout {
                     links,
                     neighbours: Vec::new(),
                     values_sent: 0,
+                    values_gathered: 0,
                 }
             })
             .collect();
@@ -85,6 +95,28 @@ impl RankLayout {
             }
         }
         shares.iter_mut().for_each(|s| s.neighbours.sort_unstable());
+        // What each substructure contributes to the all-gathers of an iteration.
+        let mut gathered = vec![0usize; n_subs];
+        for (e, topo) in partition.substructures.iter().enumerate() {
+            let dofs = topo
+                .nodes
+                .iter()
+                .flat_map(|&n| structure.held_components(n))
+                .filter(|&held| !held)
+                .count();
+            gathered[e] = 2 * topo.links.len() + dofs;
+        }
+        for iface in &interfaces.list {
+            let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
+            for &e in &iface.topology.sides {
+                gathered[e] += 2 * rows + iface.basis.ncols();
+            }
+        }
+        let total: usize = gathered.iter().sum();
+        for share in &mut shares {
+            share.values_gathered =
+                total - gathered[share.substructures.clone()].iter().sum::<usize>();
+        }
         RankLayout {
             subdomains: settings.subdomains,
             ranks: shares,
@@ -113,20 +145,24 @@ impl RankLayout {
         for (r, share) in self.ranks.iter().enumerate() {
             let neighbours: Vec<String> = share.neighbours.iter().map(|n| n.to_string()).collect();
             out += &format!(
-                "  rank {r}: substructures {}..{} ({}), {} links, neighbours [{}], sends {} values \
-                 ({:.1} KiB) per iteration\n",
+                "  rank {r}: substructures {}..{} ({}), {} links, neighbours [{}], receives {} \
+                 values ({:.1} KiB) per iteration (point to point: would send {}, {:.1} KiB)\n",
                 share.substructures.start,
                 share.substructures.end,
                 share.substructures.len(),
                 share.links,
                 neighbours.join(", "),
+                share.values_gathered,
+                kb(share.values_gathered),
                 share.values_sent,
                 kb(share.values_sent),
             );
         }
         out += &format!(
-            "  per iteration: {} values ({:.1} KiB) point to point over {} of {} interfaces \
-             (U, F and r(U)'s partial sums, {VALUES_PER_ROW} per interface row); the macro \
+            "  per iteration the solve all-gathers, onto every rank, the other ranks' e and t \
+             per link, U per dof, U and F per interface row and macro right-hand side parts; \
+             once point to point (not yet): {} values ({:.1} KiB) over {} of {} interfaces \
+             (U, F and r(U)'s partial sums, {VALUES_PER_ROW} per interface row), and the macro \
              right-hand side, {} values, reduced over the ranks\n",
             self.values_exchanged(),
             kb(self.values_exchanged()),
@@ -154,6 +190,7 @@ mod tests {
         assert_eq!(one.ranks[0].substructures, 0..16);
         assert_eq!(one.ranks[0].links, s.links.len());
         assert_eq!((one.crossing_interfaces, one.values_exchanged()), (0, 0));
+        assert_eq!(one.ranks[0].values_gathered, 0, "one rank gathers nothing");
         assert!(one.ranks[0].neighbours.is_empty());
 
         for p in [2, 4, 16] {
@@ -174,6 +211,15 @@ mod tests {
                     );
                 }
             }
+            // Every rank receives what the others' substructures contribute: all ranks
+            // together P − 1 times what one rank holding them all would gather.
+            let gathered: usize = layout.ranks.iter().map(|r| r.values_gathered).sum();
+            let two: usize = RankLayout::new(&s, &settings, 2)
+                .ranks
+                .iter()
+                .map(|r| r.values_gathered)
+                .sum();
+            assert_eq!(gathered, (p - 1) * two, "{p} ranks");
             let sent: usize = layout.ranks.iter().map(|r| r.values_sent).sum();
             assert_eq!(sent, layout.values_exchanged());
             assert_eq!(sent % (2 * VALUES_PER_ROW), 0, "as much each way");
