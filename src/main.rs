@@ -273,11 +273,13 @@ fn run_command(
     });
     if ranks.size() > 1 {
         reporter.line(&format!(
-            "MPI: {} ranks; rank 0 received {} values ({}) in {} collective calls",
+            "MPI: {} ranks; rank 0 received {} values ({}) in {} collective calls, {:.3} s \
+             in them (waiting for the other ranks included)",
             ranks.size(),
             exchange.values_received(),
             tensolve::host::bytes_text(8 * exchange.values_received()),
-            exchange.calls()
+            exchange.calls(),
+            exchange.seconds()
         ));
     }
     reporter.finish();

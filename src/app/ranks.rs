@@ -115,6 +115,8 @@ pub struct RankExchange {
     received: AtomicU64,
     /// Collective calls made.
     calls: AtomicU64,
+    /// Nanoseconds spent in them (waiting for the other ranks included).
+    nanos: AtomicU64,
 }
 
 impl Ranks {
@@ -125,6 +127,7 @@ impl Ranks {
             size: self.size(),
             received: AtomicU64::new(0),
             calls: AtomicU64::new(0),
+            nanos: AtomicU64::new(0),
         }
     }
 }
@@ -139,6 +142,21 @@ impl RankExchange {
     pub fn calls(&self) -> u64 {
         self.calls.load(Ordering::Relaxed)
     }
+
+    /// Seconds spent in collective calls so far, waiting for the other ranks included.
+    pub fn seconds(&self) -> f64 {
+        self.nanos.load(Ordering::Relaxed) as f64 * 1e-9
+    }
+
+    /// `f`, counted as one collective call and timed.
+    fn collective<T>(&self, f: impl FnOnce() -> T) -> T {
+        let clock = std::time::Instant::now();
+        let out = f();
+        self.calls.fetch_add(1, Ordering::Relaxed);
+        let nanos = u64::try_from(clock.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        self.nanos.fetch_add(nanos, Ordering::Relaxed);
+        out
+    }
 }
 
 impl Exchange for RankExchange {
@@ -151,7 +169,16 @@ impl Exchange for RankExchange {
     }
 
     fn all_gather(&self, mine: &[f64]) -> Vec<f64> {
-        self.calls.fetch_add(1, Ordering::Relaxed);
+        self.collective(|| self.gather_all(mine))
+    }
+
+    fn all(&self, value: bool) -> bool {
+        self.collective(|| self.all_true(value))
+    }
+}
+
+impl RankExchange {
+    fn gather_all(&self, mine: &[f64]) -> Vec<f64> {
         #[cfg(feature = "mpi")]
         if self.size > 1 {
             use mpi::datatype::PartitionMut;
@@ -183,8 +210,7 @@ impl Exchange for RankExchange {
         mine.to_vec()
     }
 
-    fn all(&self, value: bool) -> bool {
-        self.calls.fetch_add(1, Ordering::Relaxed);
+    fn all_true(&self, value: bool) -> bool {
         #[cfg(feature = "mpi")]
         if self.size > 1 {
             use mpi::collective::SystemOperation;
