@@ -95,23 +95,7 @@ impl RankLayout {
             }
         }
         shares.iter_mut().for_each(|s| s.neighbours.sort_unstable());
-        // What each substructure contributes to the all-gathers of an iteration.
-        let mut gathered = vec![0usize; n_subs];
-        for (e, topo) in partition.substructures.iter().enumerate() {
-            let dofs = topo
-                .nodes
-                .iter()
-                .flat_map(|&n| structure.held_components(n))
-                .filter(|&held| !held)
-                .count();
-            gathered[e] = 2 * topo.links.len() + dofs;
-        }
-        for iface in &interfaces.list {
-            let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
-            for &e in &iface.topology.sides {
-                gathered[e] += 2 * rows + iface.basis.ncols();
-            }
-        }
+        let gathered = gathered_per_substructure(structure, &partition, &interfaces);
         let total: usize = gathered.iter().sum();
         for share in &mut shares {
             share.values_gathered =
@@ -172,6 +156,35 @@ impl RankLayout {
         );
         out
     }
+}
+
+/// Per substructure, the values it contributes to an iteration's all-gathers: e and t per link,
+/// U_E per free dof, U and F per interface row and one macro right-hand side part per macro dof.
+fn gathered_per_substructure(
+    structure: &Structure,
+    partition: &Partition,
+    interfaces: &Interfaces,
+) -> Vec<usize> {
+    let mut gathered: Vec<usize> = partition
+        .substructures
+        .iter()
+        .map(|topo| {
+            let dofs = topo
+                .nodes
+                .iter()
+                .flat_map(|&n| structure.held_components(n))
+                .filter(|&held| !held)
+                .count();
+            2 * topo.links.len() + dofs
+        })
+        .collect();
+    for iface in &interfaces.list {
+        let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
+        for &e in &iface.topology.sides {
+            gathered[e] += 2 * rows + iface.basis.ncols();
+        }
+    }
+    gathered
 }
 
 #[cfg(test)]
