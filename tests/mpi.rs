@@ -194,7 +194,7 @@ fn files_under(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
 /// (iterations, slack sets' counts, e, η, r(U)), histories and displacements. Each rank
 /// computes its substructures' halves of the linear stage, and the macro right-hand side is
 /// summed in the substructures' order on every rank, as on one process.
-fn ranks_agree_with_threads(case: &str, alpha: &str) {
+fn ranks_agree_with_threads(case: &str, sets: &[&str], rank_counts: &[usize]) {
     let case = manifest_path(case);
     let args = |out: &Temp| {
         vec![
@@ -206,12 +206,16 @@ fn ranks_agree_with_threads(case: &str, alpha: &str) {
             "--solver".into(),
             "micro-macro".into(),
             "--set".into(),
-            format!("load.alpha=[{alpha}]"),
-            "--set".into(),
             "output.displacements=true".into(),
             "--set".into(),
             "output.plots=false".into(),
         ]
+        .into_iter()
+        .chain(
+            sets.iter()
+                .flat_map(|set| ["--set".to_string(), set.to_string()]),
+        )
+        .collect::<Vec<String>>()
     };
     let threads = Temp::dir("mpi-threads");
     let a = args(&threads);
@@ -219,7 +223,7 @@ fn ranks_agree_with_threads(case: &str, alpha: &str) {
     assert_eq!(code(&o), 0, "{}", text(&o.stderr));
     let expected = files_under(&threads.0);
     assert!(expected.len() >= 3, "{expected:?}");
-    for ranks in [1, 2, 4] {
+    for &ranks in rank_counts {
         let out = Temp::dir("mpi-ranks");
         let a = args(&out);
         let o = mpirun(ranks, &a.iter().map(String::as_str).collect::<Vec<_>>());
@@ -242,17 +246,36 @@ fn ranks_agree_with_threads(case: &str, alpha: &str) {
 
 #[test]
 fn the_paper_case_on_ranks_is_the_threaded_run() {
-    ranks_agree_with_threads("cases/paper.toml", "0.5, 1.0");
+    ranks_agree_with_threads("cases/paper.toml", &["load.alpha=[0.5, 1.0]"], &[1, 2, 4]);
 }
 
 #[test]
 fn scale_16_on_ranks_is_the_threaded_run() {
-    ranks_agree_with_threads("cases/scale-16-latin.toml", "2.4");
+    ranks_agree_with_threads(
+        "cases/scale-16-latin.toml",
+        &["load.alpha=[2.4]"],
+        &[1, 2, 4],
+    );
 }
 
 #[test]
 fn scale_64_on_ranks_is_the_threaded_run() {
-    ranks_agree_with_threads("cases/scale-64-latin.toml", "0.15");
+    ranks_agree_with_threads(
+        "cases/scale-64-latin.toml",
+        &["load.alpha=[0.15]"],
+        &[1, 2, 4],
+    );
+}
+
+/// The paper's plain method (the relaxed order, l fixed) on 3 ranks, whose blocks are uneven
+/// (5, 5 and 6 of the 16 substructures), once as the paper runs it (μ = 1) and once relaxed
+/// (μ = 0.8: each rank blends its own substructures' s before sharing it).
+#[test]
+fn the_plain_method_on_three_ranks_is_the_threaded_run() {
+    let case = "cases/paper-plain.toml";
+    ranks_agree_with_threads(case, &["load.alpha=[0.5, 1.0]"], &[3]);
+    let relaxed = ["load.alpha=[1.0]", "solver.relaxation=0.8"];
+    ranks_agree_with_threads(case, &relaxed, &[3]);
 }
 
 /// A solve that cannot be set up fails on every rank, with one message and nothing written;
