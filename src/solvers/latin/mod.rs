@@ -249,15 +249,7 @@ impl<'s> Latin<'s> {
         let dense_bytes: usize = partition
             .substructures
             .iter()
-            .map(|t| {
-                let dofs = t
-                    .nodes
-                    .iter()
-                    .flat_map(|&n| structure.held_components(n))
-                    .filter(|&held| !held)
-                    .count();
-                8 * dofs.pow(2)
-            })
+            .map(|t| 8 * t.free_dofs(structure).pow(2))
             .sum();
         // (½ Σ t0² / l)^{1/2} with l as set up: the prestress in the units of Δη.
         let prestress_scale = (0.5

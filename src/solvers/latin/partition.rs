@@ -32,6 +32,17 @@ pub struct InterfaceTopology {
     pub nodes: Vec<usize>,
 }
 
+impl SubstructureTopology {
+    /// Its free dofs: the free components of its nodes (the size of K_E).
+    pub fn free_dofs(&self, structure: &Structure) -> usize {
+        self.nodes
+            .iter()
+            .flat_map(|&n| structure.held_components(n))
+            .filter(|&held| !held)
+            .count()
+    }
+}
+
 impl InterfaceTopology {
     /// Weak interface: at most [`WEAK_MAX_NODES`] nodes, too few for the nine-field macro basis.
     pub fn is_weak(&self) -> bool {

@@ -168,15 +168,7 @@ fn gathered_per_substructure(
     let mut gathered: Vec<usize> = partition
         .substructures
         .iter()
-        .map(|topo| {
-            let dofs = topo
-                .nodes
-                .iter()
-                .flat_map(|&n| structure.held_components(n))
-                .filter(|&held| !held)
-                .count();
-            2 * topo.links.len() + dofs
-        })
+        .map(|topo| 2 * topo.links.len() + topo.free_dofs(structure))
         .collect();
     for iface in &interfaces.list {
         let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
