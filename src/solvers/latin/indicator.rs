@@ -15,6 +15,10 @@ const ROUNDOFF: f64 = 1e-12;
 /// grid) still iterates to its tolerance above it.
 const LOADED_ROUNDOFF: f64 = 1e-15;
 
+/// r(U), and with inexact Newton status steps the residual under the law linearised at the
+/// status.
+pub(super) type Residuals = (f64, Option<f64>);
+
 impl Latin<'_> {
     /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (docs/method.md §4 "Indicator", §5.3). The distance is
     /// measured along the search direction that does not relate them: E⁺ (`t − t̂ = −l(e − ê)`)
@@ -72,12 +76,7 @@ impl Latin<'_> {
     /// r(U) of the linear stage's U (`u`, [`Latin::displacements`]) under the exact law, and
     /// with inexact Newton status steps the residual under the law linearised at `law_slack`.
     /// It reads only U, so it may run beside the local stage.
-    pub(super) fn residuals(
-        &self,
-        u: &[f64],
-        load: &[f64],
-        law_slack: &[bool],
-    ) -> (f64, Option<f64>) {
+    pub(super) fn residuals(&self, u: &[f64], load: &[f64], law_slack: &[bool]) -> Residuals {
         if self.newton_steps() {
             let (exact, frozen) = exact_and_frozen_residuals(self.structure, u, load, law_slack);
             (exact, Some(frozen))
@@ -87,8 +86,9 @@ impl Latin<'_> {
     }
 
     /// η, the equilibrium residual r(U), the round-off stop and the slack count of `state`
-    /// after a linear stage.
-    pub(super) fn measure_state(&self, state: &mut LatinState) {
+    /// after a linear stage; the residuals are `measured` when the iteration computed them
+    /// beside its local stage.
+    pub(super) fn measure_state(&self, state: &mut LatinState, measured: Option<Residuals>) {
         let (distance, size) = self.indicator(&state.subs);
         state.eta = if size > 0.0 { distance / size } else { 0.0 };
         // η is scale-free: when s and ŝ are both round-off (no load: the exact answer is
@@ -101,7 +101,7 @@ impl Latin<'_> {
         state.at_roundoff = distance <= floor * self.prestress_scale;
         // r(U) of the linear stage's U under the exact law (docs/method.md §6), unless the
         // iteration measured it beside its local stage.
-        let residuals = state.measured.take().unwrap_or_else(|| {
+        let residuals = measured.unwrap_or_else(|| {
             let u = self.displacements(&state.subs);
             self.residuals(&u, &state.load, &state.law_slack)
         });

@@ -4,6 +4,7 @@
 //! `progress`) the driver runs.
 
 use super::anderson::Anderson;
+use super::indicator::Residuals;
 use super::local_stage::LocalLaw;
 use super::state::{LatinState, SubState};
 use super::{Latin, SearchPolicy, StopOn};
@@ -61,8 +62,13 @@ impl Latin<'_> {
 
     /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; new
     /// operators if the status asks for them; x⁺ from Anderson (restarted when the map changed:
-    /// new operators, or `restart` from a status step); then s = linear(x⁺) and ŝ = local(s).
-    pub(super) fn accelerated_iteration(&mut self, state: &mut LatinState, restart: bool) {
+    /// new operators, or `restart` from a status step); then s = linear(x⁺) and ŝ = local(s),
+    /// with the residuals of s measured beside it (returned).
+    pub(super) fn accelerated_iteration(
+        &mut self,
+        state: &mut LatinState,
+        restart: bool,
+    ) -> Residuals {
         let restarted = self.update_search(state) || restart;
         let g = self.linear_stage_input(&state.subs);
         let next = state.anderson.step(&state.input, &g, restarted);
@@ -70,14 +76,15 @@ impl Latin<'_> {
         state.input = next;
         let accuracy = self.macro_accuracy(state.residual);
         self.linear_stage(&state.load, &mut state.subs, None, accuracy);
-        self.local_stage_measuring(state);
+        let residuals = self.local_stage_measuring(state);
         state.relax = true;
+        residuals
     }
 
     /// ŝ = local(s) on the iteration's law, and beside it (on another thread: the local stage
     /// is parallel over the substructures, r(U) one pass over the links) the residuals of s's
-    /// U, kept for [`Latin::measure_state`]: the same numbers as one after the other.
-    pub(super) fn local_stage_measuring(&self, state: &mut LatinState) {
+    /// U, for [`Latin::measure_state`]: the same numbers as one after the other.
+    pub(super) fn local_stage_measuring(&self, state: &mut LatinState) -> Residuals {
         let u = self.displacements(&state.subs);
         let law = self.local_law(&state.law_slack);
         let (subs, load, law_slack) = (&mut state.subs, &state.load, &state.law_slack);
@@ -85,7 +92,7 @@ impl Latin<'_> {
             || self.local_stage(subs, law),
             || self.residuals(&u, load, law_slack),
         );
-        state.measured = Some(residuals);
+        residuals
     }
 
     /// How far the macro solve is refined (a fraction of its right-hand side): 1e-9 while
@@ -203,15 +210,15 @@ impl Solver for Latin<'_> {
             input: Vec::new(),
             anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
             status_streak: vec![0; self.structure.links.len()],
-            measured: None,
         };
         self.linear_stage(&state.load, &mut state.subs, None, 1e-9);
+        let mut measured = None;
         if self.accelerated() {
             state.input = self.linear_stage_input(&state.subs);
-            self.local_stage_measuring(&mut state);
+            measured = Some(self.local_stage_measuring(&mut state));
         }
         state.relax = true;
-        self.measure_state(&mut state);
+        self.measure_state(&mut state, measured);
         if self.newton_steps() {
             state.step = Some(self.step_start(&state));
         }
@@ -226,14 +233,15 @@ impl Solver for Latin<'_> {
     /// first ends in a status step, and the iteration is the first of the next inner run.
     fn next_iter(&mut self, state: &mut LatinState) {
         let stepped = self.newton_steps() && self.inner_run_done(state);
-        if self.accelerated() {
+        let measured = if self.accelerated() {
             let restart = stepped && self.status_step(state).map_changed;
-            self.accelerated_iteration(state, restart);
+            Some(self.accelerated_iteration(state, restart))
         } else {
             self.relaxed_iteration(state);
-        }
+            None
+        };
         state.iteration += 1;
-        self.measure_state(state);
+        self.measure_state(state, measured);
         if stepped {
             state.step = Some(self.step_start(state));
         }

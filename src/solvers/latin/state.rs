@@ -94,9 +94,6 @@ pub struct LatinState {
     /// search direction was built for (status-following l).
     pub(super) status_streak: Vec<u8>,
 
-    /// `(r(U), frozen r(U))` of s when the iteration measured them beside its local stage
-    /// ([`Latin::local_stage_measuring`](super::Latin)), taken by the next measurement.
-    pub(super) measured: Option<(f64, Option<f64>)>,
     /// With inexact Newton status steps: r(U) under the law linearised at the status.
     pub frozen_residual: f64,
     /// With inexact Newton status steps: the slack status the local stage's law is linearised
