@@ -255,7 +255,8 @@ impl Solver for Latin<'_> {
             StopOn::Residual => residual_met,
             StopOn::Both => eta_met && residual_met,
         };
-        let stop = if !(state.eta.is_finite() && state.residual.is_finite()) {
+        let stop = if self.operators_lost || !(state.eta.is_finite() && state.residual.is_finite())
+        {
             Some(Status::Stalled)
         } else if criterion || (state.at_roundoff && state.unloaded) {
             Some(Status::Converged)

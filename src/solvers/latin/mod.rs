@@ -130,6 +130,9 @@ pub struct Latin<'s> {
     search: Vec<f64>,
     /// The cables whose l is ε·l: the slack set of ŝ when the operators were last built.
     search_slack: Vec<bool>,
+    /// A failed rebuild whose undo failed too: the operators match no search direction, and
+    /// the solve stops as stalled (it cannot happen: the undo repeats a build that succeeded).
+    operators_lost: bool,
     /// The interfaces that carry constraints.
     pub(crate) interfaces: Vec<Interface>,
     /// The substructures, row by row of the partition.
@@ -282,6 +285,7 @@ impl<'s> Latin<'s> {
             dense: dense_bytes <= DENSE_BUDGET_BYTES,
             search: base_search.clone(),
             search_slack: vec![false; structure.links.len()],
+            operators_lost: false,
             base_search,
             interfaces: interfaces.list,
             substructures,

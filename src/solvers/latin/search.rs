@@ -3,11 +3,8 @@
 //! changed are rebuilt (each rank those it holds), then the macro problem.
 
 use super::operators::share_homogenised;
-use super::{
-    Latin, LatinState, SubState, Substructure, SLACK_SEARCH_FACTOR, STATUS_BAND, STATUS_PERSISTENCE,
-};
+use super::{Latin, LatinState, SubState, SLACK_SEARCH_FACTOR, STATUS_BAND, STATUS_PERSISTENCE};
 use crate::structure::law;
-use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 impl Latin<'_> {
@@ -78,8 +75,9 @@ impl Latin<'_> {
     }
 
     /// New operators with ε·l on the cables of `slack`: the substructures where l changed,
-    /// then the macro problem. On failure (a substructure left without stiffness) the previous
-    /// ones are kept. `true` when rebuilt.
+    /// then the macro problem. On failure (a substructure left without stiffness, or a
+    /// singular macro problem) the operators of the current directions are rebuilt and kept.
+    /// `true` when rebuilt.
     pub(super) fn set_search(&mut self, slack: Vec<bool>) -> bool {
         let mut search = self.base_search.clone();
         for (l, &is_slack) in search.iter_mut().zip(&slack) {
@@ -95,62 +93,47 @@ impl Latin<'_> {
                     .any(|&i| search[i] != self.search[i])
             })
             .collect();
-        // Only l changed: each substructure keeps its pattern, symbolic analysis and kernel.
-        // Each rank rebuilds those it holds; the rebuild stands only if it succeeded on all.
-        let (dm, dense) = (self.dm, self.dense);
-        let held: Vec<usize> = changed
-            .iter()
-            .copied()
-            .filter(|e| self.held.contains(e))
-            .collect();
-        let rebuilt = held
-            .par_iter()
-            .map(|&e| self.substructures[e].with_search(&search, dm, dense))
-            .collect::<Result<Vec<Substructure>, _>>();
-        if !self.exchange.all(rebuilt.is_ok()) {
+        if self.rebuild(&changed, &search) {
+            self.search = search;
+            self.search_slack = slack;
+            return true;
+        }
+        // Back to the current directions: the inputs the operators were last built from, so
+        // the same operators, bit for bit. Should that fail all the same, the solve cannot go
+        // on (`operators_lost`: it stops as stalled).
+        let current = std::mem::take(&mut self.search);
+        self.operators_lost |= !self.rebuild(&changed, &current);
+        self.search = current;
+        false
+    }
+
+    /// The operators of the substructures `changed` rebuilt in place for the directions
+    /// `search` (each rank those it holds; the rebuild stands only if it succeeded on all),
+    /// their L_E shared, and the macro problem refactorised. `false` on failure, when the
+    /// changed substructures' operators are left unusable.
+    fn rebuild(&mut self, changed: &[usize], search: &[f64]) -> bool {
+        let (dm, dense, held) = (self.dm, self.dense, self.held.clone());
+        let rebuilt = self
+            .substructures
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(e, _)| held.contains(e) && changed.binary_search(e).is_ok())
+            .map(|(_, sub)| sub.set_search(search, dm, dense))
+            .collect::<Result<Vec<()>, _>>()
+            .is_ok();
+        if !self.exchange.all(rebuilt) {
             return false;
         }
-        let Ok(rebuilt) = rebuilt else {
-            return false;
-        };
-        let mut substructures = std::mem::take(&mut self.substructures);
-        let previous: Vec<(usize, Substructure)> = held
-            .iter()
-            .zip(rebuilt)
-            .map(|(&e, sub)| (e, std::mem::replace(&mut substructures[e], sub)))
-            .collect();
-        // L_E and Q_E of the others' rebuilt substructures (the previous ones kept to undo).
-        let remote: Vec<(usize, DMatrix<f64>, DMatrix<f64>)> = changed
-            .iter()
-            .filter(|e| !self.held.contains(e))
-            .map(|&e| {
-                let sub = &substructures[e];
-                (e, sub.flexibility.clone(), sub.kernel.clone())
-            })
-            .collect();
-        share_homogenised(&mut substructures, &changed, self.exchange, &self.held);
+        share_homogenised(&mut self.substructures, changed, self.exchange, &held);
         match self
             .macro_problem
-            .refactor(&substructures, &self.interfaces)
+            .refactor(&self.substructures, &self.interfaces)
         {
             Ok(macro_problem) => {
-                self.substructures = substructures;
                 self.macro_problem = macro_problem;
-                self.search = search;
-                self.search_slack = slack;
                 true
             }
-            Err(_) => {
-                for (e, sub) in previous {
-                    substructures[e] = sub;
-                }
-                for (e, flexibility, kernel) in remote {
-                    substructures[e].flexibility = flexibility;
-                    substructures[e].kernel = kernel;
-                }
-                self.substructures = substructures;
-                false
-            }
+            Err(_) => false,
         }
     }
 }

@@ -195,58 +195,61 @@ impl Substructure {
             .expect("a substructure's operators are used only on the rank that holds it")
     }
 
-    /// E with the search directions `search`: its indexing, the pattern of K_E and its
-    /// symbolic analysis, and the kernel Q_E are kept (they depend on E's links and
-    /// supports, not on l > 0); K_E is factorised anew and Z_E, K*_E, K⁺_E, L_E recomputed.
-    pub fn with_search(
-        &self,
+    /// E's operators for the search directions `search`, rebuilt in place: its indexing, the
+    /// pattern of K_E and its symbolic analysis, and the kernel Q_E are kept (they depend on
+    /// E's links and supports, not on l > 0); K_E is factorised anew into the factor's own
+    /// storage and Z_E, K*_E, K⁺_E, L_E recomputed. Nothing of the previous operators is kept
+    /// (a rebuild of every substructure would otherwise hold two sets at once): on failure
+    /// they are lost, and the caller rebuilds them from the previous directions.
+    pub fn set_search(
+        &mut self,
         search: &[f64],
         dm: f64,
         dense: bool,
-    ) -> Result<Substructure, SingularSubstructure> {
-        let old = self.ops();
+    ) -> Result<(), SingularSubstructure> {
+        let mut ops = self
+            .ops
+            .take()
+            .expect("a substructure's operators are rebuilt only on the rank that holds it");
+        let rebuilt = self.rebuild_operators(&mut ops, search, dm, dense);
+        self.ops = Some(ops);
+        rebuilt
+    }
+
+    /// Steps 4–7 of [`Self::new`] on E's kept pattern, analysis and kernel.
+    fn rebuild_operators(
+        &mut self,
+        ops: &mut LocalOperators,
+        search: &[f64],
+        dm: f64,
+        dense: bool,
+    ) -> Result<(), SingularSubstructure> {
+        // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
         let values = stiffness(
-            &old.pattern,
+            &ops.pattern,
             &self.link_dofs,
-            &old.geometric,
+            &ops.geometric,
             &self.gamma_dofs,
             &self.links,
             search,
             dm,
         );
-        let factor = match &old.factor {
-            SpdSolver::Sparse(old_factor) => {
-                let mut factor = old_factor.share_symbolic();
-                factor
-                    .factorize(&old.pattern, &values)
-                    .map_err(|_| SingularSubstructure)?;
-                SpdSolver::Sparse(factor)
-            }
+        match &mut ops.factor {
+            SpdSolver::Sparse(factor) => factor
+                .factorize(&ops.pattern, &values)
+                .map_err(|_| SingularSubstructure)?,
             SpdSolver::Dense(_) => {
-                SpdSolver::new(&old.pattern, &values, dense).map_err(|_| SingularSubstructure)?
+                ops.factor = SpdSolver::new(&ops.pattern, &values, dense)
+                    .map_err(|_| SingularSubstructure)?
             }
-        };
-        let (z, k_star) = self.condense_operators(&factor, dm);
+        }
+        drop(values);
+        // 5. Z_E and K*_E; 7. K⁺_E and L_E (Q_E of step 6 is kept).
+        let (z, k_star) = self.condense_operators(&ops.factor, dm);
         let (k_plus, flexibility) = invert(&k_star, &self.kernel, dm)?;
-        Ok(Substructure {
-            links: self.links.clone(),
-            dof_global: self.dof_global.clone(),
-            load_share: self.load_share.clone(),
-            link_dofs: self.link_dofs.clone(),
-            sides: self.sides.clone(),
-            gamma_dofs: self.gamma_dofs.clone(),
-            n_macro: self.n_macro,
-            ops: Some(LocalOperators {
-                pattern: old.pattern.clone(),
-                geometric: old.geometric.clone(),
-                factor,
-                z,
-                k_star,
-                k_plus,
-            }),
-            flexibility,
-            kernel: self.kernel.clone(),
-        })
+        (ops.z, ops.k_star, ops.k_plus) = (z, k_star, k_plus);
+        self.flexibility = flexibility;
+        Ok(())
     }
 
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` and `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E` (symmetrised) from the
