@@ -219,3 +219,30 @@ fn supported_paper_grid_is_not_a_mechanism() {
     let s = paper_structure(&[]);
     assert!(TautStiffness::new(&s).is_ok());
 }
+
+/// A run that never solves with K's factor releases it (`Prepared::release_taut`); a solver
+/// that needs it, set up afterwards, is refused with a set-up error naming it (never a
+/// panic), while the LATIN solvers, which never use it, set up as before.
+#[test]
+fn a_released_taut_factor_refuses_the_solvers_that_need_it() {
+    use tensolve::app::setup::{prepare, set_up};
+    use tensolve::solvers::Method;
+    let case = common::paper_with(&[]);
+    let mut prepared = prepare(&case).unwrap();
+    prepared.release_taut();
+    for method in [Method::Newton, Method::PcgLcp] {
+        match set_up(method, &case.solver, &prepared) {
+            Err(e @ SetupError::TautReleased { .. }) => {
+                assert!(e.to_string().starts_with(method.name()), "{e}")
+            }
+            Err(e) => panic!("{method:?}: {e}"),
+            Ok(_) => panic!("{method:?} set up without K's factor"),
+        }
+    }
+    for method in [Method::MonoLatin, Method::MicroMacro] {
+        assert!(
+            set_up(method, &case.solver, &prepared).is_ok(),
+            "{method:?}"
+        );
+    }
+}

@@ -220,6 +220,73 @@ fn large_displacements_are_flagged() {
     }
 }
 
+/// `summary.csv` of `dir` as rows of named columns.
+fn summary_rows(dir: &std::path::Path) -> Vec<std::collections::HashMap<String, String>> {
+    let summary = std::fs::read_to_string(dir.join("summary.csv")).unwrap();
+    let mut lines = summary.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .zip(l.split(','))
+                .map(|(h, v)| (h.to_string(), v.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn the_geometric_term_is_computed_only_when_asked() {
+    // The 24 x 10 grid of `large_displacements_are_flagged` at α = 0.05, where the term is
+    // ≈ 10 % (flagged) while the members turn by less than 10 % of their length. Without
+    // `output.geometric_term` the column is empty, the warning is not given, and
+    // small_displacement_ok says what the rotation alone says; micro-macro alone (reference
+    // none), whose run then releases K's factor after the mechanism check, solves alike.
+    let text = |methods: &str, term: bool| {
+        format!(
+            "[grid]\nmodules = [24, 10]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\n\
+             alpha = [0.05]\n[solver]\nmethods = {methods}\nreference = \"none\"\n\
+             [output]\ngeometric_term = {term}\n"
+        )
+    };
+    let mut rows = Vec::new();
+    for (methods, term) in [
+        ("[\"newton\", \"micro-macro\"]", true),
+        ("[\"newton\", \"micro-macro\"]", false),
+        ("[\"micro-macro\"]", false),
+    ] {
+        let case = Temp::file("geometric-term", &text(methods, term));
+        let out = Temp::dir("geometric-term-out");
+        let o = tensolve(&["run", case.arg(), "--out", out.arg()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{err}");
+        assert_eq!(err.contains("leave out a geometric term"), term, "{err}");
+        rows.push(summary_rows(&out.0));
+    }
+    let (with, without, alone) = (&rows[0], &rows[1], &rows[2]);
+    for row in with {
+        let term: f64 = row["geometric_term"].parse().unwrap();
+        assert!(term > 0.05, "{row:?}");
+        assert_eq!(row["small_displacement_ok"], "false", "{row:?}");
+    }
+    for row in without.iter().chain(alone) {
+        assert_eq!(row["geometric_term"], "", "{row:?}");
+        assert_eq!(row["small_displacement_ok"], "true", "{row:?}");
+    }
+    // The same solves: micro-macro's row alone is its row beside newton.
+    let same = [
+        "iterations",
+        "slack_cables",
+        "max_deflection",
+        "equilibrium_residual",
+    ];
+    for key in same {
+        assert_eq!(with[1][key], alone[0][key], "{key}");
+        assert_eq!(without[1][key], alone[0][key], "{key}");
+    }
+}
+
 #[test]
 fn the_readme_command_reproduces_the_papers_section_5() {
     // `cargo run --release -- run cases/paper.toml`, the case file as it is.

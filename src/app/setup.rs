@@ -13,8 +13,9 @@ use std::time::Instant;
 pub struct Prepared {
     /// The structure of the case.
     pub structure: Structure,
-    /// Its stiffness with every cable taut, factorized.
-    pub taut: TautStiffness,
+    /// Its stiffness with every cable taut, factorized; `None` once released
+    /// ([`Prepared::release_taut`]).
+    pub taut: Option<TautStiffness>,
     /// Time to build the structure, s.
     pub structure_seconds: f64,
     /// Time to assemble and factorize the taut stiffness and check for a mechanism, s.
@@ -29,10 +30,19 @@ pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
     let taut = TautStiffness::new(&structure)?;
     Ok(Prepared {
         structure,
-        taut,
+        taut: Some(taut),
         structure_seconds,
         taut_seconds: clock.elapsed().as_secs_f64() - structure_seconds,
     })
+}
+
+impl Prepared {
+    /// Drop the factor of K with every cable taut once the mechanism check is done, for a run
+    /// that never solves with it ([`crate::app::memory::Workload::keeps_taut`]): it is as large
+    /// as a solver's factor, and the LATIN solvers never use it.
+    pub fn release_taut(&mut self) {
+        self.taut = None;
+    }
 }
 
 /// A solver as the application holds it: solved through the driver ([`AnySolver`]), and
@@ -83,25 +93,30 @@ pub fn set_up_on<'s>(
     prepared: &'s Prepared,
     exchange: &'s dyn Exchange,
 ) -> Result<SetUpSolver<'s>, SetupError> {
-    let (structure, taut) = (&prepared.structure, &prepared.taut);
+    let structure = &prepared.structure;
     if !method.supports(structure.model) {
         return Err(SetupError::ModelNotSupported {
             solver: method.name(),
             model: structure.model.name(),
         });
     }
+    let taut = || {
+        prepared.taut.as_ref().ok_or(SetupError::TautReleased {
+            solver: method.name(),
+        })
+    };
     let clock = Instant::now();
     let (solver, shared): (Box<dyn HeldSolver + 's>, f64) = match choice.settings(method) {
         Settings::Newton(settings) if structure.model == GeometricModel::Large => (
-            Box::new(LargeNewton::new(structure, taut, settings)),
+            Box::new(LargeNewton::new(structure, taut()?, settings)),
             prepared.taut_seconds,
         ),
         Settings::Newton(settings) => (
-            Box::new(Newton::new(structure, taut, settings)?),
+            Box::new(Newton::new(structure, taut()?, settings)?),
             prepared.taut_seconds,
         ),
         Settings::PcgLcp(settings) => (
-            Box::new(PcgLcp::new(structure, taut, settings)),
+            Box::new(PcgLcp::new(structure, taut()?, settings)),
             prepared.taut_seconds,
         ),
         Settings::MonoLatin(settings) => (Box::new(Latin::new(structure, settings)?), 0.0),

@@ -25,6 +25,7 @@ pub(super) fn output_choice(o: RawOutput) -> Result<OutputChoice, CaseError> {
         plots: o.plots.unwrap_or(defaults.plots),
         vtk: o.vtk.unwrap_or(defaults.vtk),
         stability: o.stability.unwrap_or(defaults.stability),
+        geometric_term: o.geometric_term.unwrap_or(defaults.geometric_term),
         homogenised: o.homogenised.unwrap_or(defaults.homogenised),
         amplification: o.amplification.unwrap_or(defaults.amplification),
         max_plot_iterations: o

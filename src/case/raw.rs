@@ -208,6 +208,7 @@ pub(super) struct RawOutput {
     pub plots: Option<bool>,
     pub vtk: Option<bool>,
     pub stability: Option<bool>,
+    pub geometric_term: Option<bool>,
     pub homogenised: Option<bool>,
     pub amplification: Option<f64>,
     pub max_plot_iterations: Option<usize>,

@@ -187,6 +187,12 @@ pub struct OutputChoice {
     /// `stability.csv`: the smallest eigenvalue of the tangent stiffness at every solution
     /// (one more factorization per row). Default false.
     pub stability: bool,
+    /// `summary.csv`'s `geometric_term`: the relative change of the answer by the geometric
+    /// term a model on the initial geometry leaves out (one solve with the factor of K with
+    /// every cable taut per row, and the warning when it is above 1 %). Default true. Without
+    /// it, a run whose solvers never solve with that factor (the LATIN solvers, reference
+    /// none, no stability) releases it after the mechanism check.
+    pub geometric_term: bool,
     /// `homogenised/substructure_{E}.csv`: micro-macro's homogenised flexibility of every
     /// substructure and its macro basis. Default false.
     pub homogenised: bool,
@@ -215,6 +221,7 @@ impl Default for OutputChoice {
             plots: false,
             vtk: false,
             stability: false,
+            geometric_term: true,
             homogenised: false,
             amplification: 10.0,
             max_plot_iterations: 100,

@@ -67,6 +67,16 @@ pub enum SetupError {
         /// The modes' nodal motions, for `mechanisms.csv` (empty when not computed).
         modes: Vec<ModeRow>,
     },
+    /// A solver that solves with the factor of K with every cable taut, set up after the run
+    /// released it (a library caller's order of calls; `run` keeps it for such solvers).
+    #[error(
+        "{solver} solves with the factor of K with every cable taut, which was released \
+         (`Prepared::release_taut`) before it was set up: set it up before releasing, or keep it"
+    )]
+    TautReleased {
+        /// The solver.
+        solver: &'static str,
+    },
     /// A LATIN substructure operator could not be factorized or pseudo-inverted.
     #[error(
         "substructure {index} has a singular operator (K_E or K*_E + QQᵀ): change \

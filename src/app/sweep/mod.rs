@@ -26,7 +26,7 @@ use crate::solvers::{
 use crate::structure::StructureSize;
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
-use verdict::{assess, not_converged_message};
+use verdict::{assess, not_converged_message, AnswerChecks};
 
 /// What the command line adds to a case.
 #[derive(Debug, Clone, Default)]
@@ -115,13 +115,22 @@ pub fn run_on(
     let dir = output_dir(case, options);
     let methods = methods(case, options)?;
     // 0. The memory the run needs, estimated before anything large is allocated.
-    let fits = memory::ensure_fits(&run_estimate(case, &methods), "run").map_err(RunError::from);
-    on_every_rank(exchange, fits)?;
-    // 1. The structure and its mechanism check (K with every cable taut, factorized).
+    let work = Workload::run(case, &methods);
+    let estimate = MemoryEstimate::new(StructureSize::of(&case.geometry), &work);
+    on_every_rank(
+        exchange,
+        memory::ensure_fits(&estimate, "run").map_err(RunError::from),
+    )?;
+    // 1. The structure and its mechanism check (K with every cable taut, factorized); the
+    //    factor released when nothing of the run solves with it.
     events(RunEvent::Stage(
         "building the structure and factorising its taut stiffness",
     ));
-    let prepared = prepare_or_locate_mechanisms(case, &dir, writes)?;
+    let mut prepared = prepare_or_locate_mechanisms(case, &dir, writes)?;
+    if !work.keeps_taut {
+        prepared.release_taut();
+    }
+    let prepared = prepared;
     // 2. Every solver asked for, set up once.
     let mut solvers = set_up_all(case, &methods, &prepared, exchange, events)?;
     // 3. Where LATIN's error e is measured from.
@@ -175,14 +184,6 @@ fn open_output(
         .then(|| OutputDir::open(dir).map(RefCell::new))
         .transpose()
         .map_err(RunError::from)
-}
-
-/// What running `methods` on `case` needs ([`MemoryEstimate`]).
-fn run_estimate(case: &Case, methods: &[Method]) -> MemoryEstimate {
-    MemoryEstimate::new(
-        StructureSize::of(&case.geometry),
-        &Workload::run(case, methods),
-    )
 }
 
 /// The solvers of the run: `--solver`, else `solver.methods`, each named once.
@@ -258,8 +259,8 @@ struct Sweep<'s> {
     /// Each solver's converged answer at the previous α: its warm start (newton and pcg-lcp
     /// use it; they stop on the same criterion as from a cold start).
     previous: Vec<Option<Equilibrium>>,
-    /// Whether the smallest tangent eigenvalue is computed at every answer.
-    wants_eigenvalue: bool,
+    /// The checks made of every answer with K's factor.
+    checks: AnswerChecks,
     rows: Vec<SummaryRow>,
     failures: Vec<String>,
     /// The processes of the run: a solve's files, written by rank 0 alone, are agreed on
@@ -284,7 +285,10 @@ impl<'s> Sweep<'s> {
             solvers,
             reference,
             sinks,
-            wants_eigenvalue: model.has_geometric_stiffness() || case.output.stability,
+            checks: AnswerChecks {
+                eigenvalue: model.has_geometric_stiffness() || case.output.stability,
+                geometric_term: case.output.geometric_term,
+            },
             rows: Vec::new(),
             failures: Vec::new(),
         }
@@ -362,7 +366,7 @@ impl<'s> Sweep<'s> {
         let (structure, alpha) = (&self.prepared.structure, key.alpha);
         // 7. What the answer is beyond the solver's own stop: no equilibrium, or an unstable
         //    one (docs/method.md §8).
-        let verdict = assess(&mut solution, self.prepared, load, self.wants_eigenvalue);
+        let verdict = assess(&mut solution, self.prepared, load, self.checks);
         self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
             .then(|| solution.equilibrium.clone());
         // 8. A non-finite answer (or a row it would give) is reported, never written.
@@ -461,7 +465,7 @@ fn sinks<'s>(
     };
     let staging = output.borrow().staging().to_path_buf();
     let dir = staging.as_path();
-    let (structure, taut) = (&prepared.structure, &prepared.taut);
+    let (structure, taut) = (&prepared.structure, prepared.taut.as_ref());
     let out = &case.output;
     let has_history = solvers
         .iter()
@@ -489,7 +493,9 @@ fn sinks<'s>(
         );
     }
     sinks.add(true, PublishSink::new(output));
-    sinks.add(out.stability, StabilitySink::new(output, structure, taut));
+    if let Some(taut) = taut {
+        sinks.add(out.stability, StabilitySink::new(output, structure, taut));
+    }
     sinks.add(out.summary, SummarySink::new(output));
     sinks
 }

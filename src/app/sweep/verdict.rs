@@ -16,15 +16,26 @@ pub(super) struct Verdict {
     pub no_equilibrium: Option<crate::solvers::NoEquilibrium>,
 }
 
+/// The checks of an answer that solve with the factor of K with every cable taut, each made
+/// only when the case asks for what it gives.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct AnswerChecks {
+    /// The smallest tangent eigenvalue (the models with geometric stiffness, and
+    /// `output.stability`).
+    pub eigenvalue: bool,
+    /// The geometric term a model on the initial geometry leaves out (`output.geometric_term`).
+    pub geometric_term: bool,
+}
+
 /// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
 /// energy decreases without bound (no equilibrium exists: [`Status::NoEquilibrium`]); with
-/// `eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer where it
-/// is negative is an unstable equilibrium ([`Status::Unstable`]).
+/// `checks.eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer
+/// where it is negative is an unstable equilibrium ([`Status::Unstable`]).
 pub(super) fn assess(
     solution: &mut Solution,
     prepared: &Prepared,
     load: &[f64],
-    eigenvalue: bool,
+    checks: AnswerChecks,
 ) -> Verdict {
     let s = &prepared.structure;
     if !results::is_finite(solution) {
@@ -49,8 +60,11 @@ pub(super) fn assess(
             no_equilibrium: Some(none),
         };
     }
-    let min_tangent_eigenvalue = (eigenvalue && !solution.info.status.no_answer())
-        .then(|| results::smallest_tangent_eigenvalue(s, &solution.equilibrium, &prepared.taut));
+    // The run keeps K's factor whenever a check is asked (`Workload::keeps_taut`).
+    let taut = prepared.taut.as_ref();
+    let min_tangent_eigenvalue = taut
+        .filter(|_| checks.eigenvalue && !solution.info.status.no_answer())
+        .map(|taut| results::smallest_tangent_eigenvalue(s, &solution.equilibrium, taut));
     if solution.info.status.converged() && min_tangent_eigenvalue.is_some_and(|v| v < 0.0) {
         solution.info.status = Status::Unstable;
     }
@@ -61,7 +75,9 @@ pub(super) fn assess(
     }
     Verdict {
         min_tangent_eigenvalue,
-        geometric_term: results::geometric_term(s, &solution.equilibrium, &prepared.taut),
+        geometric_term: taut
+            .filter(|_| checks.geometric_term)
+            .and_then(|taut| results::geometric_term(s, &solution.equilibrium, taut)),
         no_equilibrium: None,
     }
 }
