@@ -57,7 +57,8 @@ pub enum CaseError {
         "the case is too large for the memory available: `{command}` needs {estimate}; \
          {available} is available. Use fewer modules (`grid.modules`), fewer solvers \
          (`solver.methods` or `--solver`) or fewer outputs (`output.stability`, \
-         `output.compare_modules`), or run where more memory is available"
+         `output.compare_modules`; with LATIN solvers alone and `solver.reference = \"none\"`, \
+         `output.geometric_term = false` frees K's factor), or run where more memory is available"
     )]
     TooLarge {
         /// What would need the memory (`run`, `check`, `bench`, or loading the case).
