@@ -8,7 +8,7 @@ use super::SparseRow;
 
 /// Lower-triangular CSC sparsity pattern of `Σ_i w_i rowᵢᵀ rowᵢ`, with every diagonal entry,
 /// and the value slots each row adds into.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct StiffnessPattern {
     /// Order of the matrix (number of dofs).
     pub n: usize,

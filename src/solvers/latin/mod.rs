@@ -40,6 +40,7 @@ pub(crate) mod partition;
 mod ranks;
 mod search;
 mod settings;
+mod shapes;
 mod state;
 mod status_step;
 mod substructure;

@@ -4,6 +4,7 @@
 
 use super::exchange::Exchange;
 use super::macro_problem::MacroProblem;
+use super::shapes::Shapes;
 use super::{Interface, Partition, Substructure};
 use crate::solvers::SetupError;
 use crate::structure::{Structure, CLAMPED};
@@ -24,7 +25,9 @@ pub(super) fn build(
     dense: bool,
     (exchange, held): (&dyn Exchange, std::ops::Range<usize>),
 ) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
-    // Every substructure, in parallel (a scratch dof map per task).
+    // Every substructure, in parallel (a scratch dof map per task); those of one shape share
+    // its pattern and analysis.
+    let shapes = Shapes::default();
     let built: Vec<Result<Substructure, usize>> = (0..partition.substructures.len())
         .into_par_iter()
         .map_init(
@@ -37,7 +40,7 @@ pub(super) fn build(
                     ));
                 }
                 Substructure::new(
-                    e, topo, structure, interfaces, holders, search, dm, dense, scratch,
+                    e, topo, structure, interfaces, holders, search, dm, dense, &shapes, scratch,
                 )
                 .map_err(|_| e)
             },

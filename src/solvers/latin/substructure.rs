@@ -6,11 +6,13 @@
 use super::kernel::{substructure_kernel, InterfaceTrace};
 use super::macro_basis::orthonormal_columns;
 use super::partition::SubstructureTopology;
+use super::shapes::Shapes;
 use super::Interface;
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
 use crate::structure::law::transverse_pair;
 use crate::structure::{LinkDofs, Structure, CLAMPED};
 use nalgebra::DMatrix;
+use std::sync::Arc;
 
 /// E's view of one of its interfaces.
 #[derive(Debug, Clone)]
@@ -74,8 +76,8 @@ pub struct Substructure {
 
 /// E's operators on its own dofs, built by the rank that holds E.
 pub struct LocalOperators {
-    /// The pattern of K_E (fixed by E's links).
-    pattern: StiffnessPattern,
+    /// The pattern of K_E (fixed by E's links), shared by the substructures of E's shape.
+    pub(super) pattern: Arc<StiffnessPattern>,
     /// With the prestress's geometric stiffness (`model.geometry = "prestress"`): per link of
     /// E (its index j in E) its two transverse rows on E's dofs and `t0 / L`, the share of
     /// `K_G(t0)` that K_E holds (docs/method.md §8: part of the admissibility, not of the law).
@@ -94,10 +96,11 @@ pub struct LocalOperators {
 
 impl Substructure {
     /// E's operators, built in the order of docs/method.md §4 "Linear stage". `dense`: keep
-    /// K_E⁻¹ dense (see [`SpdSolver::new`]). `local_dof` is a scratch map of length
-    /// `3·nodes`, all [`CLAMPED`] on entry and on exit.
+    /// K_E⁻¹ dense (see [`SpdSolver::new`]). `shapes`: the patterns and analyses of the
+    /// substructures built so far, shared with E when it has the shape of one. `local_dof` is
+    /// a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
     #[allow(clippy::too_many_arguments)]
-    pub fn new(
+    pub(super) fn new(
         index: usize,
         topology: &SubstructureTopology,
         structure: &Structure,
@@ -106,6 +109,7 @@ impl Substructure {
         search: &[f64],
         dm: f64,
         dense: bool,
+        shapes: &Shapes,
         local_dof: &mut [usize],
     ) -> Result<Substructure, SingularSubstructure> {
         // 1.–3. E's local dofs, B_E and its share of K_G(t0), C_E and R_E.
@@ -122,7 +126,9 @@ impl Substructure {
             search,
             dm,
         );
-        let factor = SpdSolver::new(&pattern, &values, dense).map_err(|_| SingularSubstructure)?;
+        let (pattern, factor) = shapes
+            .factor(pattern, &values, dense)
+            .map_err(|_| SingularSubstructure)?;
         // 5. Z_E = K_E⁻¹ C_Eᵀ R_E and K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
         let (z, k_star) = sub.condense_operators(&factor, dm);
         // 6. Q_E: the rigid motions with no micro trace, completed by the null space of K*_E.

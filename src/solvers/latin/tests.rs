@@ -611,3 +611,31 @@ fn the_macro_problems_accuracy_does_not_depend_on_the_status() {
     println!("macro forward error: taut {taut:.1e}, half the cables slack {slack:.1e}");
     assert!(taut < 1e-9 && slack < 10.0 * taut, "{taut:e} {slack:e}");
 }
+
+/// Substructures of one shape share the pattern of K_E and its analysis: on 64 × 64 modules
+/// with 256 substructures, two substructures hold the same pattern object exactly when their
+/// patterns are equal, and there are a few shapes (3 when written: a grid clamped on its
+/// lower x edges has its substructures along those edges and the rest).
+#[test]
+fn substructures_of_one_shape_share_their_pattern() {
+    let spec = GridSpec {
+        modules: [64, 64],
+        ..GridSpec::default()
+    };
+    let s = Structure::grid(&spec, &LoadPattern::default());
+    let latin = Latin::new(&s, settings([16, 16], WeakInterfaces::Macro)).unwrap();
+    let patterns: Vec<&std::sync::Arc<crate::linalg::StiffnessPattern>> = latin
+        .substructures
+        .iter()
+        .map(|sub| &sub.ops().pattern)
+        .collect();
+    let mut shapes = 0;
+    for (i, a) in patterns.iter().enumerate() {
+        for b in &patterns[..i] {
+            assert_eq!(std::sync::Arc::ptr_eq(a, b), a == b, "substructures {i}");
+        }
+        shapes += usize::from(patterns[..i].iter().all(|b| b != a));
+    }
+    println!("{shapes} shapes of {} substructures", patterns.len());
+    assert!((1..=9).contains(&shapes), "{shapes}");
+}
