@@ -22,6 +22,24 @@ fn paper_structure() -> Structure {
     Structure::grid(&GridSpec::default(), &LoadPattern::default())
 }
 
+/// The paper's grid with n × n modules.
+fn grid_structure(n: usize) -> Structure {
+    let spec = GridSpec {
+        modules: [n, n],
+        ..GridSpec::default()
+    };
+    Structure::grid(&spec, &LoadPattern::default())
+}
+
+/// Every k-th link slack where it is a cable (a status pattern for the operators' tests).
+fn slack_every(s: &Structure, k: usize) -> Vec<bool> {
+    s.links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| l.unilateral && i % k == 0)
+        .collect()
+}
+
 /// The load `alpha · unit_load` on the free dofs.
 fn load(s: &Structure, alpha: f64) -> Vec<f64> {
     s.unit_load.iter().map(|f| alpha * f).collect()
@@ -564,12 +582,7 @@ fn a_rebuild_and_its_undo_give_the_set_up_operators_bit_for_bit() {
     let s = paper_structure();
     let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
     let set_up = operator_bits(&latin);
-    let slack: Vec<bool> = s
-        .links
-        .iter()
-        .enumerate()
-        .map(|(i, l)| l.unilateral && i % 3 == 0)
-        .collect();
+    let slack = slack_every(&s, 3);
     assert!(latin.set_search(slack));
     let rebuilt = operator_bits(&latin);
     let differing = set_up.iter().zip(&rebuilt).filter(|(a, b)| a != b).count();
@@ -593,19 +606,10 @@ fn a_rebuild_and_its_undo_give_the_set_up_operators_bit_for_bit() {
 /// stalled at 9e-7 for 1000 iterations).
 #[test]
 fn the_macro_problems_accuracy_does_not_depend_on_the_status() {
-    let spec = GridSpec {
-        modules: [64, 64],
-        ..GridSpec::default()
-    };
-    let s = Structure::grid(&spec, &LoadPattern::default());
+    let s = grid_structure(64);
     let mut latin = Latin::new(&s, settings([16, 16], WeakInterfaces::Macro)).unwrap();
     let taut = latin.macro_problem.forward_error();
-    let slack: Vec<bool> = s
-        .links
-        .iter()
-        .enumerate()
-        .map(|(i, l)| l.unilateral && i % 2 == 0)
-        .collect();
+    let slack = slack_every(&s, 2);
     assert!(latin.set_search(slack));
     let slack = latin.macro_problem.forward_error();
     println!("macro forward error: taut {taut:.1e}, half the cables slack {slack:.1e}");
@@ -618,11 +622,7 @@ fn the_macro_problems_accuracy_does_not_depend_on_the_status() {
 /// lower x edges has its substructures along those edges and the rest).
 #[test]
 fn substructures_of_one_shape_share_their_pattern() {
-    let spec = GridSpec {
-        modules: [64, 64],
-        ..GridSpec::default()
-    };
-    let s = Structure::grid(&spec, &LoadPattern::default());
+    let s = grid_structure(64);
     let latin = Latin::new(&s, settings([16, 16], WeakInterfaces::Macro)).unwrap();
     let patterns: Vec<&std::sync::Arc<crate::linalg::StiffnessPattern>> = latin
         .substructures
