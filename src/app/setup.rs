@@ -36,6 +36,33 @@ pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
     })
 }
 
+/// The checks of every answer that solve with the factor of K with every cable taut, each made
+/// only when the case asks for what it gives.
+#[derive(Debug, Clone, Copy)]
+pub struct AnswerChecks {
+    /// The smallest tangent eigenvalue (the models with geometric stiffness, and
+    /// `output.stability`).
+    pub eigenvalue: bool,
+    /// The geometric term a model on the initial geometry leaves out (`output.geometric_term`;
+    /// none with `large`, which leaves nothing out).
+    pub geometric_term: bool,
+}
+
+impl AnswerChecks {
+    /// The checks `case` asks for.
+    pub fn of(case: &Case) -> AnswerChecks {
+        AnswerChecks {
+            eigenvalue: case.model.has_geometric_stiffness() || case.output.stability,
+            geometric_term: case.output.geometric_term && case.model != GeometricModel::Large,
+        }
+    }
+
+    /// Whether any check is made.
+    pub fn any(self) -> bool {
+        self.eigenvalue || self.geometric_term
+    }
+}
+
 impl Prepared {
     /// Drop the factor of K with every cable taut once the mechanism check is done, for a run
     /// that never solves with it ([`crate::app::memory::Workload::keeps_taut`]): it is as large

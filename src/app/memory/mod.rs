@@ -18,10 +18,11 @@ mod fit;
 
 pub use fit::ensure_fits;
 
+use super::setup::AnswerChecks;
 use crate::case::Case;
 use crate::host::bytes_text;
 use crate::solvers::Method;
-use crate::structure::{GeometricModel, StructureSize};
+use crate::structure::StructureSize;
 
 /// Entries of a sparse Cholesky factor per dof and per `log2(dofs)` under nested dissection:
 /// 124 M entries on 256 × 256 modules (592 899 dofs, log2 = 19.2) is 10.9.
@@ -180,11 +181,8 @@ impl Workload {
                 all.push(reference);
             }
         }
-        let checks_answers = case.output.stability
-            || case.model.has_geometric_stiffness()
-            || (case.output.geometric_term && case.model != GeometricModel::Large);
         Workload {
-            keeps_taut: checks_answers || all.iter().any(|m| !m.is_latin()),
+            keeps_taut: AnswerChecks::of(case).any() || all.iter().any(|m| !m.is_latin()),
             methods: all,
             stability: case.output.stability,
             compare_modules: case.output.plots && !case.output.compare_modules.is_empty(),

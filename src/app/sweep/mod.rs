@@ -11,7 +11,7 @@ pub use error::RunError;
 
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
-use super::setup::{prepare, set_up_on, Prepared, SetUpSolver};
+use super::setup::{prepare, set_up_on, AnswerChecks, Prepared, SetUpSolver};
 use crate::case::Case;
 use crate::output::{
     self, alpha_label,
@@ -26,7 +26,7 @@ use crate::solvers::{
 use crate::structure::StructureSize;
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
-use verdict::{assess, not_converged_message, AnswerChecks};
+use verdict::{assess, not_converged_message};
 
 /// What the command line adds to a case.
 #[derive(Debug, Clone, Default)]
@@ -277,7 +277,6 @@ impl<'s> Sweep<'s> {
         sinks: Sinks<'s>,
         exchange: &'s dyn Exchange,
     ) -> Self {
-        let model = prepared.structure.model;
         Sweep {
             exchange,
             prepared,
@@ -285,10 +284,7 @@ impl<'s> Sweep<'s> {
             solvers,
             reference,
             sinks,
-            checks: AnswerChecks {
-                eigenvalue: model.has_geometric_stiffness() || case.output.stability,
-                geometric_term: case.output.geometric_term,
-            },
+            checks: AnswerChecks::of(case),
             rows: Vec::new(),
             failures: Vec::new(),
         }

@@ -1,7 +1,7 @@
 //! What an answer is beyond its solver's own stop (docs/method.md §8): no equilibrium, an
 //! unstable one, or beyond the model; and the failure line of a row that did not converge.
 
-use crate::app::setup::Prepared;
+use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
 use crate::solvers::{Solution, Status};
@@ -14,17 +14,6 @@ pub(super) struct Verdict {
     pub geometric_term: Option<f64>,
     /// Why the answer is no equilibrium, when it is none.
     pub no_equilibrium: Option<crate::solvers::NoEquilibrium>,
-}
-
-/// The checks of an answer that solve with the factor of K with every cable taut, each made
-/// only when the case asks for what it gives.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct AnswerChecks {
-    /// The smallest tangent eigenvalue (the models with geometric stiffness, and
-    /// `output.stability`).
-    pub eigenvalue: bool,
-    /// The geometric term a model on the initial geometry leaves out (`output.geometric_term`).
-    pub geometric_term: bool,
 }
 
 /// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
