@@ -19,6 +19,12 @@ impl SpdSolver {
     /// Matrices of at most this order may be inverted densely (8 MB at most).
     pub const DENSE_MAX: usize = 1000;
 
+    /// Whether [`SpdSolver::new`] factorises a matrix of order `n` sparse: unless `dense` is
+    /// asked and honoured (up to [`SpdSolver::DENSE_MAX`]).
+    pub fn is_sparse(n: usize, dense: bool) -> bool {
+        !dense || n > Self::DENSE_MAX
+    }
+
     /// `dense`: invert densely (only honoured up to [`SpdSolver::DENSE_MAX`]). A dense inverse
     /// is read whole at every solve, so it pays while the inverses of all the matrices solved
     /// together stay in cache; the caller knows how many there are.
@@ -28,7 +34,7 @@ impl SpdSolver {
         dense: bool,
     ) -> Result<Self, NotPositiveDefinite> {
         let n = pattern.n;
-        if !dense || n > Self::DENSE_MAX {
+        if Self::is_sparse(n, dense) {
             let mut factor = SparseCholesky::analyse(pattern, Par::Seq);
             factor.factorize(pattern, values)?;
             return Ok(SpdSolver::Sparse(factor));

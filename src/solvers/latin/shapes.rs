@@ -31,7 +31,7 @@ impl Shapes {
         values: &[f64],
         dense: bool,
     ) -> Result<(Arc<StiffnessPattern>, SpdSolver), NotPositiveDefinite> {
-        let sparse = !dense || pattern.n > SpdSolver::DENSE_MAX;
+        let sparse = SpdSolver::is_sparse(pattern.n, dense);
         let (pattern, factor) = {
             // A poisoned lock only means another build panicked; its shapes are whole.
             let mut seen = self.seen.lock().unwrap_or_else(|p| p.into_inner());
