@@ -7,7 +7,7 @@
 //! With m = 0 this is `x⁺ = β G(x) + (1 − β) x`: the linear stage is affine in x, so it is
 //! exactly the relaxation of s with μ = β.
 
-use crate::linalg::{par_dot, par_update, par_zip_map, CHUNK};
+use crate::linalg::{par_update, par_zip_map, CHUNK};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 use std::collections::VecDeque;
@@ -27,7 +27,8 @@ pub struct Anderson {
     damping: f64,
     /// The last iterate x and its residual f.
     last: Option<(Vec<f64>, Vec<f64>)>,
-    /// The differences `(ΔX_i, ΔF_i)` of the last m iterates, oldest first.
+    /// Of the last m iterates, oldest first: `(ΔX_i + β ΔF_i, ΔF_i)`, the step's column
+    /// (formed once, when the difference is taken) and the least-squares column.
     differences: VecDeque<(Vec<f64>, Vec<f64>)>,
     /// `ΔF_iᵀ ΔF_j`, updated as differences come and go (O(m n) an iteration instead of the
     /// O(m² n) of a factorisation of ΔF).
@@ -68,11 +69,15 @@ impl Anderson {
         if self.depth == 0 {
             return next;
         }
+        // A new difference, and with it ΔFᵀΔF_new and ΔFᵀf (the least-squares right-hand
+        // side) in one pass over the kept ΔF.
+        let mut rhs = Vec::new();
         if let Some((x_prev, f_prev)) = self.last.take() {
-            // ΔX = x − x_prev, ΔF = f − f_prev, and its products with the kept ΔF.
-            let (mut dx, mut df) = (x_prev, f_prev);
-            par_update(&mut dx, x, |previous, x| x - previous);
+            // ΔX = x − x_prev, ΔF = f − f_prev; the step's column ΔX + β ΔF.
+            let (mut step, mut df) = (x_prev, f_prev);
+            par_update(&mut step, x, |previous, x| x - previous);
             par_update(&mut df, &f, |previous, f| f - previous);
+            par_update(&mut step, &df, |dx, df| dx + beta * df);
             if self.differences.len() == self.depth {
                 self.differences.pop_front();
                 self.gram.pop_front();
@@ -80,31 +85,24 @@ impl Anderson {
                     row.pop_front();
                 });
             }
-            let products: VecDeque<f64> = self
-                .differences
-                .iter()
-                .map(|(_, other)| par_dot(other, &df))
-                .chain([par_dot(&df, &df)])
-                .collect();
+            let (products, with_f) = products_with(&self.differences, &df, &f);
             for (row, &p) in self.gram.iter_mut().zip(&products) {
                 row.push_back(p);
             }
-            self.gram.push_back(products);
-            self.differences.push_back((dx, df));
+            self.gram.push_back(products.into_iter().collect());
+            self.differences.push_back((step, df));
+            rhs = with_f;
         }
-        if let Some(gamma) = self.coefficients(&f) {
+        if let Some(gamma) = self.coefficients(&rhs) {
             // x⁺ −= (ΔX + β ΔF) γ, chunk by chunk over all the columns.
             let differences = &self.differences;
             next.par_chunks_mut(CHUNK)
                 .enumerate()
                 .for_each(|(chunk, out)| {
                     let start = chunk * CHUNK;
-                    for ((dx, df), &c) in differences.iter().zip(&gamma) {
-                        let (dx, df) =
-                            (&dx[start..start + out.len()], &df[start..start + out.len()]);
-                        out.iter_mut()
-                            .zip(dx.iter().zip(df))
-                            .for_each(|(x, (a, b))| *x -= c * (a + beta * b));
+                    for ((step, _), &c) in differences.iter().zip(&gamma) {
+                        let step = &step[start..start + out.len()];
+                        out.iter_mut().zip(step).for_each(|(x, s)| *x -= c * s);
                     }
                 });
         }
@@ -112,10 +110,10 @@ impl Anderson {
         next
     }
 
-    /// `γ = argmin ‖f − ΔF γ‖` from the normal equations `ΔFᵀΔF γ = ΔFᵀ f`, scaled to a unit
-    /// diagonal and solved on the eigenvectors whose eigenvalue is above `RCOND²` of the
-    /// largest. `None` without history.
-    fn coefficients(&self, f: &[f64]) -> Option<Vec<f64>> {
+    /// `γ = argmin ‖f − ΔF γ‖` from the normal equations `ΔFᵀΔF γ = ΔFᵀ f` (`with_f` = ΔFᵀf),
+    /// scaled to a unit diagonal and solved on the eigenvectors whose eigenvalue is above
+    /// `RCOND²` of the largest. `None` without history.
+    fn coefficients(&self, with_f: &[f64]) -> Option<Vec<f64>> {
         let k = self.differences.len();
         if k == 0 {
             return None;
@@ -131,12 +129,7 @@ impl Anderson {
             })
             .collect();
         let gram = DMatrix::from_fn(k, k, |i, j| scale[i] * self.gram[i][j] * scale[j]);
-        let rhs: Vec<f64> = self
-            .differences
-            .iter()
-            .zip(&scale)
-            .map(|((_, df), s)| s * par_dot(df, f))
-            .collect();
+        let rhs: Vec<f64> = with_f.iter().zip(&scale).map(|(p, s)| s * p).collect();
         let eigen = gram.symmetric_eigen();
         let largest = eigen.eigenvalues.max();
         if !(largest > 0.0 && largest.is_finite()) {
@@ -157,6 +150,45 @@ impl Anderson {
         gamma.iter_mut().zip(&scale).for_each(|(g, s)| *g *= s);
         Some(gamma)
     }
+}
+
+/// `(ΔF_iᵀ ΔF_new, ΔF_iᵀ f)` for every kept ΔF_i and then ΔF_new itself, in one pass over
+/// them: the partial sums of each fixed chunk added in chunk order, as [`par_dot`] takes
+/// them (the same sums on any number of threads).
+fn products_with(
+    kept: &VecDeque<(Vec<f64>, Vec<f64>)>,
+    df_new: &[f64],
+    f: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    let columns: Vec<&[f64]> = kept
+        .iter()
+        .map(|(_, df)| df.as_slice())
+        .chain([df_new])
+        .collect();
+    let partial: Vec<Vec<(f64, f64)>> = df_new
+        .par_chunks(CHUNK)
+        .zip(f.par_chunks(CHUNK))
+        .enumerate()
+        .map(|(chunk, (new, f))| {
+            let start = chunk * CHUNK;
+            columns
+                .iter()
+                .map(|column| {
+                    let column = &column[start..start + new.len()];
+                    let with_new = column.iter().zip(new).map(|(p, q)| p * q).sum::<f64>();
+                    let with_f = column.iter().zip(f).map(|(p, q)| p * q).sum::<f64>();
+                    (with_new, with_f)
+                })
+                .collect()
+        })
+        .collect();
+    (0..columns.len())
+        .map(|i| {
+            partial
+                .iter()
+                .fold((0.0, 0.0), |(a, b), chunk| (a + chunk[i].0, b + chunk[i].1))
+        })
+        .unzip()
 }
 
 #[cfg(test)]
@@ -194,6 +226,33 @@ mod tests {
         let accelerated = iterations(5, 0.8);
         assert!(plain > 100 && plain < 10_000, "plain {plain}");
         assert!(accelerated <= 8, "accelerated {accelerated}");
+    }
+
+    /// The fused pass gives the products `par_dot` gives, to the bit, on one and on two
+    /// threads (what makes the Anderson step's results independent of the threads).
+    #[test]
+    fn the_fused_products_are_par_dots() {
+        let n = 3 * CHUNK + 17;
+        let column = |seed: usize| -> Vec<f64> {
+            (0..n)
+                .map(|k| (((k + 1) * (seed + 3) * 7919) % 1013) as f64 / 101.0 - 5.0)
+                .collect()
+        };
+        let kept: VecDeque<(Vec<f64>, Vec<f64>)> =
+            (0..4).map(|i| (Vec::new(), column(i))).collect();
+        let (new, f) = (column(11), column(12));
+        for threads in [1, 2] {
+            let (with_new, with_f) = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| products_with(&kept, &new, &f));
+            let columns: Vec<&Vec<f64>> = kept.iter().map(|(_, c)| c).chain([&new]).collect();
+            for (i, c) in columns.iter().enumerate() {
+                assert_eq!(with_new[i].to_bits(), crate::linalg::par_dot(c, &new).to_bits());
+                assert_eq!(with_f[i].to_bits(), crate::linalg::par_dot(c, &f).to_bits());
+            }
+        }
     }
 
     #[test]
