@@ -249,7 +249,10 @@ mod tests {
                 .install(|| products_with(&kept, &new, &f));
             let columns: Vec<&Vec<f64>> = kept.iter().map(|(_, c)| c).chain([&new]).collect();
             for (i, c) in columns.iter().enumerate() {
-                assert_eq!(with_new[i].to_bits(), crate::linalg::par_dot(c, &new).to_bits());
+                assert_eq!(
+                    with_new[i].to_bits(),
+                    crate::linalg::par_dot(c, &new).to_bits()
+                );
                 assert_eq!(with_f[i].to_bits(), crate::linalg::par_dot(c, &f).to_bits());
             }
         }

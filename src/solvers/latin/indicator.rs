@@ -77,7 +77,10 @@ impl Latin<'_> {
     /// with inexact Newton status steps the residual under the law linearised at `law_slack`.
     /// It reads only U, so it may run beside the local stage.
     pub(super) fn residuals(&self, u: &[f64], load: &[f64], law_slack: &[bool]) -> Residuals {
-        if self.newton_steps() {
+        if self.structure.geometric.is_none() {
+            let (exact, frozen) = self.residuals_by_substructure(u, load, law_slack);
+            (exact, self.newton_steps().then_some(frozen))
+        } else if self.newton_steps() {
             let (exact, frozen) = exact_and_frozen_residuals(self.structure, u, load, law_slack);
             (exact, Some(frozen))
         } else {

@@ -24,6 +24,7 @@
 //! | `anderson` | Anderson acceleration of the fixed point ŝ ↦ local(linear(ŝ)) |
 //! | `exchange`, `operators`, `ranks` | a solve shared by MPI ranks: what is gathered, the set-up of each rank's operators, the layout |
 //! | `search` | status-following search directions and operator rebuilds |
+//! | `residual` | r(U) of the linear stage's U, substructure by substructure |
 
 mod anderson;
 mod exchange;
@@ -38,6 +39,7 @@ mod macro_problem;
 mod operators;
 pub(crate) mod partition;
 mod ranks;
+mod residual;
 mod search;
 mod settings;
 mod shapes;

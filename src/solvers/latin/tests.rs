@@ -639,3 +639,47 @@ fn substructures_of_one_shape_share_their_pattern() {
     println!("{shapes} shapes of {} substructures", patterns.len());
     assert!((1..=9).contains(&shapes), "{shapes}");
 }
+
+/// r(U) substructure by substructure is the global r(U) (the links' forces grouped by
+/// substructure, so equal to round-off), under the exact law and under the law linearised at
+/// a status, on a partition with interfaces and on the paper's plain 1 × 1 one, at a U that
+/// leaves about half the cables slack.
+#[test]
+fn r_u_by_substructure_is_the_global_r_u() {
+    let s = paper_structure();
+    let wavy: Vec<f64> = (0..s.n_free).map(|d| (0.37 * d as f64).sin()).collect();
+    // Scaled so that k e is ten times the prestress on average: many cables pulled slack.
+    let trial = crate::structure::law::trial_tensions(&s, &wavy);
+    let kinds = s.links.iter().zip(&trial);
+    let pull: f64 = kinds.map(|(l, t)| (t - l.prestress).abs()).sum::<f64>() / trial.len() as f64;
+    let u: Vec<f64> = wavy
+        .iter()
+        .map(|x| 10.0 * x * s.prestress_scale / pull)
+        .collect();
+    let slack_now = crate::structure::law::trial_tensions(&s, &u)
+        .iter()
+        .zip(&s.links)
+        .filter(|(t, l)| l.unilateral && **t < 0.0)
+        .count();
+    let cables = s.links.iter().filter(|l| l.unilateral).count();
+    assert!(
+        slack_now > cables / 10 && slack_now < 9 * cables / 10,
+        "{slack_now}/{cables}"
+    );
+    let law_slack = slack_every(&s, 3);
+    let f = load(&s, 1.0);
+    let (exact, frozen) = crate::solvers::exact_and_frozen_residuals(&s, &u, &f, &law_slack);
+    assert!((exact - frozen).abs() > 1e-3 * exact, "{exact} {frozen}");
+    for subdomains in [[4, 4], [3, 5], [1, 1]] {
+        let latin = Latin::new(&s, settings(subdomains, WeakInterfaces::Macro)).unwrap();
+        let (by_sub, frozen_by_sub) = latin.residuals_by_substructure(&u, &f, &law_slack);
+        assert!(
+            (by_sub - exact).abs() <= 1e-13 * exact,
+            "{subdomains:?}: {by_sub} {exact}"
+        );
+        assert!(
+            (frozen_by_sub - frozen).abs() <= 1e-13 * frozen,
+            "{subdomains:?}: {frozen_by_sub} {frozen}"
+        );
+    }
+}
