@@ -73,14 +73,16 @@ impl Method {
     /// units of the structure's stiffness factor (the memory estimate): newton its Hessian's;
     /// pcg-lcp none (it solves with K's); mono-latin its whole-structure operators (measured
     /// 3.0–3.4 units on 64 × 64 to 256 × 256, rounded up to 4); micro-macro its substructure
-    /// operators and macro problem (2.3–2.7 units on 64 × 64 to 256 × 256 with 4 × 4
-    /// substructures, rounded up to 3).
+    /// operators, Anderson's history and macro problem (1.1–1.6 units on 64 × 64 to 256 × 256
+    /// with 4 × 4 substructures since they are rebuilt in place and share their shapes'
+    /// analyses, 2026-11-26; 2.0 to also bound 1024 substructures of 4 × 4 modules on
+    /// 128 × 128, 1.04 GB. Many smaller substructures cost more: their macro problem grows).
     pub fn factor_units(self) -> f64 {
         match self {
             Method::Newton => 1.0,
             Method::PcgLcp => 0.0,
             Method::MonoLatin => 4.0,
-            Method::MicroMacro => 3.0,
+            Method::MicroMacro => 2.0,
         }
     }
 
