@@ -267,6 +267,31 @@ fn scale_64_on_ranks_is_the_threaded_run() {
     );
 }
 
+/// A run that never solves with K's factor (LATIN alone, reference none, no geometric-term
+/// check) has rank 0 alone make the mechanism check: the others' results are the same, and a
+/// mechanism is refused on every rank, with rank 0's message once and nothing written.
+#[test]
+fn rank_0_alone_checks_for_a_mechanism_when_no_solve_needs_k() {
+    let released = [
+        "load.alpha=[2.4]",
+        "solver.reference=\"none\"",
+        "output.geometric_term=false",
+    ];
+    ranks_agree_with_threads("cases/scale-16-latin.toml", &released, &[2]);
+    let case = manifest_path("cases/scale-16-latin.toml");
+    let out = Temp::dir("mpi-mechanism");
+    let mut args = vec!["run", case.to_str().unwrap(), "--out", out.arg(), "--quiet"];
+    for set in released.iter().chain(&["supports.clamp=\"none\""]) {
+        args.extend(["--set", set]);
+    }
+    let o = mpirun(2, &args);
+    let err = text(&o.stderr);
+    assert_ne!(code(&o), 0, "{err}");
+    assert_eq!(err.matches("error").count(), 1, "{err}");
+    assert!(err.contains("mechanism"), "{err}");
+    assert!(!out.0.exists(), "nothing written");
+}
+
 /// The paper's plain method (the relaxed order, l fixed) on 3 ranks, whose blocks are uneven
 /// (5, 5 and 6 of the 16 substructures), once as the paper runs it (μ = 1) and once relaxed
 /// (μ = 0.8: each rank blends its own substructures' s before sharing it).

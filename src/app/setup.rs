@@ -64,6 +64,19 @@ impl AnswerChecks {
 }
 
 impl Prepared {
+    /// The structure of `case` without its mechanism check: for an MPI rank whose run never
+    /// solves with K's factor, which takes rank 0's check instead of factorizing K itself.
+    pub fn unchecked(case: &Case) -> Prepared {
+        let clock = Instant::now();
+        let structure = case.structure();
+        Prepared {
+            structure,
+            taut: None,
+            structure_seconds: clock.elapsed().as_secs_f64(),
+            taut_seconds: 0.0,
+        }
+    }
+
     /// Drop the factor of K with every cable taut once the mechanism check is done, for a run
     /// that never solves with it ([`crate::app::memory::Workload::keeps_taut`]): it is as large
     /// as a solver's factor, and the LATIN solvers never use it.

@@ -122,11 +122,17 @@ pub fn run_on(
         memory::ensure_fits(&estimate, "run").map_err(RunError::from),
     )?;
     // 1. The structure and its mechanism check (K with every cable taut, factorized); the
-    //    factor released when nothing of the run solves with it.
+    //    factor released when nothing of the run solves with it. Such a run on MPI ranks has
+    //    rank 0 alone make the check, and the others take its verdict: they never hold a
+    //    factor of the whole structure.
     events(RunEvent::Stage(
         "building the structure and factorising its taut stiffness",
     ));
-    let mut prepared = prepare_or_locate_mechanisms(case, &dir, writes)?;
+    let prepared = match writes || work.keeps_taut {
+        true => prepare_or_locate_mechanisms(case, &dir, writes),
+        false => Ok(Prepared::unchecked(case)),
+    };
+    let mut prepared = on_every_rank(exchange, prepared)?;
     if !work.keeps_taut {
         prepared.release_taut();
     }
