@@ -7,6 +7,9 @@
 //! With m = 0 this is `x⁺ = β G(x) + (1 − β) x`: the linear stage is affine in x, so it is
 //! exactly the relaxation of s with μ = β.
 
+use super::exchange::Exchange;
+#[cfg(test)]
+use super::exchange::OneProcess;
 use crate::linalg::{par_update, par_zip_map, CHUNK};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -52,9 +55,10 @@ impl Anderson {
         self.gram.clear();
     }
 
-    /// The next input from `x` and `g = G(x)`. Right after a restart it is `G(x)` itself (the
-    /// old x belongs to another map: neither damped nor kept).
-    pub fn step(&mut self, x: &[f64], g: &[f64], restarted: bool) -> Vec<f64> {
+    /// The next input from `x` and `g = G(x)` (this process's part of them, in `pieces`).
+    /// Right after a restart it is `G(x)` itself (the old x belongs to another map: neither
+    /// damped nor kept).
+    pub fn step(&mut self, x: &[f64], g: &[f64], restarted: bool, pieces: &Pieces<'_>) -> Vec<f64> {
         if restarted {
             self.restart();
             return g.to_vec();
@@ -85,7 +89,7 @@ impl Anderson {
                     row.pop_front();
                 });
             }
-            let (products, with_f) = products_with(&self.differences, &df, &f);
+            let (products, with_f) = products_with(&self.differences, &df, &f, pieces);
             for (row, &p) in self.gram.iter_mut().zip(&products) {
                 row.push_back(p);
             }
@@ -152,43 +156,81 @@ impl Anderson {
     }
 }
 
+/// How Anderson's vectors are split among processes and summed: this process holds the
+/// consecutive `pieces` (the linear stage's input of its substructures), each summed in fixed
+/// chunks from its own start; every rank gathers the chunks' partial sums and adds them in the
+/// substructures' order. The same sums on any number of threads and of ranks.
+pub(crate) struct Pieces<'a> {
+    /// The lengths of this process's pieces, in order.
+    pub lengths: Vec<usize>,
+    /// The processes that hold the other pieces.
+    pub exchange: &'a dyn Exchange,
+}
+
+impl Pieces<'_> {
+    /// One piece of `n` entries on one process.
+    #[cfg(test)]
+    pub fn whole(n: usize) -> Pieces<'static> {
+        Pieces {
+            lengths: vec![n],
+            exchange: &OneProcess,
+        }
+    }
+
+    /// The chunks of this process's entries: each piece cut every [`CHUNK`] entries.
+    fn chunks(&self) -> Vec<std::ops::Range<usize>> {
+        let mut chunks = Vec::new();
+        let mut start = 0;
+        for &len in &self.lengths {
+            let end = start + len;
+            let mut at = start;
+            while at < end {
+                let next = (at + CHUNK).min(end);
+                chunks.push(at..next);
+                at = next;
+            }
+            start = end;
+        }
+        chunks
+    }
+}
+
 /// `(ΔF_iᵀ ΔF_new, ΔF_iᵀ f)` for every kept ΔF_i and then ΔF_new itself, in one pass over
-/// them: the partial sums of each fixed chunk added in chunk order, as [`par_dot`] takes
-/// them (the same sums on any number of threads).
+/// them: each chunk's partial sums, gathered from every rank and added in chunk order.
 fn products_with(
     kept: &VecDeque<(Vec<f64>, Vec<f64>)>,
     df_new: &[f64],
     f: &[f64],
+    pieces: &Pieces<'_>,
 ) -> (Vec<f64>, Vec<f64>) {
     let columns: Vec<&[f64]> = kept
         .iter()
         .map(|(_, df)| df.as_slice())
         .chain([df_new])
         .collect();
-    let partial: Vec<Vec<(f64, f64)>> = df_new
-        .par_chunks(CHUNK)
-        .zip(f.par_chunks(CHUNK))
-        .enumerate()
-        .map(|(chunk, (new, f))| {
-            let start = chunk * CHUNK;
+    let width = 2 * columns.len();
+    let partial: Vec<f64> = pieces
+        .chunks()
+        .into_par_iter()
+        .flat_map_iter(|range| {
+            let (new, f) = (&df_new[range.clone()], &f[range.clone()]);
             columns
                 .iter()
-                .map(|column| {
-                    let column = &column[start..start + new.len()];
+                .flat_map(|column| {
+                    let column = &column[range.clone()];
                     let with_new = column.iter().zip(new).map(|(p, q)| p * q).sum::<f64>();
                     let with_f = column.iter().zip(f).map(|(p, q)| p * q).sum::<f64>();
-                    (with_new, with_f)
+                    [with_new, with_f]
                 })
-                .collect()
+                .collect::<Vec<f64>>()
         })
         .collect();
-    (0..columns.len())
-        .map(|i| {
-            partial
-                .iter()
-                .fold((0.0, 0.0), |(a, b), chunk| (a + chunk[i].0, b + chunk[i].1))
-        })
-        .unzip()
+    let all = pieces.exchange.all_gather(&partial);
+    let mut sums = vec![0.0; width];
+    for chunk in all.chunks(width) {
+        sums.iter_mut().zip(chunk).for_each(|(s, p)| *s += p);
+    }
+    sums.chunks(2).map(|pair| (pair[0], pair[1])).unzip()
 }
 
 #[cfg(test)]
@@ -213,7 +255,7 @@ mod tests {
             if res.sqrt() < 1e-10 {
                 return k;
             }
-            x = aa.step(&x, &g, false);
+            x = aa.step(&x, &g, false, &Pieces::whole(3));
         }
         usize::MAX
     }
@@ -246,7 +288,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| products_with(&kept, &new, &f));
+                .install(|| products_with(&kept, &new, &f, &Pieces::whole(n)));
             let columns: Vec<&Vec<f64>> = kept.iter().map(|(_, c)| c).chain([&new]).collect();
             for (i, c) in columns.iter().enumerate() {
                 assert_eq!(
@@ -258,13 +300,58 @@ mod tests {
         }
     }
 
+    /// Pieces (a substructure's part each, one longer than a chunk) are cut into chunks from
+    /// their own starts: the chunks tile the entries in order, and the products are the same on
+    /// one and on two threads and equal the plain sums to round-off.
+    #[test]
+    fn products_over_pieces_do_not_depend_on_the_threads() {
+        let pieces = Pieces {
+            lengths: vec![7, CHUNK + 5, 0, 300],
+            exchange: &OneProcess,
+        };
+        let chunks = pieces.chunks();
+        let n: usize = pieces.lengths.iter().sum();
+        assert_eq!(chunks.len(), 4);
+        assert!(chunks.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!((chunks[0].start, chunks[3].end), (0, n));
+        let column = |seed: usize| -> Vec<f64> {
+            (0..n)
+                .map(|k| (((k + 1) * (seed + 3) * 7919) % 1013) as f64 / 101.0 - 5.0)
+                .collect()
+        };
+        let kept: VecDeque<(Vec<f64>, Vec<f64>)> =
+            (0..3).map(|i| (Vec::new(), column(i))).collect();
+        let (new, f) = (column(11), column(12));
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| products_with(&kept, &new, &f, &pieces))
+        };
+        let (one, two) = (on(1), on(2));
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!((bits(&one.0), bits(&one.1)), (bits(&two.0), bits(&two.1)));
+        let plain = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(p, q)| p * q).sum::<f64>();
+        let columns: Vec<&Vec<f64>> = kept.iter().map(|(_, c)| c).chain([&new]).collect();
+        for (i, c) in columns.iter().enumerate() {
+            let (a, b) = (plain(c, &new), plain(c, &f));
+            assert!((one.0[i] - a).abs() <= 1e-12 * a.abs(), "{} {a}", one.0[i]);
+            assert!(
+                (one.1[i] - b).abs() <= 1e-12 * b.abs().max(1.0),
+                "{} {b}",
+                one.1[i]
+            );
+        }
+    }
+
     #[test]
     fn restart_returns_the_map_value_and_forgets() {
         let mut aa = Anderson::new(3, 0.5);
         let x = vec![1.0, 2.0];
-        let _ = aa.step(&x, &[0.0, 0.0], false);
+        let _ = aa.step(&x, &[0.0, 0.0], false, &Pieces::whole(2));
         assert!(aa.last.is_some());
-        let next = aa.step(&x, &[3.0, 4.0], true);
+        let next = aa.step(&x, &[3.0, 4.0], true, &Pieces::whole(2));
         assert_eq!(next, vec![3.0, 4.0]);
         assert!(aa.last.is_none() && aa.differences.is_empty() && aa.gram.is_empty());
     }

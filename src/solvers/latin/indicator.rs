@@ -32,11 +32,12 @@ impl Latin<'_> {
         let sign = if self.accelerated() { -1.0 } else { 1.0 };
         let exact = self.newton_steps();
         let links = &self.structure.links;
-        // Per substructure in parallel, then added in order (the same sums on any threads).
-        let parts: Vec<(f64, f64)> = self
-            .substructures
+        // Per held substructure in parallel, gathered from every rank, then added in the
+        // substructures' order (the same sums on any number of threads and of ranks).
+        let held = self.held.clone();
+        let parts: Vec<(f64, f64)> = self.substructures[held.clone()]
             .par_iter()
-            .zip(state.par_iter())
+            .zip(state[held].par_iter())
             .with_min_len(self.chunk)
             .map(|(sub, st)| {
                 let mut delta = 0.0;
@@ -67,9 +68,12 @@ impl Latin<'_> {
                 (delta, size)
             })
             .collect();
-        let (delta, size) = parts
-            .iter()
-            .fold((0.0, 0.0), |(d, s), (pd, ps)| (d + pd, s + ps));
+        let mine: Vec<f64> = parts.iter().flat_map(|&(d, s)| [d, s]).collect();
+        let (delta, size) = self
+            .exchange
+            .all_gather(&mine)
+            .chunks(2)
+            .fold((0.0, 0.0), |(d, s), p| (d + p[0], s + p[1]));
         ((0.5 * delta).sqrt(), (0.5 * size).sqrt())
     }
 

@@ -3,7 +3,7 @@
 //! refinement of the macro solve, and the [`Solver`] state machine (`init`, `next_iter`,
 //! `progress`) the driver runs.
 
-use super::anderson::Anderson;
+use super::anderson::{Anderson, Pieces};
 use super::indicator::Residuals;
 use super::local_stage::LocalLaw;
 use super::state::{LatinState, SubState};
@@ -71,7 +71,10 @@ impl Latin<'_> {
     ) -> Residuals {
         let restarted = self.update_search(state) || restart;
         let g = self.linear_stage_input(&state.subs);
-        let next = state.anderson.step(&state.input, &g, restarted);
+        let next =
+            state
+                .anderson
+                .step(&state.input, &g, restarted, &self.input_pieces(&state.subs));
         self.set_linear_stage_input(&mut state.subs, &next);
         state.input = next;
         let accuracy = self.macro_accuracy(state.residual);
@@ -109,13 +112,14 @@ impl Latin<'_> {
     }
 
     /// What a linear stage reads of ŝ, scaled to the energy norm: per link `(t̂ − l ê)/√l`,
-    /// per interface row `(F̂^m + d_m Û^m)/√d_m`.
+    /// per interface row `(F̂^m + d_m Û^m)/√d_m`; of the substructures this process holds
+    /// (whose linear stages it runs).
     pub(super) fn linear_stage_input(&self, subs: &[SubState]) -> Vec<f64> {
         let sqrt_dm = self.dm.sqrt();
-        let parts: Vec<Vec<f64>> = self
-            .substructures
+        let held = self.held.clone();
+        let parts: Vec<Vec<f64>> = self.substructures[held.clone()]
             .par_iter()
-            .zip(subs.par_iter())
+            .zip(subs[held].par_iter())
             .with_min_len(self.chunk)
             .map(|(sub, st)| {
                 let mut x = Vec::with_capacity(Self::input_len(st));
@@ -137,9 +141,24 @@ impl Latin<'_> {
         st.t_hat.len() + st.sides.iter().map(|s| s.hat_load.len()).sum::<usize>()
     }
 
-    /// A ŝ that a linear stage reads as `x` (t̂ = √l x, ê = 0 on the links).
+    /// How the linear stage's input is held (each held substructure's part, in order) and
+    /// summed, for Anderson's inner products.
+    pub(super) fn input_pieces(&self, subs: &[SubState]) -> Pieces<'_> {
+        Pieces {
+            lengths: subs[self.held.clone()]
+                .iter()
+                .map(Self::input_len)
+                .collect(),
+            exchange: self.exchange,
+        }
+    }
+
+    /// A ŝ that a linear stage reads as `x` (t̂ = √l x, ê = 0 on the links), on the held
+    /// substructures (`x` their part of the input).
     pub(super) fn set_linear_stage_input(&self, subs: &mut [SubState], x: &[f64]) {
         let sqrt_dm = self.dm.sqrt();
+        let held = self.held.clone();
+        let subs = &mut subs[held.clone()];
         let mut pieces = Vec::with_capacity(subs.len());
         let mut rest = x;
         for st in subs.iter() {
@@ -147,7 +166,7 @@ impl Latin<'_> {
             pieces.push(piece);
             rest = tail;
         }
-        self.substructures
+        self.substructures[held]
             .par_iter()
             .zip(subs.par_iter_mut().zip(pieces.into_par_iter()))
             .with_min_len(self.chunk)
