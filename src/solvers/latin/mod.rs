@@ -155,6 +155,8 @@ pub struct Latin<'s> {
     /// The substructures this process holds (their operators, their halves of the linear
     /// stage): all of them on one process.
     held: std::ops::Range<usize>,
+    /// Which substructure owns each free dof, for r(U).
+    dof_ownership: residual::DofOwnership,
 }
 
 /// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
@@ -281,6 +283,7 @@ impl<'s> Latin<'s> {
             dense_bytes <= DENSE_BUDGET_BYTES,
             (exchange, held.clone()),
         )?;
+        let dof_ownership = residual::DofOwnership::of(&substructures, structure.n_free);
         let mut latin = Latin {
             structure,
             settings,
@@ -304,6 +307,7 @@ impl<'s> Latin<'s> {
             },
             exchange,
             held,
+            dof_ownership,
         };
         let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
         for sub in &latin.substructures {

@@ -1,8 +1,10 @@
 //! r(U) of the linear stage's U substructure by substructure (docs/method.md §6): each
-//! substructure's links give their forces on its own dofs, in parallel and in cache; the
-//! pieces are then summed over the substructures holding each dof, in their order (the same
-//! sums on any number of threads). Every link belongs to one substructure, so this is
-//! `Bᵀτ(U) − F` term by term, grouped by substructure.
+//! substructure's links give their forces on its own dofs, in parallel, in cache and on the
+//! rank that holds it; a dof held by several substructures sums their pieces in their order
+//! (gathered from every rank), and each norm adds per substructure the dofs it owns, then the
+//! substructures in their order (the same sums on any number of threads and of ranks). Every
+//! link belongs to one substructure, so this is `Bᵀτ(U) − F` term by term, grouped by
+//! substructure.
 
 use super::{Latin, Substructure};
 use crate::linalg::norm;
@@ -50,11 +52,56 @@ impl Substructure {
     }
 }
 
+/// Which substructure owns each free dof (the first of those holding it) and, per
+/// substructure, its dofs held by others too (in its local order): what r(U) sums across
+/// substructures, and across ranks.
+pub(super) struct DofOwnership {
+    /// Per free dof, its owner.
+    owner: Vec<u32>,
+    /// Per free dof, whether more than one substructure holds it.
+    shared: Vec<bool>,
+    /// Per substructure, the local indices of its shared dofs.
+    shared_local: Vec<Vec<u32>>,
+}
+
+impl DofOwnership {
+    pub(super) fn of(subs: &[Substructure], n_free: usize) -> DofOwnership {
+        let mut owner = vec![u32::MAX; n_free];
+        let mut holders = vec![0u8; n_free];
+        for (e, sub) in subs.iter().enumerate() {
+            for &d in &sub.dof_global {
+                if owner[d] == u32::MAX {
+                    owner[d] = e as u32;
+                }
+                holders[d] = holders[d].saturating_add(1);
+            }
+        }
+        let shared: Vec<bool> = holders.iter().map(|&h| h > 1).collect();
+        let shared_local = subs
+            .iter()
+            .map(|sub| {
+                (0..sub.dof_global.len() as u32)
+                    .filter(|&k| shared[sub.dof_global[k as usize]])
+                    .collect()
+            })
+            .collect();
+        DofOwnership {
+            owner,
+            shared,
+            shared_local,
+        }
+    }
+}
+
 impl Latin<'_> {
     /// `(r(U), r_frozen(U))` as [`crate::solvers::exact_and_frozen_residuals`] defines them
     /// (the exact law, and the law linearised at `slack`, both relative to
-    /// `‖F‖ + ‖|B|ᵀ|τ|‖`), with the links' forces computed substructure by substructure. For
-    /// models without the prestress's geometric stiffness (the caller checks).
+    /// `‖F‖ + ‖|B|ᵀ|τ|‖`), with the links' forces computed substructure by substructure, each
+    /// on the rank that holds it. A dof's forces are summed over the substructures holding it
+    /// in their order (the values at shared dofs gathered from every rank), and each norm
+    /// over the substructures in their order, each adding the dofs it owns: the same numbers
+    /// on any number of threads and of ranks. For models without the prestress's geometric
+    /// stiffness (the caller checks).
     pub(super) fn residuals_by_substructure(
         &self,
         u: &[f64],
@@ -62,34 +109,77 @@ impl Latin<'_> {
         slack: &[bool],
     ) -> (f64, f64) {
         let s = self.structure;
-        let pieces: Vec<LinkForces> = self
-            .substructures
+        let own = &self.dof_ownership;
+        let held = self.held.clone();
+        let pieces: Vec<LinkForces> = self.substructures[held.clone()]
             .par_iter()
             .with_min_len(self.chunk)
             .map(|sub| sub.link_forces(s, u, slack))
             .collect();
-        // Summed over the substructures in their order.
+        // The pieces at shared dofs, from every rank, summed in the substructures' order.
+        let mine: Vec<f64> = pieces
+            .iter()
+            .zip(&own.shared_local[held.clone()])
+            .flat_map(|(piece, shared)| {
+                shared.iter().flat_map(|&k| {
+                    let k = k as usize;
+                    [piece.exact[k], piece.size[k], piece.frozen_change[k]]
+                })
+            })
+            .collect();
+        let all = self.exchange.all_gather(&mine);
         let n = s.n_free;
         let (mut r, mut size, mut change) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        for (sub, piece) in self.substructures.iter().zip(&pieces) {
-            for (k, &d) in sub.dof_global.iter().enumerate() {
-                r[d] += piece.exact[k];
-                size[d] += piece.size[k];
-                change[d] += piece.frozen_change[k];
+        let mut values = all.chunks(3);
+        for (sub, shared) in self.substructures.iter().zip(&own.shared_local) {
+            for (&k, v) in shared.iter().zip(&mut values) {
+                let d = sub.dof_global[k as usize];
+                r[d] += v[0];
+                size[d] += v[1];
+                change[d] += v[2];
             }
         }
-        // r = Bᵀτ − F; r_frozen = r + Bᵀ(τ_frozen − τ).
-        r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
-        let frozen: Vec<f64> = r.iter().zip(&change).map(|(a, b)| a + b).collect();
-        let scale = norm(load) + norm(&size);
-        let relative = |v: &[f64]| {
-            let v = norm(v);
+        // Per held substructure, the squares of the dofs it owns: r = Bᵀτ − F,
+        // r_frozen = r + Bᵀ(τ_frozen − τ), and |B|ᵀ|τ|.
+        let squares: Vec<f64> = self.substructures[held.clone()]
+            .par_iter()
+            .zip(&pieces)
+            .enumerate()
+            .with_min_len(self.chunk)
+            .flat_map_iter(|(i, (sub, piece))| {
+                let e = (held.start + i) as u32;
+                let mut sums = [0.0; 3];
+                for (k, &d) in sub.dof_global.iter().enumerate() {
+                    if own.owner[d] != e {
+                        continue;
+                    }
+                    let (force, scale, frozen_change) = match own.shared[d] {
+                        true => (r[d], size[d], change[d]),
+                        false => (piece.exact[k], piece.size[k], piece.frozen_change[k]),
+                    };
+                    let exact = force - load[d];
+                    let frozen = exact + frozen_change;
+                    sums[0] += exact * exact;
+                    sums[1] += frozen * frozen;
+                    sums[2] += scale * scale;
+                }
+                sums
+            })
+            .collect();
+        let total = self
+            .exchange
+            .all_gather(&squares)
+            .chunks(3)
+            .fold([0.0; 3], |t, p| [t[0] + p[0], t[1] + p[1], t[2] + p[2]]);
+        let scale = norm(load) + total[2].sqrt();
+        let relative = |square: f64| {
+            let v = square.sqrt();
             if scale > 0.0 {
                 v / scale
             } else {
                 v
             }
         };
-        (relative(&r), relative(&frozen))
+        (relative(total[0]), relative(total[1]))
     }
 }
