@@ -117,10 +117,11 @@ impl Latin<'_> {
             state.frozen_residual = frozen;
         }
 
-        state.slack_cables = state
-            .subs
+        // The slack cables of ŝ, counted per held substructure and gathered from every rank.
+        let held: Vec<f64> = state.subs[self.held.clone()]
             .iter()
-            .map(|st| st.slack_hat.iter().filter(|&&x| x).count())
-            .sum();
+            .map(|st| st.slack_hat.iter().filter(|&&x| x).count() as f64)
+            .collect();
+        state.slack_cables = self.exchange.all_gather(&held).iter().sum::<f64>() as usize;
     }
 }

@@ -317,7 +317,8 @@ impl Solver for Latin<'_> {
     fn iterate(&self, state: &LatinState) -> Equilibrium {
         let s = self.structure;
         let mut subs = state.subs.clone();
-        self.local_stage(&mut subs, LocalLaw::Exact);
+        let all = 0..subs.len();
+        self.local_stage_on(&mut subs, LocalLaw::Exact, all);
         let u = self.displacements(&state.subs);
         let mut tensions = vec![0.0; s.links.len()];
         for (sub, st) in self.substructures.iter().zip(&subs) {

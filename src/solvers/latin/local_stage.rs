@@ -18,17 +18,29 @@ pub(super) enum LocalLaw<'a> {
 }
 
 impl Latin<'_> {
-    /// Local stage (docs/method.md §4): given s in `state`, find ŝ on `law`.
+    /// Local stage (docs/method.md §4): given s in `state`, find ŝ on `law`, on the links of
+    /// the substructures this process holds and on the interfaces they touch (all of them on
+    /// one process): what its linear stages, η and slack count read.
     pub(super) fn local_stage(&self, state: &mut [SubState], law: LocalLaw) {
+        self.local_stage_on(state, law, self.held.clone());
+    }
+
+    /// The local stage on the links of `subs` and on the interfaces they touch.
+    pub(super) fn local_stage_on(
+        &self,
+        state: &mut [SubState],
+        law: LocalLaw,
+        subs: std::ops::Range<usize>,
+    ) {
         let s = self.structure;
         let search = &self.search;
         let status = match law {
             LocalLaw::Exact => None,
             LocalLaw::Frozen(status) => Some(status),
         };
-        self.substructures
+        self.substructures[subs.clone()]
             .par_iter()
-            .zip(state.par_iter_mut())
+            .zip(state[subs.clone()].par_iter_mut())
             .with_min_len(self.chunk)
             .for_each(|(sub, st)| {
                 for (j, &i) in sub.links.iter().enumerate() {
@@ -42,13 +54,20 @@ impl Latin<'_> {
                     st.slack_hat[j] = slack;
                 }
             });
-        // Every interface's two sides, computed in parallel on copies, then written back.
-        let sides: Vec<(SideState, SideState)> = self
-            .interfaces
+        // The interfaces with a side in `subs`: their two sides computed in parallel on
+        // copies, then written back (an interface between two ranks is computed alike on
+        // both, from the two sides' s every rank holds).
+        let touched: Vec<usize> = (0..self.interfaces.len())
+            .filter(|&k| {
+                let [a, b] = self.interfaces[k].topology.sides;
+                subs.contains(&a) || subs.contains(&b)
+            })
+            .collect();
+        let sides: Vec<(SideState, SideState)> = touched
             .par_iter()
-            .zip(self.side_slots.par_iter())
             .with_min_len(self.chunk)
-            .map(|(iface, &[ia, ib])| {
+            .map(|&k| {
+                let (iface, [ia, ib]) = (&self.interfaces[k], self.side_slots[k]);
                 let [a, b] = iface.topology.sides;
                 let (mut side_a, mut side_b) =
                     (state[a].sides[ia].clone(), state[b].sides[ib].clone());
@@ -56,10 +75,9 @@ impl Latin<'_> {
                 (side_a, side_b)
             })
             .collect();
-        for ((iface, &[ia, ib]), (side_a, side_b)) in
-            self.interfaces.iter().zip(&self.side_slots).zip(sides)
-        {
-            let [a, b] = iface.topology.sides;
+        for (&k, (side_a, side_b)) in touched.iter().zip(sides) {
+            let [a, b] = self.interfaces[k].topology.sides;
+            let [ia, ib] = self.side_slots[k];
             state[a].sides[ia] = side_a;
             state[b].sides[ib] = side_b;
         }
