@@ -30,10 +30,11 @@ pub struct RankShare {
     /// Values it sends per iteration to its neighbours (as many as it receives) once the
     /// exchange is point to point.
     pub values_sent: usize,
-    /// Values it receives per iteration in the solve's all-gathers today: the fields of s the
-    /// linear stage writes (e and t per link, U_E per dof, U and F per interface row) and the
-    /// macro right-hand side's parts (one per macro dof; kernel amplitudes left out) of every
-    /// other rank's substructures.
+    /// Values it receives per iteration in the solve's all-gathers today, from every other
+    /// rank's substructures: the fields of s the linear stage writes (e and t per link, U_E per
+    /// dof, U and F per interface row), the macro right-hand side's parts (one per macro dof;
+    /// kernel amplitudes left out), η's parts, the slack count, r(U)'s pieces at shared dofs
+    /// and sums of squares, and Anderson's inner products with a full history.
     pub values_gathered: usize,
 }
 
@@ -95,7 +96,8 @@ impl RankLayout {
             }
         }
         shares.iter_mut().for_each(|s| s.neighbours.sort_unstable());
-        let gathered = gathered_per_substructure(structure, &partition, &interfaces);
+        let gathered =
+            gathered_per_substructure(structure, &partition, &interfaces, settings.anderson);
         let total: usize = gathered.iter().sum();
         for share in &mut shares {
             share.values_gathered =
@@ -144,7 +146,8 @@ impl RankLayout {
         }
         out += &format!(
             "  per iteration the solve all-gathers, onto every rank, the other ranks' e and t \
-             per link, U per dof, U and F per interface row and macro right-hand side parts; \
+             per link, U per dof, U and F per interface row, macro right-hand side parts and \
+             per substructure the parts of η, r(U) and Anderson's inner products; \
              once point to point (not yet): {} values ({:.1} KiB) over {} of {} interfaces \
              (U, F and r(U)'s partial sums, {VALUES_PER_ROW} per interface row), and the macro \
              right-hand side, {} values, reduced over the ranks\n",
@@ -164,17 +167,43 @@ fn gathered_per_substructure(
     structure: &Structure,
     partition: &Partition,
     interfaces: &Interfaces,
+    anderson: usize,
 ) -> Vec<usize> {
+    // Substructures holding each node, for the dofs r(U) sums across substructures.
+    let mut holders = vec![0usize; structure.n_nodes()];
+    for topo in &partition.substructures {
+        topo.nodes.iter().for_each(|&n| holders[n] += 1);
+    }
+    let mut input = vec![0usize; partition.substructures.len()];
     let mut gathered: Vec<usize> = partition
         .substructures
         .iter()
-        .map(|topo| 2 * topo.links.len() + topo.free_dofs(structure))
+        .zip(&mut input)
+        .map(|(topo, input)| {
+            let shared_dofs = topo
+                .nodes
+                .iter()
+                .filter(|&&n| holders[n] > 1)
+                .flat_map(|&n| structure.held_components(n))
+                .filter(|&held| !held)
+                .count();
+            *input = topo.links.len();
+            // e and t per link, U per dof; η's two parts, the slack count and r(U)'s three
+            // sums of squares; r(U)'s three pieces per shared dof.
+            2 * topo.links.len() + topo.free_dofs(structure) + 6 + 3 * shared_dofs
+        })
         .collect();
     for iface in &interfaces.list {
         let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
         for &e in &iface.topology.sides {
             gathered[e] += 2 * rows + iface.basis.ncols();
+            input[e] += rows;
         }
+    }
+    // Anderson's two inner products with each of its differences (a full history of
+    // `anderson`, and the new one) per chunk of the substructure's input.
+    for (g, n) in gathered.iter_mut().zip(&input) {
+        *g += 2 * (anderson + 1) * n.div_ceil(crate::linalg::CHUNK).max(1);
     }
     gathered
 }
