@@ -270,25 +270,38 @@ mod tests {
         assert!(accelerated <= 8, "accelerated {accelerated}");
     }
 
+    /// A column of `n` entries in [−5, 5), different for each `seed`.
+    fn column(n: usize, seed: usize) -> Vec<f64> {
+        (0..n)
+            .map(|k| (((k + 1) * (seed + 3) * 7919) % 1013) as f64 / 101.0 - 5.0)
+            .collect()
+    }
+
+    /// `count` kept differences (ΔF only), the new ΔF and f, of `n` entries.
+    fn history(n: usize, count: usize) -> (VecDeque<(Vec<f64>, Vec<f64>)>, Vec<f64>, Vec<f64>) {
+        let kept = (0..count).map(|i| (Vec::new(), column(n, i))).collect();
+        (kept, column(n, 11), column(n, 12))
+    }
+
+    /// `work` on a pool of `threads` threads.
+    fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(work)
+    }
+
     /// The fused pass gives the products `par_dot` gives, to the bit, on one and on two
     /// threads (what makes the Anderson step's results independent of the threads).
     #[test]
     fn the_fused_products_are_par_dots() {
         let n = 3 * CHUNK + 17;
-        let column = |seed: usize| -> Vec<f64> {
-            (0..n)
-                .map(|k| (((k + 1) * (seed + 3) * 7919) % 1013) as f64 / 101.0 - 5.0)
-                .collect()
-        };
-        let kept: VecDeque<(Vec<f64>, Vec<f64>)> =
-            (0..4).map(|i| (Vec::new(), column(i))).collect();
-        let (new, f) = (column(11), column(12));
+        let (kept, new, f) = history(n, 4);
         for threads in [1, 2] {
-            let (with_new, with_f) = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| products_with(&kept, &new, &f, &Pieces::whole(n)));
+            let (with_new, with_f) = on_threads(threads, || {
+                products_with(&kept, &new, &f, &Pieces::whole(n))
+            });
             let columns: Vec<&Vec<f64>> = kept.iter().map(|(_, c)| c).chain([&new]).collect();
             for (i, c) in columns.iter().enumerate() {
                 assert_eq!(
@@ -314,21 +327,8 @@ mod tests {
         assert_eq!(chunks.len(), 4);
         assert!(chunks.windows(2).all(|w| w[0].end == w[1].start));
         assert_eq!((chunks[0].start, chunks[3].end), (0, n));
-        let column = |seed: usize| -> Vec<f64> {
-            (0..n)
-                .map(|k| (((k + 1) * (seed + 3) * 7919) % 1013) as f64 / 101.0 - 5.0)
-                .collect()
-        };
-        let kept: VecDeque<(Vec<f64>, Vec<f64>)> =
-            (0..3).map(|i| (Vec::new(), column(i))).collect();
-        let (new, f) = (column(11), column(12));
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| products_with(&kept, &new, &f, &pieces))
-        };
+        let (kept, new, f) = history(n, 3);
+        let on = |threads: usize| on_threads(threads, || products_with(&kept, &new, &f, &pieces));
         let (one, two) = (on(1), on(2));
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!((bits(&one.0), bits(&one.1)), (bits(&two.0), bits(&two.1)));
