@@ -21,6 +21,9 @@ use std::collections::VecDeque;
 /// matrix's eigenvalues (≈ 1e-14 of the largest) are round-off.
 const RCOND: f64 = 1e-7;
 
+/// Of the last m iterates, oldest first: `(ΔX_i + β ΔF_i, ΔF_i)`.
+type Differences = VecDeque<(Vec<f64>, Vec<f64>)>;
+
 /// The history of an Anderson-accelerated fixed-point iteration.
 #[derive(Debug, Clone, Default)]
 pub struct Anderson {
@@ -32,7 +35,7 @@ pub struct Anderson {
     last: Option<(Vec<f64>, Vec<f64>)>,
     /// Of the last m iterates, oldest first: `(ΔX_i + β ΔF_i, ΔF_i)`, the step's column
     /// (formed once, when the difference is taken) and the least-squares column.
-    differences: VecDeque<(Vec<f64>, Vec<f64>)>,
+    differences: Differences,
     /// `ΔF_iᵀ ΔF_j`, updated as differences come and go (O(m n) an iteration instead of the
     /// O(m² n) of a factorisation of ΔF).
     gram: VecDeque<VecDeque<f64>>,
@@ -198,7 +201,7 @@ impl Pieces<'_> {
 /// `(ΔF_iᵀ ΔF_new, ΔF_iᵀ f)` for every kept ΔF_i and then ΔF_new itself, in one pass over
 /// them: each chunk's partial sums, gathered from every rank and added in chunk order.
 fn products_with(
-    kept: &VecDeque<(Vec<f64>, Vec<f64>)>,
+    kept: &Differences,
     df_new: &[f64],
     f: &[f64],
     pieces: &Pieces<'_>,
@@ -278,7 +281,7 @@ mod tests {
     }
 
     /// `count` kept differences (ΔF only), the new ΔF and f, of `n` entries.
-    fn history(n: usize, count: usize) -> (VecDeque<(Vec<f64>, Vec<f64>)>, Vec<f64>, Vec<f64>) {
+    fn history(n: usize, count: usize) -> (Differences, Vec<f64>, Vec<f64>) {
         let kept = (0..count).map(|i| (Vec::new(), column(n, i))).collect();
         (kept, column(n, 11), column(n, 12))
     }
