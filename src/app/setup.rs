@@ -24,16 +24,11 @@ pub struct Prepared {
 
 /// Build the structure of `case` and refuse a mechanism.
 pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
+    let mut prepared = Prepared::unchecked(case);
     let clock = Instant::now();
-    let structure = case.structure();
-    let structure_seconds = clock.elapsed().as_secs_f64();
-    let taut = TautStiffness::new(&structure)?;
-    Ok(Prepared {
-        structure,
-        taut: Some(taut),
-        structure_seconds,
-        taut_seconds: clock.elapsed().as_secs_f64() - structure_seconds,
-    })
+    prepared.taut = Some(TautStiffness::new(&prepared.structure)?);
+    prepared.taut_seconds = clock.elapsed().as_secs_f64();
+    Ok(prepared)
 }
 
 /// The checks of every answer that solve with the factor of K with every cable taut, each made
