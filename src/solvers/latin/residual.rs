@@ -58,11 +58,17 @@ impl Substructure {
 pub(super) struct DofOwnership {
     /// Per free dof, its owner.
     owner: Vec<u32>,
-    /// Per free dof, whether more than one substructure holds it.
-    shared: Vec<bool>,
+    /// Per free dof held by more than one substructure, its slot among those dofs
+    /// ([`NOT_SHARED`] for the others).
+    shared_slot: Vec<u32>,
+    /// How many free dofs are shared.
+    n_shared: usize,
     /// Per substructure, the local indices of its shared dofs.
     shared_local: Vec<Vec<u32>>,
 }
+
+/// [`DofOwnership::shared_slot`] of a dof only one substructure holds.
+const NOT_SHARED: u32 = u32::MAX;
 
 impl DofOwnership {
     pub(super) fn of(subs: &[Substructure], n_free: usize) -> DofOwnership {
@@ -76,18 +82,29 @@ impl DofOwnership {
                 holders[d] = holders[d].saturating_add(1);
             }
         }
-        let shared: Vec<bool> = holders.iter().map(|&h| h > 1).collect();
+        let mut n_shared = 0;
+        let shared_slot: Vec<u32> = holders
+            .iter()
+            .map(|&h| match h > 1 {
+                true => {
+                    n_shared += 1;
+                    (n_shared - 1) as u32
+                }
+                false => NOT_SHARED,
+            })
+            .collect();
         let shared_local = subs
             .iter()
             .map(|sub| {
                 (0..sub.dof_global.len() as u32)
-                    .filter(|&k| shared[sub.dof_global[k as usize]])
+                    .filter(|&k| shared_slot[sub.dof_global[k as usize]] != NOT_SHARED)
                     .collect()
             })
             .collect();
         DofOwnership {
             owner,
-            shared,
+            shared_slot,
+            n_shared,
             shared_local,
         }
     }
@@ -128,15 +145,16 @@ impl Latin<'_> {
             })
             .collect();
         let all = self.exchange.all_gather(&mine);
-        let n = s.n_free;
-        let (mut r, mut size, mut change) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        // Per shared dof (by its slot): Bᵀτ, |B|ᵀ|τ| and Bᵀ(τ_frozen − τ).
+        let mut at_shared = vec![[0.0; 3]; own.n_shared];
         let mut values = all.chunks(3);
         for (sub, shared) in self.substructures.iter().zip(&own.shared_local) {
             for (&k, v) in shared.iter().zip(&mut values) {
-                let d = sub.dof_global[k as usize];
-                r[d] += v[0];
-                size[d] += v[1];
-                change[d] += v[2];
+                let slot = own.shared_slot[sub.dof_global[k as usize]] as usize;
+                let sums = &mut at_shared[slot];
+                sums[0] += v[0];
+                sums[1] += v[1];
+                sums[2] += v[2];
             }
         }
         // Per held substructure, the squares of the dofs it owns: r = Bᵀτ − F,
@@ -153,9 +171,9 @@ impl Latin<'_> {
                     if own.owner[d] != e {
                         continue;
                     }
-                    let (force, scale, frozen_change) = match own.shared[d] {
-                        true => (r[d], size[d], change[d]),
-                        false => (piece.exact[k], piece.size[k], piece.frozen_change[k]),
+                    let [force, scale, frozen_change] = match own.shared_slot[d] {
+                        NOT_SHARED => [piece.exact[k], piece.size[k], piece.frozen_change[k]],
+                        slot => at_shared[slot as usize],
                     };
                     let exact = force - load[d];
                     let frozen = exact + frozen_change;
