@@ -5,7 +5,10 @@ use crate::case::{Case, SolverChoice};
 use crate::solvers::latin::{Exchange, Homogenised, Latin, OneProcess};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
-use crate::solvers::{AnySolver, Method, Settings, SetupError, TautStiffness};
+use crate::solvers::{
+    check_shape, mechanism_by_substructures, AnySolver, Method, Settings, SetupError,
+    SubstructuredVerdict, TautStiffness,
+};
 use crate::structure::{GeometricModel, Structure};
 use std::time::Instant;
 
@@ -22,13 +25,44 @@ pub struct Prepared {
     pub taut_seconds: f64,
 }
 
-/// Build the structure of `case` and refuse a mechanism.
+/// Build the structure of `case` and refuse a mechanism, keeping the factor of K with every
+/// cable taut.
 pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
+    prepare_keeping(case, true)
+}
+
+/// [`prepare`], keeping K's factor only when `keeps_taut`: without it, a grid under the linear
+/// model is checked substructure by substructure ([`checks_by_substructures`]) and K is never
+/// factorized whole, unless a substructure has a mechanism of its own.
+pub fn prepare_keeping(case: &Case, keeps_taut: bool) -> Result<Prepared, SetupError> {
     let mut prepared = Prepared::unchecked(case);
     let clock = Instant::now();
-    prepared.taut = Some(TautStiffness::new(&prepared.structure)?);
+    let structure = &prepared.structure;
+    let by_substructures = checks_by_substructures(case, keeps_taut)
+        .then_some(structure.layout.as_ref())
+        .flatten();
+    prepared.taut = match by_substructures {
+        Some(layout) => {
+            let shape = check_shape(layout.nx, layout.ny);
+            match mechanism_by_substructures(structure, shape) {
+                SubstructuredVerdict::Regular => None,
+                SubstructuredVerdict::Mechanism(modes) => {
+                    return Err(TautStiffness::refusal(structure, modes))
+                }
+                SubstructuredVerdict::Undecided(_) => Some(TautStiffness::new(structure)?),
+            }
+        }
+        None => Some(TautStiffness::new(structure)?),
+    };
     prepared.taut_seconds = clock.elapsed().as_secs_f64();
     Ok(prepared)
+}
+
+/// Whether the mechanism check of `case` is made substructure by substructure: a grid under the
+/// linear model (K is `Bᵀ k B`) whose run does not keep K's factor
+/// ([`crate::app::memory::Workload::keeps_taut`]).
+pub fn checks_by_substructures(case: &Case, keeps_taut: bool) -> bool {
+    !keeps_taut && case.grid.is_some() && case.model == GeometricModel::Linear
 }
 
 /// The checks of every answer that solve with the factor of K with every cable taut, each made

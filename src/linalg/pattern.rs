@@ -108,6 +108,50 @@ impl StiffnessPattern {
         }
     }
 
+    /// The pattern of the lower-triangle entries `(row, column)` (`row ≥ column`, repeats
+    /// allowed) and every diagonal entry, for a matrix assembled entry by entry rather than
+    /// from rows: it has no row slots, so [`StiffnessPattern::assemble`], `add_outer` and
+    /// `add_block` are not for it; values go in through [`StiffnessPattern::slot`].
+    pub fn from_lower_entries(n: usize, entries: &[(usize, usize)]) -> StiffnessPattern {
+        let mut columns: Vec<Vec<usize>> = (0..n).map(|c| vec![c]).collect();
+        for &(r, c) in entries {
+            assert!(
+                r >= c && r < n,
+                "entry ({r}, {c}) outside the lower triangle of {n}"
+            );
+            columns[c].push(r);
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::new();
+        let mut diag_slot = Vec::with_capacity(n);
+        for mut rows in columns {
+            rows.sort_unstable();
+            rows.dedup();
+            // The diagonal is the smallest row of its column: the column's first slot.
+            diag_slot.push(row_idx.len());
+            row_idx.extend(rows);
+            col_ptr.push(row_idx.len());
+        }
+        StiffnessPattern {
+            n,
+            col_ptr,
+            row_idx,
+            diag_slot,
+            slots: Vec::new(),
+            offsets: vec![0],
+        }
+    }
+
+    /// The slot of entry `(row, column)`, `row ≥ column`, if the pattern holds it.
+    pub fn slot(&self, row: usize, column: usize) -> Option<usize> {
+        let start = self.col_ptr[column];
+        self.row_idx[start..self.col_ptr[column + 1]]
+            .binary_search(&row)
+            .ok()
+            .map(|k| start + k)
+    }
+
     /// Number of stored entries (lower triangle with the diagonal).
     pub fn nnz(&self) -> usize {
         self.row_idx.len()

@@ -16,6 +16,9 @@ pub const ZERO_MODE_RELATIVE: f64 = 1e-12;
 pub struct SmallestEigenvalues {
     /// Ritz values, ascending, in the units of the matrix (N/m for a stiffness).
     pub values: Vec<f64>,
+    /// The Ritz vectors, one column per value in the same order (n × values; empty when
+    /// the iteration broke down).
+    pub vectors: Mat<f64>,
     /// Subspace iterations done.
     pub iterations: usize,
     /// Two successive sets of Ritz values agreed within the relative tolerance (false also
@@ -88,6 +91,7 @@ pub fn smallest_eigenvalues(
             // Not even A + scale·I factors: not positive semidefinite.
             return SmallestEigenvalues {
                 values: vec![f64::NEG_INFINITY],
+                vectors: Mat::zeros(n, 0),
                 iterations: 0,
                 converged: false,
             };
@@ -104,6 +108,7 @@ pub fn smallest_eigenvalues(
             // Every direction vanished or blew up: no spectrum to report.
             return SmallestEigenvalues {
                 values: previous,
+                vectors: Mat::zeros(n, 0),
                 iterations: it,
                 converged: false,
             };
@@ -140,6 +145,7 @@ pub fn smallest_eigenvalues(
         if settled {
             return SmallestEigenvalues {
                 values: previous,
+                vectors: x,
                 iterations: it,
                 converged: true,
             };
@@ -147,6 +153,7 @@ pub fn smallest_eigenvalues(
     }
     SmallestEigenvalues {
         values: previous,
+        vectors: x,
         iterations: max_iterations,
         converged: false,
     }
@@ -198,18 +205,28 @@ pub fn factorize_counting_zero_modes(
     values: &[f64],
     factor: &mut SparseCholesky,
 ) -> usize {
-    let singular = match factor.factorize(pattern, values) {
+    if factorize_or_find_singular(pattern, values, factor) {
+        let mut probe = factor.share_symbolic();
+        zero_mode_count(pattern, values, &mut probe).max(1)
+    } else {
+        0
+    }
+}
+
+/// Factorise `values` with `factor` (analysed on `pattern`) and tell whether the matrix is
+/// singular: its factorization fails, or [`PROBE_ITERATIONS`] inverse iterations find a zero
+/// mode behind round-off pivots. On `false` the factor holds the matrix's Cholesky factor.
+pub fn factorize_or_find_singular(
+    pattern: &StiffnessPattern,
+    values: &[f64],
+    factor: &mut SparseCholesky,
+) -> bool {
+    match factor.factorize(pattern, values) {
         Err(_) => true,
         Ok(()) => {
             smallest_eigenvalue_bound(pattern, values, factor, PROBE_ITERATIONS)
                 < ZERO_MODE_RELATIVE * pattern.mean_diagonal(values)
         }
-    };
-    if singular {
-        let mut probe = factor.share_symbolic();
-        zero_mode_count(pattern, values, &mut probe).max(1)
-    } else {
-        0
     }
 }
 
@@ -221,16 +238,26 @@ pub fn zero_mode_count(
     values: &[f64],
     chol: &mut SparseCholesky,
 ) -> usize {
+    zero_modes(pattern, values, chol).0
+}
+
+/// [`zero_mode_count`], and the modes themselves: orthonormal columns (the Ritz vectors of
+/// eigenvalue below the threshold), fewer than the count only when the iteration broke down.
+pub fn zero_modes(
+    pattern: &StiffnessPattern,
+    values: &[f64],
+    chol: &mut SparseCholesky,
+) -> (usize, Mat<f64>) {
     let threshold = ZERO_MODE_RELATIVE * pattern.mean_diagonal(values);
     let mut block = 8;
     loop {
         let eig = smallest_eigenvalues(pattern, values, chol, block, 30, 1e-3);
         let zeros = eig.values.iter().filter(|&&v| v < threshold).count();
-        if zeros >= ZERO_MODES_COUNTED {
-            return ZERO_MODES_COUNTED;
-        }
-        if zeros < eig.values.len() || block >= pattern.n {
-            return zeros;
+        if zeros >= ZERO_MODES_COUNTED || zeros < eig.values.len() || block >= pattern.n {
+            // Ritz values ascend: the zero ones are the first columns.
+            let count = zeros.min(ZERO_MODES_COUNTED);
+            let kept = count.min(eig.vectors.ncols());
+            return (count, eig.vectors.subcols(0, kept).to_owned());
         }
         block = (2 * block).min(ZERO_MODES_COUNTED);
     }

@@ -6,6 +6,7 @@
 mod driver;
 mod energy_error;
 pub mod latin;
+mod mechanism_by_substructures;
 mod method;
 pub mod newton;
 mod no_equilibrium;
@@ -19,6 +20,9 @@ mod taut;
 
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
+pub use mechanism_by_substructures::{
+    check_shape, mechanism_by_substructures, SubstructuredVerdict, CHECK_MODULES,
+};
 pub use method::{Method, Settings};
 pub use no_equilibrium::{no_equilibrium, no_equilibrium_along, NoEquilibrium};
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};

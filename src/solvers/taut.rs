@@ -63,6 +63,14 @@ impl TautStiffness {
     }
 }
 
+impl TautStiffness {
+    /// The refusal of `structure`, whose K has `zero_modes` zero-stiffness modes, as
+    /// [`TautStiffness::new`] gives it: for a check that found them without K's factor.
+    pub fn refusal(structure: &Structure, zero_modes: usize) -> SetupError {
+        refusal(structure, zero_modes)
+    }
+}
+
 /// Why a singular (or, with geometric stiffness, indefinite) taut stiffness is refused: the
 /// prestress-stability test of docs/method.md §8 tells whether geometric stiffness would make it
 /// solvable, and names the nodes of the modes that stay unstiffened.

@@ -18,7 +18,7 @@ mod fit;
 
 pub use fit::ensure_fits;
 
-use super::setup::AnswerChecks;
+use super::setup::{checks_by_substructures, AnswerChecks};
 use crate::case::Case;
 use crate::host::bytes_text;
 use crate::solvers::Method;
@@ -69,6 +69,10 @@ pub struct Workload {
     /// `output.geometric_term`). Otherwise it is released before the solvers are set up, and
     /// the peak counts the larger of it and theirs, not both.
     pub keeps_taut: bool,
+    /// Whether the mechanism check is made substructure by substructure
+    /// ([`crate::app::setup::checks_by_substructures`]): K is then never factorized whole, and
+    /// the check's substructure factors, one per thread at a time, are small beside the rest.
+    pub taut_by_substructures: bool,
 }
 
 /// The estimated peak memory of a command on a structure, by part.
@@ -96,11 +100,13 @@ impl MemoryEstimate {
             solvers += m.factor_units();
             latin |= m.is_latin();
         }
-        // K with every cable taut (the mechanism check) is always factorized; released, it is
-        // gone before the solvers' factors are built.
-        let mut units = match work.keeps_taut {
-            true => 1.0 + solvers,
-            false => f64::max(1.0, solvers),
+        // K with every cable taut (the mechanism check) is factorized unless the check is made
+        // by substructures; released, it is gone before the solvers' factors are built.
+        let taut = !work.taut_by_substructures;
+        let mut units = match (work.keeps_taut, taut) {
+            (true, _) => 1.0 + solvers,
+            (false, true) => f64::max(1.0, solvers),
+            (false, false) => solvers,
         };
         if work.stability {
             units += 1.0;
@@ -118,6 +124,7 @@ impl MemoryEstimate {
         }
         let names: Vec<&str> = ["K with every cable taut"]
             .into_iter()
+            .filter(|_| taut)
             .chain(work.methods.iter().map(|m| m.name()))
             .collect();
         parts.push((
@@ -181,8 +188,10 @@ impl Workload {
                 all.push(reference);
             }
         }
+        let keeps_taut = AnswerChecks::of(case).any() || all.iter().any(|m| !m.is_latin());
         Workload {
-            keeps_taut: AnswerChecks::of(case).any() || all.iter().any(|m| !m.is_latin()),
+            keeps_taut,
+            taut_by_substructures: checks_by_substructures(case, keeps_taut),
             methods: all,
             stability: case.output.stability,
             compare_modules: case.output.plots && !case.output.compare_modules.is_empty(),
@@ -206,6 +215,7 @@ impl Workload {
             compare_modules: false,
             rank_factorization: true,
             keeps_taut: true,
+            taut_by_substructures: false,
         }
     }
 
@@ -226,6 +236,7 @@ impl Workload {
             compare_modules: false,
             rank_factorization: false,
             keeps_taut: true,
+            taut_by_substructures: false,
         }
     }
 }
@@ -259,6 +270,7 @@ mod tests {
             compare_modules: false,
             rank_factorization: false,
             keeps_taut: true,
+            taut_by_substructures: false,
         }
     }
 

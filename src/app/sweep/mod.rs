@@ -11,7 +11,7 @@ pub use error::RunError;
 
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
-use super::setup::{prepare, set_up_on, AnswerChecks, Prepared, SetUpSolver};
+use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolver};
 use crate::case::Case;
 use crate::output::{
     self, alpha_label,
@@ -129,7 +129,7 @@ pub fn run_on(
         "building the structure and factorising its taut stiffness",
     ));
     let prepared = match writes || work.keeps_taut {
-        true => prepare_or_locate_mechanisms(case, &dir, writes),
+        true => prepare_or_locate_mechanisms(case, &dir, writes, work.keeps_taut),
         false => Ok(Prepared::unchecked(case)),
     };
     let mut prepared = on_every_rank(exchange, prepared)?;
@@ -225,8 +225,9 @@ fn prepare_or_locate_mechanisms(
     case: &Case,
     dir: &Path,
     writes: bool,
+    keeps_taut: bool,
 ) -> Result<Prepared, RunError> {
-    prepare(case).or_else(|refused| {
+    prepare_keeping(case, keeps_taut).or_else(|refused| {
         if writes && !refused.modes().is_empty() {
             write_mechanisms(dir, refused.modes())?;
         }

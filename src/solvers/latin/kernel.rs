@@ -4,7 +4,7 @@
 //! `Q_E = orth(R_Eᵀ C_E ρ)`.
 
 use super::macro_basis::orthonormal_columns;
-use nalgebra::{DMatrix, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, DVector, SymmetricEigen, Vector3};
 
 /// Gram eigenvalue below which a rigid motion satisfies the kernel's constraints.
 const NULL_THRESHOLD: f64 = 1e-10;
@@ -19,21 +19,69 @@ pub struct InterfaceTrace<'a> {
     pub basis: &'a DMatrix<f64>,
 }
 
-/// The six rigid motions (3 translations, 3 rotations about `centre`, scaled by `length`)
-/// evaluated at `p`: a 3 × 6 block.
-fn rigid_block(p: &[f64; 3], centre: &Vector3<f64>, length: f64) -> [[f64; 6]; 3] {
-    let d = (Vector3::from(*p) - centre) / length;
-    let mut block = [[0.0; 6]; 3];
-    for k in 0..3 {
-        block[k][k] = 1.0;
-        let mut axis = Vector3::zeros();
-        axis[k] = 1.0;
-        let r = axis.cross(&d);
-        for c in 0..3 {
-            block[c][3 + k] = r[c];
+/// The frame the six rigid motions of a set of nodes are written in: about the nodes' centre,
+/// rotations scaled by their root-mean-square distance to it, so that every field is O(1) per
+/// node and Gram thresholds can be absolute.
+pub(crate) struct RigidFrame {
+    centre: Vector3<f64>,
+    length: f64,
+}
+
+impl RigidFrame {
+    /// The frame of the nodes at `positions`.
+    pub(crate) fn new(positions: &[[f64; 3]]) -> RigidFrame {
+        let n = positions.len().max(1) as f64;
+        let centre = positions
+            .iter()
+            .fold(Vector3::zeros(), |s, p| s + Vector3::from(*p))
+            / n;
+        let length = (positions
+            .iter()
+            .map(|p| (Vector3::from(*p) - centre).norm_squared())
+            .sum::<f64>()
+            / n)
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
+        RigidFrame { centre, length }
+    }
+
+    /// The six rigid motions (3 translations, 3 rotations) evaluated at `p`: a 3 × 6 block.
+    pub(crate) fn block(&self, p: &[f64; 3]) -> [[f64; 6]; 3] {
+        let d = (Vector3::from(*p) - self.centre) / self.length;
+        let mut block = [[0.0; 6]; 3];
+        for k in 0..3 {
+            block[k][k] = 1.0;
+            let mut axis = Vector3::zeros();
+            axis[k] = 1.0;
+            let r = axis.cross(&d);
+            for c in 0..3 {
+                block[c][3 + k] = r[c];
+            }
+        }
+        block
+    }
+}
+
+/// `Σ rᵀ r` over `rows`, added to the 6 × 6 Gram matrix of the rigid motions' amplitudes.
+pub(crate) fn add_to_gram(gram: &mut DMatrix<f64>, rows: &[[f64; 6]]) {
+    for r in rows {
+        for i in 0..6 {
+            for j in 0..6 {
+                gram[(i, j)] += r[i] * r[j];
+            }
         }
     }
-    block
+}
+
+/// The amplitudes of the rigid motions that satisfy the constraints gathered in `gram`:
+/// eigenvectors of eigenvalue at most [`NULL_THRESHOLD`] (the fields are O(1) per node, so a
+/// violated constraint gives an eigenvalue of order one or more, a satisfied one round-off).
+pub(crate) fn null_amplitudes(gram: DMatrix<f64>) -> Vec<DVector<f64>> {
+    let eig = SymmetricEigen::new(gram);
+    (0..6)
+        .filter(|&i| eig.eigenvalues[i] <= NULL_THRESHOLD)
+        .map(|i| eig.eigenvectors.column(i).into_owned())
+        .collect()
 }
 
 /// `Q_E`: orthonormal columns (rows = E's macro dofs, interfaces in `traces` order).
@@ -44,36 +92,16 @@ pub fn substructure_kernel(
     held: &[([f64; 3], [bool; 3])],
     traces: &[InterfaceTrace<'_>],
 ) -> DMatrix<f64> {
-    let n = all_positions.len().max(1) as f64;
-    let centre = all_positions
-        .iter()
-        .fold(Vector3::zeros(), |s, p| s + Vector3::from(*p))
-        / n;
-    let length = (all_positions
-        .iter()
-        .map(|p| (Vector3::from(*p) - centre).norm_squared())
-        .sum::<f64>()
-        / n)
-        .sqrt()
-        .max(f64::MIN_POSITIVE);
+    let frame = RigidFrame::new(all_positions);
     // Constraints on the 6 amplitudes: ρ = 0 on held components; (I − R Rᵀ) ρ|Γ = 0.
     let mut gram = DMatrix::<f64>::zeros(6, 6);
-    let mut add_rows = |rows: &[[f64; 6]]| {
-        for r in rows {
-            for i in 0..6 {
-                for j in 0..6 {
-                    gram[(i, j)] += r[i] * r[j];
-                }
-            }
-        }
-    };
     for (p, components) in held {
-        let block = rigid_block(p, &centre, length);
+        let block = frame.block(p);
         let rows: Vec<[f64; 6]> = (0..3)
             .filter(|&c| components[c])
             .map(|c| block[c])
             .collect();
-        add_rows(&rows);
+        add_to_gram(&mut gram, &rows);
     }
     // ρ on the interface's free components, node-major (the rows of its R).
     let trace_of = |t: &InterfaceTrace<'_>| -> DMatrix<f64> {
@@ -82,7 +110,7 @@ pub fn substructure_kernel(
             .iter()
             .zip(t.free)
             .flat_map(|(p, free)| {
-                let b = rigid_block(p, &centre, length);
+                let b = frame.block(p);
                 (0..3).filter(move |&c| free[c]).map(move |c| b[c])
             })
             .collect();
@@ -94,24 +122,17 @@ pub fn substructure_kernel(
         let rows: Vec<[f64; 6]> = (0..micro.nrows())
             .map(|i| std::array::from_fn(|j| micro[(i, j)]))
             .collect();
-        add_rows(&rows);
+        add_to_gram(&mut gram, &rows);
     }
-    // The six fields are O(1) per node (rotations scaled by the substructure's size), so a
-    // motion that violates a constraint has a Gram eigenvalue of order one or more, and one
-    // that satisfies them only round-off: the threshold is absolute.
-    let eig = SymmetricEigen::new(gram);
-    let null: Vec<usize> = (0..6)
-        .filter(|&i| eig.eigenvalues[i] <= NULL_THRESHOLD)
-        .collect();
+    let null = null_amplitudes(gram);
     // R_Eᵀ C_E ρ for each surviving rigid motion.
     let m_e: usize = traces.iter().map(|t| t.basis.ncols()).sum();
     let fields: Vec<Vec<f64>> = null
         .iter()
-        .map(|&i| {
-            let amplitude = eig.eigenvectors.column(i).into_owned();
+        .map(|amplitude| {
             let mut out = Vec::with_capacity(m_e);
             for t in traces {
-                let rho = trace_of(t) * &amplitude;
+                let rho = trace_of(t) * amplitude;
                 out.extend((t.basis.transpose() * rho).iter());
             }
             out

@@ -51,8 +51,10 @@ mod tests;
 
 pub use exchange::{block, Exchange, OneProcess};
 pub(crate) use interfaces::Interface;
+pub(crate) use kernel::{add_to_gram, null_amplitudes, RigidFrame};
 #[cfg(test)]
 use macro_basis::macro_basis;
+pub(crate) use macro_basis::orthonormal_columns;
 pub(crate) use partition::Partition;
 pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW};
 pub use settings::{
