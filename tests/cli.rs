@@ -109,6 +109,20 @@ fn invalid_cases_exit_2_and_name_the_key() {
             &["mechanism", "zero-stiffness mode"],
         ),
         (
+            // LATIN alone, nothing solving with K: checked by substructures (a free 2 × 2 grid
+            // of the standard module has 7 zero modes, as the whole factor counts).
+            "mechanism-checked-by-substructures",
+            with(
+                "[supports]\nclamp = \"none\"\n[solver]\nmethods = [\"micro-macro\"]\n\
+                 reference = \"none\"\n[output]\ngeometric_term = false",
+            ),
+            &[
+                "mechanism",
+                "has 7 zero-stiffness mode(s)",
+                "supports.clamp",
+            ],
+        ),
+        (
             "overflowing-young",
             with("[cables]\nyoung = 1e300"),
             &["cables.young", "1e300", "≤ 1e15"],
@@ -162,6 +176,11 @@ fn invalid_cases_exit_2_and_name_the_key() {
             "forcing-out-of-range",
             with("[solver]\nforcing = 1.5"),
             &["solver.forcing", "1.5", "between 0 and 1"],
+        ),
+        (
+            "keep-z-not-a-boolean",
+            with("[solver]\nkeep_z = \"no\""),
+            &["keep_z", "bool"],
         ),
         (
             "unknown-stop-on",
