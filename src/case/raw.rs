@@ -191,6 +191,7 @@ pub(super) struct RawSolver {
     pub forcing: Option<f64>,
     pub stop_on: Option<StopOn>,
     pub residual_tolerance: Option<f64>,
+    pub keep_z: Option<bool>,
     pub reference: Option<ReferenceChoice>,
 }
 

@@ -130,6 +130,9 @@ fn latin_settings(
     if let Some(stop_on) = raw.stop_on {
         latin.stop_on = stop_on;
     }
+    if let Some(keep) = raw.keep_z {
+        latin.keep_z = keep;
+    }
     if let Some(tol) = raw.residual_tolerance {
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
             return Err(CaseError::invalid(

@@ -74,7 +74,16 @@ impl Substructure {
         // U_E = y_E + d_m Z_E (u_E + f_E/d_m).
         let star: Vec<f64> = u_e.iter().zip(f_e).map(|(u, f)| dm * u + f).collect();
         st.u.copy_from_slice(&condensed.y);
-        gemv(&mut st.u, &self.ops().z, &star, true);
+        match &self.ops().z {
+            Some(z) => gemv(&mut st.u, z, &star, true),
+            None => {
+                // Z_E star = K_E⁻¹ C_Eᵀ R_E star, by one more solve.
+                let mut v = vec![0.0; self.n_dofs()];
+                self.scatter_macro(&star, &mut v);
+                self.ops().factor.solve_in_place(&mut v);
+                st.u.iter_mut().zip(&v).for_each(|(u, z)| *u += z);
+            }
+        }
         // e_E = B_E U_E, t_E = t̂_E + l(e_E − ê_E).
         for (j, &i) in self.links.iter().enumerate() {
             st.e[j] = self.link_dofs[j].elongation(&st.u);

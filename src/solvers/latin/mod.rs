@@ -62,7 +62,7 @@ pub use settings::{
 };
 pub use state::LatinState;
 pub(crate) use state::{SideState, SubState};
-pub(crate) use substructure::Substructure;
+pub(crate) use substructure::{OperatorStorage, Substructure};
 
 use super::{displacement_residual, SetupError};
 use crate::structure::Structure;
@@ -126,8 +126,9 @@ pub struct Latin<'s> {
     settings: LatinSettings,
     /// d_m as used: `settings.dm`, or [`auto_dm`] for this structure and partition.
     dm: f64,
-    /// Substructure operators kept as dense inverses (see `DENSE_BUDGET_BYTES`).
-    dense: bool,
+    /// How the substructure operators are kept: as dense inverses (see
+    /// `DENSE_BUDGET_BYTES`), and with or without Z_E (`solver.keep_z`).
+    storage: OperatorStorage,
     /// Search direction l of every link as set up (`solver.l`).
     base_search: Vec<f64>,
     /// Search direction l of every link now: `base_search`, times ε on the cables of
@@ -275,6 +276,10 @@ impl<'s> Latin<'s> {
             exchange.size(),
             partition.substructures.len(),
         );
+        let storage = OperatorStorage {
+            dense: dense_bytes <= DENSE_BUDGET_BYTES,
+            keep_z: settings.keep_z,
+        };
         let (substructures, macro_problem) = operators::build(
             structure,
             &partition,
@@ -282,7 +287,7 @@ impl<'s> Latin<'s> {
             &holders,
             &base_search,
             dm,
-            dense_bytes <= DENSE_BUDGET_BYTES,
+            storage,
             (exchange, held.clone()),
         )?;
         let dof_ownership = residual::DofOwnership::of(&substructures, structure.n_free);
@@ -290,7 +295,7 @@ impl<'s> Latin<'s> {
             structure,
             settings,
             dm,
-            dense: dense_bytes <= DENSE_BUDGET_BYTES,
+            storage,
             search: base_search.clone(),
             search_slack: vec![false; structure.links.len()],
             operators_lost: false,

@@ -5,6 +5,7 @@
 use super::exchange::Exchange;
 use super::macro_problem::MacroProblem;
 use super::shapes::Shapes;
+use super::substructure::OperatorStorage;
 use super::{Interface, Partition, Substructure};
 use crate::solvers::SetupError;
 use crate::structure::{Structure, CLAMPED};
@@ -22,7 +23,7 @@ pub(super) fn build(
     holders: &[u8],
     search: &[f64],
     dm: f64,
-    dense: bool,
+    storage: OperatorStorage,
     (exchange, held): (&dyn Exchange, std::ops::Range<usize>),
 ) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
     // Every substructure, in parallel (a scratch dof map per task); those of one shape share
@@ -40,7 +41,7 @@ pub(super) fn build(
                     ));
                 }
                 Substructure::new(
-                    e, topo, structure, interfaces, holders, search, dm, dense, &shapes, scratch,
+                    e, topo, structure, interfaces, holders, search, dm, storage, &shapes, scratch,
                 )
                 .map_err(|_| e)
             },

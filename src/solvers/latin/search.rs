@@ -112,13 +112,13 @@ impl Latin<'_> {
     /// their L_E shared, and the macro problem refactorised. `false` on failure, when the
     /// changed substructures' operators are left unusable.
     fn rebuild(&mut self, changed: &[usize], search: &[f64]) -> bool {
-        let (dm, dense, held) = (self.dm, self.dense, self.held.clone());
+        let (dm, storage, held) = (self.dm, self.storage, self.held.clone());
         let rebuilt = self
             .substructures
             .par_iter_mut()
             .enumerate()
             .filter(|(e, _)| held.contains(e) && changed.binary_search(e).is_ok())
-            .map(|(_, sub)| sub.set_search(search, dm, dense))
+            .map(|(_, sub)| sub.set_search(search, dm, storage))
             .collect::<Result<Vec<()>, _>>()
             .is_ok();
         if !self.exchange.all(rebuilt) {

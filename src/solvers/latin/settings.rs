@@ -112,6 +112,10 @@ pub struct LatinSettings {
     pub residual_tolerance: Option<f64>,
     /// Iteration cap. Default 1000.
     pub max_iterations: usize,
+    /// Keep every substructure's `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × its macro dofs). Default
+    /// true; false computes `Z_E w` by a second solve with K_E's factor in every linear
+    /// stage: a fifth less memory on large grids, and a slower iteration.
+    pub keep_z: bool,
 }
 
 impl Default for LatinSettings {
@@ -130,6 +134,7 @@ impl Default for LatinSettings {
             tolerance: 1e-6,
             residual_tolerance: None,
             max_iterations: 1000,
+            keep_z: true,
         }
     }
 }

@@ -44,6 +44,16 @@ impl Side {
     }
 }
 
+/// How a substructure's operators are kept.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OperatorStorage {
+    /// K_E⁻¹ kept dense (see [`SpdSolver::new`]).
+    pub dense: bool,
+    /// Z_E kept (`solver.keep_z`); otherwise every linear stage computes `Z_E w` by one more
+    /// solve with K_E's factor.
+    pub keep_z: bool,
+}
+
 /// Why a substructure operator could not be built.
 #[derive(Debug, Clone, Copy)]
 pub struct SingularSubstructure;
@@ -84,8 +94,9 @@ pub struct LocalOperators {
     geometric: Vec<(usize, LinkDofs, f64)>,
     /// Solves with K_E.
     pub factor: SpdSolver,
-    /// `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × `n_macro`).
-    pub z: DMatrix<f64>,
+    /// `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × `n_macro`), unless it is recomputed
+    /// ([`OperatorStorage::keep_z`]).
+    pub z: Option<DMatrix<f64>>,
     /// `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, symmetrised (kept for the invariant tests of its
     /// kernel).
     #[cfg_attr(not(test), allow(dead_code))]
@@ -95,8 +106,8 @@ pub struct LocalOperators {
 }
 
 impl Substructure {
-    /// E's operators, built in the order of docs/method.md §4 "Linear stage". `dense`: keep
-    /// K_E⁻¹ dense (see [`SpdSolver::new`]). `shapes`: the patterns and analyses of the
+    /// E's operators, built in the order of docs/method.md §4 "Linear stage", kept as
+    /// `storage` says. `shapes`: the patterns and analyses of the
     /// substructures built so far, shared with E when it has the shape of one. `local_dof` is
     /// a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
     #[allow(clippy::too_many_arguments)]
@@ -108,7 +119,7 @@ impl Substructure {
         holders: &[u8],
         search: &[f64],
         dm: f64,
-        dense: bool,
+        storage: OperatorStorage,
         shapes: &Shapes,
         local_dof: &mut [usize],
     ) -> Result<Substructure, SingularSubstructure> {
@@ -127,7 +138,7 @@ impl Substructure {
             dm,
         );
         let (pattern, factor) = shapes
-            .factor(pattern, &values, dense)
+            .factor(pattern, &values, storage.dense)
             .map_err(|_| SingularSubstructure)?;
         // 5. Z_E = K_E⁻¹ C_Eᵀ R_E and K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
         let (z, k_star) = sub.condense_operators(&factor, dm);
@@ -141,7 +152,7 @@ impl Substructure {
             pattern,
             geometric,
             factor,
-            z,
+            z: storage.keep_z.then_some(z),
             k_star,
             k_plus,
         });
@@ -211,13 +222,13 @@ impl Substructure {
         &mut self,
         search: &[f64],
         dm: f64,
-        dense: bool,
+        storage: OperatorStorage,
     ) -> Result<(), SingularSubstructure> {
         let mut ops = self
             .ops
             .take()
             .expect("a substructure's operators are rebuilt only on the rank that holds it");
-        let rebuilt = self.rebuild_operators(&mut ops, search, dm, dense);
+        let rebuilt = self.rebuild_operators(&mut ops, search, dm, storage);
         self.ops = Some(ops);
         rebuilt
     }
@@ -228,7 +239,7 @@ impl Substructure {
         ops: &mut LocalOperators,
         search: &[f64],
         dm: f64,
-        dense: bool,
+        storage: OperatorStorage,
     ) -> Result<(), SingularSubstructure> {
         // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
         let values = stiffness(
@@ -245,7 +256,7 @@ impl Substructure {
                 .factorize(&ops.pattern, &values)
                 .map_err(|_| SingularSubstructure)?,
             SpdSolver::Dense(_) => {
-                ops.factor = SpdSolver::new(&ops.pattern, &values, dense)
+                ops.factor = SpdSolver::new(&ops.pattern, &values, storage.dense)
                     .map_err(|_| SingularSubstructure)?
             }
         }
@@ -253,7 +264,7 @@ impl Substructure {
         // 5. Z_E and K*_E; 7. K⁺_E and L_E (Q_E of step 6 is kept).
         let (z, k_star) = self.condense_operators(&ops.factor, dm);
         let (k_plus, flexibility) = invert(&k_star, &self.kernel, dm)?;
-        (ops.z, ops.k_star, ops.k_plus) = (z, k_star, k_plus);
+        (ops.z, ops.k_star, ops.k_plus) = (storage.keep_z.then_some(z), k_star, k_plus);
         self.flexibility = flexibility;
         Ok(())
     }
@@ -298,6 +309,17 @@ impl Substructure {
     /// `C_E v`: E's interface rows.
     pub fn gather(&self, v: &[f64]) -> Vec<f64> {
         self.gamma_dofs.iter().map(|&d| v[d]).collect()
+    }
+
+    /// `v += C_Eᵀ R_E w` for w on E's macro dofs: each interface's `R w` on its rows' dofs.
+    pub fn scatter_macro(&self, w: &[f64], v: &mut [f64]) {
+        for side in &self.sides {
+            let block = &w[side.macro_offset..side.macro_offset + side.cols];
+            for r in 0..side.rows {
+                let row: f64 = (0..side.cols).map(|j| side.basis[(r, j)] * block[j]).sum();
+                v[self.gamma_dofs[side.gamma_offset + r]] += row;
+            }
+        }
     }
 
     /// `R_Eᵀ w` for w on E's interface rows.
