@@ -72,11 +72,10 @@ impl Method {
     /// Sparse factors the solver holds beyond the taut stiffness every run factorizes, in
     /// units of the structure's stiffness factor (the memory estimate): newton its Hessian's;
     /// pcg-lcp none (it solves with K's); mono-latin its whole-structure operators (measured
-    /// 3.0–3.4 units on 64 × 64 to 256 × 256, rounded up to 4); micro-macro its substructure
-    /// operators, Anderson's history and macro problem (1.1–1.6 units on 64 × 64 to 256 × 256
-    /// with 4 × 4 substructures since they are rebuilt in place and share their shapes'
-    /// analyses, 2026-11-26; 2.0 to also bound 1024 substructures of 4 × 4 modules on
-    /// 128 × 128, 1.04 GB. Many smaller substructures cost more: their macro problem grows).
+    /// 3.0–3.4 units on 64 × 64 to 256 × 256, rounded up to 4). micro-macro's memory is
+    /// counted from its substructures ([`crate::app::memory::micro_macro_bytes`]); its 2 units
+    /// (1.1–1.6 measured with 4 × 4 substructures on 64 × 64 to 256 × 256) only rank it among
+    /// the solvers `bench` sets up one at a time.
     pub fn factor_units(self) -> f64 {
         match self {
             Method::Newton => 1.0,

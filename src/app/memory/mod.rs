@@ -21,6 +21,7 @@ pub use fit::ensure_fits;
 use super::setup::{checks_by_substructures, AnswerChecks};
 use crate::case::Case;
 use crate::host::bytes_text;
+use crate::solvers::latin::LatinSettings;
 use crate::solvers::Method;
 use crate::structure::StructureSize;
 
@@ -50,6 +51,52 @@ pub fn factor_bytes(size: StructureSize, amd: bool) -> u64 {
     (fill * entries * BYTES_PER_FACTOR_ENTRY) as u64
 }
 
+/// Entries of a substructure factor per dof: `28 (log2 d_E − 8.3)`, at least `4 log2 d_E`, for
+/// `d_E` dofs (AMD on E's node graph). Fitted to the substructure factors of 256 × 256 modules
+/// on 2 × 2 to 64 × 64 substructures (148 224 to 180 dofs: 238, 183, 128, 82, 36 and 22 entries
+/// per dof, each below the formula).
+fn substructure_entries_per_dof(d_e: f64) -> f64 {
+    let l = d_e.max(2.0).log2();
+    f64::max(28.0 * (l - 8.3), 4.0 * l)
+}
+
+/// Macro dofs per substructure: 22 on 256 × 256 modules with 256 and 1 024 substructures;
+/// rounded up.
+const MACRO_DOFS_PER_SUBSTRUCTURE: f64 = 24.0;
+
+/// Bytes of Z_E per dof: a substructure's macro dofs (44 on average on 256 × 256 modules with
+/// 256 substructures) of 8 bytes, rounded up.
+const Z_BYTES_PER_DOF: f64 = 384.0;
+
+/// Bytes of micro-macro's own memory beside the structure on a structure of `size` with
+/// `settings`: the substructure factors ([`substructure_entries_per_dof`], 10 bytes an entry
+/// as K's), Z_E unless `keep_z` is false, Anderson's history (two vectors of about 1.25 values
+/// per link per depth) and the macro factor (three times a stiffness factor of its dofs: its
+/// blocks are denser). Measured against peak RSS of whole runs (2026-11-27, reference none,
+/// `geometric_term = false`): 256 × 256 modules on 256 substructures, anderson 10, 1.31 GB
+/// (`keep_z = false`, estimate 1.45 GB) and 1.53 GB (1.68 GB); 512 × 512 on 1 024, anderson
+/// 10, `keep_z = false`, 5.08 GB (5.8 GB).
+pub fn micro_macro_bytes(size: StructureSize, settings: &LatinSettings) -> u64 {
+    let d = size.dofs().max(2) as f64;
+    let substructures = (settings.subdomains[0] * settings.subdomains[1]).max(1) as f64;
+    let d_e = d / substructures;
+    let factors = BYTES_PER_FACTOR_ENTRY * substructure_entries_per_dof(d_e) * d;
+    let z = match settings.keep_z {
+        true => Z_BYTES_PER_DOF * d,
+        false => 0.0,
+    };
+    let anderson = 2.0 * 1.25 * 8.0 * settings.anderson as f64 * size.links as f64;
+    let macro_size = StructureSize {
+        nodes: (MACRO_DOFS_PER_SUBSTRUCTURE * substructures / 3.0).ceil() as usize,
+        links: 0,
+    };
+    let macro_factor = match substructures > 1.0 {
+        true => 3 * factor_bytes(macro_size, false),
+        false => 0,
+    };
+    (factors + z + anderson) as u64 + macro_factor
+}
+
 /// What a command will do with the structure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Workload {
@@ -73,6 +120,9 @@ pub struct Workload {
     /// ([`crate::app::setup::checks_by_substructures`]): K is then never factorized whole, and
     /// the check's substructure factors, one per thread at a time, are small beside the rest.
     pub taut_by_substructures: bool,
+    /// micro-macro's settings (partition, Anderson depth, `keep_z`), for its memory when it
+    /// is among `methods`.
+    pub micro_macro: LatinSettings,
 }
 
 /// The estimated peak memory of a command on a structure, by part.
@@ -94,47 +144,70 @@ impl MemoryEstimate {
     pub fn new(size: StructureSize, work: &Workload) -> MemoryEstimate {
         let factor = factor_bytes(size, false);
         let mut parts = vec![("structure".to_string(), size.bytes())];
-        let mut solvers = 0.0;
-        let mut latin = false;
-        for &m in &work.methods {
-            solvers += m.factor_units();
-            latin |= m.is_latin();
-        }
+        let latin = work.methods.iter().any(|m| m.is_latin());
+        // The solvers' own memory: whole-structure factors in units of K's, and micro-macro's
+        // substructure operators in bytes.
+        let whole = |methods: &mut dyn Iterator<Item = &Method>| -> f64 {
+            methods
+                .filter(|&&m| m != Method::MicroMacro)
+                .map(|m| m.factor_units())
+                .sum()
+        };
+        let solvers = whole(&mut work.methods.iter());
+        let micro = match work.methods.contains(&Method::MicroMacro) {
+            true => micro_macro_bytes(size, &work.micro_macro),
+            false => 0,
+        };
         // K with every cable taut (the mechanism check) is factorized unless the check is made
         // by substructures; released, it is gone before the solvers' factors are built.
         let taut = !work.taut_by_substructures;
+        let solver_bytes = solvers * factor as f64 + micro as f64;
+        let check_alone = !work.keeps_taut && taut && factor as f64 > solver_bytes;
         let mut units = match (work.keeps_taut, taut) {
-            (true, _) => 1.0 + solvers,
-            (false, true) => f64::max(1.0, solvers),
-            (false, false) => solvers,
+            (true, true) => 1.0 + solvers,
+            _ if check_alone => 1.0,
+            _ => solvers,
+        };
+        let mut micro_parts = match check_alone {
+            true => 0,
+            false => micro,
         };
         if work.stability {
             units += 1.0;
         }
         if work.compare_modules {
             // A second grid: its structure, its taut factor and its LATIN solvers.
-            units += 1.0;
-            units += work
-                .methods
-                .iter()
-                .filter(|m| m.is_latin())
-                .map(|&m| m.factor_units())
-                .sum::<f64>();
+            units += 1.0 + whole(&mut work.methods.iter().filter(|m| m.is_latin()));
+            micro_parts += micro;
             parts.push(("second grid (Figure 12)".into(), size.bytes()));
         }
         let names: Vec<&str> = ["K with every cable taut"]
             .into_iter()
-            .filter(|_| taut)
-            .chain(work.methods.iter().map(|m| m.name()))
+            .filter(|_| taut && (work.keeps_taut || check_alone))
+            .chain(
+                work.methods
+                    .iter()
+                    .filter(|&&m| m != Method::MicroMacro && !check_alone)
+                    .map(|m| m.name()),
+            )
             .collect();
-        parts.push((
-            format!(
-                "{units} sparse factor(s) of {} ({})",
-                bytes_text(factor),
-                names.join(", ")
-            ),
-            (units * factor as f64) as u64,
-        ));
+        if units > 0.0 {
+            parts.push((
+                format!(
+                    "{units} sparse factor(s) of {} ({})",
+                    bytes_text(factor),
+                    names.join(", ")
+                ),
+                (units * factor as f64) as u64,
+            ));
+        }
+        if micro_parts > 0 {
+            parts.push((
+                "micro-macro (substructure factors, Z_E, Anderson's history, macro problem)".into(),
+                micro_parts,
+            ));
+        }
+        let units = units + micro_parts as f64 / factor as f64;
         if work.rank_factorization {
             // Freed before the solvers' set-up: counted when larger than what follows it.
             let rank = factor_bytes(size, true);
@@ -192,6 +265,7 @@ impl Workload {
         Workload {
             keeps_taut,
             taut_by_substructures: checks_by_substructures(case, keeps_taut),
+            micro_macro: case.solver.latin,
             methods: all,
             stability: case.output.stability,
             compare_modules: case.output.plots && !case.output.compare_modules.is_empty(),
@@ -216,6 +290,7 @@ impl Workload {
             rank_factorization: true,
             keeps_taut: true,
             taut_by_substructures: false,
+            micro_macro: case.solver.latin,
         }
     }
 
@@ -237,6 +312,7 @@ impl Workload {
             rank_factorization: false,
             keeps_taut: true,
             taut_by_substructures: false,
+            micro_macro: case.solver.latin,
         }
     }
 }
@@ -271,6 +347,7 @@ mod tests {
             rank_factorization: false,
             keeps_taut: true,
             taut_by_substructures: false,
+            micro_macro: LatinSettings::default(),
         }
     }
 
@@ -314,36 +391,47 @@ mod tests {
     }
 
     /// The estimate is above every peak RSS measured (`/usr/bin/time -v tensolve run`, kB, one
-    /// solver, 3 iterations, 2026-11-23; micro-macro's again on 2026-11-26, reference none,
-    /// after its operators were rebuilt in place and shared by shape) and within 1.5 times it
-    /// on the grids where the structure dominates the process.
+    /// solver, 3 iterations, 2026-11-23; micro-macro's again on 2026-11-27, reference none,
+    /// `geometric_term = false`, with its mechanism check by substructures; on 64 × 64 and
+    /// 128 × 128 whole sweeps of the paper's case, 300 iterations with Anderson's history
+    /// full, which 3 iterations leave nearly empty) and within 1.5 times it on the grids where
+    /// the structure dominates the process.
     #[test]
     fn the_estimate_bounds_the_measured_peaks() {
         let measured: [(usize, Method, u64); 20] = [
             (16, Method::Newton, 13_052),
             (16, Method::PcgLcp, 11_020),
             (16, Method::MonoLatin, 17_768),
-            (16, Method::MicroMacro, 23_260),
+            (16, Method::MicroMacro, 22_500),
             (56, Method::Newton, 133_684),
             (56, Method::PcgLcp, 87_948),
             (56, Method::MonoLatin, 213_204),
-            (56, Method::MicroMacro, 135_128),
+            (56, Method::MicroMacro, 75_444),
             (64, Method::Newton, 156_548),
             (64, Method::PcgLcp, 103_848),
             (64, Method::MonoLatin, 279_184),
-            (64, Method::MicroMacro, 176_656),
+            (64, Method::MicroMacro, 126_088),
             (128, Method::Newton, 681_060),
             (128, Method::PcgLcp, 432_172),
             (128, Method::MonoLatin, 1_309_900),
-            (128, Method::MicroMacro, 774_904),
+            (128, Method::MicroMacro, 502_284),
             (256, Method::Newton, 3_005_132),
             (256, Method::PcgLcp, 1_826_340),
             (256, Method::MonoLatin, 5_818_292),
-            (256, Method::MicroMacro, 3_430_784),
+            (256, Method::MicroMacro, 1_777_752),
         ];
         for (n, method, kb) in measured {
             let peak = kb * 1024;
-            let estimate = MemoryEstimate::new(grid(n), &run(&[method])).total();
+            // micro-macro as measured: alone, reference none, `geometric_term = false`.
+            let work = match method {
+                Method::MicroMacro => Workload {
+                    keeps_taut: false,
+                    taut_by_substructures: true,
+                    ..run(&[method])
+                },
+                _ => run(&[method]),
+            };
+            let estimate = MemoryEstimate::new(grid(n), &work).total();
             assert!(
                 estimate >= peak,
                 "{n} x {n} {method:?}: {estimate} < {peak}"
@@ -355,6 +443,54 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// micro-macro's own memory follows its settings: Z_E and Anderson's history count, and
+    /// on 1 024 × 1 024 modules with substructures of 16 × 16 (anderson 5, `keep_z = false`)
+    /// a run checked by substructures needs about 21.6 GB, where two factors of K counted
+    /// before would have been 48 GB on their own.
+    #[test]
+    fn micro_macro_is_counted_by_its_substructures() {
+        let size = grid(1024);
+        let settings = LatinSettings {
+            subdomains: [64, 64],
+            anderson: 5,
+            keep_z: false,
+            ..LatinSettings::default()
+        };
+        let lean = micro_macro_bytes(size, &settings);
+        let with_z = micro_macro_bytes(
+            size,
+            &LatinSettings {
+                keep_z: true,
+                ..settings
+            },
+        );
+        let deeper = micro_macro_bytes(
+            size,
+            &LatinSettings {
+                anderson: 10,
+                ..settings
+            },
+        );
+        let dofs = size.dofs() as u64;
+        assert!(with_z - lean == 384 * dofs, "{with_z} {lean}");
+        assert!(deeper - lean == 100 * size.links as u64, "{deeper} {lean}");
+        let work = Workload {
+            keeps_taut: false,
+            taut_by_substructures: true,
+            micro_macro: settings,
+            ..run(&[Method::MicroMacro])
+        };
+        let total = MemoryEstimate::new(size, &work).total() as f64 / 1e9;
+        assert!((21.0..22.5).contains(&total), "{total} GB");
+        // K's factor alone would be 24 GB: checked whole, it is what the run needs.
+        let whole = Workload {
+            taut_by_substructures: false,
+            ..work
+        };
+        let total = MemoryEstimate::new(size, &whole).total();
+        assert_eq!(total, size.bytes() + factor_bytes(size, false));
     }
 
     /// More modules, more solvers or more outputs never need less memory.
