@@ -71,6 +71,13 @@ pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<No
     if size * stretch > RUNAWAY_ENERGY_RATIO * work {
         return None;
     }
+    // A direction that shortens no cable (and stretches no member) would be a mechanism of K
+    // with every cable taut, which set-up refused: it is round-off, not a runaway (seen on
+    // 1024 × 1024 modules: a status step's change of 1e-6 of the answer, every member's length
+    // change along it below the tolerance, passed the energy test by its small size).
+    if slack_cables.is_empty() {
+        return None;
+    }
     let stiffened = s
         .geometric
         .as_ref()
@@ -82,4 +89,30 @@ pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<No
         slack_cables,
         mode_nodes: largest_moving_nodes(s, &d, 3),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::{Clamp, GridSpec, LoadPattern};
+
+    /// A direction that shortens no cable is never a certificate, however the load works on
+    /// it: a free grid's rigid translation (every length change exactly 0) under a load along
+    /// it is a mechanism of K itself, which set-up refuses (before the guard it passed every
+    /// test: no member stretched, no cable lengthened, the load working on it).
+    #[test]
+    fn a_direction_that_shortens_no_cable_is_no_certificate() {
+        let spec = GridSpec {
+            modules: [3, 2],
+            clamp: Clamp::None,
+            ..GridSpec::default()
+        };
+        let s = Structure::grid(&spec, &LoadPattern::default());
+        let load: Vec<f64> = s.unit_load.clone();
+        let down: Vec<f64> = (0..s.n_free)
+            .map(|d| if d % 3 == 2 { -1e-9 } else { 0.0 })
+            .collect();
+        assert!(dot(&load, &down) > 0.0);
+        assert!(no_equilibrium_along(&s, &down, &load).is_none());
+    }
 }

@@ -121,13 +121,15 @@ pub fn run_on(
         exchange,
         memory::ensure_fits(&estimate, "run").map_err(RunError::from),
     )?;
-    // 1. The structure and its mechanism check (K with every cable taut, factorized); the
+    // 1. The structure and its mechanism check (K with every cable taut, factorized; or, on a
+    //    grid when nothing of the run solves with K, substructure by substructure); the
     //    factor released when nothing of the run solves with it. Such a run on MPI ranks has
     //    rank 0 alone make the check, and the others take its verdict: they never hold a
     //    factor of the whole structure.
-    events(RunEvent::Stage(
-        "building the structure and factorising its taut stiffness",
-    ));
+    events(RunEvent::Stage(match work.taut_by_substructures {
+        true => "building the structure and checking it for mechanisms by substructures",
+        false => "building the structure and factorising its taut stiffness",
+    }));
     let prepared = match writes || work.keeps_taut {
         true => prepare_or_locate_mechanisms(case, &dir, writes, work.keeps_taut),
         false => Ok(Prepared::unchecked(case)),

@@ -7,7 +7,7 @@
 //! are inexact LATIN runs.
 
 use super::{Latin, LatinState, SubState};
-use crate::linalg::dot;
+use crate::linalg::{dot, norm};
 use crate::solvers::newton::exact_line_search;
 use crate::solvers::no_equilibrium_along;
 use crate::structure::law;
@@ -90,10 +90,19 @@ impl Latin<'_> {
             .zip(&start.displacements)
             .map(|(b, a)| b - a)
             .collect();
-        state.runaway = no_equilibrium_along(self.structure, &step, &state.load).or_else(|| {
-            let opposite: Vec<f64> = step.iter().map(|x| -x).collect();
-            no_equilibrium_along(self.structure, &opposite, &state.load)
-        });
+        // A runaway outgrows the answer it started from: a step smaller than that is the
+        // iteration's own correction, whose size says nothing of the energy far along it (the
+        // certificate's energy test compares the stretch, quadratic in the step, with the
+        // load's work, linear in it: any small enough step passes it).
+        let runs_away = norm(&step) >= norm(&start.displacements);
+        state.runaway = runs_away
+            .then(|| {
+                no_equilibrium_along(self.structure, &step, &state.load).or_else(|| {
+                    let opposite: Vec<f64> = step.iter().map(|x| -x).collect();
+                    no_equilibrium_along(self.structure, &opposite, &state.load)
+                })
+            })
+            .flatten();
         // Near the answer (r(U) within 100 times its tolerance) the full step when it lowered
         // r(U): there the energy along it is flat to round-off and its minimiser is noise
         // (seen: θ ≈ 0.3–0.7 at r(U) ≈ 1e-8 blending the inner run's work away). Farther, the
