@@ -121,14 +121,15 @@ fn loads_at(case: &Case, alpha: f64) -> bool {
 
 #[test]
 fn every_converged_row_of_the_shipped_cases_meets_its_criterion() {
-    // Every case file but scale-256.toml (590 k dofs, ≈ 3 GB: the shipped large case that CI
-    // machines may not hold; scale-128 runs the same solver on the same kind of grid).
+    // Every case file but the two large ones CI machines may not hold: scale-256.toml (590 k
+    // dofs, ≈ 3 GB; scale-128 runs the same solver on the same kind of grid) and
+    // scale-1024.toml (9.4 M dofs, ≈ 19 GB and 25 minutes; scale-64-latin runs micro-macro).
     let mut total = 0;
     let mut cases = 0;
     for entry in std::fs::read_dir(common::manifest_path("cases")).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
-        if !name.ends_with(".toml") || name == "scale-256.toml" {
+        if !name.ends_with(".toml") || name == "scale-256.toml" || name == "scale-1024.toml" {
             continue;
         }
         let case = case::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
