@@ -107,6 +107,9 @@ pub struct LatinState {
 
     /// Δη is at round-off level against the prestress: nothing is left to iterate on.
     pub at_roundoff: bool,
+    /// r(U) has been within 100 times its tolerance: every macro solve from then on is refined
+    /// to the end ([`super::Latin::macro_accuracy`]).
+    pub(super) macro_to_the_end: bool,
     /// No force and no settlement: the exact answer is U = 0 (η is then a ratio of round-off,
     /// and Δη at round-off is convergence; under a load it is a stall).
     pub(super) unloaded: bool,

@@ -729,3 +729,23 @@ fn a_solve_without_z_e_is_the_solve_with_it() {
     );
     assert!(gap <= 1e-9 * largest, "{gap:e} {largest:e}");
 }
+
+/// The macro solve is refined to 1e-9 of its right-hand side while r(U) is above 100 times
+/// its tolerance, then to the end for the rest of the solve, even when r(U) rises again (a
+/// status step): switching back changed the map under Anderson's history at every crossing.
+#[test]
+fn the_macro_solve_stays_refined_to_the_end_once_r_u_is_near_its_tolerance() {
+    let s = paper_structure();
+    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(&s, 1.0));
+    let latin = latin;
+    let near = 100.0 * latin.settings.residual_tolerance();
+    let mut accuracy = |residual: f64| {
+        state.residual = residual;
+        latin.macro_accuracy(&mut state)
+    };
+    assert_eq!(accuracy(1e3 * near), 1e-9);
+    assert_eq!(accuracy(2.0 * near), 1e-9);
+    assert_eq!(accuracy(0.5 * near), 0.0);
+    assert_eq!(accuracy(4.0 * near), 0.0);
+}
