@@ -17,7 +17,7 @@
 //!    pair of substructures sharing a node) as K's own zero modes are counted.
 
 use crate::linalg::{
-    factorize_counting_zero_modes, factorize_or_find_singular, zero_modes, SparseCholesky,
+    dot, factorize_counting_zero_modes, factorize_or_find_singular, zero_modes, SparseCholesky,
     SparseRow, StiffnessPattern, ZERO_MODES_COUNTED,
 };
 use crate::solvers::latin::partition::SubstructureTopology;
@@ -147,8 +147,9 @@ fn rigid_trace(
         })
         .collect();
     let q = orthonormal_columns(&fields, n);
-    // K⁰_E = Σ k b bᵀ over E's links, plus p at each pin, p = K⁰_E's mean diagonal.
-    let mut rows: Vec<SparseRow> = sub
+    // K⁰_E = Σ k b bᵀ over E's links, plus p at each pin, p = K⁰_E's mean diagonal (the
+    // pattern holds every diagonal entry).
+    let rows: Vec<SparseRow> = sub
         .links
         .iter()
         .map(|&i| {
@@ -159,26 +160,17 @@ fn rigid_trace(
             )
         })
         .collect();
-    let stiffness = |j: usize| structure.links[sub.links[j]].stiffness;
-    let diagonal_sum: f64 = rows
-        .iter()
-        .enumerate()
-        .map(|(j, row)| stiffness(j) * row.iter().map(|(_, c)| c * c).sum::<f64>())
-        .sum();
-    let pin = diagonal_sum / n as f64;
-    let n_links = rows.len();
-    rows.extend(
-        independent_rows(&q)
-            .into_iter()
-            .map(|d| SparseRow::new([(Some(d), 1.0)])),
-    );
     let pattern = StiffnessPattern::new(n, &rows);
     let mut values = vec![0.0; pattern.nnz()];
     pattern.assemble(
         &rows,
-        |j| if j < n_links { stiffness(j) } else { pin },
+        |j| structure.links[sub.links[j]].stiffness,
         &mut values,
     );
+    let pin = pattern.mean_diagonal(&values);
+    for d in independent_rows(&q) {
+        values[pattern.diag_slot[d]] += pin;
+    }
     let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
     let q = match factorize_or_find_singular(&pattern, &values, &mut factor) {
         false => q,
@@ -221,7 +213,6 @@ fn rigid_trace(
 /// the row of largest norm once the rows chosen before are projected out.
 fn independent_rows(q: &DMatrix<f64>) -> Vec<usize> {
     let mut rows: Vec<Vec<f64>> = q.row_iter().map(|r| r.iter().copied().collect()).collect();
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let mut chosen = Vec::with_capacity(q.ncols());
     for _ in 0..q.ncols() {
         let (best, norm2) = rows
