@@ -97,6 +97,15 @@ pub fn micro_macro_bytes(size: StructureSize, settings: &LatinSettings) -> u64 {
     (factors + z + anderson) as u64 + macro_factor
 }
 
+/// The whole-structure factors of `methods`, in units of K's: every solver's but
+/// micro-macro's, which [`micro_macro_bytes`] counts.
+fn whole_structure_units<'m>(methods: impl Iterator<Item = &'m Method>) -> f64 {
+    methods
+        .filter(|&&m| m != Method::MicroMacro)
+        .map(|m| m.factor_units())
+        .sum()
+}
+
 /// What a command will do with the structure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Workload {
@@ -147,13 +156,7 @@ impl MemoryEstimate {
         let latin = work.methods.iter().any(|m| m.is_latin());
         // The solvers' own memory: whole-structure factors in units of K's, and micro-macro's
         // substructure operators in bytes.
-        let whole = |methods: &mut dyn Iterator<Item = &Method>| -> f64 {
-            methods
-                .filter(|&&m| m != Method::MicroMacro)
-                .map(|m| m.factor_units())
-                .sum()
-        };
-        let solvers = whole(&mut work.methods.iter());
+        let solvers = whole_structure_units(work.methods.iter());
         let micro = match work.methods.contains(&Method::MicroMacro) {
             true => micro_macro_bytes(size, &work.micro_macro),
             false => 0,
@@ -177,7 +180,7 @@ impl MemoryEstimate {
         }
         if work.compare_modules {
             // A second grid: its structure, its taut factor and its LATIN solvers.
-            units += 1.0 + whole(&mut work.methods.iter().filter(|m| m.is_latin()));
+            units += 1.0 + whole_structure_units(work.methods.iter().filter(|m| m.is_latin()));
             micro_parts += micro;
             parts.push(("second grid (Figure 12)".into(), size.bytes()));
         }
