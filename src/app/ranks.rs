@@ -175,6 +175,10 @@ impl Exchange for RankExchange {
     fn all(&self, value: bool) -> bool {
         self.collective(|| self.all_true(value))
     }
+
+    fn exchange_with(&self, sends: Vec<(usize, Vec<f64>)>) -> Vec<Vec<f64>> {
+        self.collective(|| self.send_and_receive(&sends))
+    }
 }
 
 impl RankExchange {
@@ -208,6 +212,37 @@ impl RankExchange {
             return all;
         }
         mine.to_vec()
+    }
+
+    /// Each send posted at once (non-blocking), then each neighbour's message received in
+    /// turn: no pair of ranks waits on the other.
+    fn send_and_receive(&self, sends: &[(usize, Vec<f64>)]) -> Vec<Vec<f64>> {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::request::WaitGuard;
+            use mpi::traits::{Communicator, Destination, Source};
+            let world = mpi::topology::SimpleCommunicator::world();
+            let received: Vec<Vec<f64>> = mpi::request::scope(|scope| {
+                let _sent: Vec<WaitGuard<'_, [f64], _>> = sends
+                    .iter()
+                    .map(|(rank, values)| {
+                        let to = world.process_at_rank(*rank as mpi::Rank);
+                        WaitGuard::from(to.immediate_send(scope, &values[..]))
+                    })
+                    .collect();
+                sends
+                    .iter()
+                    .map(|(rank, _)| {
+                        let from = world.process_at_rank(*rank as mpi::Rank);
+                        from.receive_vec::<f64>().0
+                    })
+                    .collect()
+            });
+            let count: usize = received.iter().map(Vec::len).sum();
+            self.received.fetch_add(count as u64, Ordering::Relaxed);
+            return received;
+        }
+        sends.iter().map(|_| Vec::new()).collect()
     }
 
     fn all_true(&self, value: bool) -> bool {

@@ -7,8 +7,12 @@
 //! What the others need of them is gathered: L_E and Q_E at set-up and at each rebuild (the
 //! macro matrix, factorised on every rank), each substructure's part of the macro right-hand
 //! side (summed on every rank in the substructures' order, so that every rank and a run on one
-//! process add the same numbers in the same order), and the fields of s the linear stage
-//! wrote (the local stage, η, r(U) and the status steps then run alike on every rank).
+//! process add the same numbers in the same order), and the sums of η, r(U), Anderson's inner
+//! products and the slack count. After each linear stage a rank sends its neighbouring ranks
+//! what they read of its substructures (`neighbours.rs`, point to point); the status steps,
+//! which read the whole state, gather s whole first. A solve whose every iteration reads the
+//! whole state (status-following l, or r(U) with the prestress's geometric stiffness)
+//! gathers s whole after each linear stage.
 
 use std::ops::Range;
 
@@ -23,6 +27,9 @@ pub trait Exchange: Sync {
     fn all_gather(&self, mine: &[f64]) -> Vec<f64>;
     /// Whether `value` holds on every rank (every rank learns the answer).
     fn all(&self, value: bool) -> bool;
+    /// Point to point: to each rank of `sends` its values, and from each of them (in the same
+    /// order) the values it sent this rank. Every rank named must name this one in turn.
+    fn exchange_with(&self, sends: Vec<(usize, Vec<f64>)>) -> Vec<Vec<f64>>;
 }
 
 /// One process holds every substructure: nothing is exchanged.
@@ -41,6 +48,10 @@ impl Exchange for OneProcess {
     }
     fn all(&self, value: bool) -> bool {
         value
+    }
+    /// One process has no other rank to send to: nothing comes back.
+    fn exchange_with(&self, sends: Vec<(usize, Vec<f64>)>) -> Vec<Vec<f64>> {
+        sends.iter().map(|_| Vec::new()).collect()
     }
 }
 

@@ -243,6 +243,7 @@ impl Solver for Latin<'_> {
         state.relax = true;
         self.measure_state(&mut state, measured);
         if self.newton_steps() {
+            self.complete_state(&mut state.subs);
             state.step = Some(self.step_start(&state));
         }
         state
@@ -256,6 +257,9 @@ impl Solver for Latin<'_> {
     /// first ends in a status step, and the iteration is the first of the next inner run.
     fn next_iter(&mut self, state: &mut LatinState) {
         let stepped = self.newton_steps() && self.inner_run_done(state);
+        if stepped {
+            self.complete_state(&mut state.subs);
+        }
         let measured = if self.accelerated() {
             let restart = stepped && self.status_step(state).map_changed;
             Some(self.accelerated_iteration(state, restart))
@@ -266,6 +270,7 @@ impl Solver for Latin<'_> {
         state.iteration += 1;
         self.measure_state(state, measured);
         if stepped {
+            self.complete_state(&mut state.subs);
             state.step = Some(self.step_start(state));
         }
     }
@@ -300,9 +305,21 @@ impl Solver for Latin<'_> {
         }
     }
 
-    /// e of the linear stage, link by link (each link belongs to one substructure).
+    /// e of the linear stage, link by link (each link belongs to one substructure; on
+    /// several ranks, gathered from the ranks holding them).
     fn elongations(&self, state: &LatinState) -> Vec<f64> {
         let mut e = vec![0.0; self.structure.links.len()];
+        if self.exchange.size() > 1 {
+            let held = self.held.clone();
+            let mine: Vec<f64> = state.subs[held.clone()]
+                .iter()
+                .flat_map(|st| st.e.iter().copied())
+                .collect();
+            let all = self.exchange.all_gather(&mine);
+            let links = self.substructures.iter().flat_map(|sub| &sub.links);
+            links.zip(all).for_each(|(&i, v)| e[i] = v);
+            return e;
+        }
         for (sub, st) in self.substructures.iter().zip(&state.subs) {
             for (j, &i) in sub.links.iter().enumerate() {
                 e[i] = st.e[j];
@@ -321,9 +338,10 @@ impl Solver for Latin<'_> {
     fn iterate(&self, state: &LatinState) -> Equilibrium {
         let s = self.structure;
         let mut subs = state.subs.clone();
+        self.complete_state(&mut subs);
+        let u = self.displacements(&subs);
         let all = 0..subs.len();
         self.local_stage_on(&mut subs, LocalLaw::Exact, all);
-        let u = self.displacements(&state.subs);
         let mut tensions = vec![0.0; s.links.len()];
         for (sub, st) in self.substructures.iter().zip(&subs) {
             for (j, &i) in sub.links.iter().enumerate() {

@@ -186,9 +186,28 @@ impl Latin<'_> {
             .collect()
     }
 
+    /// What the next stages read of the other ranks' substructures after a linear stage:
+    /// point to point from the neighbouring ranks (`NeighbourPlan::share_s`), or s whole
+    /// when every iteration reads it.
+    fn share_linear_stage(&self, state: &mut [SubState]) {
+        match &self.neighbours {
+            _ if self.exchange.size() == 1 => {}
+            Some(plan) => plan.share_s(self.exchange, state),
+            None => self.share_whole_state(state),
+        }
+    }
+
+    /// Before a status step and its snapshot, which read the whole state: s whole, when the
+    /// iterations exchange it point to point.
+    pub(super) fn complete_state(&self, state: &mut [SubState]) {
+        if self.neighbours.is_some() {
+            self.share_whole_state(state);
+        }
+    }
+
     /// The fields of s a linear stage writes (e, t, U_E, the sides' U and F) of every
     /// substructure, from the rank that holds it onto every rank.
-    fn share_linear_stage(&self, state: &mut [SubState]) {
+    pub(super) fn share_whole_state(&self, state: &mut [SubState]) {
         if self.exchange.size() == 1 {
             return;
         }

@@ -22,7 +22,7 @@
 //! | `linear_stage`, `local_stage`, `indicator` | the two stages and η |
 //! | `iteration` | the two iteration orders and the `Solver` state machine |
 //! | `anderson` | Anderson acceleration of the fixed point ŝ ↦ local(linear(ŝ)) |
-//! | `exchange`, `operators`, `ranks` | a solve shared by MPI ranks: what is gathered, the set-up of each rank's operators, the layout |
+//! | `exchange`, `neighbours`, `operators`, `ranks` | a solve shared by MPI ranks: what is gathered, what passes point to point, the set-up of each rank's operators, the layout |
 //! | `search` | status-following search directions and operator rebuilds |
 //! | `residual` | r(U) of the linear stage's U, substructure by substructure |
 
@@ -36,6 +36,7 @@ mod linear_stage;
 mod local_stage;
 mod macro_basis;
 mod macro_problem;
+mod neighbours;
 mod operators;
 pub(crate) mod partition;
 mod ranks;
@@ -56,7 +57,7 @@ pub(crate) use kernel::{add_to_gram, null_amplitudes, RigidFrame};
 use macro_basis::macro_basis;
 pub(crate) use macro_basis::orthonormal_columns;
 pub(crate) use partition::Partition;
-pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW};
+pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW, VALUES_PER_SHARED_DOF};
 pub use settings::{
     LatinSettings, SearchDirection, SearchPolicy, StopOn, WeakInterfaces, PAPER_DM,
 };
@@ -160,6 +161,10 @@ pub struct Latin<'s> {
     held: std::ops::Range<usize>,
     /// Which substructure owns each free dof, for r(U).
     dof_ownership: residual::DofOwnership,
+    /// On several ranks, what passes point to point after each linear stage; `None` when
+    /// every iteration reads the whole state ([`Latin::reads_whole_state`]) and on one
+    /// process.
+    neighbours: Option<neighbours::NeighbourPlan>,
 }
 
 /// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
@@ -315,6 +320,7 @@ impl<'s> Latin<'s> {
             exchange,
             held,
             dof_ownership,
+            neighbours: None,
         };
         let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
         for sub in &latin.substructures {
@@ -323,7 +329,24 @@ impl<'s> Latin<'s> {
             }
         }
         latin.side_slots = side_slots;
+        if exchange.size() > 1 && !latin.reads_whole_state() {
+            latin.neighbours = Some(neighbours::NeighbourPlan::new(
+                &latin.substructures,
+                &latin.interfaces,
+                &latin.dof_ownership,
+                exchange.rank(),
+                exchange.size(),
+            ));
+        }
         Ok(latin)
+    }
+
+    /// Whether every iteration reads the whole state, not only the held substructures' and
+    /// what neighbouring ranks send: status-following l (each iteration classifies every
+    /// cable) and r(U) with the prestress's geometric stiffness (one pass over the whole
+    /// structure).
+    fn reads_whole_state(&self) -> bool {
+        self.settings.policy == SearchPolicy::Status || self.structure.geometric.is_some()
     }
 
     /// U of the linear stage on the free dofs, interface nodes averaged over the

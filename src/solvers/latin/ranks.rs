@@ -1,22 +1,25 @@
-//! How micro-macro's substructures would lie on P ranks (issue 25): contiguous blocks of the
+//! How micro-macro's substructures lie on P ranks (issue 25): contiguous blocks of the
 //! partition, row by row, so that most interfaces stay inside a rank; what each rank holds and
 //! what crosses between ranks at each iteration. Topology only: nothing is factorized.
 //!
-//! Today the solve all-gathers the fields of s each linear stage writes and the parts of the
-//! macro right-hand side (`exchange.rs`): a rank receives those of every other rank's
-//! substructures. Once the exchange is point to point, a rank will send, for every interface it
-//! shares with another rank, three values per interface row (a free component of an interface
-//! node): its side's U and F (the interface's local stage needs both sides) and its partial
-//! sums of r(U) on the shared dofs; the macro right-hand side (one value per macro force)
-//! reduced over all ranks.
+//! After each linear stage a rank sends each neighbouring rank, point to point
+//! (`neighbours.rs`), its U at the dofs their substructures share and its sides' U and F on
+//! the interfaces between them, then its pieces of r(U) at those dofs. What is still gathered
+//! from every rank per iteration is small and per substructure: the macro right-hand side's
+//! parts (every rank solves the macro problem), the parts of η, of r(U)'s norms, of the slack
+//! count and of Anderson's inner products. A status step gathers s whole, twice.
 
 use super::interfaces::Interfaces;
 use super::{LatinSettings, Partition};
 use crate::structure::Structure;
 use std::ops::Range;
 
-/// Values sent per interface row and iteration: U, F and r(U)'s partial sum.
-pub const VALUES_PER_ROW: usize = 3;
+/// Values sent per shared dof and iteration: U and r(U)'s three pieces (`Bᵀτ`, `|B|ᵀ|τ|`,
+/// `Bᵀ(τ_frozen − τ)`).
+pub const VALUES_PER_SHARED_DOF: usize = 4;
+
+/// Values sent per interface row and iteration: the side's U and F.
+pub const VALUES_PER_ROW: usize = 2;
 
 /// One rank's share.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -27,15 +30,19 @@ pub struct RankShare {
     pub links: usize,
     /// Ranks it shares an interface with, increasing.
     pub neighbours: Vec<usize>,
-    /// Values it sends per iteration to its neighbours (as many as it receives) once the
-    /// exchange is point to point.
+    /// Values it sends per iteration to its neighbours, point to point: per dof one of its
+    /// substructures shares with a neighbour's, [`VALUES_PER_SHARED_DOF`]; per row of an
+    /// interface between them, [`VALUES_PER_ROW`].
     pub values_sent: usize,
-    /// Values it receives per iteration in the solve's all-gathers today, from every other
-    /// rank's substructures: the fields of s the linear stage writes (e and t per link, U_E per
-    /// dof, U and F per interface row), the macro right-hand side's parts (one per macro dof;
-    /// kernel amplitudes left out), η's parts, the slack count, r(U)'s pieces at shared dofs
-    /// and sums of squares, and Anderson's inner products with a full history.
+    /// Values it receives per iteration in the solve's all-gathers, from every other rank's
+    /// substructures: the macro right-hand side's parts (one per macro dof; kernel amplitudes
+    /// left out), η's parts, the slack count, r(U)'s sums of squares, and Anderson's inner
+    /// products with a full history.
     pub values_gathered: usize,
+    /// Values it receives at each status step, which gathers s whole (twice: at the step's
+    /// end and at the next one's start): e and t per link, U per dof, U and F per interface
+    /// row of every other rank's substructures.
+    pub values_per_status_step: usize,
 }
 
 /// The layout of a micro-macro partition over P ranks.
@@ -77,6 +84,7 @@ impl RankLayout {
                     neighbours: Vec::new(),
                     values_sent: 0,
                     values_gathered: 0,
+                    values_per_status_step: 0,
                 }
             })
             .collect();
@@ -88,20 +96,39 @@ impl RankLayout {
             }
             crossing += 1;
             let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
-            for (from, to) in [(a, b), (b, a)] {
-                shares[from].values_sent += VALUES_PER_ROW * rows;
-                if !shares[from].neighbours.contains(&to) {
-                    shares[from].neighbours.push(to);
+            shares[a].values_sent += VALUES_PER_ROW * rows;
+            shares[b].values_sent += VALUES_PER_ROW * rows;
+        }
+        // A node several substructures hold: each holder sends each other rank holding it its
+        // U and r(U)'s pieces there (once per rank, however many of its substructures hold it).
+        let mut holders: Vec<Vec<usize>> = vec![Vec::new(); structure.n_nodes()];
+        for (e, topo) in partition.substructures.iter().enumerate() {
+            topo.nodes.iter().for_each(|&n| holders[n].push(e));
+        }
+        for (n, subs) in holders.iter().enumerate().filter(|(_, h)| h.len() > 1) {
+            let free = structure.held_components(n).iter().filter(|&&h| !h).count();
+            let node_ranks: Vec<usize> = subs.iter().map(|&e| rank_of(e)).collect();
+            for &from in &node_ranks {
+                let mut to: Vec<usize> =
+                    node_ranks.iter().copied().filter(|&q| q != from).collect();
+                to.dedup();
+                for q in to {
+                    shares[from].values_sent += VALUES_PER_SHARED_DOF * free;
+                    if !shares[from].neighbours.contains(&q) {
+                        shares[from].neighbours.push(q);
+                    }
                 }
             }
         }
         shares.iter_mut().for_each(|s| s.neighbours.sort_unstable());
-        let gathered =
+        let (gathered, whole) =
             gathered_per_substructure(structure, &partition, &interfaces, settings.anderson);
         let total: usize = gathered.iter().sum();
+        let total_whole: usize = whole.iter().sum();
         for share in &mut shares {
-            share.values_gathered =
-                total - gathered[share.substructures.clone()].iter().sum::<usize>();
+            let mine = share.substructures.clone();
+            share.values_gathered = total - gathered[mine.clone()].iter().sum::<usize>();
+            share.values_per_status_step = 2 * (total_whole - whole[mine].iter().sum::<usize>());
         }
         RankLayout {
             subdomains: settings.subdomains,
@@ -131,26 +158,28 @@ impl RankLayout {
         for (r, share) in self.ranks.iter().enumerate() {
             let neighbours: Vec<String> = share.neighbours.iter().map(|n| n.to_string()).collect();
             out += &format!(
-                "  rank {r}: substructures {}..{} ({}), {} links, neighbours [{}], receives {} \
-                 values ({:.1} KiB) per iteration (point to point: would send {}, {:.1} KiB)\n",
+                "  rank {r}: substructures {}..{} ({}), {} links, neighbours [{}]; per \
+                 iteration sends {} values ({:.1} KiB) point to point and receives {} ({:.1} \
+                 KiB) in all-gathers; {} values ({:.1} KiB) at each status step\n",
                 share.substructures.start,
                 share.substructures.end,
                 share.substructures.len(),
                 share.links,
                 neighbours.join(", "),
-                share.values_gathered,
-                kb(share.values_gathered),
                 share.values_sent,
                 kb(share.values_sent),
+                share.values_gathered,
+                kb(share.values_gathered),
+                share.values_per_status_step,
+                kb(share.values_per_status_step),
             );
         }
         out += &format!(
-            "  per iteration the solve all-gathers, onto every rank, the other ranks' e and t \
-             per link, U per dof, U and F per interface row, macro right-hand side parts and \
-             per substructure the parts of η, r(U) and Anderson's inner products; \
-             once point to point (not yet): {} values ({:.1} KiB) over {} of {} interfaces \
-             (U, F and r(U)'s partial sums, {VALUES_PER_ROW} per interface row), and the macro \
-             right-hand side, {} values, reduced over the ranks\n",
+            "  per iteration, point to point between neighbouring ranks: {} values ({:.1} KiB) \
+             over {} of {} interfaces (U and F per interface row, U and r(U)'s 3 pieces per \
+             shared dof); gathered from every rank: the macro right-hand side ({} values, \
+             solved on every rank) and per substructure the parts of η, r(U) and Anderson's \
+             inner products; a status step gathers s whole\n",
             self.values_exchanged(),
             kb(self.values_exchanged()),
             self.crossing_interfaces,
@@ -161,42 +190,34 @@ impl RankLayout {
     }
 }
 
-/// Per substructure, the values it contributes to an iteration's all-gathers: e and t per link,
-/// U_E per free dof, U and F per interface row and one macro right-hand side part per macro dof.
+/// Per substructure, the values it contributes to an iteration's all-gathers (one macro
+/// right-hand side part per macro dof, η's two parts, the slack count, r(U)'s three sums of
+/// squares, Anderson's inner products), and to the gather of s whole at a status step (e and
+/// t per link, U per free dof, U and F per interface row).
 fn gathered_per_substructure(
     structure: &Structure,
     partition: &Partition,
     interfaces: &Interfaces,
     anderson: usize,
-) -> Vec<usize> {
-    // Substructures holding each node, for the dofs r(U) sums across substructures.
-    let mut holders = vec![0usize; structure.n_nodes()];
-    for topo in &partition.substructures {
-        topo.nodes.iter().for_each(|&n| holders[n] += 1);
-    }
+) -> (Vec<usize>, Vec<usize>) {
     let mut input = vec![0usize; partition.substructures.len()];
+    let mut whole = vec![0usize; partition.substructures.len()];
     let mut gathered: Vec<usize> = partition
         .substructures
         .iter()
         .zip(&mut input)
-        .map(|(topo, input)| {
-            let shared_dofs = topo
-                .nodes
-                .iter()
-                .filter(|&&n| holders[n] > 1)
-                .flat_map(|&n| structure.held_components(n))
-                .filter(|&held| !held)
-                .count();
+        .zip(&mut whole)
+        .map(|((topo, input), whole)| {
             *input = topo.links.len();
-            // e and t per link, U per dof; η's two parts, the slack count and r(U)'s three
-            // sums of squares; r(U)'s three pieces per shared dof.
-            2 * topo.links.len() + topo.free_dofs(structure) + 6 + 3 * shared_dofs
+            *whole = 2 * topo.links.len() + topo.free_dofs(structure);
+            6
         })
         .collect();
     for iface in &interfaces.list {
         let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
         for &e in &iface.topology.sides {
-            gathered[e] += 2 * rows + iface.basis.ncols();
+            gathered[e] += iface.basis.ncols();
+            whole[e] += 2 * rows;
             input[e] += rows;
         }
     }
@@ -205,7 +226,7 @@ fn gathered_per_substructure(
     for (g, n) in gathered.iter_mut().zip(&input) {
         *g += 2 * (anderson + 1) * n.div_ceil(crate::linalg::CHUNK).max(1);
     }
-    gathered
+    (gathered, whole)
 }
 
 #[cfg(test)]
@@ -246,17 +267,23 @@ mod tests {
                 }
             }
             // Every rank receives what the others' substructures contribute: all ranks
-            // together P − 1 times what one rank holding them all would gather.
-            let gathered: usize = layout.ranks.iter().map(|r| r.values_gathered).sum();
-            let two: usize = RankLayout::new(&s, &settings, 2)
-                .ranks
-                .iter()
-                .map(|r| r.values_gathered)
-                .sum();
-            assert_eq!(gathered, (p - 1) * two, "{p} ranks");
+            // together P − 1 times what one rank holding them all would gather (per
+            // iteration, and at a status step).
+            let two = RankLayout::new(&s, &settings, 2);
+            for field in [
+                |r: &RankShare| r.values_gathered,
+                |r: &RankShare| r.values_per_status_step,
+            ] {
+                let gathered: usize = layout.ranks.iter().map(field).sum();
+                let of_two: usize = two.ranks.iter().map(field).sum();
+                assert_eq!(gathered, (p - 1) * of_two, "{p} ranks");
+            }
             let sent: usize = layout.ranks.iter().map(|r| r.values_sent).sum();
             assert_eq!(sent, layout.values_exchanged());
-            assert_eq!(sent % (2 * VALUES_PER_ROW), 0, "as much each way");
+            // Point to point is the small part: less than a status step's gather of s.
+            for share in &layout.ranks {
+                assert!(share.values_sent > 0 && share.values_sent < share.values_per_status_step);
+            }
         }
         // One row of substructures per rank: each rank touches only the rows next to it, and
         // an inner rank sends twice what an end rank sends (two boundaries against one).

@@ -6,6 +6,7 @@
 //! link belongs to one substructure, so this is `Bᵀτ(U) − F` term by term, grouped by
 //! substructure.
 
+use super::neighbours::PIECES_PER_DOF;
 use super::{Latin, Substructure};
 use crate::linalg::norm;
 use crate::structure::law;
@@ -62,15 +63,20 @@ pub(super) struct DofOwnership {
     /// ([`NOT_SHARED`] for the others).
     shared_slot: Vec<u32>,
     /// How many free dofs are shared.
-    n_shared: usize,
+    pub(super) n_shared: usize,
     /// Per substructure, the local indices of its shared dofs.
-    shared_local: Vec<Vec<u32>>,
+    pub(super) shared_local: Vec<Vec<u32>>,
 }
 
 /// [`DofOwnership::shared_slot`] of a dof only one substructure holds.
 const NOT_SHARED: u32 = u32::MAX;
 
 impl DofOwnership {
+    /// The slot of a shared free dof `d` among the shared dofs.
+    pub(super) fn slot(&self, d: usize) -> usize {
+        self.shared_slot[d] as usize
+    }
+
     pub(super) fn of(subs: &[Substructure], n_free: usize) -> DofOwnership {
         let mut owner = vec![u32::MAX; n_free];
         let mut holders = vec![0u8; n_free];
@@ -133,30 +139,9 @@ impl Latin<'_> {
             .with_min_len(self.chunk)
             .map(|sub| sub.link_forces(s, u, slack))
             .collect();
-        // The pieces at shared dofs, from every rank, summed in the substructures' order.
-        let mine: Vec<f64> = pieces
-            .iter()
-            .zip(&own.shared_local[held.clone()])
-            .flat_map(|(piece, shared)| {
-                shared.iter().flat_map(|&k| {
-                    let k = k as usize;
-                    [piece.exact[k], piece.size[k], piece.frozen_change[k]]
-                })
-            })
-            .collect();
-        let all = self.exchange.all_gather(&mine);
-        // Per shared dof (by its slot): Bᵀτ, |B|ᵀ|τ| and Bᵀ(τ_frozen − τ).
-        let mut at_shared = vec![[0.0; 3]; own.n_shared];
-        let mut values = all.chunks(3);
-        for (sub, shared) in self.substructures.iter().zip(&own.shared_local) {
-            for (&k, v) in shared.iter().zip(&mut values) {
-                let slot = own.shared_slot[sub.dof_global[k as usize]] as usize;
-                let sums = &mut at_shared[slot];
-                sums[0] += v[0];
-                sums[1] += v[1];
-                sums[2] += v[2];
-            }
-        }
+        // The pieces at shared dofs, from the ranks holding them, summed in the
+        // substructures' order.
+        let at_shared = self.pieces_at_shared_dofs(&pieces);
         // Per held substructure, the squares of the dofs it owns: r = Bᵀτ − F,
         // r_frozen = r + Bᵀ(τ_frozen − τ), and |B|ᵀ|τ|.
         let squares: Vec<f64> = self.substructures[held.clone()]
@@ -199,5 +184,67 @@ impl Latin<'_> {
             }
         };
         (relative(total[0]), relative(total[1]))
+    }
+
+    /// Per shared dof (by its slot), `Bᵀτ`, `|B|ᵀ|τ|` and `Bᵀ(τ_frozen − τ)` summed over the
+    /// substructures holding it in their order, from the `pieces` of the held ones and those
+    /// the other ranks give: all of them on one process; point to point from the neighbouring
+    /// ranks (the dofs the held substructures share), or gathered from every rank when the
+    /// solve shares its whole state at each iteration. The same sums either way.
+    fn pieces_at_shared_dofs(&self, pieces: &[LinkForces]) -> Vec<[f64; PIECES_PER_DOF]> {
+        let own = &self.dof_ownership;
+        let held = self.held.clone();
+        let mine: Vec<Vec<f64>> = pieces
+            .iter()
+            .zip(&own.shared_local[held.clone()])
+            .map(|(piece, shared)| {
+                shared
+                    .iter()
+                    .flat_map(|&k| {
+                        let k = k as usize;
+                        [piece.exact[k], piece.size[k], piece.frozen_change[k]]
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut at_shared = vec![[0.0; PIECES_PER_DOF]; own.n_shared];
+        let mut add = |e: usize, position: usize, v: &[f64]| {
+            let k = own.shared_local[e][position] as usize;
+            let sums = &mut at_shared[own.slot(self.substructures[e].dof_global[k])];
+            sums.iter_mut().zip(v).for_each(|(s, v)| *s += v);
+        };
+        match (&self.neighbours, self.exchange.size()) {
+            (_, 1) => {
+                for (e, values) in held.clone().zip(&mine) {
+                    for (position, v) in values.chunks_exact(PIECES_PER_DOF).enumerate() {
+                        add(e, position, v);
+                    }
+                }
+            }
+            (Some(plan), _) => {
+                // (substructure, position in its shared dofs, pieces), put in the
+                // substructures' order.
+                let mut all = plan.share_pieces(self.exchange, |e| &mine[e - held.start]);
+                for (e, values) in held.clone().zip(&mine) {
+                    for (position, v) in values.chunks_exact(PIECES_PER_DOF).enumerate() {
+                        all.push((e, position as u32, [v[0], v[1], v[2]]));
+                    }
+                }
+                all.sort_by_key(|c| c.0);
+                for (e, position, v) in all {
+                    add(e, position as usize, &v);
+                }
+            }
+            (None, _) => {
+                let all = self.exchange.all_gather(&mine.concat());
+                let mut values = all.chunks_exact(PIECES_PER_DOF);
+                for (e, shared) in own.shared_local.iter().enumerate() {
+                    for (position, v) in (0..shared.len()).zip(&mut values) {
+                        add(e, position, v);
+                    }
+                }
+            }
+        }
+        at_shared
     }
 }

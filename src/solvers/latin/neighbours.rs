@@ -1,0 +1,485 @@
+//! What a rank sends to each neighbouring rank after a linear stage, and what it reads back
+//! (issue 25): point to point, in place of an all-gather of s. Between two status steps a
+//! rank reads, of the substructures other ranks hold, only
+//! - the far side's U and F of each interface between them (the interface's local stage
+//!   reads both sides),
+//! - their U at the dofs its own substructures share with them (r(U) averages U there), and
+//! - their pieces of r(U) at those dofs (a shared dof's forces are summed over the
+//!   substructures holding it, in their order).
+//!
+//! A status step reads the whole state and gathers it whole first
+//! (`Latin::share_whole_state`). Both ranks of a pair build the same lists from the partition,
+//! which every rank knows: what one packs, the other unpacks in the same order.
+
+use super::residual::DofOwnership;
+use super::state::SubState;
+use super::{block, Exchange, Interface, Substructure};
+use std::ops::Range;
+
+/// r(U)'s pieces per shared dof: `Bᵀτ`, `|B|ᵀ|τ|` and `Bᵀ(τ_frozen − τ)`.
+pub(super) const PIECES_PER_DOF: usize = 3;
+
+/// One substructure's values for a neighbouring rank.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Item {
+    /// The substructure.
+    sub: usize,
+    /// Its local dofs the other rank's substructures hold too (positions in its shared dofs'
+    /// list, [`DofOwnership::shared_local`], and the local dofs themselves).
+    shared: Vec<(u32, u32)>,
+    /// Its sides (slots in `sides`) whose interface's other substructure the other rank holds.
+    sides: Vec<usize>,
+}
+
+/// What passes between this rank and one neighbouring rank.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Neighbour {
+    rank: usize,
+    /// Of this rank's substructures, what the neighbour reads.
+    send: Vec<Item>,
+    /// Of the neighbour's substructures, what this rank reads.
+    receive: Vec<Item>,
+}
+
+/// A rank's point-to-point exchanges, with each neighbouring rank in increasing order.
+#[derive(Debug, Clone, Default)]
+pub(super) struct NeighbourPlan {
+    neighbours: Vec<Neighbour>,
+}
+
+impl NeighbourPlan {
+    /// The plan of rank `rank` of `ranks`, each holding its [`block`] of `substructures`.
+    pub(super) fn new(
+        substructures: &[Substructure],
+        interfaces: &[Interface],
+        ownership: &DofOwnership,
+        rank: usize,
+        ranks: usize,
+    ) -> NeighbourPlan {
+        let n = substructures.len();
+        let blocks: Vec<Range<usize>> = (0..ranks).map(|r| block(r, ranks, n)).collect();
+        let rank_of = |e: usize| blocks.iter().position(|b| b.contains(&e)).unwrap_or(0);
+        // Per shared dof (by slot), the ranks holding it.
+        let mut holder_ranks: Vec<Vec<usize>> = vec![Vec::new(); ownership.n_shared];
+        for (e, sub) in substructures.iter().enumerate() {
+            let r = rank_of(e);
+            for &k in &ownership.shared_local[e] {
+                let ranks = &mut holder_ranks[ownership.slot(sub.dof_global[k as usize])];
+                if !ranks.contains(&r) {
+                    ranks.push(r);
+                }
+            }
+        }
+        // What rank `from` sends rank `to`.
+        let items = |from: usize, to: usize| -> Vec<Item> {
+            blocks[from]
+                .clone()
+                .filter_map(|e| {
+                    let sub = &substructures[e];
+                    let shared: Vec<(u32, u32)> = ownership.shared_local[e]
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &k)| {
+                            holder_ranks[ownership.slot(sub.dof_global[k as usize])].contains(&to)
+                        })
+                        .map(|(position, &k)| (position as u32, k))
+                        .collect();
+                    let sides: Vec<usize> = sub
+                        .sides
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, side)| {
+                            let other = interfaces[side.interface].topology.sides[1 - side.which];
+                            blocks[to].contains(&other)
+                        })
+                        .map(|(slot, _)| slot)
+                        .collect();
+                    (!shared.is_empty() || !sides.is_empty()).then_some(Item {
+                        sub: e,
+                        shared,
+                        sides,
+                    })
+                })
+                .collect()
+        };
+        let neighbours = (0..ranks)
+            .filter(|&q| q != rank)
+            .map(|q| Neighbour {
+                rank: q,
+                send: items(rank, q),
+                receive: items(q, rank),
+            })
+            .filter(|nb| !nb.send.is_empty() || !nb.receive.is_empty())
+            .collect();
+        NeighbourPlan { neighbours }
+    }
+
+    /// The neighbouring ranks, increasing.
+    #[cfg(test)]
+    pub(super) fn ranks(&self) -> Vec<usize> {
+        self.neighbours.iter().map(|nb| nb.rank).collect()
+    }
+
+    /// Values sent per iteration, all neighbours together: U and r(U)'s pieces per shared
+    /// dof, U and F per side row (what `RankLayout` counts from the partition alone).
+    #[cfg(test)]
+    pub(super) fn values_sent(&self, substructures: &[Substructure]) -> usize {
+        self.neighbours
+            .iter()
+            .flat_map(|nb| &nb.send)
+            .map(|item| {
+                (1 + PIECES_PER_DOF) * item.shared.len()
+                    + item
+                        .sides
+                        .iter()
+                        .map(|&slot| 2 * substructures[item.sub].sides[slot].rows)
+                        .sum::<usize>()
+            })
+            .sum()
+    }
+
+    /// After a linear stage: to each neighbour, this rank's U at the dofs it shares with it
+    /// and its sides' U and F on the interfaces between them; from each, the same of its
+    /// substructures, written into `state`.
+    pub(super) fn share_s(&self, exchange: &dyn Exchange, state: &mut [SubState]) {
+        let sends: Vec<(usize, Vec<f64>)> = self
+            .neighbours
+            .iter()
+            .map(|nb| {
+                let mut values = Vec::new();
+                for item in &nb.send {
+                    let st = &state[item.sub];
+                    values.extend(item.shared.iter().map(|&(_, k)| st.u[k as usize]));
+                    for &slot in &item.sides {
+                        values.extend_from_slice(&st.sides[slot].u);
+                        values.extend_from_slice(&st.sides[slot].f);
+                    }
+                }
+                (nb.rank, values)
+            })
+            .collect();
+        let received = exchange.exchange_with(sends);
+        for (nb, values) in self.neighbours.iter().zip(received) {
+            let mut rest = values.as_slice();
+            let mut take = |into: &mut [f64]| {
+                let (values, tail) = rest.split_at(into.len().min(rest.len()));
+                into[..values.len()].copy_from_slice(values);
+                rest = tail;
+            };
+            for item in &nb.receive {
+                let st = &mut state[item.sub];
+                for &(_, k) in &item.shared {
+                    take(std::slice::from_mut(&mut st.u[k as usize]));
+                }
+                for &slot in &item.sides {
+                    take(&mut st.sides[slot].u);
+                    take(&mut st.sides[slot].f);
+                }
+            }
+        }
+    }
+
+    /// r(U)'s pieces at shared dofs ([`PIECES_PER_DOF`] per dof; of a held substructure
+    /// `mine(e)` gives them in its shared dofs' order): to each neighbour those at the dofs
+    /// it shares, from each its own, as `(substructure, position in its shared dofs, pieces)`.
+    pub(super) fn share_pieces<'a>(
+        &self,
+        exchange: &dyn Exchange,
+        mine: impl Fn(usize) -> &'a [f64],
+    ) -> Vec<(usize, u32, [f64; PIECES_PER_DOF])> {
+        let sends: Vec<(usize, Vec<f64>)> = self
+            .neighbours
+            .iter()
+            .map(|nb| {
+                let mut values = Vec::new();
+                for item in &nb.send {
+                    let pieces = mine(item.sub);
+                    for &(position, _) in &item.shared {
+                        let at = position as usize * PIECES_PER_DOF;
+                        values.extend_from_slice(&pieces[at..at + PIECES_PER_DOF]);
+                    }
+                }
+                (nb.rank, values)
+            })
+            .collect();
+        let received = exchange.exchange_with(sends);
+        let mut out = Vec::new();
+        for (nb, values) in self.neighbours.iter().zip(received) {
+            let mut chunks = values.chunks_exact(PIECES_PER_DOF);
+            for item in &nb.receive {
+                for &(position, _) in &item.shared {
+                    let mut v = [0.0; PIECES_PER_DOF];
+                    if let Some(chunk) = chunks.next() {
+                        v.copy_from_slice(chunk);
+                    }
+                    out.push((item.sub, position, v));
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solvers::latin::{Latin, LatinSettings, RankLayout, SearchPolicy};
+    use crate::solvers::Solver;
+    use crate::structure::{GridSpec, LoadPattern, Structure};
+    use std::collections::{HashMap, VecDeque};
+    use std::sync::{Barrier, Condvar, Mutex};
+
+    /// Messages from one rank to another, first in first out, by (from, to).
+    type Mailboxes = HashMap<(usize, usize), VecDeque<Vec<f64>>>;
+
+    /// Ranks as threads of one process: the collectives meet at a barrier, the point-to-point
+    /// messages wait in mailboxes (first in, first out per pair of ranks, as MPI's are).
+    struct Hub {
+        size: usize,
+        barrier: Barrier,
+        slots: Mutex<Vec<Vec<f64>>>,
+        mail: Mutex<Mailboxes>,
+        arrived: Condvar,
+    }
+
+    struct ThreadRank<'h> {
+        hub: &'h Hub,
+        rank: usize,
+    }
+
+    impl Exchange for ThreadRank<'_> {
+        fn rank(&self) -> usize {
+            self.rank
+        }
+        fn size(&self) -> usize {
+            self.hub.size
+        }
+        fn all_gather(&self, mine: &[f64]) -> Vec<f64> {
+            self.hub.slots.lock().unwrap()[self.rank] = mine.to_vec();
+            self.hub.barrier.wait();
+            let all = self.hub.slots.lock().unwrap().concat();
+            self.hub.barrier.wait();
+            all
+        }
+        fn all(&self, value: bool) -> bool {
+            self.all_gather(&[f64::from(u8::from(value))])
+                .iter()
+                .all(|&v| v == 1.0)
+        }
+        fn exchange_with(&self, sends: Vec<(usize, Vec<f64>)>) -> Vec<Vec<f64>> {
+            let mut mail = self.hub.mail.lock().unwrap();
+            let from: Vec<usize> = sends.iter().map(|(rank, _)| *rank).collect();
+            for (to, values) in sends {
+                mail.entry((self.rank, to)).or_default().push_back(values);
+            }
+            self.hub.arrived.notify_all();
+            let mut received = Vec::with_capacity(from.len());
+            for q in from {
+                loop {
+                    if let Some(values) = mail.get_mut(&(q, self.rank)).and_then(|m| m.pop_front())
+                    {
+                        received.push(values);
+                        break;
+                    }
+                    mail = self.hub.arrived.wait(mail).unwrap();
+                }
+            }
+            received
+        }
+    }
+
+    fn grid(n: usize) -> Structure {
+        let spec = GridSpec {
+            modules: [n, n],
+            ..GridSpec::default()
+        };
+        Structure::grid(&spec, &LoadPattern::default())
+    }
+
+    /// The iteration count, the status and the iterate's displacements and tensions of a
+    /// solve at `alpha` on `ranks` thread-ranks (rank 0's view: every rank's must agree).
+    fn solve_on(
+        s: &Structure,
+        settings: &LatinSettings,
+        alpha: f64,
+        ranks: usize,
+    ) -> (usize, String, Vec<f64>, Vec<f64>) {
+        let load: Vec<f64> = s.unit_load.iter().map(|f| alpha * f).collect();
+        let hub = Hub {
+            size: ranks,
+            barrier: Barrier::new(ranks),
+            slots: Mutex::new(vec![Vec::new(); ranks]),
+            mail: Mutex::new(HashMap::new()),
+            arrived: Condvar::new(),
+        };
+        let results: Vec<_> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..ranks)
+                .map(|rank| {
+                    let (hub, load) = (&hub, &load);
+                    // Each rank its own thread pool, as each MPI rank is a process of its
+                    // own (a rank waiting for the others inside a parallel section must not
+                    // hold a worker another rank needs).
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(1)
+                        .build()
+                        .unwrap();
+                    scope.spawn(move || {
+                        pool.install(|| {
+                            let exchange = ThreadRank { hub, rank };
+                            let mut latin = Latin::on_ranks(s, *settings, &exchange).unwrap();
+                            let mut state = latin.init(load);
+                            let status = loop {
+                                let progress = latin.progress(&state);
+                                if let Some(stop) = progress.stop {
+                                    break format!("{stop:?}");
+                                }
+                                if progress.iteration >= latin.max_iterations() {
+                                    break "MaxIterations".to_string();
+                                }
+                                latin.next_iter(&mut state);
+                            };
+                            let eq = latin.iterate(&state);
+                            (state.iteration, status, eq.displacements, eq.tensions)
+                        })
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        for other in &results[1..] {
+            assert_eq!(other, &results[0], "the ranks disagree");
+        }
+        results.into_iter().next().unwrap()
+    }
+
+    /// On 2 and 3 ranks the solve is the one-process solve bit for bit, with s exchanged
+    /// point to point between status steps (inexact Newton status steps, the default) and
+    /// gathered whole at each iteration (status-following l): the paper's grid at α = 2.4 of
+    /// its default load, in 4 × 4 and 3 × 5 substructures.
+    #[test]
+    fn ranks_exchanging_point_to_point_solve_as_one_process() {
+        let s = grid(16);
+        for (subdomains, policy) in [
+            ([4, 4], SearchPolicy::Newton),
+            ([3, 5], SearchPolicy::Newton),
+            ([4, 4], SearchPolicy::Status),
+        ] {
+            let settings = LatinSettings {
+                subdomains,
+                policy,
+                ..LatinSettings::default()
+            };
+            let one = solve_on(&s, &settings, 2.4, 1);
+            assert_eq!(one.1, "Converged", "{subdomains:?} {policy:?}");
+            // The status matters: over a tenth of the cables slack (820 of 3072).
+            let slack = one
+                .3
+                .iter()
+                .zip(&s.links)
+                .filter(|(t, l)| l.unilateral && **t == 0.0);
+            assert!(slack.count() > 307, "{subdomains:?} {policy:?}");
+            for ranks in [2, 3] {
+                let shared = solve_on(&s, &settings, 2.4, ranks);
+                assert!(
+                    shared == one,
+                    "{subdomains:?} {policy:?} on {ranks} ranks: {} / {} iterations, {} / {}",
+                    shared.0,
+                    one.0,
+                    shared.1,
+                    one.1
+                );
+            }
+        }
+    }
+
+    /// What one rank sends another is what that rank expects, and covers what it reads: every
+    /// interface between them (both sides) and every dof its substructures share with the
+    /// other's (each holder on the other rank).
+    #[test]
+    fn each_pair_of_ranks_agrees_on_what_passes_and_it_covers_the_shared_dofs() {
+        let s = grid(12);
+        for (subdomains, ranks) in [([4, 4], 3), ([3, 5], 4), ([6, 2], 5)] {
+            let settings = LatinSettings {
+                subdomains,
+                ..LatinSettings::default()
+            };
+            let latin = Latin::new(&s, settings).unwrap();
+            let (subs, own) = (&latin.substructures, &latin.dof_ownership);
+            let plans: Vec<NeighbourPlan> = (0..ranks)
+                .map(|r| NeighbourPlan::new(subs, &latin.interfaces, own, r, ranks))
+                .collect();
+            for (p, plan) in plans.iter().enumerate() {
+                for nb in &plan.neighbours {
+                    let back = plans[nb.rank].neighbours.iter().find(|b| b.rank == p);
+                    let back = back.expect("the neighbour relation is symmetric");
+                    assert_eq!(nb.send, back.receive, "{subdomains:?} {p} → {}", nb.rank);
+                    assert_eq!(nb.receive, back.send, "{subdomains:?} {} → {p}", nb.rank);
+                }
+                // Every dof a held substructure shares, with a holder q on another rank:
+                // received from q for that holder.
+                let held = block(p, ranks, subs.len());
+                let holders = |d: usize| -> Vec<usize> {
+                    (0..subs.len())
+                        .filter(|&e| subs[e].dof_global.contains(&d))
+                        .collect()
+                };
+                let mut expected = 0;
+                for e in held.clone() {
+                    for &k in &own.shared_local[e] {
+                        let d = subs[e].dof_global[k as usize];
+                        for f in holders(d).into_iter().filter(|f| !held.contains(f)) {
+                            expected += 1;
+                            let found =
+                                plan.neighbours
+                                    .iter()
+                                    .flat_map(|nb| &nb.receive)
+                                    .any(|item| {
+                                        item.sub == f
+                                            && item
+                                                .shared
+                                                .iter()
+                                                .any(|&(_, j)| subs[f].dof_global[j as usize] == d)
+                                    });
+                            assert!(found, "{subdomains:?} rank {p}: dof {d} of {f}");
+                        }
+                    }
+                    for side in &subs[e].sides {
+                        let other = latin.interfaces[side.interface].topology.sides[1 - side.which];
+                        if !held.contains(&other) {
+                            let found =
+                                plan.neighbours
+                                    .iter()
+                                    .flat_map(|nb| &nb.receive)
+                                    .any(|item| {
+                                        item.sub == other
+                                            && item.sides.iter().any(|&slot| {
+                                                subs[other].sides[slot].interface == side.interface
+                                            })
+                                    });
+                            assert!(
+                                found,
+                                "{subdomains:?} rank {p}: interface {}",
+                                side.interface
+                            );
+                        }
+                    }
+                }
+                assert!(expected > 0 || plan.neighbours.is_empty());
+                // Neighbours are the ranks it shares something with, increasing, itself not;
+                // `check`'s layout counts them and what passes from the partition alone.
+                let ranks_of = plan.ranks();
+                assert!(ranks_of.windows(2).all(|w| w[0] < w[1]) && !ranks_of.contains(&p));
+                let layout = RankLayout::new(&s, &latin.settings, ranks);
+                assert_eq!(
+                    layout.ranks[p].neighbours, ranks_of,
+                    "{subdomains:?} rank {p}"
+                );
+                assert_eq!(
+                    layout.ranks[p].values_sent,
+                    plan.values_sent(subs),
+                    "{subdomains:?} rank {p}"
+                );
+            }
+        }
+    }
+}
