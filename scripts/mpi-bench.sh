@@ -7,13 +7,17 @@
 # oversubscribed: two ranks share a core. Ranks are not bound to cores (`--bind-to none`): with
 # one rank OpenMPI would otherwise bind it, and its two threads, to one core.
 # Usage: scripts/mpi-bench.sh [N]   (needs mpirun and python3; builds with --features mpi into
-# target/mpi so that the default binary is left alone)
+# target/mpi so that the default binary is left alone; TENSOLVE_BIN=path runs that binary
+# instead, unbuilt: an older build, for a before/after comparison)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${1:-3}
-export CARGO_TARGET_DIR=target/mpi
-cargo build --release --quiet --features mpi
-bin=target/mpi/release/tensolve
+bin=${TENSOLVE_BIN:-}
+if [ -z "$bin" ]; then
+  export CARGO_TARGET_DIR=target/mpi
+  cargo build --release --quiet --features mpi
+  bin=target/mpi/release/tensolve
+fi
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 cases=(
