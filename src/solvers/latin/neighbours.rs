@@ -138,27 +138,33 @@ impl NeighbourPlan {
             .sum()
     }
 
+    /// To each neighbour, the values `pack` gives of each item it reads (in order); from
+    /// each, in the same order as `neighbours`, what it sent.
+    fn send_items(
+        &self,
+        exchange: &dyn Exchange,
+        pack: impl Fn(&Item, &mut Vec<f64>),
+    ) -> Vec<Vec<f64>> {
+        let sends = self.neighbours.iter().map(|nb| {
+            let mut values = Vec::new();
+            nb.send.iter().for_each(|item| pack(item, &mut values));
+            (nb.rank, values)
+        });
+        exchange.exchange_with(sends.collect())
+    }
+
     /// After a linear stage: to each neighbour, this rank's U at the dofs it shares with it
     /// and its sides' U and F on the interfaces between them; from each, the same of its
     /// substructures, written into `state`.
     pub(super) fn share_s(&self, exchange: &dyn Exchange, state: &mut [SubState]) {
-        let sends: Vec<(usize, Vec<f64>)> = self
-            .neighbours
-            .iter()
-            .map(|nb| {
-                let mut values = Vec::new();
-                for item in &nb.send {
-                    let st = &state[item.sub];
-                    values.extend(item.shared.iter().map(|&(_, k)| st.u[k as usize]));
-                    for &slot in &item.sides {
-                        values.extend_from_slice(&st.sides[slot].u);
-                        values.extend_from_slice(&st.sides[slot].f);
-                    }
-                }
-                (nb.rank, values)
-            })
-            .collect();
-        let received = exchange.exchange_with(sends);
+        let received = self.send_items(exchange, |item, values| {
+            let st = &state[item.sub];
+            values.extend(item.shared.iter().map(|&(_, k)| st.u[k as usize]));
+            for &slot in &item.sides {
+                values.extend_from_slice(&st.sides[slot].u);
+                values.extend_from_slice(&st.sides[slot].f);
+            }
+        });
         for (nb, values) in self.neighbours.iter().zip(received) {
             let mut rest = values.as_slice();
             let mut take = |into: &mut [f64]| {
@@ -187,22 +193,13 @@ impl NeighbourPlan {
         exchange: &dyn Exchange,
         mine: impl Fn(usize) -> &'a [f64],
     ) -> Vec<(usize, u32, [f64; PIECES_PER_DOF])> {
-        let sends: Vec<(usize, Vec<f64>)> = self
-            .neighbours
-            .iter()
-            .map(|nb| {
-                let mut values = Vec::new();
-                for item in &nb.send {
-                    let pieces = mine(item.sub);
-                    for &(position, _) in &item.shared {
-                        let at = position as usize * PIECES_PER_DOF;
-                        values.extend_from_slice(&pieces[at..at + PIECES_PER_DOF]);
-                    }
-                }
-                (nb.rank, values)
-            })
-            .collect();
-        let received = exchange.exchange_with(sends);
+        let received = self.send_items(exchange, |item, values| {
+            let pieces = mine(item.sub);
+            for &(position, _) in &item.shared {
+                let at = position as usize * PIECES_PER_DOF;
+                values.extend_from_slice(&pieces[at..at + PIECES_PER_DOF]);
+            }
+        });
         let mut out = Vec::new();
         for (nb, values) in self.neighbours.iter().zip(received) {
             let mut chunks = values.chunks_exact(PIECES_PER_DOF);
@@ -423,39 +420,33 @@ mod tests {
                         .filter(|&e| subs[e].dof_global.contains(&d))
                         .collect()
                 };
+                // Whether this rank receives of substructure `sub` an item `what` accepts.
+                let receives = |sub: usize, what: &dyn Fn(&Item) -> bool| {
+                    let mut items = plan.neighbours.iter().flat_map(|nb| &nb.receive);
+                    items.any(|item| item.sub == sub && what(item))
+                };
                 let mut expected = 0;
                 for e in held.clone() {
                     for &k in &own.shared_local[e] {
                         let d = subs[e].dof_global[k as usize];
                         for f in holders(d).into_iter().filter(|f| !held.contains(f)) {
                             expected += 1;
-                            let found =
-                                plan.neighbours
+                            let found = receives(f, &|item| {
+                                item.shared
                                     .iter()
-                                    .flat_map(|nb| &nb.receive)
-                                    .any(|item| {
-                                        item.sub == f
-                                            && item
-                                                .shared
-                                                .iter()
-                                                .any(|&(_, j)| subs[f].dof_global[j as usize] == d)
-                                    });
+                                    .any(|&(_, j)| subs[f].dof_global[j as usize] == d)
+                            });
                             assert!(found, "{subdomains:?} rank {p}: dof {d} of {f}");
                         }
                     }
                     for side in &subs[e].sides {
                         let other = latin.interfaces[side.interface].topology.sides[1 - side.which];
                         if !held.contains(&other) {
-                            let found =
-                                plan.neighbours
-                                    .iter()
-                                    .flat_map(|nb| &nb.receive)
-                                    .any(|item| {
-                                        item.sub == other
-                                            && item.sides.iter().any(|&slot| {
-                                                subs[other].sides[slot].interface == side.interface
-                                            })
-                                    });
+                            let found = receives(other, &|item| {
+                                item.sides.iter().any(|&slot| {
+                                    subs[other].sides[slot].interface == side.interface
+                                })
+                            });
                             assert!(
                                 found,
                                 "{subdomains:?} rank {p}: interface {}",
