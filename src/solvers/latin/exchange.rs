@@ -9,10 +9,11 @@
 //! side (summed on every rank in the substructures' order, so that every rank and a run on one
 //! process add the same numbers in the same order), and the sums of η, r(U), Anderson's inner
 //! products and the slack count. After each linear stage a rank sends its neighbouring ranks
-//! what they read of its substructures (`neighbours.rs`, point to point); the status steps,
-//! which read the whole state, gather s whole first. A solve whose every iteration reads the
-//! whole state (status-following l, or r(U) with the prestress's geometric stiffness)
-//! gathers s whole after each linear stage.
+//! what they read of its substructures (`neighbours.rs`, point to point); a status step
+//! classifies each rank's own links and adds the substructures' parts of its line search; the
+//! answer is gathered whole. A solve whose every iteration reads the whole state
+//! (status-following l, or r(U) with the prestress's geometric stiffness) gathers s whole
+//! after each linear stage.
 
 use std::ops::Range;
 

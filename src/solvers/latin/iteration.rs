@@ -210,7 +210,7 @@ impl Solver for Latin<'_> {
     /// status-following l is undone, so that every solve starts alike). With Anderson
     /// acceleration it is followed by the local stage on it (ŝ = local(s)).
     fn init(&mut self, load: &[f64]) -> LatinState {
-        if self.search_slack.iter().any(|&x| x) {
+        if self.any_search_slack() {
             self.set_search(vec![false; self.structure.links.len()]);
         }
         let mut state = LatinState {
@@ -243,7 +243,6 @@ impl Solver for Latin<'_> {
         state.relax = true;
         self.measure_state(&mut state, measured);
         if self.newton_steps() {
-            self.complete_state(&mut state.subs);
             state.step = Some(self.step_start(&state));
         }
         state
@@ -257,9 +256,6 @@ impl Solver for Latin<'_> {
     /// first ends in a status step, and the iteration is the first of the next inner run.
     fn next_iter(&mut self, state: &mut LatinState) {
         let stepped = self.newton_steps() && self.inner_run_done(state);
-        if stepped {
-            self.complete_state(&mut state.subs);
-        }
         let measured = if self.accelerated() {
             let restart = stepped && self.status_step(state).map_changed;
             Some(self.accelerated_iteration(state, restart))
@@ -270,7 +266,6 @@ impl Solver for Latin<'_> {
         state.iteration += 1;
         self.measure_state(state, measured);
         if stepped {
-            self.complete_state(&mut state.subs);
             state.step = Some(self.step_start(state));
         }
     }
@@ -334,24 +329,34 @@ impl Solver for Latin<'_> {
 
     /// U of the linear stage (interface nodes averaged over the substructures holding them),
     /// tensions of the local stage on it (which satisfy the cable law exactly; slack cables
-    /// carry exactly 0), the slack set by the shared classification of U.
+    /// carry exactly 0), the slack set by the shared classification of U. On several ranks s
+    /// is gathered whole for U, and each rank gives its own links' tensions: a rank knows the
+    /// search directions of its own substructures' links only.
     fn iterate(&self, state: &LatinState) -> Equilibrium {
         let s = self.structure;
         let mut subs = state.subs.clone();
         self.complete_state(&mut subs);
         let u = self.displacements(&subs);
-        let all = 0..subs.len();
-        self.local_stage_on(&mut subs, LocalLaw::Exact, all);
+        let held = self.held.clone();
+        self.local_stage_on(&mut subs, LocalLaw::Exact, held.clone());
+        let mine: Vec<f64> = self.substructures[held.clone()]
+            .iter()
+            .zip(&subs[held])
+            .flat_map(|(sub, st)| {
+                sub.links
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &i)| match st.slack_hat[j] {
+                        true => 0.0,
+                        false => st.t_hat[j] + s.links[i].prestress,
+                    })
+            })
+            .collect();
         let mut tensions = vec![0.0; s.links.len()];
-        for (sub, st) in self.substructures.iter().zip(&subs) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                tensions[i] = if st.slack_hat[j] {
-                    0.0
-                } else {
-                    st.t_hat[j] + s.links[i].prestress
-                };
-            }
-        }
+        let links = self.substructures.iter().flat_map(|sub| &sub.links);
+        links
+            .zip(self.exchange.all_gather(&mine))
+            .for_each(|(&i, t)| tensions[i] = t);
         Equilibrium::classified(s, u, tensions)
     }
 }

@@ -197,8 +197,8 @@ impl Latin<'_> {
         }
     }
 
-    /// Before a status step and its snapshot, which read the whole state: s whole, when the
-    /// iterations exchange it point to point.
+    /// For the answer, which reads U on every dof: s whole, when the iterations exchange it
+    /// point to point.
     pub(super) fn complete_state(&self, state: &mut [SubState]) {
         if self.neighbours.is_some() {
             self.share_whole_state(state);

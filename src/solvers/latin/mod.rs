@@ -369,7 +369,7 @@ impl<'s> Latin<'s> {
     /// Every substructure's homogenised flexibility and macro basis, with l as set up (a
     /// solve's status-following l is undone first).
     pub fn homogenised(&mut self) -> Vec<Homogenised> {
-        if self.search_slack.iter().any(|&x| x) {
+        if self.any_search_slack() {
             self.set_search(vec![false; self.structure.links.len()]);
         }
         self.substructures

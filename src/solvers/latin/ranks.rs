@@ -7,7 +7,9 @@
 //! the interfaces between them, then its pieces of r(U) at those dofs. What is still gathered
 //! from every rank per iteration is small and per substructure: the macro right-hand side's
 //! parts (every rank solves the macro problem), the parts of η, of r(U)'s norms, of the slack
-//! count and of Anderson's inner products. A status step gathers s whole, twice.
+//! count and of Anderson's inner products, and at a status step the parts of its line search.
+//! The answer is gathered whole where the driver reads it: at its no-equilibrium checks
+//! (iterations 16, 32, 64, …) and at the end.
 
 use super::interfaces::Interfaces;
 use super::{LatinSettings, Partition};
@@ -39,10 +41,10 @@ pub struct RankShare {
     /// left out), η's parts, the slack count, r(U)'s sums of squares, and Anderson's inner
     /// products with a full history.
     pub values_gathered: usize,
-    /// Values it receives at each status step, which gathers s whole (twice: at the step's
-    /// end and at the next one's start): e and t per link, U per dof, U and F per interface
-    /// row of every other rank's substructures.
-    pub values_per_status_step: usize,
+    /// Values it receives each time the answer is gathered whole (the driver's no-equilibrium
+    /// checks at iterations 16, 32, 64, … and the end): e and t per link, U per dof, U and F
+    /// per interface row, and the tension per link, of every other rank's substructures.
+    pub values_per_answer: usize,
 }
 
 /// The layout of a micro-macro partition over P ranks.
@@ -84,7 +86,7 @@ impl RankLayout {
                     neighbours: Vec::new(),
                     values_sent: 0,
                     values_gathered: 0,
-                    values_per_status_step: 0,
+                    values_per_answer: 0,
                 }
             })
             .collect();
@@ -128,7 +130,7 @@ impl RankLayout {
         for share in &mut shares {
             let mine = share.substructures.clone();
             share.values_gathered = total - gathered[mine.clone()].iter().sum::<usize>();
-            share.values_per_status_step = 2 * (total_whole - whole[mine].iter().sum::<usize>());
+            share.values_per_answer = total_whole - whole[mine].iter().sum::<usize>();
         }
         RankLayout {
             subdomains: settings.subdomains,
@@ -160,7 +162,7 @@ impl RankLayout {
             out += &format!(
                 "  rank {r}: substructures {}..{} ({}), {} links, neighbours [{}]; per \
                  iteration sends {} values ({:.1} KiB) point to point and receives {} ({:.1} \
-                 KiB) in all-gathers; {} values ({:.1} KiB) at each status step\n",
+                 KiB) in all-gathers; {} values ({:.1} KiB) each time the answer is gathered\n",
                 share.substructures.start,
                 share.substructures.end,
                 share.substructures.len(),
@@ -170,8 +172,8 @@ impl RankLayout {
                 kb(share.values_sent),
                 share.values_gathered,
                 kb(share.values_gathered),
-                share.values_per_status_step,
-                kb(share.values_per_status_step),
+                share.values_per_answer,
+                kb(share.values_per_answer),
             );
         }
         out += &format!(
@@ -179,7 +181,8 @@ impl RankLayout {
              over {} of {} interfaces (U and F per interface row, U and r(U)'s 3 pieces per \
              shared dof); gathered from every rank: the macro right-hand side ({} values, \
              solved on every rank) and per substructure the parts of η, r(U) and Anderson's \
-             inner products; a status step gathers s whole\n",
+             inner products (at a status step, its line search's parts); the answer is gathered whole \
+             at the no-equilibrium checks (iterations 16, 32, 64, ...) and at the end\n",
             self.values_exchanged(),
             kb(self.values_exchanged()),
             self.crossing_interfaces,
@@ -192,8 +195,8 @@ impl RankLayout {
 
 /// Per substructure, the values it contributes to an iteration's all-gathers (one macro
 /// right-hand side part per macro dof, η's two parts, the slack count, r(U)'s three sums of
-/// squares, Anderson's inner products), and to the gather of s whole at a status step (e and
-/// t per link, U per free dof, U and F per interface row).
+/// squares, Anderson's inner products), and to a gather of the answer whole (e, t and the
+/// tension per link, U per free dof, U and F per interface row).
 fn gathered_per_substructure(
     structure: &Structure,
     partition: &Partition,
@@ -209,7 +212,7 @@ fn gathered_per_substructure(
         .zip(&mut whole)
         .map(|((topo, input), whole)| {
             *input = topo.links.len();
-            *whole = 2 * topo.links.len() + topo.free_dofs(structure);
+            *whole = 3 * topo.links.len() + topo.free_dofs(structure);
             6
         })
         .collect();
@@ -268,11 +271,11 @@ mod tests {
             }
             // Every rank receives what the others' substructures contribute: all ranks
             // together P − 1 times what one rank holding them all would gather (per
-            // iteration, and at a status step).
+            // iteration, and for the answer).
             let two = RankLayout::new(&s, &settings, 2);
             for field in [
                 |r: &RankShare| r.values_gathered,
-                |r: &RankShare| r.values_per_status_step,
+                |r: &RankShare| r.values_per_answer,
             ] {
                 let gathered: usize = layout.ranks.iter().map(field).sum();
                 let of_two: usize = two.ranks.iter().map(field).sum();
@@ -280,9 +283,9 @@ mod tests {
             }
             let sent: usize = layout.ranks.iter().map(|r| r.values_sent).sum();
             assert_eq!(sent, layout.values_exchanged());
-            // Point to point is the small part: less than a status step's gather of s.
+            // Point to point is the small part: less than a gather of the answer.
             for share in &layout.ranks {
-                assert!(share.values_sent > 0 && share.values_sent < share.values_per_status_step);
+                assert!(share.values_sent > 0 && share.values_sent < share.values_per_answer);
             }
         }
         // One row of substructures per rank: each rank touches only the rows next to it, and

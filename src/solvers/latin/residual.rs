@@ -72,6 +72,11 @@ pub(super) struct DofOwnership {
 const NOT_SHARED: u32 = u32::MAX;
 
 impl DofOwnership {
+    /// Whether substructure `e` owns free dof `d` (the first of those holding it).
+    pub(super) fn owns(&self, e: usize, d: usize) -> bool {
+        self.owner[d] as usize == e
+    }
+
     /// The slot of a shared free dof `d` among the shared dofs.
     pub(super) fn slot(&self, d: usize) -> usize {
         self.shared_slot[d] as usize

@@ -74,6 +74,16 @@ impl Latin<'_> {
         (trial, (sum2 / cables.max(1) as f64).sqrt())
     }
 
+    /// Whether any cable has its search direction at ε·l, on any process (each knows its own
+    /// substructures' cables).
+    pub(super) fn any_search_slack(&self) -> bool {
+        let held = &self.substructures[self.held.clone()];
+        let mine = held
+            .iter()
+            .any(|sub| sub.links.iter().any(|&i| self.search_slack[i]));
+        !self.exchange.all(!mine)
+    }
+
     /// New operators with ε·l on the cables of `slack`: the substructures where l changed,
     /// then the macro problem. On failure (a substructure left without stiffness, or a
     /// singular macro problem) the operators of the current directions are rebuilt and kept.
@@ -85,7 +95,11 @@ impl Latin<'_> {
                 *l *= SLACK_SEARCH_FACTOR;
             }
         }
-        let changed: Vec<usize> = (0..self.substructures.len())
+        // Each process knows the status of its own substructures' links: the changed ones
+        // are gathered from the ranks that hold them.
+        let held_changed: Vec<usize> = self
+            .held
+            .clone()
             .filter(|&e| {
                 self.substructures[e]
                     .links
@@ -93,6 +107,14 @@ impl Latin<'_> {
                     .any(|&i| search[i] != self.search[i])
             })
             .collect();
+        let changed: Vec<usize> = match self.exchange.size() {
+            1 => held_changed,
+            _ => {
+                let mine: Vec<f64> = held_changed.iter().map(|&e| e as f64).collect();
+                let all = self.exchange.all_gather(&mine);
+                all.into_iter().map(|e| e as usize).collect()
+            }
+        };
         if self.rebuild(&changed, &search) {
             self.search = search;
             self.search_slack = slack;

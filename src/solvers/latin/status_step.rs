@@ -7,10 +7,11 @@
 //! are inexact LATIN runs.
 
 use super::{Latin, LatinState, SubState};
-use crate::linalg::{dot, norm};
-use crate::solvers::newton::exact_line_search;
+use crate::linalg::dot;
+use crate::solvers::newton::{exact_line_search, EnergyAlongStep};
 use crate::solvers::no_equilibrium_along;
 use crate::structure::law;
+use rayon::prelude::*;
 
 /// An inner run that has not reached its forcing tolerance after this many iterations takes
 /// its step anyway (the linearised problem may have no equilibrium, e.g. a loaded node held
@@ -45,6 +46,16 @@ const REBUILD_FRACTION: f64 = 5e-4;
 /// tolerance times the RMS trial tension of the cables: its force is then below what r(U)
 /// can see.
 const STATUS_BAND: f64 = 0.1;
+
+/// Sums over the free dofs a status step needs.
+struct StepSums {
+    /// ‖ΔU‖².
+    step_squared: f64,
+    /// ‖U0‖² at the step's start.
+    start_squared: f64,
+    /// Fᵀ ΔU.
+    load_work: f64,
+}
 
 /// What a status step changed.
 pub(super) struct StatusStep {
@@ -90,13 +101,15 @@ impl Latin<'_> {
             .zip(&start.displacements)
             .map(|(b, a)| b - a)
             .collect();
+        let sums = self.step_sums(&step, &start.displacements, &state.load);
         // A runaway outgrows the answer it started from: a step smaller than that is the
         // iteration's own correction, whose size says nothing of the energy far along it (the
         // certificate's energy test compares the stretch, quadratic in the step, with the
         // load's work, linear in it: any small enough step passes it).
-        let runs_away = norm(&step) >= norm(&start.displacements);
+        let runs_away = sums.step_squared >= sums.start_squared;
         state.runaway = runs_away
             .then(|| {
+                let step = self.whole_step(step.clone());
                 no_equilibrium_along(self.structure, &step, &state.load).or_else(|| {
                     let opposite: Vec<f64> = step.iter().map(|x| -x).collect();
                     no_equilibrium_along(self.structure, &opposite, &state.load)
@@ -111,8 +124,10 @@ impl Latin<'_> {
         let near = state.residual <= 100.0 * self.settings.residual_tolerance();
         let theta = if near && state.residual < start.residual {
             1.0
-        } else {
+        } else if self.structure.geometric.is_some() {
             self.line_search(&start.displacements, &step, &state.load)
+        } else {
+            self.line_search_by_substructure(&start.displacements, &step, sums.load_work)
         };
         if theta < 1.0 {
             for (st, st0) in state.subs.iter_mut().zip(&start.subs) {
@@ -122,24 +137,40 @@ impl Latin<'_> {
         }
         // The blend's status: slack where τ = t0 + k e ≤ 0, a cable keeping its status while
         // |τ| is within a band far below what r(U) is stopped on (a cable at zero tension in
-        // the answer would otherwise be free to flip at every step).
+        // the answer would otherwise be free to flip at every step). Each process classifies
+        // the links of the substructures it holds (all of them when every process holds the
+        // whole state, whose r(U) reads every link's status).
         let links = &self.structure.links;
-        let (trial, rms) = self.trial_tensions(&state.subs);
+        let rms = self.trial_tension_rms(&state.subs);
         let band = STATUS_BAND * self.settings.residual_tolerance() * rms;
         let cables = links.iter().filter(|l| l.unilateral).count();
-        let slack: Vec<bool> = links
+        let whole = self.reads_whole_state();
+        let classified = match whole {
+            true => 0..self.substructures.len(),
+            false => self.held.clone(),
+        };
+        let mut slack = state.law_slack.clone();
+        let (mut law_changed, mut disagree) = (false, 0usize);
+        for (sub, st) in self.substructures[classified.clone()]
             .iter()
-            .zip(&trial)
-            .zip(&state.law_slack)
-            .map(|((l, &tau), &was)| l.unilateral && if was { tau <= band } else { tau < -band })
-            .collect();
-
-        let law_changed = slack != state.law_slack;
-        let disagree = slack
-            .iter()
-            .zip(&self.search_slack)
-            .filter(|(a, b)| a != b)
-            .count();
+            .zip(&state.subs[classified])
+        {
+            for (&i, &e) in sub.links.iter().zip(&st.e) {
+                let (l, was) = (&links[i], state.law_slack[i]);
+                let tau = law::trial_tension(l, e);
+                slack[i] = l.unilateral && if was { tau <= band } else { tau < -band };
+                law_changed |= slack[i] != was;
+                disagree += usize::from(slack[i] != self.search_slack[i]);
+            }
+        }
+        if !whole {
+            law_changed = !self.exchange.all(!law_changed);
+            disagree = self
+                .exchange
+                .all_gather(&[disagree as f64])
+                .iter()
+                .sum::<f64>() as usize;
+        }
         let rebuilt =
             disagree as f64 > REBUILD_FRACTION * cables as f64 && self.set_search(slack.clone());
         if rebuilt {
@@ -150,6 +181,145 @@ impl Latin<'_> {
         StatusStep {
             map_changed: rebuilt || law_changed,
         }
+    }
+
+    /// ‖ΔU‖², ‖U0‖² and Fᵀ ΔU, each dof counted by the substructure that owns it, summed per
+    /// held substructure and then over the substructures in their order (on every rank).
+    fn step_sums(&self, step: &[f64], start: &[f64], load: &[f64]) -> StepSums {
+        let own = &self.dof_ownership;
+        let held = self.held.clone();
+        let parts: Vec<f64> = self.substructures[held.clone()]
+            .iter()
+            .zip(held)
+            .flat_map(|(sub, e)| {
+                let mut sums = [0.0; 3];
+                for &d in sub.dof_global.iter().filter(|&&d| own.owns(e, d)) {
+                    sums[0] += step[d] * step[d];
+                    sums[1] += start[d] * start[d];
+                    sums[2] += load[d] * step[d];
+                }
+                sums
+            })
+            .collect();
+        let all = self.exchange.all_gather(&parts);
+        let total = all
+            .chunks_exact(3)
+            .fold([0.0; 3], |t, p| [t[0] + p[0], t[1] + p[1], t[2] + p[2]]);
+        StepSums {
+            step_squared: total[0],
+            start_squared: total[1],
+            load_work: total[2],
+        }
+    }
+
+    /// `step` on every free dof (on several ranks each holds it at its substructures' dofs
+    /// only): each dof's value from the rank of the substructure that owns it.
+    fn whole_step(&self, mut step: Vec<f64>) -> Vec<f64> {
+        if self.exchange.size() == 1 {
+            return step;
+        }
+        let own = &self.dof_ownership;
+        let owned = |e: usize| {
+            let sub = &self.substructures[e];
+            sub.dof_global
+                .iter()
+                .copied()
+                .filter(move |&d| own.owns(e, d))
+        };
+        let mine: Vec<f64> = self
+            .held
+            .clone()
+            .flat_map(|e| owned(e).map(|d| step[d]))
+            .collect();
+        let mut all = self.exchange.all_gather(&mine).into_iter();
+        for e in 0..self.substructures.len() {
+            for d in owned(e) {
+                step[d] = all.next().unwrap_or(0.0);
+            }
+        }
+        step
+    }
+
+    /// The RMS trial tension `t0 + k e` of the cables (the scale of the status bands), the
+    /// squares summed per held substructure and then in the substructures' order.
+    fn trial_tension_rms(&self, subs: &[SubState]) -> f64 {
+        let links = &self.structure.links;
+        let held = self.held.clone();
+        let parts: Vec<f64> = self.substructures[held.clone()]
+            .iter()
+            .zip(&subs[held])
+            .map(|(sub, st)| {
+                let cables = sub
+                    .links
+                    .iter()
+                    .zip(&st.e)
+                    .filter(|(&i, _)| links[i].unilateral);
+                cables
+                    .map(|(&i, &e)| law::trial_tension(&links[i], e).powi(2))
+                    .sum::<f64>()
+            })
+            .collect();
+        let sum: f64 = self.exchange.all_gather(&parts).iter().sum();
+        let cables = links.iter().filter(|l| l.unilateral).count();
+        (sum / cables.max(1) as f64).sqrt()
+    }
+
+    /// θ ∈ (0, 1] as [`Latin::line_search`] finds it, from each held substructure's links
+    /// (trial tensions at U0 and elongations along ΔU through its dof map) and their parts
+    /// added in the substructures' order, on any number of processes alike. For models
+    /// without the prestress's geometric stiffness.
+    fn line_search_by_substructure(&self, u0: &[f64], step: &[f64], load_work: f64) -> f64 {
+        let s = self.structure;
+        let held = self.held.clone();
+        let parts: Vec<EnergyAlongStep> = self.substructures[held]
+            .par_iter()
+            .with_min_len(self.chunk)
+            .map(|sub| {
+                let at = |v: &[f64], row: &crate::structure::LinkDofs| -> f64 {
+                    row.iter().map(|(d, c)| c * v[sub.dof_global[d]]).sum()
+                };
+                EnergyAlongStep::of_links(sub.links.iter().zip(&sub.link_dofs).map(|(&i, row)| {
+                    let link = &s.links[i];
+                    (link, law::trial_tension(link, at(u0, row)), at(step, row))
+                }))
+            })
+            .collect();
+        let mut total = EnergyAlongStep::default();
+        for part in self.gather_parts(parts) {
+            total.add(&part);
+        }
+        total
+            .minimiser(load_work)
+            .map_or(1.0, |theta| theta.min(1.0))
+    }
+
+    /// Every substructure's part, in order, from the held ones' on each rank.
+    fn gather_parts(&self, held: Vec<EnergyAlongStep>) -> Vec<EnergyAlongStep> {
+        if self.exchange.size() == 1 {
+            return held;
+        }
+        let mut mine = Vec::new();
+        for part in &held {
+            mine.extend([part.slope, part.curvature, part.breakpoints.len() as f64]);
+            mine.extend(part.breakpoints.iter().flat_map(|&(p, c)| [p, c]));
+        }
+        let all = self.exchange.all_gather(&mine);
+        let mut rest = all.as_slice();
+        let mut parts = Vec::with_capacity(self.substructures.len());
+        while let [slope, curvature, n, tail @ ..] = rest {
+            let n = *n as usize;
+            let breakpoints = tail[..2 * n]
+                .chunks_exact(2)
+                .map(|p| (p[0], p[1]))
+                .collect();
+            parts.push(EnergyAlongStep {
+                slope: *slope,
+                curvature: *curvature,
+                breakpoints,
+            });
+            rest = &tail[2 * n..];
+        }
+        parts
     }
 
     /// θ ∈ (0, 1]: the minimiser of the exact energy `Π(U0 + θ ΔU)` (docs/method.md §3,

@@ -72,6 +72,65 @@ pub(crate) fn exact_line_search(
             event(-a / b, c);
         }
     }
+    walk(slope_value, curvature, events)
+}
+
+/// Where the energy along a step has its minimiser (docs/method.md §3), substructure by
+/// substructure: each gives its links' part of φ'(0), of the curvature and its breakpoints up
+/// to `s = 1` ([`EnergyAlongStep::of_links`]); the parts are added in the substructures'
+/// order ([`EnergyAlongStep::add`]), on any number of processes alike. For callers that take
+/// `min(s, 1)`: a breakpoint beyond 1 cannot move a minimiser below 1.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct EnergyAlongStep {
+    /// φ'(0) of these links.
+    pub slope: f64,
+    /// φ''(0⁺) of these links.
+    pub curvature: f64,
+    /// (position, change of curvature) of each breakpoint at a position ≤ 1.
+    pub breakpoints: Vec<(f64, f64)>,
+}
+
+impl EnergyAlongStep {
+    /// The part of the links `(link, trial tension at U, elongation along ΔU)`.
+    pub(crate) fn of_links<'a>(links: impl Iterator<Item = (&'a Link, f64, f64)>) -> Self {
+        let mut part = EnergyAlongStep::default();
+        for (l, a, de) in links {
+            let b = l.stiffness * de;
+            let c = l.stiffness * de * de;
+            let active = !l.unilateral || a > 0.0 || (a == 0.0 && b > 0.0);
+            if active {
+                part.slope += a * de;
+                part.curvature += c;
+            }
+            // A taut cable going slack (its curvature leaves) or a slack one becoming taut.
+            let turns = l.unilateral && if active { b < 0.0 } else { b > 0.0 };
+            if turns && -a / b <= 1.0 {
+                part.breakpoints.push((-a / b, if active { -c } else { c }));
+            }
+        }
+        part
+    }
+
+    /// `self` then `other`, in that order.
+    pub(crate) fn add(&mut self, other: &EnergyAlongStep) {
+        self.slope += other.slope;
+        self.curvature += other.curvature;
+        self.breakpoints.extend_from_slice(&other.breakpoints);
+    }
+
+    /// The minimiser `s > 0` of `φ(s)` with the load's work `Fᵀ ΔU` along the step, beyond
+    /// which `min(s, 1)` is taken; `None` when the step is not a descent or φ has no
+    /// minimiser below 1.
+    pub(crate) fn minimiser(&self, load_work: f64) -> Option<f64> {
+        let events = self.breakpoints.iter();
+        let events = events.map(|&(position, change)| Reverse(Breakpoint { position, change }));
+        walk(self.slope - load_work, self.curvature, events.collect())
+    }
+}
+
+/// The minimiser of a piecewise quadratic from φ'(0), φ''(0⁺) and its breakpoints (`None`
+/// when φ'(0) ≥ 0, or when φ decreases without end).
+fn walk(mut slope_value: f64, mut curvature: f64, events: Vec<Reverse<Breakpoint>>) -> Option<f64> {
     if slope_value >= 0.0 {
         return None;
     }

@@ -30,7 +30,7 @@ use crate::linalg::{
 };
 use crate::structure::law::{self, SlackRule};
 use crate::structure::Structure;
-pub(crate) use line_search::exact_line_search;
+pub(crate) use line_search::{exact_line_search, EnergyAlongStep};
 
 /// Settings, each default written once, at its field.
 #[derive(Debug, Clone, Copy, PartialEq)]
