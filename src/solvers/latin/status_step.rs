@@ -5,6 +5,11 @@
 //! blend (`t0 + k e > 0`) is taken by the law, and the operators are rebuilt only when enough
 //! cables' search directions disagree with it. A semismooth Newton method whose linear solves
 //! are inexact LATIN runs.
+//!
+//! On several processes each classifies the links of its own substructures, and the sums the
+//! step needs (the line search's parts, the step's norms, the RMS trial tension) are made per
+//! substructure and added in the substructures' order: the same numbers on any number of
+//! processes.
 
 use super::{Latin, LatinState, SubState};
 use crate::linalg::dot;
@@ -325,6 +330,8 @@ impl Latin<'_> {
     /// θ ∈ (0, 1]: the minimiser of the exact energy `Π(U0 + θ ΔU)` (docs/method.md §3,
     /// newton's exact line search), 1 when it lies beyond or the step is not a descent (a
     /// step along which the energy is unbounded below has been caught as no equilibrium).
+    /// With the prestress's geometric stiffness, whose term is one pass over the whole
+    /// structure (such a solve holds the whole state on every process).
     fn line_search(&self, u0: &[f64], step: &[f64], load: &[f64]) -> f64 {
         let s = self.structure;
         let trial = law::trial_tensions(s, u0);
