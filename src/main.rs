@@ -269,11 +269,15 @@ fn run_command(
     });
     if ranks.size() > 1 {
         reporter.line(&format!(
-            "MPI: {} ranks; rank 0 received {} values ({}) in {} collective calls, {:.3} s \
-             in them (waiting for the other ranks included)",
+            "MPI: {} ranks; rank 0 received {} values ({}) in {} collective and \
+             point-to-point calls, {:.3} s in them (waiting for the other ranks included)",
             ranks.size(),
             exchange.values_received(),
-            tensolve::host::bytes_text(8 * exchange.values_received()),
+            match 8 * exchange.values_received() {
+                tiny @ 0..1_000 => format!("{tiny} B"),
+                small @ 1_000..1_000_000 => format!("{:.1} kB", small as f64 / 1e3),
+                bytes => tensolve::host::bytes_text(bytes),
+            },
             exchange.calls(),
             exchange.seconds()
         ));
