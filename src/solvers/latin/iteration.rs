@@ -214,7 +214,20 @@ impl Solver for Latin<'_> {
             self.set_search(vec![false; self.structure.links.len()]);
         }
         let mut state = LatinState {
-            subs: self.substructures.iter().map(SubState::zero).collect(),
+            // Of the others' substructures, a process exchanging s point to point keeps only
+            // what it reads (`SubState::of_another_rank`).
+            subs: self
+                .substructures
+                .iter()
+                .enumerate()
+                .map(|(e, sub)| {
+                    let own = self.held.contains(&e) || self.neighbours.is_none();
+                    match own {
+                        true => SubState::zero(sub),
+                        false => SubState::of_another_rank(sub),
+                    }
+                })
+                .collect(),
             iteration: 0,
             eta: f64::INFINITY,
             residual: f64::INFINITY,

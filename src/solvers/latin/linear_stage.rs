@@ -230,8 +230,9 @@ impl Latin<'_> {
             }
             rest = tail;
         };
-        for (e, st) in state.iter_mut().enumerate() {
+        for ((e, st), sub) in state.iter_mut().enumerate().zip(&self.substructures) {
             let write = !self.held.contains(&e);
+            st.widen(sub);
             take(&mut st.e, write);
             take(&mut st.t, write);
             take(&mut st.u, write);

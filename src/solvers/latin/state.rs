@@ -65,6 +65,26 @@ impl SubState {
             u: vec![0.0; sub.n_dofs()],
         }
     }
+
+    /// The state a process keeps of a substructure another process holds, when the
+    /// iterations exchange s point to point: U_E (its shared dofs kept current) and the
+    /// sides (the interfaces' local stage reads and writes both), no per-link field.
+    pub(super) fn of_another_rank(sub: &Substructure) -> SubState {
+        let mut st = SubState::zero(sub);
+        (st.e, st.t, st.e_hat, st.t_hat) = Default::default();
+        st.slack_hat = Vec::new();
+        st
+    }
+
+    /// The per-link fields back at E's size, zero, where they were left out.
+    pub(super) fn widen(&mut self, sub: &Substructure) {
+        let m = sub.links.len();
+        if self.e.len() != m {
+            (self.e, self.t) = (vec![0.0; m], vec![0.0; m]);
+            (self.e_hat, self.t_hat) = (vec![0.0; m], vec![0.0; m]);
+            self.slack_hat = vec![false; m];
+        }
+    }
 }
 
 /// The iterate of the LATIN state machine: after `init` or `next_iter` it holds s (the last
