@@ -365,11 +365,14 @@ impl Solver for Latin<'_> {
                     })
             })
             .collect();
+        drop(subs);
+        let gathered = match self.exchange.size() {
+            1 => mine,
+            _ => self.exchange.all_gather(&mine),
+        };
         let mut tensions = vec![0.0; s.links.len()];
         let links = self.substructures.iter().flat_map(|sub| &sub.links);
-        links
-            .zip(self.exchange.all_gather(&mine))
-            .for_each(|(&i, t)| tensions[i] = t);
+        links.zip(gathered).for_each(|(&i, t)| tensions[i] = t);
         Equilibrium::classified(s, u, tensions)
     }
 }
