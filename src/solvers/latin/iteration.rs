@@ -139,6 +139,20 @@ impl Latin<'_> {
         parts.concat()
     }
 
+    /// A value per link of the world, from `mine`, the held substructures' values in their
+    /// links' order: the others' gathered from the ranks holding them (on one process,
+    /// `mine` itself, laid out).
+    fn per_link(&self, mine: Vec<f64>) -> Vec<f64> {
+        let all = match self.exchange.size() {
+            1 => mine,
+            _ => self.exchange.all_gather(&mine),
+        };
+        let mut out = vec![0.0; self.structure.links.len()];
+        let links = self.substructures.iter().flat_map(|sub| &sub.links);
+        links.zip(all).for_each(|(&i, v)| out[i] = v);
+        out
+    }
+
     /// How many entries of the linear stage's input a substructure holds.
     pub(super) fn input_len(st: &SubState) -> usize {
         st.t_hat.len() + st.sides.iter().map(|s| s.hat_load.len()).sum::<usize>()
@@ -316,24 +330,9 @@ impl Solver for Latin<'_> {
     /// e of the linear stage, link by link (each link belongs to one substructure; on
     /// several ranks, gathered from the ranks holding them).
     fn elongations(&self, state: &LatinState) -> Vec<f64> {
-        let mut e = vec![0.0; self.structure.links.len()];
-        if self.exchange.size() > 1 {
-            let held = self.held.clone();
-            let mine: Vec<f64> = state.subs[held.clone()]
-                .iter()
-                .flat_map(|st| st.e.iter().copied())
-                .collect();
-            let all = self.exchange.all_gather(&mine);
-            let links = self.substructures.iter().flat_map(|sub| &sub.links);
-            links.zip(all).for_each(|(&i, v)| e[i] = v);
-            return e;
-        }
-        for (sub, st) in self.substructures.iter().zip(&state.subs) {
-            for (j, &i) in sub.links.iter().enumerate() {
-                e[i] = st.e[j];
-            }
-        }
-        e
+        let held = self.held.clone();
+        let mine = state.subs[held].iter().flat_map(|st| st.e.iter().copied());
+        self.per_link(mine.collect())
     }
 
     fn runaway(&self, state: &LatinState) -> Option<NoEquilibrium> {
@@ -366,13 +365,6 @@ impl Solver for Latin<'_> {
             })
             .collect();
         drop(subs);
-        let gathered = match self.exchange.size() {
-            1 => mine,
-            _ => self.exchange.all_gather(&mine),
-        };
-        let mut tensions = vec![0.0; s.links.len()];
-        let links = self.substructures.iter().flat_map(|sub| &sub.links);
-        links.zip(gathered).for_each(|(&i, t)| tensions[i] = t);
-        Equilibrium::classified(s, u, tensions)
+        Equilibrium::classified(s, u, self.per_link(mine))
     }
 }
