@@ -18,6 +18,7 @@ use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
 use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions};
 use tensolve::case;
+use tensolve::host;
 use tensolve::output::alpha_label;
 use tensolve::solvers::latin::RankLayout;
 use tensolve::solvers::Method;
@@ -363,14 +364,17 @@ fn check_command(ranks: &Ranks, path: PathBuf, set: &[String]) -> Result<(), Fai
 
 fn check_case(ranks: &Ranks, case: case::Case, path: PathBuf) -> Result<(), RunError> {
     // What check itself allocates (a rank factorization, the LATIN set-ups) must fit first.
+    // The memory available is read once, before check builds anything: read later, what check
+    // itself holds (the structure, the set-ups) would count against the run.
+    let available = host::available();
     let own = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::check(&case));
-    memory::ensure_fits(&own, "check")?;
+    memory::ensure_fits_in(&own, "check", available.clone())?;
     let layout = (ranks.size() > 1)
         .then(|| case.solver.latin_settings(Method::MicroMacro))
         .flatten()
         .filter(|_| case.solver.methods.contains(&Method::MicroMacro))
         .map(|settings| RankLayout::new(&case.structure(), &settings, ranks.size()));
-    let report = check(&case, path);
+    let report = check(&case, path, available.clone());
     print_ignoring_closed_pipe(&report.to_string());
     if let Some(layout) = layout {
         print_ignoring_closed_pipe(&layout.describe());
@@ -389,7 +393,7 @@ fn check_case(ranks: &Ranks, case: case::Case, path: PathBuf) -> Result<(), RunE
     match report.error {
         Some(e) => Err(e.into()),
         // A case `run` would refuse for its memory is not valid here either.
-        None => memory::ensure_fits(&report.memory, "run").map_err(RunError::from),
+        None => memory::ensure_fits_in(&report.memory, "run", available).map_err(RunError::from),
     }
 }
 

@@ -2,8 +2,9 @@
 //! a report struct (tests read it directly; the command line prints its `Display`).
 
 use super::memory::{MemoryEstimate, Workload};
+use super::setup::zero_modes_by_substructures;
 use crate::case::Case;
-use crate::host::{self, Available};
+use crate::host::Available;
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
@@ -113,9 +114,14 @@ pub struct CheckReport {
     pub available: Option<Available>,
 }
 
-/// Check `case` (read from `path`).
-pub fn check(case: &Case, path: PathBuf) -> CheckReport {
+/// Check `case` (read from `path`), with `available` the memory this process could use before
+/// it built anything.
+pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckReport {
     let s = case.structure();
+    // The mechanism check as the run makes it: substructure by substructure when the run
+    // never factorizes K whole, which then also gives the counts (m = dim ker K).
+    let keeps_taut = Workload::run(case, &case.solver.methods).keeps_taut;
+    let zero_modes = zero_modes_by_substructures(case, &s, keeps_taut);
     // The given prestress t0, without the tensions prescribed displacements impose.
     let unsettled = crate::structure::NodeFix::unsettled(&case.fixes);
     let given = Structure::new(&case.geometry, &unsettled, &Default::default());
@@ -144,7 +150,10 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
         bars: s.n_bars(),
         prestress_imbalance: given.prestress_imbalance(),
         free_prestress_imbalance,
-        counts: equilibrium_counts(&s),
+        counts: match zero_modes {
+            Some(m) => EquilibriumCounts::new(&s, m),
+            None => equilibrium_counts(&s),
+        },
         prestress: s.prestress_scale,
         geometry: case.model,
         bounding_box: s.bounding_box(),
@@ -177,9 +186,14 @@ pub fn check(case: &Case, path: PathBuf) -> CheckReport {
             StructureSize::of(&case.geometry),
             &Workload::run(case, &case.solver.methods),
         ),
-        available: host::available(),
+        available,
     };
-    if let Err(e) = TautStiffness::new(&s) {
+    let regular = match zero_modes {
+        Some(0) => Ok(()),
+        Some(modes) => Err(TautStiffness::refusal(&s, modes)),
+        None => TautStiffness::new(&s).map(drop),
+    };
+    if let Err(e) = regular {
         report.error = Some(e);
         return report;
     }
@@ -448,5 +462,60 @@ impl CheckReport {
             writeln!(f, "  d_m           {:.4e} N/m ({origin})", r.dm)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::case;
+
+    /// A grid case of `modules` under `clamp` solved by `methods` alone, with nothing that
+    /// needs K's factor when the methods are LATIN's.
+    fn grid_case(module: &str, clamp: &str, methods: &str) -> Case {
+        case::parse(&format!(
+            "[grid]\nmodules = [20, 5]\nmodule = \"{module}\"\n[supports]\nclamp = \"{clamp}\"\n\
+             [load]\nalpha = [1.0]\n[solver]\nmethods = [{methods}]\nreference = \"none\"\n\
+             subdomains = [2, 1]\n[output]\ngeometric_term = false\n"
+        ))
+        .expect("the case parses")
+    }
+
+    /// `check` of a case whose run checks for mechanisms substructure by substructure makes
+    /// the same check, and takes the counts from it: the same counts, verdict and refusal as
+    /// the rank factorization and K's whole factor give, with and without mechanisms (20 × 5
+    /// modules: two check blocks along x).
+    #[test]
+    fn check_by_substructures_counts_as_the_whole_factor() {
+        for module in ["standard", "braced"] {
+            for clamp in ["lower-x-edges", "lower-all-edges", "lower-corners", "none"] {
+                let by_parts = grid_case(module, clamp, "\"micro-macro\"");
+                let whole = grid_case(module, clamp, "\"newton\"");
+                let structure = by_parts.structure();
+                let modes = zero_modes_by_substructures(&by_parts, &structure, false);
+                let Some(modes) = modes else {
+                    panic!("{module} {clamp}: not checked by substructures");
+                };
+                assert_eq!(
+                    EquilibriumCounts::new(&structure, modes),
+                    equilibrium_counts(&structure),
+                    "{module} {clamp}"
+                );
+                assert!(!Workload::check(&by_parts).rank_factorization);
+                assert!(Workload::check(&whole).rank_factorization);
+                let (a, b) = (
+                    check(&by_parts, "a.toml".into(), None),
+                    check(&whole, "b.toml".into(), None),
+                );
+                assert_eq!(a.model.counts, b.model.counts, "{module} {clamp}");
+                assert_eq!(a.model.counts, equilibrium_counts(&structure));
+                assert_eq!(a.stiffness_regular, b.stiffness_regular, "{module} {clamp}");
+                assert_eq!(
+                    a.error.as_ref().map(ToString::to_string),
+                    b.error.as_ref().map(ToString::to_string),
+                    "{module} {clamp}"
+                );
+            }
+        }
     }
 }

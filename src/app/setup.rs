@@ -38,20 +38,9 @@ pub fn prepare_keeping(case: &Case, keeps_taut: bool) -> Result<Prepared, SetupE
     let mut prepared = Prepared::unchecked(case);
     let clock = Instant::now();
     let structure = &prepared.structure;
-    let by_substructures = checks_by_substructures(case, keeps_taut)
-        .then_some(structure.layout.as_ref())
-        .flatten();
-    prepared.taut = match by_substructures {
-        Some(layout) => {
-            let shape = check_shape(layout.nx, layout.ny);
-            match mechanism_by_substructures(structure, shape) {
-                SubstructuredVerdict::Regular => None,
-                SubstructuredVerdict::Mechanism(modes) => {
-                    return Err(TautStiffness::refusal(structure, modes))
-                }
-                SubstructuredVerdict::Undecided(_) => Some(TautStiffness::new(structure)?),
-            }
-        }
+    prepared.taut = match zero_modes_by_substructures(case, structure, keeps_taut) {
+        Some(0) => None,
+        Some(modes) => return Err(TautStiffness::refusal(structure, modes)),
         None => Some(TautStiffness::new(structure)?),
     };
     prepared.taut_seconds = clock.elapsed().as_secs_f64();
@@ -63,6 +52,26 @@ pub fn prepare_keeping(case: &Case, keeps_taut: bool) -> Result<Prepared, SetupE
 /// ([`crate::app::memory::Workload::keeps_taut`]).
 pub fn checks_by_substructures(case: &Case, keeps_taut: bool) -> bool {
     !keeps_taut && case.grid.is_some() && case.model == GeometricModel::Linear
+}
+
+/// The zero-stiffness modes of K with every cable taut (rigid motions included), counted
+/// substructure by substructure when the run of `case` checks that way
+/// ([`checks_by_substructures`]); `None` when K must be factorized whole instead (another
+/// check, or a substructure with more mechanisms of its own than the check counts).
+pub fn zero_modes_by_substructures(
+    case: &Case,
+    structure: &Structure,
+    keeps_taut: bool,
+) -> Option<usize> {
+    let layout = structure.layout.as_ref()?;
+    if !checks_by_substructures(case, keeps_taut) {
+        return None;
+    }
+    match mechanism_by_substructures(structure, check_shape(layout.nx, layout.ny)) {
+        SubstructuredVerdict::Regular => Some(0),
+        SubstructuredVerdict::Mechanism(modes) => Some(modes),
+        SubstructuredVerdict::Undecided(_) => None,
+    }
 }
 
 /// The checks of every answer that solve with the factor of K with every cable taut, each made

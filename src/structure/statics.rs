@@ -32,7 +32,6 @@ pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
 /// The counts, and `A Aᵀ = Bᵀ B` factorized when it is regular (m = 0).
 fn counts_and_factor(structure: &Structure) -> (EquilibriumCounts, Option<SparseCholesky>) {
     let n = structure.n_free;
-    let members = structure.links.len();
     let (mechanisms, factor) = if n == 0 {
         (0, None)
     } else {
@@ -43,15 +42,24 @@ fn counts_and_factor(structure: &Structure) -> (EquilibriumCounts, Option<Sparse
         let m = factorize_counting_zero_modes(&pattern, &values, &mut factor);
         (m, (m == 0).then_some(factor))
     };
-    let rank = n - mechanisms;
-    let counts = EquilibriumCounts {
-        members,
-        free_dofs: n,
-        rank,
-        self_stress_states: members - rank.min(members),
-        mechanisms,
-    };
-    (counts, factor)
+    (EquilibriumCounts::new(structure, mechanisms), factor)
+}
+
+impl EquilibriumCounts {
+    /// The counts of `structure` from its number of mechanisms m, the dimension of ker A
+    /// (of `B` and of `Bᵀ k B` alike, every member's stiffness k being positive):
+    /// r = free dofs − m, s = members − r.
+    pub fn new(structure: &Structure, mechanisms: usize) -> EquilibriumCounts {
+        let (members, free_dofs) = (structure.links.len(), structure.n_free);
+        let rank = free_dofs - mechanisms.min(free_dofs);
+        EquilibriumCounts {
+            members,
+            free_dofs,
+            rank,
+            self_stress_states: members - rank.min(members),
+            mechanisms,
+        }
+    }
 }
 
 /// Why the self-stress state cannot scale a prestress.

@@ -10,7 +10,17 @@ use crate::host::{available, bytes_text, Available};
 /// buffer and a malloc arena), first size rayon's global pool to as many workers as fit: the
 /// LATIN stages then run on fewer threads, with the same results.
 pub fn ensure_fits(estimate: &MemoryEstimate, command: &str) -> Result<(), CaseError> {
-    let Some(available) = available() else {
+    ensure_fits_in(estimate, command, available())
+}
+
+/// [`ensure_fits`] against `available`, read before the command allocated anything of its own
+/// (read after, the memory it holds would count against it).
+pub fn ensure_fits_in(
+    estimate: &MemoryEstimate,
+    command: &str,
+    available: Option<Available>,
+) -> Result<(), CaseError> {
+    let Some(available) = available else {
         return Ok(());
     };
     let main_thread = (estimate.dense_threads - estimate.worker_threads) as u64;

@@ -16,7 +16,7 @@
 
 mod fit;
 
-pub use fit::ensure_fits;
+pub use fit::{ensure_fits, ensure_fits_in};
 
 use super::setup::{checks_by_substructures, AnswerChecks};
 use crate::case::Case;
@@ -277,7 +277,8 @@ impl Workload {
     }
 
     /// `tensolve check` of `case`: the rank factorization, then the taut stiffness and the
-    /// LATIN solvers' set-up.
+    /// LATIN solvers' set-up; or, when the run checks for mechanisms substructure by
+    /// substructure, that check (which gives the counts too) and the set-ups.
     pub fn check(case: &Case) -> Workload {
         let latin = case
             .solver
@@ -286,13 +287,14 @@ impl Workload {
             .copied()
             .filter(|m| m.is_latin())
             .collect();
+        let by_substructures = Workload::run(case, &case.solver.methods).taut_by_substructures;
         Workload {
             methods: latin,
             stability: false,
             compare_modules: false,
-            rank_factorization: true,
-            keeps_taut: true,
-            taut_by_substructures: false,
+            rank_factorization: !by_substructures,
+            keeps_taut: !by_substructures,
+            taut_by_substructures: by_substructures,
             micro_macro: case.solver.latin,
         }
     }
