@@ -183,6 +183,21 @@ fn invalid_cases_exit_2_and_name_the_key() {
             &["keep_z", "bool"],
         ),
         (
+            "macro-degree-zero",
+            with("[solver]\nmacro_degree = 0"),
+            &["solver.macro_degree", "between 1", "16"],
+        ),
+        (
+            "macro-degree-too-high",
+            with("[solver]\nmacro_degree = 40"),
+            &["solver.macro_degree", "40", "16"],
+        ),
+        (
+            "macro-degree-not-an-integer",
+            with("[solver]\nmacro_degree = 2.5"),
+            &["macro_degree = 2.5", "expected usize"],
+        ),
+        (
             "unknown-stop-on",
             with("[solver]\nstop_on = \"never\""),
             &["never", "residual"],

@@ -452,12 +452,23 @@ impl CheckReport {
                 r.dropped_interfaces,
                 settings.weak
             )?;
-            writeln!(f, "  macro dofs    {}", r.macro_dofs)?;
+            let degree_origin = match settings.macro_degree {
+                Some(_) => "solver.macro_degree",
+                None => "default max(1, round(H/4))",
+            };
+            match r.strong_interfaces {
+                0 => writeln!(f, "  macro dofs    {}", r.macro_dofs)?,
+                _ => writeln!(
+                    f,
+                    "  macro dofs    {} (degree {} on strong interfaces: {degree_origin})",
+                    r.macro_dofs, r.macro_degree
+                )?,
+            }
             writeln!(f, "  kernel cols   {}", r.kernel_columns)?;
             let origin = if settings.dm.is_some() {
                 "solver.dm".to_string()
             } else {
-                format!("default {} k/sqrt(H)", crate::solvers::latin::DM_FACTOR)
+                format!("default {} p k/sqrt(H)", crate::solvers::latin::DM_FACTOR)
             };
             writeln!(f, "  d_m           {:.4e} N/m ({origin})", r.dm)?;
         }

@@ -192,6 +192,7 @@ pub(super) struct RawSolver {
     pub stop_on: Option<StopOn>,
     pub residual_tolerance: Option<f64>,
     pub keep_z: Option<bool>,
+    pub macro_degree: Option<usize>,
     pub reference: Option<ReferenceChoice>,
 }
 

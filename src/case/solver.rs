@@ -4,7 +4,7 @@
 use super::numbers::{number, positive, shown};
 use super::raw::RawSolver;
 use super::{CaseError, SolverChoice};
-use crate::solvers::latin::{LatinSettings, SearchDirection};
+use crate::solvers::latin::{LatinSettings, SearchDirection, MAX_MACRO_DEGREE};
 
 /// The deepest Anderson history a case may ask for: each level keeps two vectors of the size
 /// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
@@ -132,6 +132,16 @@ fn latin_settings(
     }
     if let Some(keep) = raw.keep_z {
         latin.keep_z = keep;
+    }
+    if let Some(degree) = raw.macro_degree {
+        if !(1..=MAX_MACRO_DEGREE).contains(&degree) {
+            return Err(CaseError::invalid(
+                "solver.macro_degree",
+                degree.to_string(),
+                format!("give the degree of the interfaces' macro basis between 1 (the paper's nine fields) and {MAX_MACRO_DEGREE}, e.g. 2"),
+            ));
+        }
+        latin.macro_degree = Some(degree);
     }
     if let Some(tol) = raw.residual_tolerance {
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {

@@ -21,7 +21,7 @@ pub use fit::{ensure_fits, ensure_fits_in};
 use super::setup::{checks_by_substructures, AnswerChecks};
 use crate::case::Case;
 use crate::host::bytes_text;
-use crate::solvers::latin::LatinSettings;
+use crate::solvers::latin::{auto_macro_degree, substructure_side, LatinSettings};
 use crate::solvers::Method;
 use crate::structure::StructureSize;
 
@@ -60,13 +60,23 @@ fn substructure_entries_per_dof(d_e: f64) -> f64 {
     f64::max(28.0 * (l - 8.3), 4.0 * l)
 }
 
-/// Macro dofs per substructure: 22 on 256 × 256 modules with 256 and 1 024 substructures;
-/// rounded up.
-const MACRO_DOFS_PER_SUBSTRUCTURE: f64 = 24.0;
+/// Macro dofs per substructure with a macro basis of degree p: `6p + 18`, two strong interfaces
+/// of `3p + 6` fields and the crosspoints' weak ones (22 on 256 × 256 modules with 256 and
+/// 1 024 substructures at p = 1; rounded up).
+fn macro_dofs_per_substructure(degree: f64) -> f64 {
+    6.0 * degree + 18.0
+}
 
-/// Bytes of Z_E per dof: a substructure's macro dofs (44 on average on 256 × 256 modules with
-/// 256 substructures) of 8 bytes, rounded up.
-const Z_BYTES_PER_DOF: f64 = 384.0;
+/// Columns of all the Z_E together (each substructure's macro dofs) on an `sx × sy` partition
+/// of a grid with a macro basis of degree p: two sides of each strong interface between
+/// neighbours along x or y, of `3p + 6` fields, and two of each one-node interface between
+/// diagonal neighbours, of 3 (44 per substructure on 256 × 256 modules with 256 substructures
+/// at p = 1).
+fn z_columns([sx, sy]: [usize; 2], degree: f64) -> f64 {
+    let strong = (sx * sy.saturating_sub(1) + sy * sx.saturating_sub(1)) as f64;
+    let crosspoints = (2 * sx.saturating_sub(1) * sy.saturating_sub(1)) as f64;
+    2.0 * strong * (3.0 * degree + 6.0) + 2.0 * crosspoints * 3.0
+}
 
 /// Bytes of micro-macro's own memory beside the structure on a structure of `size` with
 /// `settings`: the substructure factors ([`substructure_entries_per_dof`], 10 bytes an entry
@@ -81,13 +91,19 @@ pub fn micro_macro_bytes(size: StructureSize, settings: &LatinSettings) -> u64 {
     let substructures = (settings.subdomains[0] * settings.subdomains[1]).max(1) as f64;
     let d_e = d / substructures;
     let factors = BYTES_PER_FACTOR_ENTRY * substructure_entries_per_dof(d_e) * d;
+    let degree = settings
+        .macro_degree
+        .unwrap_or_else(|| auto_macro_degree(substructure_side(size.links, substructures as usize)))
+        as f64;
+    // Z_E: E's dofs (d / substructures) × its macro dofs, 8 bytes each; twice, since a status
+    // rebuild builds the new Z_E beside the old one (kept until the rebuild succeeds).
     let z = match settings.keep_z {
-        true => Z_BYTES_PER_DOF * d,
+        true => 2.0 * 8.0 * d / substructures * z_columns(settings.subdomains, degree),
         false => 0.0,
     };
     let anderson = 2.0 * 1.25 * 8.0 * settings.anderson as f64 * size.links as f64;
     let macro_size = StructureSize {
-        nodes: (MACRO_DOFS_PER_SUBSTRUCTURE * substructures / 3.0).ceil() as usize,
+        nodes: (macro_dofs_per_substructure(degree) * substructures / 3.0).ceil() as usize,
         links: 0,
     };
     let macro_factor = match substructures > 1.0 {
@@ -396,7 +412,9 @@ mod tests {
     }
 
     /// The estimate is above every peak RSS measured (`/usr/bin/time -v tensolve run`, kB, one
-    /// solver, 3 iterations, 2026-11-23; micro-macro's again on 2026-11-27, reference none,
+    /// solver, 3 iterations, 2026-11-23; micro-macro's again on 2026-11-27 with the default
+    /// macro degree (1, 4, 4, 8 and 16 on 16, 56, 64, 128 and 256 square grids; 256 × 256
+    /// with 40 iterations at α = 1, past its first status rebuild), reference none,
     /// `geometric_term = false`, with its mechanism check by substructures; on 64 × 64 and
     /// 128 × 128 whole sweeps of the paper's case, 300 iterations with Anderson's history
     /// full, which 3 iterations leave nearly empty) and within 1.5 times it on the grids where
@@ -411,19 +429,19 @@ mod tests {
             (56, Method::Newton, 133_684),
             (56, Method::PcgLcp, 87_948),
             (56, Method::MonoLatin, 213_204),
-            (56, Method::MicroMacro, 75_444),
+            (56, Method::MicroMacro, 83_800),
             (64, Method::Newton, 156_548),
             (64, Method::PcgLcp, 103_848),
             (64, Method::MonoLatin, 279_184),
-            (64, Method::MicroMacro, 126_088),
+            (64, Method::MicroMacro, 148_076),
             (128, Method::Newton, 681_060),
             (128, Method::PcgLcp, 432_172),
             (128, Method::MonoLatin, 1_309_900),
-            (128, Method::MicroMacro, 502_284),
+            (128, Method::MicroMacro, 723_204),
             (256, Method::Newton, 3_005_132),
             (256, Method::PcgLcp, 1_826_340),
             (256, Method::MonoLatin, 5_818_292),
-            (256, Method::MicroMacro, 1_777_752),
+            (256, Method::MicroMacro, 2_727_676),
         ];
         for (n, method, kb) in measured {
             let peak = kb * 1024;
@@ -479,7 +497,14 @@ mod tests {
             },
         );
         let dofs = size.dofs() as u64;
-        assert!(with_z - lean == 384 * dofs, "{with_z} {lean}");
+        // Substructures of 16 × 16 modules: a macro basis of degree 4, 18 fields on each
+        // strong interface; 64 × 63 of them along x and as many along y.
+        let columns = 2.0 * (2 * 64 * 63) as f64 * 18.0 + 2.0 * (2 * 63 * 63) as f64 * 3.0;
+        let z = 2.0 * 8.0 * dofs as f64 / 4096.0 * columns;
+        assert!(
+            ((with_z - lean) as f64 - z).abs() < 1e-9 * z,
+            "{with_z} {lean}"
+        );
         assert!(deeper - lean == 100 * size.links as u64, "{deeper} {lean}");
         let work = Workload {
             keeps_taut: false,

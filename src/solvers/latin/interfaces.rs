@@ -83,7 +83,13 @@ pub(super) struct Interfaces {
 
 impl Interfaces {
     /// The interfaces of `partition`, redundant exact constraints left out, with their bases.
-    pub(super) fn new(structure: &Structure, partition: &Partition, weak: WeakInterfaces) -> Self {
+    /// `degree` is the macro basis's ([`super::macro_basis::labelled_macro_basis`]).
+    pub(super) fn new(
+        structure: &Structure,
+        partition: &Partition,
+        weak: WeakInterfaces,
+        degree: usize,
+    ) -> Self {
         let mut offset = 0;
         let mut exact = ExactContinuity::default();
         let mut redundant_nodes = 0;
@@ -114,7 +120,7 @@ impl Interfaces {
                     .iter()
                     .map(|&n| structure.held_components(n).map(|held| !held))
                     .collect();
-                let (basis, fields) = labelled_macro_basis(&positions, &free, weak);
+                let (basis, fields) = labelled_macro_basis(&positions, &free, weak, degree);
                 let count = positions.len().max(1) as f64;
                 let centroid =
                     [0, 1, 2].map(|c| positions.iter().map(|p| p[c]).sum::<f64>() / count);

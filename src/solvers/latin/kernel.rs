@@ -156,7 +156,7 @@ mod tests {
         let lower: Vec<[f64; 3]> = square.iter().map(|p| [p[0], p[1], 0.0]).collect();
         let upper: Vec<[f64; 3]> = square.iter().map(|p| [p[0], p[1], 1.0]).collect();
         let free = vec![[true; 3]; 4];
-        let (basis, _) = labelled_macro_basis(&upper, &free, WeakInterfaces::Macro);
+        let (basis, _) = labelled_macro_basis(&upper, &free, WeakInterfaces::Macro, 1);
         let all: Vec<[f64; 3]> = lower.iter().chain(&upper).copied().collect();
         let held: Vec<([f64; 3], [bool; 3])> = lower
             .iter()

@@ -1,7 +1,9 @@
 //! Macro basis R of an interface (docs/method.md §4, paper §4.1.2): nine first-order nodal fields about
-//! the centroid G in the interface's principal frame (n3 the normal, least spread), made
-//! orthonormal by modified Gram–Schmidt (twice), dependent fields dropped. Weak interfaces get
-//! the identity (all-macro) or nothing (all-micro).
+//! the centroid G in the interface's principal frame (n3 the normal, least spread), and for a
+//! degree p > 1 the translations along n1, n2, n3 times the Legendre polynomials P_2 … P_p of
+//! the position along n1 (docs/method.md §9, "The macro basis's degree"), made orthonormal by
+//! modified Gram–Schmidt (twice), dependent fields dropped. Weak interfaces get the identity
+//! (all-macro) or nothing (all-micro).
 
 use super::WeakInterfaces;
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
@@ -44,7 +46,7 @@ fn orthonormal_columns_kept(fields: &[Vec<f64>], rows: usize) -> (DMatrix<f64>, 
 /// The macro basis (3·nodes rows, node-major, x y z) of an interface through `positions`.
 #[cfg(test)]
 pub(crate) fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatrix<f64> {
-    labelled_macro_basis(positions, &vec![[true; 3]; positions.len()], weak).0
+    labelled_macro_basis(positions, &vec![[true; 3]; positions.len()], weak, 1).0
 }
 
 /// [`macro_basis`] on the free components only: `free[k]` says which components of node k
@@ -52,10 +54,13 @@ pub(crate) fn macro_basis(positions: &[[f64; 3]], weak: WeakInterfaces) -> DMatr
 /// one row per free component, node-major, x y z. Also says what each column is: the field
 /// it was made from, with its axes (`translation along (…)`, `rotation about (…) through G`,
 /// …; for an all-macro weak interface `node k, x` etc., k counting the interface's nodes).
+/// `degree` p ≥ 1 adds, for k = 2 … p, the fields `n_i P_k(s)` (i = 1, 2, 3), s ∈ [−1, 1] the
+/// position along n1 scaled to the interface's half-span.
 pub fn labelled_macro_basis(
     positions: &[[f64; 3]],
     free: &[[bool; 3]],
     weak: WeakInterfaces,
+    degree: usize,
 ) -> (DMatrix<f64>, Vec<String>) {
     let n = positions.len();
     // The free rows: (node k, component c) in node-major order.
@@ -89,7 +94,7 @@ pub fn labelled_macro_basis(
     let field = |f: &dyn Fn(&Vector3<f64>) -> Vector3<f64>| -> Vec<f64> {
         free_rows.iter().map(|&(k, c)| f(&(x[k] - g))[c]).collect()
     };
-    let fields = vec![
+    let mut fields = vec![
         // Translations along n1, n2, n3.
         field(&|_| n1),
         field(&|_| n2),
@@ -111,7 +116,7 @@ pub fn labelled_macro_basis(
     let largest = fields.iter().map(norm).fold(0.0, f64::max);
     let axis_text = |v: &Vector3<f64>| format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2]);
     let (a1, a2, a3) = (axis_text(&n1), axis_text(&n2), axis_text(&n3));
-    let names = [
+    let mut names = vec![
         format!("translation along {a1}"),
         format!("translation along {a2}"),
         format!("translation along {a3}"),
@@ -122,6 +127,16 @@ pub fn labelled_macro_basis(
         format!("extension along {a2}"),
         format!("distortion in the plane of {a1} and {a2}"),
     ];
+    // Degree k = 2 … p: n_i P_k(s), s the position along n1 over the half-span.
+    let half_span = x.iter().map(|p| n1.dot(&(p - g)).abs()).fold(0.0, f64::max);
+    if half_span > 0.0 {
+        for k in 2..=degree {
+            for (ni, a) in [(n1, &a1), (n2, &a2), (n3, &a3)] {
+                fields.push(field(&|d| ni * legendre(k, n1.dot(d) / half_span)));
+                names.push(format!("degree {k} along {a1}, translation along {a}"));
+            }
+        }
+    }
     let (fields, names): (Vec<Vec<f64>>, Vec<String>) = fields
         .into_iter()
         .zip(names)
@@ -130,6 +145,22 @@ pub fn labelled_macro_basis(
     let (basis, kept) = orthonormal_columns_kept(&fields, rows);
     let labels = kept.into_iter().map(|k| names[k].clone()).collect();
     (basis, labels)
+}
+
+/// The Legendre polynomial P_k at s (Bonnet's recursion `(k + 1) P_{k+1} = (2k + 1) s P_k − k
+/// P_{k−1}`): fields of every degree of the same size on [−1, 1], where monomials s^k would
+/// become nearly dependent.
+fn legendre(k: usize, s: f64) -> f64 {
+    let (mut previous, mut current) = (1.0, s);
+    if k == 0 {
+        return previous;
+    }
+    for j in 1..k {
+        let next = ((2 * j + 1) as f64 * s * current - j as f64 * previous) / (j + 1) as f64;
+        previous = current;
+        current = next;
+    }
+    current
 }
 
 /// A macro field smaller than this fraction of the largest one vanishes on the interface.
@@ -186,6 +217,69 @@ mod tests {
             }
         }
         p
+    }
+
+    /// The nodes of a grid interface of `modules` modules: two rows (z = 0 and 0.5) of
+    /// `modules + 1` nodes along y in the plane x = 3.
+    fn grid_interface(modules: usize) -> Vec<[f64; 3]> {
+        (0..=modules)
+            .flat_map(|j| [[3.0, j as f64, 0.0], [3.0, j as f64, 0.5]])
+            .collect()
+    }
+
+    /// Degree p adds three orthonormal columns per degree above 1, which span every
+    /// translation times a polynomial of degree ≤ p along the interface (the bending the
+    /// first-order basis misses among them), and no more than the nodes can tell apart.
+    #[test]
+    fn a_higher_degree_spans_the_polynomials_along_the_interface() {
+        let positions = grid_interface(16);
+        let free = vec![[true; 3]; positions.len()];
+        for degree in 1..=6 {
+            let (r, labels) =
+                labelled_macro_basis(&positions, &free, WeakInterfaces::Macro, degree);
+            // Two rows of nodes carry all nine first-order fields, then three per degree.
+            assert_eq!(r.ncols(), 9 + 3 * (degree - 1), "degree {degree}");
+            assert_eq!(labels.len(), r.ncols());
+            assert!(orthonormality_error(&r) <= 1e-12, "degree {degree}");
+            for k in 0..=degree {
+                for c in 0..3 {
+                    let field: Vec<f64> = positions
+                        .iter()
+                        .flat_map(|p| {
+                            let mut v = [0.0; 3];
+                            v[c] = (p[1] / 16.0).powi(k as i32);
+                            v
+                        })
+                        .collect();
+                    let off = off_span(&r, &field);
+                    assert!(
+                        off <= 1e-9 * norm(&field),
+                        "degree {degree}: y^{k} along {c}"
+                    );
+                }
+            }
+            // The next degree is not in the span.
+            let beyond: Vec<f64> = positions
+                .iter()
+                .flat_map(|p| [(p[1] / 16.0 - 0.5).powi(degree as i32 + 1), 0.0, 0.0])
+                .collect();
+            assert!(
+                off_span(&r, &beyond) > 1e-3 * norm(&beyond),
+                "degree {degree}"
+            );
+        }
+        // Three modules (four nodes along y): polynomials of degree 3 already span every
+        // field along y; higher degrees add nothing.
+        let short = grid_interface(3);
+        let free = vec![[true; 3]; short.len()];
+        let columns = |p| {
+            labelled_macro_basis(&short, &free, WeakInterfaces::Macro, p)
+                .0
+                .ncols()
+        };
+        assert_eq!(columns(3), 9 + 6);
+        assert_eq!(columns(8), columns(3));
+        assert!(columns(8) <= 3 * short.len());
     }
 
     #[test]
@@ -326,7 +420,7 @@ mod tests {
         // A weak interface of two nodes, the first held in z: all-macro on the 5 free rows.
         let p = [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0]];
         let free = [[true, true, false], [true; 3]];
-        let (r, labels) = labelled_macro_basis(&p, &free, WeakInterfaces::Macro);
+        let (r, labels) = labelled_macro_basis(&p, &free, WeakInterfaces::Macro, 1);
         assert_eq!(r, DMatrix::<f64>::identity(5, 5));
         assert_eq!(labels[..3], ["node 0, x", "node 0, y", "node 1, x"]);
         // A strong planar interface (the 3 × 3 grid in x = 2.5) held in x everywhere: its
@@ -336,7 +430,7 @@ mod tests {
         // remain.
         let positions = planar_grid();
         let free = vec![[false, true, true]; positions.len()];
-        let (r, _) = labelled_macro_basis(&positions, &free, WeakInterfaces::Macro);
+        let (r, _) = labelled_macro_basis(&positions, &free, WeakInterfaces::Macro, 1);
         assert_eq!((r.nrows(), r.ncols()), (18, 6));
         assert!(orthonormality_error(&r) <= 1e-12);
     }

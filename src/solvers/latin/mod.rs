@@ -77,7 +77,8 @@ pub struct PartitionReport {
     pub substructures: usize,
     /// Interfaces that carry constraints.
     pub interfaces: usize,
-    /// Interfaces of more than three nodes (with a macro basis of at most nine fields).
+    /// Interfaces of more than three nodes (with a macro basis of at most nine fields, and
+    /// three more per degree above 1).
     pub strong_interfaces: usize,
     /// Interfaces of at most three nodes.
     pub weak_interfaces: usize,
@@ -94,6 +95,8 @@ pub struct PartitionReport {
     pub max_substructure_dofs: usize,
     /// The interface search direction d_m used, N/m.
     pub dm: f64,
+    /// The degree of the strong interfaces' macro bases.
+    pub macro_degree: usize,
 }
 
 /// One macro dof of a substructure: a column of one of its interfaces' macro bases.
@@ -187,14 +190,41 @@ const STATUS_BAND: f64 = 1e-3;
 /// log").
 const STATUS_PERSISTENCE: u8 = 2;
 
-/// The default d_m, N/m: `d_m = DM_FACTOR k̄ / √H`. k̄ is the stiffness of a median cable and a
-/// median bar in series, `k̄ = (1/k_c + 1/k_b)⁻¹` (the softer of the two governs how a load
-/// passes through a module). H is the side of a substructure counted in modules of the paper's
-/// grid, `H = √(m / 16)` with m the mean number of links per substructure (a module has 16).
-/// At fixed module size h this is the optimised-Schwarz scaling `d_m ∝ 1/√(hH)`; the paper's
-/// 3.92e6 ([`PAPER_DM`]) suits only the smallest substructures. How the factor was chosen:
+/// Modules of a substructure's side per degree of its interfaces' macro basis: the default
+/// degree is `p = max(1, round(H / MODULES_PER_MACRO_DEGREE))` ([`auto_macro_degree`]), so
+/// that the micro part of an interface, what the macro problem leaves to the search direction
+/// d_m, varies over about this many modules whatever the substructures' size. Why 4:
 /// docs/method.md, "Tuning log".
-pub fn auto_dm(structure: &Structure, substructures: usize) -> f64 {
+pub const MODULES_PER_MACRO_DEGREE: f64 = 4.0;
+
+/// H, the side of a substructure counted in modules of the paper's grid: `H = √(m / 16)` with
+/// m the mean number of links per substructure (a module has 16), at least 1.
+pub fn substructure_side(links: usize, substructures: usize) -> f64 {
+    (links as f64 / substructures.max(1) as f64 / 16.0)
+        .sqrt()
+        .max(1.0)
+}
+
+/// The default degree of the macro basis on substructures of side H modules
+/// ([`substructure_side`]): `round(H / 4)` between 1 (the paper's nine first-order fields, up
+/// to 5 × 5 modules) and [`MAX_MACRO_DEGREE`].
+pub fn auto_macro_degree(h: f64) -> usize {
+    ((h / MODULES_PER_MACRO_DEGREE).round() as usize).clamp(1, MAX_MACRO_DEGREE)
+}
+
+/// The largest degree of the macro basis (`solver.macro_degree`, and the default's cap): three
+/// fields per degree, and beyond the number of an interface's nodes along it the fields are
+/// dependent and dropped.
+pub const MAX_MACRO_DEGREE: usize = 16;
+
+/// The default d_m, N/m: `d_m = DM_FACTOR p k̄ / √H` for a macro basis of degree p. k̄ is the
+/// stiffness of a median cable and a median bar in series, `k̄ = (1/k_c + 1/k_b)⁻¹` (the softer
+/// of the two governs how a load passes through a module). H is the side of a substructure in
+/// modules ([`substructure_side`]). With p = 1 this is the optimised-Schwarz scaling
+/// `d_m ∝ 1/√(hH)` at fixed module size h; a richer macro basis leaves the search direction
+/// only the interface's shorter waves, which a stiffer d_m suits (measured: docs/method.md,
+/// "Tuning log"). The paper's 3.92e6 ([`PAPER_DM`]) suits only the smallest substructures.
+pub fn auto_dm(structure: &Structure, substructures: usize, degree: usize) -> f64 {
     let median = |cables: bool| {
         let mut k: Vec<f64> = structure
             .links
@@ -214,10 +244,8 @@ pub fn auto_dm(structure: &Structure, substructures: usize) -> f64 {
     if !(compliance.is_finite() && compliance > 0.0) {
         return PAPER_DM;
     }
-    let h = (structure.links.len() as f64 / substructures.max(1) as f64 / 16.0)
-        .sqrt()
-        .max(1.0);
-    DM_FACTOR / compliance / h.sqrt()
+    let h = substructure_side(structure.links.len(), substructures);
+    DM_FACTOR * degree.max(1) as f64 / compliance / h.sqrt()
 }
 
 /// Memory all dense substructure inverses together may take (see
@@ -242,10 +270,12 @@ impl<'s> Latin<'s> {
     ) -> Result<Self, SetupError> {
         settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
+        let n_subs = partition.substructures.len();
+        let macro_degree = settings.macro_degree_on(structure, n_subs);
         let dm = settings
             .dm
-            .unwrap_or_else(|| auto_dm(structure, partition.substructures.len()));
-        let interfaces = Interfaces::new(structure, &partition, settings.weak);
+            .unwrap_or_else(|| auto_dm(structure, n_subs, macro_degree));
+        let interfaces = Interfaces::new(structure, &partition, settings.weak, macro_degree);
         let base_search: Vec<f64> = structure
             .links
             .iter()
@@ -443,6 +473,9 @@ impl<'s> Latin<'s> {
                 .max()
                 .unwrap_or(0),
             dm: self.dm,
+            macro_degree: self
+                .settings
+                .macro_degree_on(self.structure, self.substructures.len()),
         }
     }
 }

@@ -110,6 +110,11 @@ pub struct LatinSettings {
     /// 10 × tolerance there. Below 1e-9 lies micro-macro's own accuracy: on the paper case its
     /// iterates settle at r = 1.65e-10 (mono-latin: 3e-14).
     pub residual_tolerance: Option<f64>,
+    /// Degree p of the strong interfaces' macro bases: the paper's nine first-order fields, and
+    /// for p > 1 the translations times the Legendre polynomials of degree 2 … p along the
+    /// interface. Default `None`: `max(1, round(H / 4))` for substructures of side H modules
+    /// ([`super::auto_macro_degree`]).
+    pub macro_degree: Option<usize>,
     /// Iteration cap. Default 1000.
     pub max_iterations: usize,
     /// Keep every substructure's `Z_E = K_E⁻¹ C_Eᵀ R_E` (E's dofs × its macro dofs). Default
@@ -133,6 +138,7 @@ impl Default for LatinSettings {
             stop_on: StopOn::Both,
             tolerance: 1e-6,
             residual_tolerance: None,
+            macro_degree: None,
             max_iterations: 1000,
             keep_z: true,
         }
@@ -180,11 +186,24 @@ impl LatinSettings {
             .unwrap_or((self.tolerance / 100.0).max(RESIDUAL_FLOOR))
     }
 
-    /// The paper's plain method (§3–4): its d_m (unless `self` sets one), no relaxation, no
-    /// acceleration, l fixed at its set-up value, stopping on η alone; the rest as `self`.
+    /// The degree of the macro bases on `substructures` substructures of `structure`:
+    /// `macro_degree`, or [`super::auto_macro_degree`].
+    pub fn macro_degree_on(&self, structure: &Structure, substructures: usize) -> usize {
+        self.macro_degree.unwrap_or_else(|| {
+            super::auto_macro_degree(super::substructure_side(
+                structure.links.len(),
+                substructures,
+            ))
+        })
+    }
+
+    /// The paper's plain method (§3–4): its d_m and first-order macro basis (unless `self`
+    /// sets them), no relaxation, no acceleration, l fixed at its set-up value, stopping on η
+    /// alone; the rest as `self`.
     pub fn plain(self) -> LatinSettings {
         LatinSettings {
             dm: Some(self.dm.unwrap_or(PAPER_DM)),
+            macro_degree: Some(self.macro_degree.unwrap_or(1)),
             relaxation: 1.0,
             anderson: 0,
             policy: SearchPolicy::Stiffness,

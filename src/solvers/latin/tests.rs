@@ -451,6 +451,41 @@ fn linear_stage_invariants_uneven_partition() {
     assert_eq!(total, latin.report().kernel_columns);
 }
 
+/// Same invariants with a richer macro basis: 2 × 2 substructures of 8 × 8 modules at degree
+/// 3 (and the default, 2), the macro jump measured on every column of R.
+#[test]
+fn linear_stage_invariants_with_a_higher_degree() {
+    let s = paper_structure();
+    let first_order = LatinSettings {
+        macro_degree: Some(1),
+        ..settings([2, 2], WeakInterfaces::Macro)
+    };
+    let first_order_dofs = Latin::new(&s, first_order).unwrap().report().macro_dofs;
+    for degree in [None, Some(3)] {
+        let settings = LatinSettings {
+            macro_degree: degree,
+            ..settings([2, 2], WeakInterfaces::Macro)
+        };
+        let mut latin = Latin::new(&s, settings).unwrap();
+        let report = latin.report();
+        assert_eq!(report.macro_degree, degree.unwrap_or(2));
+        // Three more fields per degree on each of the four strong interfaces.
+        let extra = 4 * 3 * (report.macro_degree - 1);
+        assert_eq!(report.macro_dofs, first_order_dofs + extra);
+        let mut state = latin.init(&load(&s, 1.0));
+        for _ in 0..5 {
+            latin.next_iter(&mut state);
+        }
+        let [du, df, eq] = check_linear_stage(&s, &latin, &state, 1.0);
+        println!(
+            "2x2 degree {}: {du:.1e} {df:.1e} {eq:.1e}",
+            report.macro_degree
+        );
+        assert!(du < 1e-9 && df < 1e-9 && eq < 1e-8, "{du:e} {df:e} {eq:e}");
+        check_kernels(&latin, "2x2");
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // 3. Local-stage law.
 
