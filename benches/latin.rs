@@ -162,8 +162,8 @@ fn table(args: &[String]) {
     let grids: &[(usize, f64, &[usize])] = &[
         (16, 2.4, &[4]),
         (32, 0.6, &[4]),
-        (64, 0.15, &[4, 8, 16]),
-        (128, 0.0375, &[4, 16, 32]),
+        (64, 0.15, &[4, 8, 16, 32]),
+        (128, 0.0375, &[4, 8, 16, 32]),
     ];
     println!(
         "| grid, substructures | policy | to e < 1e-3 | to e < 1e-6 | total | rebuilds | e at stop | set-up s | solve s |"

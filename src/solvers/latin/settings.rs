@@ -75,9 +75,9 @@ pub struct LatinSettings {
     /// Substructures along x and y; `[1, 1]` is the monodomain solver. Default `[4, 4]` (the
     /// paper's), limited to the grid by the case.
     pub subdomains: [usize; 2],
-    /// Interface search direction d_m, N/m. Default `None`: `c k̄ / √H` with c =
-    /// [`super::DM_FACTOR`] (see [`super::auto_dm`]), which scales with the cables' stiffness and falls as the
-    /// substructures grow; the paper's 3.92e6 is [`PAPER_DM`].
+    /// Interface search direction d_m, N/m. Default `None`: `c p k̄ / √H` with c =
+    /// [`super::DM_FACTOR`] and p the macro basis's degree (see [`super::auto_dm`]), which
+    /// scales with the cables' stiffness; the paper's 3.92e6 is [`PAPER_DM`].
     pub dm: Option<f64>,
     /// Link search direction l. Default `l = k`.
     pub search: SearchDirection,
