@@ -267,6 +267,17 @@ fn scale_64_on_ranks_is_the_threaded_run() {
     );
 }
 
+/// A macro basis of degree 2 (4 substructures of 8 × 8 modules): its extra columns are
+/// reduced and solved alike on every rank.
+#[test]
+fn a_higher_macro_degree_on_ranks_is_the_threaded_run() {
+    ranks_agree_with_threads(
+        "cases/scale-16-latin.toml",
+        &["load.alpha=[2.4]", "solver.subdomains=[2, 2]"],
+        &[2, 4],
+    );
+}
+
 /// A run that never solves with K's factor (LATIN alone, reference none, no geometric-term
 /// check) has rank 0 alone make the mechanism check: the others' results are the same, and a
 /// mechanism is refused on every rank, with rank 0's message once and nothing written.
