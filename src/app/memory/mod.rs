@@ -21,7 +21,7 @@ pub use fit::{ensure_fits, ensure_fits_in};
 use super::setup::{checks_by_substructures, AnswerChecks};
 use crate::case::Case;
 use crate::host::bytes_text;
-use crate::solvers::latin::{auto_macro_degree, substructure_side, LatinSettings};
+use crate::solvers::latin::LatinSettings;
 use crate::solvers::Method;
 use crate::structure::StructureSize;
 
@@ -91,10 +91,7 @@ pub fn micro_macro_bytes(size: StructureSize, settings: &LatinSettings) -> u64 {
     let substructures = (settings.subdomains[0] * settings.subdomains[1]).max(1) as f64;
     let d_e = d / substructures;
     let factors = BYTES_PER_FACTOR_ENTRY * substructure_entries_per_dof(d_e) * d;
-    let degree = settings
-        .macro_degree
-        .unwrap_or_else(|| auto_macro_degree(substructure_side(size.links, substructures as usize)))
-        as f64;
+    let degree = settings.macro_degree_on(size.links, substructures as usize) as f64;
     // Z_E: E's dofs (d / substructures) × its macro dofs, 8 bytes each; twice, since a status
     // rebuild builds the new Z_E beside the old one (kept until the rebuild succeeds).
     let z = match settings.keep_z {

@@ -271,7 +271,7 @@ impl<'s> Latin<'s> {
         settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let n_subs = partition.substructures.len();
-        let macro_degree = settings.macro_degree_on(structure, n_subs);
+        let macro_degree = settings.macro_degree_on(structure.links.len(), n_subs);
         let dm = settings
             .dm
             .unwrap_or_else(|| auto_dm(structure, n_subs, macro_degree));
@@ -475,7 +475,7 @@ impl<'s> Latin<'s> {
             dm: self.dm,
             macro_degree: self
                 .settings
-                .macro_degree_on(self.structure, self.substructures.len()),
+                .macro_degree_on(self.structure.links.len(), self.substructures.len()),
         }
     }
 }

@@ -67,7 +67,7 @@ impl RankLayout {
     /// no more than the substructures: the extra ranks would hold nothing).
     pub fn new(structure: &Structure, settings: &LatinSettings, ranks: usize) -> RankLayout {
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
-        let degree = settings.macro_degree_on(structure, partition.substructures.len());
+        let degree = settings.macro_degree_on(structure.links.len(), partition.substructures.len());
         let interfaces = Interfaces::new(structure, &partition, settings.weak, degree);
         let n_subs = partition.substructures.len();
         let ranks = ranks.clamp(1, n_subs.max(1));

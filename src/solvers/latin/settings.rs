@@ -186,14 +186,11 @@ impl LatinSettings {
             .unwrap_or((self.tolerance / 100.0).max(RESIDUAL_FLOOR))
     }
 
-    /// The degree of the macro bases on `substructures` substructures of `structure`:
-    /// `macro_degree`, or [`super::auto_macro_degree`].
-    pub fn macro_degree_on(&self, structure: &Structure, substructures: usize) -> usize {
+    /// The degree of the macro bases on `substructures` substructures of a structure of
+    /// `links` links: `macro_degree`, or [`super::auto_macro_degree`].
+    pub fn macro_degree_on(&self, links: usize, substructures: usize) -> usize {
         self.macro_degree.unwrap_or_else(|| {
-            super::auto_macro_degree(super::substructure_side(
-                structure.links.len(),
-                substructures,
-            ))
+            super::auto_macro_degree(super::substructure_side(links, substructures))
         })
     }
 
