@@ -120,8 +120,8 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
     let s = case.structure();
     // The mechanism check as the run makes it: substructure by substructure when the run
     // never factorizes K whole, which then also gives the counts (m = dim ker K).
-    let keeps_taut = Workload::run(case, &case.solver.methods).keeps_taut;
-    let zero_modes = zero_modes_by_substructures(case, &s, keeps_taut);
+    let run = Workload::run(case, &case.solver.methods);
+    let zero_modes = zero_modes_by_substructures(case, &s, run.keeps_taut);
     // The given prestress t0, without the tensions prescribed displacements impose.
     let unsettled = crate::structure::NodeFix::unsettled(&case.fixes);
     let given = Structure::new(&case.geometry, &unsettled, &Default::default());
@@ -182,10 +182,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         stiffness_regular: false,
         latin: Vec::new(),
         error: None,
-        memory: MemoryEstimate::new(
-            StructureSize::of(&case.geometry),
-            &Workload::run(case, &case.solver.methods),
-        ),
+        memory: MemoryEstimate::new(StructureSize::of(&case.geometry), &run),
         available,
     };
     let regular = match zero_modes {
@@ -454,7 +451,7 @@ impl CheckReport {
             )?;
             let degree_origin = match settings.macro_degree {
                 Some(_) => "solver.macro_degree",
-                None => "default max(1, round(H/4))",
+                None => "default round(H/4), 1 to 16",
             };
             match r.strong_interfaces {
                 0 => writeln!(f, "  macro dofs    {}", r.macro_dofs)?,

@@ -191,7 +191,7 @@ const STATUS_BAND: f64 = 1e-3;
 const STATUS_PERSISTENCE: u8 = 2;
 
 /// Modules of a substructure's side per degree of its interfaces' macro basis: the default
-/// degree is `p = max(1, round(H / MODULES_PER_MACRO_DEGREE))` ([`auto_macro_degree`]), so
+/// degree is `p = round(H / MODULES_PER_MACRO_DEGREE)`, 1 to 16 ([`auto_macro_degree`]), so
 /// that the micro part of an interface, what the macro problem leaves to the search direction
 /// d_m, varies over about this many modules whatever the substructures' size. Why 4:
 /// docs/method.md, "Tuning log".
@@ -199,7 +199,7 @@ pub const MODULES_PER_MACRO_DEGREE: f64 = 4.0;
 
 /// H, the side of a substructure counted in modules of the paper's grid: `H = √(m / 16)` with
 /// m the mean number of links per substructure (a module has 16), at least 1.
-pub fn substructure_side(links: usize, substructures: usize) -> f64 {
+pub(crate) fn substructure_side(links: usize, substructures: usize) -> f64 {
     (links as f64 / substructures.max(1) as f64 / 16.0)
         .sqrt()
         .max(1.0)
@@ -208,7 +208,7 @@ pub fn substructure_side(links: usize, substructures: usize) -> f64 {
 /// The default degree of the macro basis on substructures of side H modules
 /// ([`substructure_side`]): `round(H / 4)` between 1 (the paper's nine first-order fields, up
 /// to 5 × 5 modules) and [`MAX_MACRO_DEGREE`].
-pub fn auto_macro_degree(h: f64) -> usize {
+pub(crate) fn auto_macro_degree(h: f64) -> usize {
     ((h / MODULES_PER_MACRO_DEGREE).round() as usize).clamp(1, MAX_MACRO_DEGREE)
 }
 

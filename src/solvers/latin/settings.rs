@@ -112,7 +112,7 @@ pub struct LatinSettings {
     pub residual_tolerance: Option<f64>,
     /// Degree p of the strong interfaces' macro bases: the paper's nine first-order fields, and
     /// for p > 1 the translations times the Legendre polynomials of degree 2 … p along the
-    /// interface. Default `None`: `max(1, round(H / 4))` for substructures of side H modules
+    /// interface. Default `None`: `round(H / 4)`, 1 to 16, for substructures of side H modules
     /// ([`super::auto_macro_degree`]).
     pub macro_degree: Option<usize>,
     /// Iteration cap. Default 1000.
