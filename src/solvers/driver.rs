@@ -15,8 +15,7 @@
 //! measuring e and the observers' own work are not charged to the solve.
 
 use super::{
-    no_equilibrium, Equilibrium, IterationRecord, Measure, Observer, Reference, Solution,
-    SolveInfo, Solver, Status,
+    Equilibrium, IterationRecord, Measure, Observer, Reference, Solution, SolveInfo, Solver, Status,
 };
 use std::time::{Duration, Instant};
 
@@ -105,7 +104,7 @@ pub fn drive_from<S: Solver + ?Sized>(
                     .zip(last)
                     .for_each(|(u, v)| *u -= v);
             }
-            if let Some(found) = no_equilibrium(solver.structure(), &iterate, load) {
+            if let Some(found) = solver.no_equilibrium_along(&iterate.displacements, load) {
                 runaway = Some(found);
                 break (Status::NoEquilibrium, progress);
             }

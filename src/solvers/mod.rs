@@ -24,7 +24,9 @@ pub use mechanism_by_substructures::{
     check_shape, mechanism_by_substructures, SubstructuredVerdict, CHECK_MODULES,
 };
 pub use method::{Method, Settings};
-pub use no_equilibrium::{no_equilibrium, no_equilibrium_along, NoEquilibrium};
+pub use no_equilibrium::{
+    no_equilibrium, no_equilibrium_along, unit_direction, LinksAlong, NoEquilibrium, UnitDirection,
+};
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use residual::{
     current_unbalances, displacement_residual, exact_and_frozen_residuals, relative_unbalance,

@@ -5,7 +5,7 @@
 
 use super::Equilibrium;
 use crate::linalg::{dot, norm};
-use crate::structure::{largest_moving_nodes, GeometricModel, Structure};
+use crate::structure::{largest_moving_nodes, GeometricModel, Link, LinkDofs, Structure};
 
 /// Why an answer is no equilibrium (docs/method.md §8): a direction d that bars and bilateral
 /// cables do not stretch, that no unilateral cable lengthens, and on which the load works —
@@ -39,6 +39,28 @@ pub fn no_equilibrium(s: &Structure, eq: &Equilibrium, load: &[f64]) -> Option<N
 
 /// [`no_equilibrium`] of a displacement (or a change of displacements) `u`.
 pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
+    let d = unit_direction(s, u)?;
+    let links = s.links.iter().zip(&s.link_dofs).enumerate();
+    let part = LinksAlong::of(links.map(|(i, (l, row))| (i, l, row)), &d.direction)?;
+    d.certificate(
+        s,
+        part.stretch,
+        part.slack.into_iter().map(|(_, id)| id).collect(),
+        load,
+    )
+}
+
+/// `d = U / ‖U‖` and ‖U‖, the direction a certificate is tested along: `None` under the
+/// `large` model or for a U of no finite, non-zero size.
+pub struct UnitDirection {
+    /// `U / ‖U‖`.
+    pub direction: Vec<f64>,
+    /// ‖U‖.
+    pub size: f64,
+}
+
+/// The direction of `u`, when a certificate can be tested along it (see [`UnitDirection`]).
+pub fn unit_direction(s: &Structure, u: &[f64]) -> Option<UnitDirection> {
     if s.model == GeometricModel::Large {
         return None;
     }
@@ -46,49 +68,87 @@ pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<No
     if size.is_nan() || size <= 0.0 || !size.is_finite() {
         return None;
     }
-    let d: Vec<f64> = u.iter().map(|x| x / size).collect();
-    let mut slack_cables = Vec::new();
-    // Σ k e(d)² over the members that stretch (every bar and bilateral cable).
-    let mut stretch = 0.0;
-    for (l, row) in s.links.iter().zip(&s.link_dofs) {
-        let e = row.elongation(&d);
-        if l.unilateral {
-            if e > MECHANISM_TOLERANCE {
-                return None;
-            }
-            if e < -MECHANISM_TOLERANCE {
-                slack_cables.push(l.id);
-            }
-            stretch += l.stiffness * e.max(0.0).powi(2);
-        } else if e.abs() > MECHANISM_TOLERANCE {
-            return None;
-        } else {
-            stretch += l.stiffness * e * e;
-        }
-    }
-    let work = dot(load, &d);
-    // Σ k e(U)² = ‖U‖² Σ k e(d)² against F·U = ‖U‖ F·d.
-    if size * stretch > RUNAWAY_ENERGY_RATIO * work {
-        return None;
-    }
-    // A direction that shortens no cable (and stretches no member) would be a mechanism of K
-    // with every cable taut, which set-up refused: it is round-off, not a runaway (seen on
-    // 1024 × 1024 modules: a status step's change of 1e-6 of the answer, every member's length
-    // change along it below the tolerance, passed the energy test by its small size).
-    if slack_cables.is_empty() {
-        return None;
-    }
-    let stiffened = s
-        .geometric
-        .as_ref()
-        .is_some_and(|g| g.quadratic(&d) > MECHANISM_TOLERANCE * norm(load));
-    if work.is_nan() || work <= MECHANISM_TOLERANCE * norm(load) || stiffened {
-        return None;
-    }
-    Some(NoEquilibrium {
-        slack_cables,
-        mode_nodes: largest_moving_nodes(s, &d, 3),
+    Some(UnitDirection {
+        direction: u.iter().map(|x| x / size).collect(),
+        size,
     })
+}
+
+/// Some links' part of a certificate along a unit direction d: their stretch energy
+/// `Σ k e(d)²` (cables where they lengthen) and the cables that shorten. `None` when one of
+/// them rules d out (a bar or bilateral cable stretched, a unilateral cable lengthened).
+#[derive(Debug, Clone, Default)]
+pub struct LinksAlong {
+    /// `Σ k e(d)²` over these links, in their order.
+    pub stretch: f64,
+    /// The unilateral cables that shorten along d: `(index, id)` with the index the caller's.
+    pub slack: Vec<(usize, u64)>,
+}
+
+impl LinksAlong {
+    /// The part of `links` (`(index, link, its row of B)`) along `d`.
+    pub fn of<'a>(
+        links: impl Iterator<Item = (usize, &'a Link, &'a LinkDofs)>,
+        d: &[f64],
+    ) -> Option<LinksAlong> {
+        let mut part = LinksAlong::default();
+        for (i, l, row) in links {
+            let e = row.elongation(d);
+            if l.unilateral {
+                if e > MECHANISM_TOLERANCE {
+                    return None;
+                }
+                if e < -MECHANISM_TOLERANCE {
+                    part.slack.push((i, l.id));
+                }
+                part.stretch += l.stiffness * e.max(0.0).powi(2);
+            } else if e.abs() > MECHANISM_TOLERANCE {
+                return None;
+            } else {
+                part.stretch += l.stiffness * e * e;
+            }
+        }
+        Some(part)
+    }
+}
+
+impl UnitDirection {
+    /// The certificate along d once every link has passed ([`LinksAlong`]): the links'
+    /// `stretch` in all and the ids of the cables that shorten (`slack_cables`), in link order.
+    /// `s` gives the nodes (and K_G(t0) where it has it).
+    pub fn certificate(
+        &self,
+        s: &Structure,
+        stretch: f64,
+        slack_cables: Vec<u64>,
+        load: &[f64],
+    ) -> Option<NoEquilibrium> {
+        let (d, size) = (&self.direction, self.size);
+        let work = dot(load, d);
+        // Σ k e(U)² = ‖U‖² Σ k e(d)² against F·U = ‖U‖ F·d.
+        if size * stretch > RUNAWAY_ENERGY_RATIO * work {
+            return None;
+        }
+        // A direction that shortens no cable (and stretches no member) would be a mechanism
+        // of K with every cable taut, which set-up refused: it is round-off, not a runaway
+        // (seen on 1024 × 1024 modules: a status step's change of 1e-6 of the answer, every
+        // member's length change along it below the tolerance, passed the energy test by its
+        // small size).
+        if slack_cables.is_empty() {
+            return None;
+        }
+        let stiffened = s
+            .geometric
+            .as_ref()
+            .is_some_and(|g| g.quadratic(d) > MECHANISM_TOLERANCE * norm(load));
+        if work.is_nan() || work <= MECHANISM_TOLERANCE * norm(load) || stiffened {
+            return None;
+        }
+        Some(NoEquilibrium {
+            slack_cables,
+            mode_nodes: largest_moving_nodes(s, d, 3),
+        })
+    }
 }
 
 #[cfg(test)]

@@ -92,4 +92,11 @@ pub trait Solver {
     fn runaway(&self, _state: &Self::State) -> Option<super::NoEquilibrium> {
         None
     }
+
+    /// The no-equilibrium certificate along the displacements (or change of displacements)
+    /// `u` under `load` (docs/method.md §8); by default tested on [`Solver::structure`] whole. A
+    /// solver whose ranks each hold a share of the links tests each share and adds the parts.
+    fn no_equilibrium_along(&self, u: &[f64], load: &[f64]) -> Option<super::NoEquilibrium> {
+        super::no_equilibrium_along(self.structure(), u, load)
+    }
 }

@@ -93,6 +93,12 @@ pub enum SlackRule {
     Gap,
 }
 
+/// Whether `link` with trial tension `trial` is slack by [`SlackRule::Gap`] against the cables'
+/// force `scale`: a unilateral cable whose `t0 + k e` lies below −[`SLACK_GAP_TOLERANCE`] of it.
+pub fn gap_slack(link: &Link, trial: f64, scale: f64) -> bool {
+    link.unilateral && trial < -SLACK_GAP_TOLERANCE * scale
+}
+
 /// Per link: a unilateral cable that is slack by `rule`, from the trial tensions.
 pub fn slack_flags(s: &Structure, trial: &[f64], rule: SlackRule) -> Vec<bool> {
     match rule {
@@ -112,7 +118,7 @@ pub fn slack_flags(s: &Structure, trial: &[f64], rule: SlackRule) -> Vec<bool> {
             s.links
                 .iter()
                 .zip(trial)
-                .map(|(l, &t)| l.unilateral && t < -SLACK_GAP_TOLERANCE * scale)
+                .map(|(l, &t)| gap_slack(l, t, scale))
                 .collect()
         }
     }

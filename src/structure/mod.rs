@@ -7,6 +7,7 @@
 mod geometry;
 mod grid;
 pub mod law;
+mod share;
 mod spec;
 mod stability;
 mod statics;

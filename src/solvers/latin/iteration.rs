@@ -7,8 +7,11 @@ use super::anderson::{Anderson, Pieces};
 use super::indicator::Residuals;
 use super::local_stage::LocalLaw;
 use super::state::{LatinState, SubState};
-use super::{Latin, SearchPolicy, StopOn};
-use crate::solvers::{Equilibrium, Measure, NoEquilibrium, Progress, Solver, Status};
+use super::{link_share, Latin, SearchPolicy, StopOn};
+use crate::solvers::{
+    unit_direction, Equilibrium, LinksAlong, Measure, NoEquilibrium, Progress, Solver, Status,
+};
+use crate::structure::law;
 use crate::structure::Structure;
 use rayon::prelude::*;
 
@@ -143,6 +146,9 @@ impl Latin<'_> {
     /// links' order: the others' gathered from the ranks holding them (on one process,
     /// `mine` itself, laid out).
     fn per_link(&self, mine: Vec<f64>) -> Vec<f64> {
+        if let Some(world_links) = self.world_links {
+            return link_share::per_world_link(self.exchange, world_links, self.world.links, mine);
+        }
         let all = match self.exchange.size() {
             1 => mine,
             _ => self.exchange.all_gather(&mine),
@@ -365,6 +371,115 @@ impl Solver for Latin<'_> {
             })
             .collect();
         drop(subs);
-        Equilibrium::classified(s, u, self.per_link(mine))
+        self.classified(u, mine)
+    }
+
+    /// The no-equilibrium certificate along `u`, each process testing the links of the
+    /// substructures it holds and the parts added in the substructures' order (on one process
+    /// too, so that every number of ranks adds the same numbers in the same order).
+    fn no_equilibrium_along(&self, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
+        self.certificate_along(u, load)
+    }
+}
+
+impl Latin<'_> {
+    /// The answer of displacements `u` with the held links' tensions `mine` (in the held
+    /// substructures' order), classified by the rule every solver shares
+    /// ([`law::SlackRule::Gap`]): a cable is slack where its trial tension `t0 + k B U` lies
+    /// below [`law::SLACK_GAP_TOLERANCE`] of the cables' force scale, the largest over every
+    /// rank; a slack cable's tension is exactly 0. Tensions and slack flags are gathered whole.
+    fn classified(&self, u: Vec<f64>, mut mine: Vec<f64>) -> Equilibrium {
+        let s = self.structure;
+        let held_links = || {
+            self.substructures[self.held.clone()]
+                .iter()
+                .flat_map(|sub| &sub.links)
+        };
+        let trial: Vec<f64> = held_links()
+            .map(|&i| law::trial_tension(&s.links[i], s.link_dofs[i].elongation(&u)))
+            .collect();
+        let scale = held_links()
+            .zip(&trial)
+            .filter(|(&i, _)| s.links[i].unilateral)
+            .fold(0.0f64, |m, (&i, t)| {
+                m.max(s.links[i].prestress.abs()).max(t.abs())
+            });
+        let scale = match self.exchange.size() {
+            1 => scale,
+            _ => self
+                .exchange
+                .all_gather(&[scale])
+                .into_iter()
+                .fold(0.0, f64::max),
+        };
+        let slack: Vec<f64> = held_links()
+            .zip(&trial)
+            .zip(&mut mine)
+            .map(|((&i, &t), tension)| {
+                let is_slack = law::gap_slack(&s.links[i], t, scale);
+                if is_slack {
+                    *tension = 0.0;
+                }
+                f64::from(u8::from(is_slack))
+            })
+            .collect();
+        Equilibrium {
+            displacements: u,
+            tensions: self.per_link(mine),
+            slack: self.per_link(slack).into_iter().map(|f| f == 1.0).collect(),
+        }
+    }
+
+    /// [`Solver::no_equilibrium_along`]: each held substructure's links tested along
+    /// `d = u / ‖u‖` ([`LinksAlong`]), a failure anywhere ruling d out on every rank; their
+    /// stretch energies added in the substructures' order, and the shortened cables gathered
+    /// and put back in the whole structure's link order.
+    pub(super) fn certificate_along(&self, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
+        let s = self.structure;
+        // The same on every rank: u is whole.
+        let d = unit_direction(s, u)?;
+        let held = self.held.clone();
+        let parts: Vec<Option<LinksAlong>> = held
+            .clone()
+            .map(|e| {
+                let sub = &self.substructures[e];
+                let world = |j: usize| match self.world_links {
+                    Some(world_links) => world_links[e][j],
+                    None => sub.links[j],
+                };
+                let links = sub.links.iter().enumerate();
+                let links = links.map(|(j, &i)| (world(j), &s.links[i], &s.link_dofs[i]));
+                LinksAlong::of(links, &d.direction)
+            })
+            .collect();
+        if !self.exchange.all(parts.iter().all(Option::is_some)) {
+            return None;
+        }
+        let parts: Vec<LinksAlong> = parts.into_iter().flatten().collect();
+        let stretches: Vec<f64> = parts.iter().map(|p| p.stretch).collect();
+        let stretch: f64 = self.exchange.all_gather(&stretches).iter().sum();
+        // (link index, id's upper and lower 32 bits): exact in f64.
+        let split = |id: u64| [(id >> 32) as f64, (id & 0xffff_ffff) as f64];
+        let mine: Vec<f64> = parts
+            .iter()
+            .flat_map(|p| &p.slack)
+            .flat_map(|&(i, id)| {
+                let [high, low] = split(id);
+                [i as f64, high, low]
+            })
+            .collect();
+        let mut slack: Vec<(usize, u64)> = self
+            .exchange
+            .all_gather(&mine)
+            .chunks_exact(3)
+            .map(|c| (c[0] as usize, ((c[1] as u64) << 32) | c[2] as u64))
+            .collect();
+        slack.sort_unstable();
+        d.certificate(
+            s,
+            stretch,
+            slack.into_iter().map(|(_, id)| id).collect(),
+            load,
+        )
     }
 }

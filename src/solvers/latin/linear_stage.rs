@@ -197,11 +197,25 @@ impl Latin<'_> {
         }
     }
 
-    /// For the answer, which reads U on every dof: s whole, when the iterations exchange it
-    /// point to point.
+    /// For the answer, which reads U on every dof: U_E of every substructure, from the rank
+    /// that holds it onto every rank, when the iterations exchange s point to point (the
+    /// answer's per-link values are gathered by themselves: `Latin::per_link`).
     pub(super) fn complete_state(&self, state: &mut [SubState]) {
-        if self.neighbours.is_some() {
-            self.share_whole_state(state);
+        if self.neighbours.is_none() || self.exchange.size() == 1 {
+            return;
+        }
+        let mine: Vec<f64> = state[self.held.clone()]
+            .iter()
+            .flat_map(|st| st.u.iter().copied())
+            .collect();
+        let all = self.exchange.all_gather(&mine);
+        let mut rest = all.as_slice();
+        for (e, st) in state.iter_mut().enumerate() {
+            let (values, tail) = rest.split_at(st.u.len());
+            if !self.held.contains(&e) {
+                st.u.copy_from_slice(values);
+            }
+            rest = tail;
         }
     }
 

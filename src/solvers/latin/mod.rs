@@ -33,6 +33,7 @@ mod interfaces;
 mod iteration;
 mod kernel;
 mod linear_stage;
+mod link_share;
 mod local_stage;
 mod macro_basis;
 mod macro_problem;
@@ -53,6 +54,8 @@ mod tests;
 pub use exchange::{block, Exchange, OneProcess};
 pub(crate) use interfaces::Interface;
 pub(crate) use kernel::{add_to_gram, null_amplitudes, RigidFrame};
+pub use link_share::LinkShare;
+use link_share::WorldFacts;
 #[cfg(test)]
 use macro_basis::macro_basis;
 pub(crate) use macro_basis::orthonormal_columns;
@@ -168,6 +171,12 @@ pub struct Latin<'s> {
     /// every iteration reads the whole state ([`Latin::reads_whole_state`]) and on one
     /// process.
     neighbours: Option<neighbours::NeighbourPlan>,
+    /// What it needs of the whole structure.
+    world: WorldFacts,
+    /// On a rank that keeps only its substructures' links ([`LinkShare`]): per substructure,
+    /// its links' indices in the whole structure (`Substructure::links` index the kept ones).
+    /// `None` when `structure` is whole.
+    world_links: Option<&'s [Vec<usize>]>,
 }
 
 /// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
@@ -262,7 +271,8 @@ impl<'s> Latin<'s> {
 
     /// Set up on the processes of `exchange` (every one calls it alike): each builds the
     /// operators of its block of substructures ([`block`]), L_E and Q_E of the others are
-    /// gathered, the macro problem is factorised on every rank (see [`Exchange`]).
+    /// gathered, the macro problem is factorised on every rank (see [`Exchange`]). Every rank
+    /// holds `structure` whole.
     pub fn on_ranks(
         structure: &'s Structure,
         settings: LatinSettings,
@@ -270,19 +280,49 @@ impl<'s> Latin<'s> {
     ) -> Result<Self, SetupError> {
         settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
-        let n_subs = partition.substructures.len();
-        let macro_degree = settings.macro_degree_on(structure.links.len(), n_subs);
-        let dm = settings
-            .dm
-            .unwrap_or_else(|| auto_dm(structure, n_subs, macro_degree));
-        let interfaces = Interfaces::new(structure, &partition, settings.weak, macro_degree);
+        let world = WorldFacts::of(structure, &settings, partition.substructures.len());
+        Self::set_up(structure, &partition, world, None, settings, exchange)
+    }
+
+    /// [`Latin::on_ranks`] on a rank that keeps only its substructures' links: `structure`
+    /// and `share` as [`LinkShare::new`] made them, with these settings and as many ranks as
+    /// `exchange` has.
+    pub fn on_share(
+        structure: &'s Structure,
+        share: &'s LinkShare,
+        settings: LatinSettings,
+        exchange: &'s dyn Exchange,
+    ) -> Result<Self, SetupError> {
+        assert!(
+            share.settings == settings && share.ranks == exchange.size(),
+            "a share of the links is used with the settings and ranks it was made for"
+        );
+        Self::set_up(
+            structure,
+            &share.partition,
+            share.world,
+            Some(&share.world_links),
+            settings,
+            exchange,
+        )
+    }
+
+    /// Set up for `partition` of `structure` (whole, or with the held substructures' links
+    /// alone and `world_links` saying where they lie in the whole).
+    fn set_up(
+        structure: &'s Structure,
+        partition: &Partition,
+        world: WorldFacts,
+        world_links: Option<&'s [Vec<usize>]>,
+        settings: LatinSettings,
+        exchange: &'s dyn Exchange,
+    ) -> Result<Self, SetupError> {
+        let dm = world.dm;
+        let interfaces = Interfaces::new(structure, partition, settings.weak, world.macro_degree);
         let base_search: Vec<f64> = structure
             .links
             .iter()
-            .map(|l| match settings.search {
-                SearchDirection::Stiffness => l.stiffness,
-                SearchDirection::Uniform(v) => v,
-            })
+            .map(|l| link_share::base_search(&settings, l.stiffness))
             .collect();
         let mut holders = vec![0u8; structure.n_nodes()];
         for topo in &partition.substructures {
@@ -297,15 +337,6 @@ impl<'s> Latin<'s> {
             .iter()
             .map(|t| 8 * t.free_dofs(structure).pow(2))
             .sum();
-        // (½ Σ t0² / l)^{1/2} with l as set up: the prestress in the units of Δη.
-        let prestress_scale = (0.5
-            * structure
-                .links
-                .iter()
-                .zip(&base_search)
-                .map(|(l, k)| l.prestress * l.prestress / k)
-                .sum::<f64>())
-        .sqrt();
         let held = block(
             exchange.rank(),
             exchange.size(),
@@ -317,7 +348,7 @@ impl<'s> Latin<'s> {
         };
         let (substructures, macro_problem) = operators::build(
             structure,
-            &partition,
+            partition,
             &interfaces.list,
             &holders,
             &base_search,
@@ -341,7 +372,7 @@ impl<'s> Latin<'s> {
             side_slots: Vec::new(),
             dropped_interfaces: interfaces.dropped,
             redundant_nodes: interfaces.redundant_nodes,
-            prestress_scale,
+            prestress_scale: world.prestress_scale,
             chunk: if structure.n_free < PARALLEL_MIN_DOFS {
                 usize::MAX
             } else {
@@ -351,6 +382,8 @@ impl<'s> Latin<'s> {
             held,
             dof_ownership,
             neighbours: None,
+            world,
+            world_links,
         };
         let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
         for sub in &latin.substructures {
@@ -473,9 +506,7 @@ impl<'s> Latin<'s> {
                 .max()
                 .unwrap_or(0),
             dm: self.dm,
-            macro_degree: self
-                .settings
-                .macro_degree_on(self.structure.links.len(), self.substructures.len()),
+            macro_degree: self.world.macro_degree,
         }
     }
 }

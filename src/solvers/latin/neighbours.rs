@@ -221,7 +221,7 @@ impl NeighbourPlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solvers::latin::{Latin, LatinSettings, RankLayout, SearchPolicy};
+    use crate::solvers::latin::{Latin, LatinSettings, LinkShare, RankLayout, SearchPolicy};
     use crate::solvers::Solver;
     use crate::structure::{GridSpec, LoadPattern, Structure};
     use std::collections::{HashMap, VecDeque};
@@ -303,6 +303,24 @@ mod tests {
         alpha: f64,
         ranks: usize,
     ) -> (usize, usize, String, Vec<f64>, Vec<f64>) {
+        solve_sharing(s, settings, alpha, ranks, false).0
+    }
+
+    /// [`solve_on`], each rank keeping the whole structure or (`share`) only its
+    /// substructures' links ([`LinkShare`]); with the answer's slack flags, and the links each
+    /// rank kept.
+    #[allow(clippy::type_complexity)]
+    fn solve_sharing(
+        s: &Structure,
+        settings: &LatinSettings,
+        alpha: f64,
+        ranks: usize,
+        share: bool,
+    ) -> (
+        (usize, usize, String, Vec<f64>, Vec<f64>),
+        Vec<bool>,
+        Vec<usize>,
+    ) {
         let load: Vec<f64> = s.unit_load.iter().map(|f| alpha * f).collect();
         let hub = Hub {
             size: ranks,
@@ -325,7 +343,16 @@ mod tests {
                     scope.spawn(move || {
                         pool.install(|| {
                             let exchange = ThreadRank { hub, rank };
-                            let mut latin = Latin::on_ranks(s, *settings, &exchange).unwrap();
+                            let kept = share.then(|| {
+                                LinkShare::new(s, settings, rank, ranks).unwrap().unwrap()
+                            });
+                            let mut latin = match &kept {
+                                Some((kept, share)) => {
+                                    Latin::on_share(kept, share, *settings, &exchange)
+                                }
+                                None => Latin::on_ranks(s, *settings, &exchange),
+                            }
+                            .unwrap();
                             let mut state = latin.init(load);
                             let status = loop {
                                 let progress = latin.progress(&state);
@@ -338,12 +365,17 @@ mod tests {
                                 latin.next_iter(&mut state);
                             };
                             let eq = latin.iterate(&state);
+                            let links = latin.structure().links.len();
                             (
-                                state.iteration,
-                                state.rebuilds,
-                                status,
-                                eq.displacements,
-                                eq.tensions,
+                                (
+                                    state.iteration,
+                                    state.rebuilds,
+                                    status,
+                                    eq.displacements,
+                                    eq.tensions,
+                                ),
+                                eq.slack,
+                                links,
                             )
                         })
                     })
@@ -351,10 +383,69 @@ mod tests {
                 .collect();
             handles.into_iter().map(|h| h.join().unwrap()).collect()
         });
-        for other in &results[1..] {
-            assert_eq!(other, &results[0], "the ranks disagree");
+        for (r, other) in results.iter().enumerate().skip(1) {
+            let (a, b) = (&other.0, &results[0].0);
+            assert_eq!((a.0, a.1, &a.2), (b.0, b.1, &b.2), "rank {r} disagrees");
+            for (what, x, y) in [("U", &a.3, &b.3), ("tensions", &a.4, &b.4)] {
+                let first = x
+                    .iter()
+                    .zip(y)
+                    .position(|(p, q)| p.to_bits() != q.to_bits());
+                assert!(
+                    first.is_none(),
+                    "rank {r}: {what} differ first at {first:?}"
+                );
+            }
+            assert!(other.1 == results[0].1, "rank {r}: the slack sets differ");
         }
-        results.into_iter().next().unwrap()
+        let kept = results.iter().map(|r| r.2).collect();
+        let (answer, slack, _) = results.into_iter().next().unwrap();
+        (answer, slack, kept)
+    }
+
+    /// Ranks that keep only their substructures' links solve as one process holding the whole
+    /// structure, bit for bit, slack set included: the paper's grid at α = 2.4 in 4 × 4 and
+    /// 3 × 5 substructures on 2 and 3 ranks, each rank keeping its share of the links and no
+    /// more (every link on one rank).
+    #[test]
+    fn ranks_keeping_their_links_alone_solve_as_one_process() {
+        let s = grid(16);
+        for subdomains in [[4, 4], [3, 5]] {
+            let settings = LatinSettings {
+                subdomains,
+                ..LatinSettings::default()
+            };
+            let (one, one_slack, _) = solve_sharing(&s, &settings, 2.4, 1, false);
+            assert_eq!(one.2, "Converged");
+            let slack = one_slack.iter().filter(|&&x| x).count();
+            assert!(slack > 307, "{subdomains:?}: {slack} slack");
+            // The answer's slack set is the shared classification's.
+            let whole = crate::solvers::Equilibrium::classified(&s, one.3.clone(), one.4.clone());
+            assert_eq!(whole.slack, one_slack);
+            assert_eq!(whole.tensions, one.4);
+            for ranks in [2, 3] {
+                let (shared, shared_slack, kept) = solve_sharing(&s, &settings, 2.4, ranks, true);
+                assert_eq!(
+                    (shared.0, shared.1, &shared.2),
+                    (one.0, one.1, &one.2),
+                    "{subdomains:?} on {ranks} ranks"
+                );
+                assert!(
+                    shared == one && shared_slack == one_slack,
+                    "{subdomains:?} on {ranks} ranks: the answers differ"
+                );
+                assert_eq!(kept.iter().sum::<usize>(), s.links.len());
+                assert!(kept
+                    .iter()
+                    .all(|&k| k < s.links.len() / ranks + s.links.len() / 10));
+            }
+        }
+        // Status-following l reads every cable at each iteration: no share is made.
+        let status = LatinSettings {
+            policy: SearchPolicy::Status,
+            ..LatinSettings::default()
+        };
+        assert!(LinkShare::new(&s, &status, 0, 2).unwrap().is_none());
     }
 
     /// On 2 and 3 ranks the solve is the one-process solve bit for bit, with s exchanged

@@ -42,8 +42,8 @@ pub struct RankShare {
     /// products with a full history.
     pub values_gathered: usize,
     /// Values it receives each time the answer is gathered whole (the driver's no-equilibrium
-    /// checks at iterations 16, 32, 64, … and the end): e and t per link, U per dof, U and F
-    /// per interface row, and the tension per link, of every other rank's substructures.
+    /// checks at iterations 16, 32, 64, … and the end): U per dof, and the tension and the
+    /// slack flag per link, of every other rank's substructures.
     pub values_per_answer: usize,
 }
 
@@ -196,8 +196,8 @@ impl RankLayout {
 
 /// Per substructure, the values it contributes to an iteration's all-gathers (one macro
 /// right-hand side part per macro dof, η's two parts, the slack count, r(U)'s three sums of
-/// squares, Anderson's inner products), and to a gather of the answer whole (e, t and the
-/// tension per link, U per free dof, U and F per interface row).
+/// squares, Anderson's inner products), and to a gather of the answer whole (U per free dof,
+/// the tension and the slack flag per link).
 fn gathered_per_substructure(
     structure: &Structure,
     partition: &Partition,
@@ -213,7 +213,7 @@ fn gathered_per_substructure(
         .zip(&mut whole)
         .map(|((topo, input), whole)| {
             *input = topo.links.len();
-            *whole = 3 * topo.links.len() + topo.free_dofs(structure);
+            *whole = 2 * topo.links.len() + topo.free_dofs(structure);
             6
         })
         .collect();
@@ -221,7 +221,6 @@ fn gathered_per_substructure(
         let rows: usize = iface.free.iter().flatten().filter(|&&f| f).count();
         for &e in &iface.topology.sides {
             gathered[e] += iface.basis.ncols();
-            whole[e] += 2 * rows;
             input[e] += rows;
         }
     }

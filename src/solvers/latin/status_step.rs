@@ -14,7 +14,6 @@
 use super::{Latin, LatinState, SubState};
 use crate::linalg::dot;
 use crate::solvers::newton::{exact_line_search, EnergyAlongStep};
-use crate::solvers::no_equilibrium_along;
 use crate::structure::law;
 use rayon::prelude::*;
 
@@ -115,9 +114,9 @@ impl Latin<'_> {
         state.runaway = runs_away
             .then(|| {
                 let step = self.whole_step(step.clone());
-                no_equilibrium_along(self.structure, &step, &state.load).or_else(|| {
+                self.certificate_along(&step, &state.load).or_else(|| {
                     let opposite: Vec<f64> = step.iter().map(|x| -x).collect();
-                    no_equilibrium_along(self.structure, &opposite, &state.load)
+                    self.certificate_along(&opposite, &state.load)
                 })
             })
             .flatten();
@@ -148,7 +147,7 @@ impl Latin<'_> {
         let links = &self.structure.links;
         let rms = self.trial_tension_rms(&state.subs);
         let band = STATUS_BAND * self.settings.residual_tolerance() * rms;
-        let cables = links.iter().filter(|l| l.unilateral).count();
+        let cables = self.world.cables;
         let whole = self.reads_whole_state();
         let classified = match whole {
             true => 0..self.substructures.len(),
@@ -265,7 +264,7 @@ impl Latin<'_> {
             })
             .collect();
         let sum: f64 = self.exchange.all_gather(&parts).iter().sum();
-        let cables = links.iter().filter(|l| l.unilateral).count();
+        let cables = self.world.cables;
         (sum / cables.max(1) as f64).sqrt()
     }
 
