@@ -269,6 +269,27 @@ fn run_command(
         reporter.run_event(event)
     });
     if ranks.size() > 1 {
+        // The most links a rank other than 0 kept (every rank asks, whatever the run's end).
+        let (kept, whole) = reporter.links_kept.unwrap_or((0, 0));
+        let others = ranks.max(if ranks.is_root() { 0 } else { kept as u64 });
+        let set_up = reporter.links_kept.is_some();
+        let kept_line = match others < whole as u64 {
+            true if ranks.size() == 2 => format!(
+                "MPI: rank 1 kept only its substructures' links, {others} of {whole}; rank 0 \
+                 kept the whole structure (it judges and writes every answer)"
+            ),
+            true => format!(
+                "MPI: ranks 1 to {} kept only their substructures' links, at most {others} of \
+                 {whole}; rank 0 kept the whole structure (it judges and writes every answer)",
+                ranks.size() - 1
+            ),
+            false => "MPI: every rank kept the whole structure (only a run of micro-macro alone \
+                      with reference = \"none\" shares out its links)"
+                .to_string(),
+        };
+        if set_up {
+            reporter.line(&kept_line);
+        }
         reporter.line(&format!(
             "MPI: {} ranks; rank 0 received {} values ({}) in {} collective and \
              point-to-point calls, {:.3} s in them (waiting for the other ranks included)",

@@ -278,6 +278,48 @@ fn a_higher_macro_degree_on_ranks_is_the_threaded_run() {
     );
 }
 
+/// A run of micro-macro alone with no reference solve has the ranks other than 0 keep only
+/// their substructures' links (rank 0 keeps the whole structure to judge and write every
+/// answer): the paper's case and a 64 × 64 grid on 2 and 4 ranks still give the threaded
+/// run's files bit for bit, and the run says what the ranks kept; with a reference solve every
+/// rank keeps the whole structure, and says so.
+#[test]
+fn ranks_keeping_their_links_alone_are_the_threaded_run() {
+    let alone = ["solver.reference=\"none\"", "output.geometric_term=false"];
+    for (case, alpha) in [
+        ("cases/paper.toml", "load.alpha=[0.5, 1.0]"),
+        ("cases/scale-64-latin.toml", "load.alpha=[0.15]"),
+    ] {
+        ranks_agree_with_threads(case, &[alpha, alone[0], alone[1]], &[2, 4]);
+    }
+    let case = manifest_path("cases/paper.toml");
+    let said = |sets: &[&str]| {
+        let out = Temp::dir("mpi-kept");
+        let mut args = vec!["run", case.to_str().unwrap(), "--out", out.arg()];
+        args.extend(["--solver", "micro-macro", "--set", "load.alpha=[1.0]"]);
+        for set in sets {
+            args.extend(["--set", set]);
+        }
+        let o = mpirun(4, &args);
+        assert_eq!(code(&o), 0, "{}", text(&o.stderr));
+        text(&o.stderr)
+    };
+    // 16 substructures of 256 links each, 4 per rank.
+    let err = said(&alone);
+    assert!(
+        err.contains(
+            "MPI: ranks 1 to 3 kept only their substructures' links, at most 1024 of 4096"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("408 / 3072 slack"), "{err}");
+    let err = said(&[]);
+    assert!(
+        err.contains("MPI: every rank kept the whole structure"),
+        "{err}"
+    );
+}
+
 /// A run that never solves with K's factor (LATIN alone, reference none, no geometric-term
 /// check) has rank 0 alone make the mechanism check: the others' results are the same, and a
 /// mechanism is refused on every rank, with rank 0's message once and nothing written.

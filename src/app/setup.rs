@@ -2,7 +2,7 @@
 //! then each solver asked for, with the set-up time it is charged.
 
 use crate::case::{Case, SolverChoice};
-use crate::solvers::latin::{Exchange, Homogenised, Latin, OneProcess};
+use crate::solvers::latin::{Exchange, Homogenised, Latin, LatinSettings, LinkShare, OneProcess};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{
@@ -23,6 +23,10 @@ pub struct Prepared {
     pub structure_seconds: f64,
     /// Time to assemble and factorize the taut stiffness and check for a mechanism, s.
     pub taut_seconds: f64,
+    /// On an MPI rank that keeps only its micro-macro substructures' links
+    /// ([`Prepared::keep_links_of`]): the rest of its share; `structure` then holds those links
+    /// alone.
+    pub share: Option<LinkShare>,
 }
 
 /// Build the structure of `case` and refuse a mechanism, keeping the factor of K with every
@@ -112,7 +116,27 @@ impl Prepared {
             taut: None,
             structure_seconds: clock.elapsed().as_secs_f64(),
             taut_seconds: 0.0,
+            share: None,
         }
+    }
+
+    /// Keep only the links of the micro-macro substructures rank `rank` of `ranks` holds under
+    /// `settings` (issue 25), when the solve can run on such shares
+    /// ([`LinkShare::possible`]); the whole structure is dropped. Whether it did.
+    pub fn keep_links_of(
+        &mut self,
+        settings: &LatinSettings,
+        rank: usize,
+        ranks: usize,
+    ) -> Result<bool, SetupError> {
+        let clock = Instant::now();
+        let Some((kept, share)) = LinkShare::new(&self.structure, settings, rank, ranks)? else {
+            return Ok(false);
+        };
+        self.structure = kept;
+        self.share = Some(share);
+        self.structure_seconds += clock.elapsed().as_secs_f64();
+        Ok(true)
     }
 
     /// Drop the factor of K with every cable taut once the mechanism check is done, for a run
@@ -198,10 +222,16 @@ pub fn set_up_on<'s>(
             prepared.taut_seconds,
         ),
         Settings::MonoLatin(settings) => (Box::new(Latin::new(structure, settings)?), 0.0),
-        Settings::MicroMacro(settings) => (
-            Box::new(Latin::on_ranks(structure, settings, exchange)?),
-            0.0,
-        ),
+        Settings::MicroMacro(settings) => match &prepared.share {
+            Some(share) => (
+                Box::new(Latin::on_share(structure, share, settings, exchange)?),
+                0.0,
+            ),
+            None => (
+                Box::new(Latin::on_ranks(structure, settings, exchange)?),
+                0.0,
+            ),
+        },
     };
     Ok(SetUpSolver {
         method,

@@ -37,6 +37,9 @@ pub struct Reporter {
     /// Rows whose left-out geometric term is above its limit: how many, and the largest (value,
     /// solver and α).
     pub geometric: (usize, Option<(f64, String)>),
+    /// The links this process kept of the structure's, when set-up said
+    /// ([`RunEvent::LinksKept`]).
+    pub links_kept: Option<(usize, usize)>,
 }
 
 impl Reporter {
@@ -63,6 +66,7 @@ impl Reporter {
             shown: Instant::now(),
             last_error: None,
             geometric: (0, None),
+            links_kept: None,
         }
     }
 
@@ -143,6 +147,7 @@ impl Reporter {
                     _ => self.status(text),
                 }
             }
+            RunEvent::LinksKept { kept, whole } => self.links_kept = Some((kept, whole)),
             RunEvent::Row(row) => {
                 if row.needs_large() {
                     let value = row.geometric_term.unwrap_or(0.0);

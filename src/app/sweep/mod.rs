@@ -12,14 +12,14 @@ pub use error::RunError;
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
 use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolver};
-use crate::case::Case;
+use crate::case::{Case, ReferenceChoice};
 use crate::output::{
     self, alpha_label,
     sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
     FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results;
-use crate::solvers::latin::{Exchange, OneProcess};
+use crate::solvers::latin::{Exchange, LatinSettings, OneProcess};
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
 };
@@ -73,6 +73,14 @@ pub enum RunEvent<'a> {
     },
     /// A solve ended and its summary row was written.
     Row(&'a SummaryRow),
+    /// Set-up kept `kept` of the structure's `whole` links on this process (fewer on an MPI
+    /// rank that keeps only its micro-macro substructures' links).
+    LinksKept {
+        /// Links kept.
+        kept: usize,
+        /// Links of the whole structure.
+        whole: usize,
+    },
 }
 
 /// Passes every iterate of one solve to the run's events as [`RunEvent::Iteration`].
@@ -138,6 +146,23 @@ pub fn run_on(
     if !work.keeps_taut {
         prepared.release_taut();
     }
+    // 1b. On MPI ranks other than 0, only the links of the rank's own micro-macro
+    //     substructures, when nothing else of the run needs the whole structure there (rank 0
+    //     keeps it: it judges and writes every answer).
+    let kept = match keeps_its_links_alone(case, &methods, work.keeps_taut, exchange) {
+        Some(settings) => prepared
+            .keep_links_of(&settings, exchange.rank(), exchange.size())
+            .map_err(RunError::from),
+        None => Ok(false),
+    };
+    on_every_rank(exchange, kept)?;
+    events(RunEvent::LinksKept {
+        kept: prepared.structure.links.len(),
+        whole: prepared
+            .share
+            .as_ref()
+            .map_or(prepared.structure.links.len(), |s| s.world_links()),
+    });
     let prepared = prepared;
     // 2. Every solver asked for, set up once.
     let mut solvers = set_up_all(case, &methods, &prepared, exchange, events)?;
@@ -179,6 +204,22 @@ pub fn run_on(
         true => Ok(rows),
         false => Err(RunError::not_converged(&failures)),
     }
+}
+
+/// The micro-macro settings under which this process keeps only its substructures' links
+/// ([`Prepared::keep_links_of`]): on an MPI rank other than 0, when micro-macro is the run's
+/// only solver, no reference solve is made and K's factor is not kept; `None` otherwise.
+fn keeps_its_links_alone(
+    case: &Case,
+    methods: &[Method],
+    keeps_taut: bool,
+    exchange: &dyn Exchange,
+) -> Option<LatinSettings> {
+    let alone = exchange.rank() > 0
+        && methods == [Method::MicroMacro]
+        && case.solver.reference == ReferenceChoice::None
+        && !keeps_taut;
+    alone.then(|| case.solver.latin_settings(Method::MicroMacro))?
 }
 
 /// The output directory `dir`, locked for this run with a private staging directory, when
@@ -368,6 +409,11 @@ impl<'s> Sweep<'s> {
         mut solution: Solution,
         events: &mut dyn FnMut(RunEvent<'_>),
     ) -> Result<(), RunError> {
+        // A rank that keeps a share of the links alone leaves the answer to rank 0, which
+        // judges it, writes it and fails the run for it.
+        if self.prepared.share.is_some() {
+            return Ok(());
+        }
         let (structure, alpha) = (&self.prepared.structure, key.alpha);
         // 7. What the answer is beyond the solver's own stop: no equilibrium, or an unstable
         //    one (docs/method.md §8).
