@@ -16,7 +16,7 @@ use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
-use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions};
+use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions, Sharing};
 use tensolve::case;
 use tensolve::host;
 use tensolve::output::alpha_label;
@@ -269,22 +269,28 @@ fn run_command(
         reporter.run_event(event)
     });
     if ranks.size() > 1 {
-        // The most links a rank other than 0 kept (every rank asks, whatever the run's end).
+        // The most links a rank kept, and a rank other than 0 (every rank asks, whatever the
+        // run's end).
         let (kept, whole) = reporter.links_kept.unwrap_or((0, 0));
+        let most = ranks.max(kept as u64);
         let others = ranks.max(if ranks.is_root() { 0 } else { kept as u64 });
         let set_up = reporter.links_kept.is_some();
-        let kept_line = match others < whole as u64 {
-            true if ranks.size() == 2 => format!(
-                "MPI: rank 1 kept only its substructures' links, {others} of {whole}; rank 0 \
-                 kept the whole structure (it judges and writes every answer)"
+        let kept_line = match (kept < whole, others < whole as u64) {
+            (true, _) => format!(
+                "MPI: every rank kept only its substructures' links, at most {most} of {whole} \
+                 (the answers' rows measured by the ranks together)"
             ),
-            true => format!(
+            (false, true) if ranks.size() == 2 => format!(
+                "MPI: rank 1 kept only its substructures' links, {others} of {whole}; rank 0 \
+                 kept the whole structure (it writes files that read every link)"
+            ),
+            (false, true) => format!(
                 "MPI: ranks 1 to {} kept only their substructures' links, at most {others} of \
-                 {whole}; rank 0 kept the whole structure (it judges and writes every answer)",
+                 {whole}; rank 0 kept the whole structure (it writes files that read every link)",
                 ranks.size() - 1
             ),
-            false => "MPI: every rank kept the whole structure (only a run of micro-macro alone \
-                      with reference = \"none\" shares out its links)"
+            (false, false) => "MPI: every rank kept the whole structure (only a run of \
+                               micro-macro alone with reference = \"none\" shares out its links)"
                 .to_string(),
         };
         if set_up {
@@ -399,6 +405,10 @@ fn check_case(ranks: &Ranks, case: case::Case, path: PathBuf) -> Result<(), RunE
     print_ignoring_closed_pipe(&report.to_string());
     if let Some(layout) = layout {
         print_ignoring_closed_pipe(&layout.describe());
+        print_ignoring_closed_pipe(&format!(
+            "  links: {}\n",
+            Sharing::of_run(&case, ranks.size()).describe()
+        ));
         print_ignoring_closed_pipe(&format!(
             "  every rank loaded the same case (from rank 0's bytes; digest {:016x} on all {} \
              ranks)\n",

@@ -80,11 +80,117 @@ pub fn max_member_rotation(s: &Structure, eq: &Equilibrium) -> f64 {
     let full = s.full_displacements(&eq.displacements);
     s.links
         .iter()
-        .map(|l| {
-            let (a, b) = (&full[3 * l.a..3 * l.a + 3], &full[3 * l.b..3 * l.b + 3]);
-            (b[0] - a[0]).hypot(b[1] - a[1]).hypot(b[2] - a[2]) / l.length
-        })
+        .map(|l| member_rotation(l, &full))
         .fold(0.0, f64::max)
+}
+
+/// `|U_b − U_a| / ℓ` of link `l`, U on every component (`full`).
+fn member_rotation(l: &crate::structure::Link, full: &[f64]) -> f64 {
+    let (a, b) = (&full[3 * l.a..3 * l.a + 3], &full[3 * l.b..3 * l.b + 3]);
+    (b[0] - a[0]).hypot(b[1] - a[1]).hypot(b[2] - a[2]) / l.length
+}
+
+/// What a summary row says of an answer beside the solver's own figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnswerMeasures {
+    /// Cables of the structure.
+    pub cables: usize,
+    /// The largest cable tension, N.
+    pub max_tension: f64,
+    /// The largest nodal displacement, m.
+    pub max_deflection: f64,
+    /// r(U), the relative equilibrium residual of the answer's U under the exact law.
+    pub equilibrium_residual: f64,
+    /// Slack cables per family of [`SLACK_FAMILIES`].
+    pub slack_by_kind: [usize; SLACK_FAMILIES.len()],
+    /// [`max_member_rotation`].
+    pub max_member_rotation: f64,
+    /// Whether the model updates the geometry (`large`).
+    pub updates_geometry: bool,
+}
+
+impl AnswerMeasures {
+    /// The measures of `eq` under `load` on the whole structure `s`.
+    pub fn of(s: &Structure, eq: &Equilibrium, load: &[f64]) -> AnswerMeasures {
+        AnswerMeasures {
+            cables: s.n_cables(),
+            max_tension: max_cable_tension(s, eq),
+            max_deflection: max_deflection(s, eq),
+            equilibrium_residual: crate::solvers::displacement_residual(s, &eq.displacements, load),
+            slack_by_kind: slack_by_kind(s, eq),
+            max_member_rotation: max_member_rotation(s, eq),
+            updates_geometry: s.model == GeometricModel::Large,
+        }
+    }
+
+    /// The measures of `eq` (whole: U on every dof, tensions and slack flags on every link)
+    /// when each process of `exchange` keeps a share of the links: `s` this process's (its
+    /// links alone, `world[j]` the whole structure's index of its link j; nodes whole) and
+    /// `cables` the whole structure's. Maxima and counts over each share are reduced; r(U)'s
+    /// nodal forces `Bᵀτ` and `|B|ᵀ|τ|` are added over the processes in rank order, so r(U)
+    /// may differ from [`AnswerMeasures::of`]'s in its last bits. Every process calls it alike.
+    /// The small-displacement models only.
+    pub fn over_shares(
+        s: &Structure,
+        world: &[usize],
+        cables: usize,
+        eq: &Equilibrium,
+        load: &[f64],
+        exchange: &dyn crate::solvers::latin::Exchange,
+    ) -> AnswerMeasures {
+        let full = s.full_displacements(&eq.displacements);
+        // Per share: the largest cable tension and member rotation, the slack counts.
+        let mut mine = vec![0.0; 2 + SLACK_FAMILIES.len()];
+        let (mut forces, mut magnitudes) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
+        for (j, (l, row)) in s.links.iter().zip(&s.link_dofs).enumerate() {
+            let i = world[j];
+            if l.kind.is_cable() {
+                mine[0] = f64::max(mine[0], eq.tensions[i]);
+            }
+            mine[1] = f64::max(mine[1], member_rotation(l, &full));
+            if eq.slack[i] {
+                if let Some(k) = slack_family(s, j) {
+                    mine[2 + k] += 1.0;
+                }
+            }
+            // τ(U) under the exact law, as `displacement_residual` takes it.
+            let t = law::tension(l, law::trial_tension(l, row.elongation(&eq.displacements)));
+            for (d, c) in row.iter() {
+                forces[d] += c * t;
+                magnitudes[d] += (c * t).abs();
+            }
+        }
+        let parts = exchange.all_gather(&mine);
+        let mut out = [0.0; 2 + SLACK_FAMILIES.len()];
+        for part in parts.chunks_exact(mine.len()) {
+            out[0] = f64::max(out[0], part[0]);
+            out[1] = f64::max(out[1], part[1]);
+            for k in 2..out.len() {
+                out[k] += part[k];
+            }
+        }
+        forces.extend_from_slice(&magnitudes);
+        drop(magnitudes);
+        let shares = exchange.all_gather(&forces);
+        let n = s.n_free;
+        let (mut r, mut all) = (vec![0.0; n], vec![0.0; n]);
+        for share in shares.chunks_exact(2 * n) {
+            r.iter_mut().zip(&share[..n]).for_each(|(x, y)| *x += y);
+            all.iter_mut().zip(&share[n..]).for_each(|(x, y)| *x += y);
+        }
+        r.iter_mut().zip(load).for_each(|(ri, fi)| *ri -= fi);
+        let scale = norm(load) + norm(&all);
+        let r_norm = norm(&r);
+        AnswerMeasures {
+            cables,
+            max_tension: out[0],
+            max_deflection: max_deflection(s, eq),
+            equilibrium_residual: if scale > 0.0 { r_norm / scale } else { r_norm },
+            slack_by_kind: std::array::from_fn(|k| out[2 + k] as usize),
+            max_member_rotation: out[1],
+            updates_geometry: false,
+        }
+    }
 }
 
 /// The geometric term a model on the initial geometry leaves out (docs/method.md §8), as the
@@ -279,3 +385,49 @@ pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautS
 /// The smallest tangent eigenvalue is reported as exactly 0 within this fraction of the mean
 /// diagonal (a singular tangent, neither stable nor unstable by round-off).
 pub const TANGENT_ZERO_RELATIVE: f64 = 1e-8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solvers::latin::OneProcess;
+    use crate::solvers::newton::Newton;
+    use crate::solvers::{AnySolver, Silent, TautStiffness};
+    use crate::structure::{GridSpec, LoadPattern};
+
+    /// Over one share holding every link the measures are [`AnswerMeasures::of`]'s bit for bit;
+    /// over a share that keeps them in another order (`world` its map) the same but for r(U)'s
+    /// round-off: the slack families, the largest tension and rotation follow each link.
+    #[test]
+    fn measures_over_shares_are_the_whole_structures() {
+        let s = Structure::grid(&GridSpec::default(), &LoadPattern::default());
+        let taut = TautStiffness::new(&s).unwrap();
+        let mut newton = Newton::new(&s, &taut, Default::default()).unwrap();
+        let load: Vec<f64> = s.unit_load.iter().map(|f| 1.0 * f).collect();
+        let eq = newton.solve(&load, None, &mut Silent).equilibrium;
+        let whole = AnswerMeasures::of(&s, &eq, &load);
+        assert_eq!(whole.slack_by_kind.iter().sum::<usize>(), 408);
+        let identity: Vec<usize> = (0..s.links.len()).collect();
+        let all = s.keeping_links(&identity).unwrap();
+        let one =
+            AnswerMeasures::over_shares(&all, &identity, s.n_cables(), &eq, &load, &OneProcess);
+        assert_eq!(one, whole);
+        let reversed: Vec<usize> = identity.iter().rev().copied().collect();
+        let kept = s.keeping_links(&reversed).unwrap();
+        let other =
+            AnswerMeasures::over_shares(&kept, &reversed, s.n_cables(), &eq, &load, &OneProcess);
+        let close = (other.equilibrium_residual - whole.equilibrium_residual).abs()
+            <= 1e-6 * whole.equilibrium_residual;
+        assert!(
+            close,
+            "{} against {}",
+            other.equilibrium_residual, whole.equilibrium_residual
+        );
+        assert_eq!(
+            AnswerMeasures {
+                equilibrium_residual: whole.equilibrium_residual,
+                ..other
+            },
+            whole
+        );
+    }
+}

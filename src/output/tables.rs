@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::results;
-use crate::solvers::{displacement_residual, Equilibrium, Measure, Solution, Status};
+use crate::solvers::{Equilibrium, Measure, Solution, Status};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
@@ -73,13 +73,12 @@ pub struct SummaryRow {
 }
 
 impl SummaryRow {
-    /// The row of `solution`, by `solver` at `alpha` (load `load` on the free dofs) on `s`,
+    /// The row of `solution`, by `solver` at `alpha`, whose answer `measures` says,
     /// set up in `setup_seconds`.
     pub fn new(
         solver: &str,
         alpha: f64,
-        load: &[f64],
-        s: &Structure,
+        measures: &results::AnswerMeasures,
         solution: &Solution,
         verdict: (Option<f64>, Option<f64>),
         setup_seconds: f64,
@@ -95,15 +94,15 @@ impl SummaryRow {
             min_tangent_eigenvalue,
             iterations: solution.info.iterations,
             slack_cables: eq.slack_count(),
-            cables: s.n_cables(),
-            max_tension: results::max_cable_tension(s, eq),
-            max_deflection: results::max_deflection(s, eq),
+            cables: measures.cables,
+            max_tension: measures.max_tension,
+            max_deflection: measures.max_deflection,
             stopping_value: solution.info.stopping_value,
-            equilibrium_residual: displacement_residual(s, &eq.displacements, load),
+            equilibrium_residual: measures.equilibrium_residual,
             rebuilds: solution.info.rebuilds,
-            slack_by_kind: results::slack_by_kind(s, eq),
-            max_member_rotation: results::max_member_rotation(s, eq),
-            updates_geometry: s.model == crate::structure::GeometricModel::Large,
+            slack_by_kind: measures.slack_by_kind,
+            max_member_rotation: measures.max_member_rotation,
+            updates_geometry: measures.updates_geometry,
             geometric_term,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,

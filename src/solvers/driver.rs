@@ -152,6 +152,9 @@ pub trait AnySolver {
 
     /// What the solver's stopping measure measures.
     fn stopping_measure(&self) -> Measure;
+
+    /// The no-equilibrium certificate along `u` ([`Solver::no_equilibrium_along`]).
+    fn no_equilibrium_along(&self, u: &[f64], load: &[f64]) -> Option<super::NoEquilibrium>;
 }
 
 impl<S: Solver> AnySolver for S {
@@ -167,5 +170,9 @@ impl<S: Solver> AnySolver for S {
 
     fn stopping_measure(&self) -> Measure {
         self.measure()
+    }
+
+    fn no_equilibrium_along(&self, u: &[f64], load: &[f64]) -> Option<super::NoEquilibrium> {
+        Solver::no_equilibrium_along(self, u, load)
     }
 }

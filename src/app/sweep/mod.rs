@@ -18,8 +18,8 @@ use crate::output::{
     sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
     FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
-use crate::results;
-use crate::solvers::latin::{Exchange, LatinSettings, OneProcess};
+use crate::results::{self, AnswerMeasures};
+use crate::solvers::latin::{Exchange, LinkShare, OneProcess};
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
 };
@@ -146,14 +146,19 @@ pub fn run_on(
     if !work.keeps_taut {
         prepared.release_taut();
     }
-    // 1b. On MPI ranks other than 0, only the links of the rank's own micro-macro
-    //     substructures, when nothing else of the run needs the whole structure there (rank 0
-    //     keeps it: it judges and writes every answer).
-    let kept = match keeps_its_links_alone(case, &methods, work.keeps_taut, exchange) {
-        Some(settings) => prepared
+    // 1b. On MPI ranks, only the links of the rank's own micro-macro substructures, when
+    //     nothing else of the run needs the whole structure there ([`Sharing`]).
+    let sharing = Sharing::of(case, &methods, work.keeps_taut, exchange.size());
+    let keeps_share = match sharing {
+        Sharing::Whole => false,
+        Sharing::AllButRank0 => exchange.rank() > 0,
+        Sharing::EveryRank => true,
+    };
+    let kept = match case.solver.latin_settings(Method::MicroMacro) {
+        Some(settings) if keeps_share => prepared
             .keep_links_of(&settings, exchange.rank(), exchange.size())
             .map_err(RunError::from),
-        None => Ok(false),
+        _ => Ok(false),
     };
     on_every_rank(exchange, kept)?;
     events(RunEvent::LinksKept {
@@ -180,7 +185,9 @@ pub fn run_on(
     };
     on_every_rank(exchange, homogenised)?;
     // 6. Every α, every solver (steps 7–9 in `Sweep`); 10. the files of the whole sweep.
-    let mut sweep = Sweep::new(case, &prepared, solvers, reference, sinks, exchange);
+    let mut sweep = Sweep::new(
+        case, &prepared, solvers, reference, sinks, exchange, sharing,
+    );
     for &alpha in &case.load.alphas {
         sweep.solve_alpha(alpha, events)?;
     }
@@ -206,20 +213,83 @@ pub fn run_on(
     }
 }
 
-/// The micro-macro settings under which this process keeps only its substructures' links
-/// ([`Prepared::keep_links_of`]): on an MPI rank other than 0, when micro-macro is the run's
-/// only solver, no reference solve is made and K's factor is not kept; `None` otherwise.
-fn keeps_its_links_alone(
-    case: &Case,
-    methods: &[Method],
-    keeps_taut: bool,
-    exchange: &dyn Exchange,
-) -> Option<LatinSettings> {
-    let alone = exchange.rank() > 0
-        && methods == [Method::MicroMacro]
-        && case.solver.reference == ReferenceChoice::None
-        && !keeps_taut;
-    alone.then(|| case.solver.latin_settings(Method::MicroMacro))?
+/// Which MPI ranks of a run keep only their micro-macro substructures' links
+/// ([`Prepared::keep_links_of`]), the others keeping the whole structure. A rank keeps a share
+/// only when micro-macro is the run's one solver, with no reference solve and without K's
+/// factor, and when the solve can run on shares ([`LinkShare::possible`]: not with
+/// status-following l nor with the prestress's geometric stiffness).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sharing {
+    /// Every rank keeps the whole structure (one process, or another solver, a reference
+    /// solve or K's factor needs it).
+    Whole,
+    /// Ranks 1 … P − 1 keep their links alone; rank 0 keeps the whole structure for the
+    /// files that read every link (tensions, forces, reactions, VTK, figures, stability,
+    /// homogenised operators) and judges every answer alone.
+    AllButRank0,
+    /// Every rank keeps its links alone (the files asked for read no link: summary, history,
+    /// displacements); the ranks judge and measure every answer together.
+    EveryRank,
+}
+
+impl Sharing {
+    /// The sharing of a run of `case` by `methods` on `ranks` ranks that keeps K's factor or
+    /// not (`keeps_taut`).
+    pub fn of(case: &Case, methods: &[Method], keeps_taut: bool, ranks: usize) -> Sharing {
+        let possible = case
+            .solver
+            .latin_settings(Method::MicroMacro)
+            .is_some_and(|settings| LinkShare::possible(case.model, &settings));
+        let shares = ranks > 1
+            && methods == [Method::MicroMacro]
+            && case.solver.reference == ReferenceChoice::None
+            && !keeps_taut
+            && possible;
+        let o = &case.output;
+        let reads_links = o.tensions
+            || o.forces
+            || o.reactions
+            || o.vtk
+            || o.plots
+            || o.stability
+            || o.homogenised;
+        match (shares, reads_links) {
+            (false, _) => Sharing::Whole,
+            (true, true) => Sharing::AllButRank0,
+            (true, false) => Sharing::EveryRank,
+        }
+    }
+
+    /// The sharing of `tensolve run` on `case` (its own solvers) on `ranks` ranks.
+    pub fn of_run(case: &Case, ranks: usize) -> Sharing {
+        let methods = &case.solver.methods;
+        Sharing::of(
+            case,
+            methods,
+            Workload::run(case, methods).keeps_taut,
+            ranks,
+        )
+    }
+
+    /// What `check` says of it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Sharing::Whole => {
+                "every rank keeps the whole structure (only a run of micro-macro alone with \
+                 reference = \"none\", output.geometric_term = false and the default search \
+                 policy shares out its links)"
+            }
+            Sharing::AllButRank0 => {
+                "ranks 1 and up keep only their substructures' links; rank 0 keeps the whole \
+                 structure for the files that read every link (tensions, forces, reactions, vtk, \
+                 plots, stability, homogenised: turn them off and every rank keeps its share)"
+            }
+            Sharing::EveryRank => {
+                "every rank keeps only its substructures' links (nodes, supports and loads \
+                 whole); the ranks judge and measure each answer together"
+            }
+        }
+    }
 }
 
 /// The output directory `dir`, locked for this run with a private staging directory, when
@@ -316,6 +386,8 @@ struct Sweep<'s> {
     /// The processes of the run: a solve's files, written by rank 0 alone, are agreed on
     /// before the next solve's collectives.
     exchange: &'s dyn Exchange,
+    /// Which ranks keep only their substructures' links.
+    sharing: Sharing,
 }
 
 impl<'s> Sweep<'s> {
@@ -326,9 +398,11 @@ impl<'s> Sweep<'s> {
         reference: ReferenceSource<'s>,
         sinks: Sinks<'s>,
         exchange: &'s dyn Exchange,
+        sharing: Sharing,
     ) -> Self {
         Sweep {
             exchange,
+            sharing,
             prepared,
             previous: vec![None; solvers.len()],
             solvers,
@@ -409,24 +483,48 @@ impl<'s> Sweep<'s> {
         mut solution: Solution,
         events: &mut dyn FnMut(RunEvent<'_>),
     ) -> Result<(), RunError> {
-        // A rank that keeps a share of the links alone leaves the answer to rank 0, which
-        // judges it, writes it and fails the run for it.
-        if self.prepared.share.is_some() {
-            return Ok(());
-        }
+        // Where the ranks keep shares of the links: with every rank keeping its own alone,
+        //    the answer is judged and measured by all of them together; with rank 0 keeping
+        //    the whole structure, the others leave the answer to it (it judges it, writes it
+        //    and fails the run for it).
+        let together = match &self.prepared.share {
+            Some(share) if self.sharing == Sharing::EveryRank => Some(share),
+            Some(_) => return Ok(()),
+            None => None,
+        };
         let (structure, alpha) = (&self.prepared.structure, key.alpha);
         // 7. What the answer is beyond the solver's own stop: no equilibrium, or an unstable
         //    one (docs/method.md §8).
-        let verdict = assess(&mut solution, self.prepared, load, self.checks);
+        let solver = &self.solvers[index].solver;
+        let verdict = assess(
+            &mut solution,
+            self.prepared,
+            self.checks,
+            |eq| match together {
+                Some(_) => solver.no_equilibrium_along(&eq.displacements, load),
+                None => crate::solvers::no_equilibrium(structure, eq, load),
+            },
+        );
         self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
             .then(|| solution.equilibrium.clone());
         // 8. A non-finite answer (or a row it would give) is reported, never written.
         let row = results::is_finite(&solution).then(|| {
+            let eq = &solution.equilibrium;
+            let measures = match together {
+                Some(share) => AnswerMeasures::over_shares(
+                    structure,
+                    &share.kept_world_links(),
+                    share.world_cables(),
+                    eq,
+                    load,
+                    self.exchange,
+                ),
+                None => AnswerMeasures::of(structure, eq, load),
+            };
             SummaryRow::new(
                 key.method.name(),
                 alpha,
-                load,
-                structure,
+                &measures,
                 &solution,
                 (verdict.min_tangent_eigenvalue, verdict.geometric_term),
                 self.solvers[index].setup_seconds,
@@ -523,7 +621,14 @@ fn sinks<'s>(
         .any(|s| output::history_column(s.solver.stopping_measure()).is_some());
     sinks.add(
         out.history && has_history,
-        HistorySink::new(root, dir, structure.n_cables()),
+        HistorySink::new(
+            root,
+            dir,
+            prepared
+                .share
+                .as_ref()
+                .map_or(structure.n_cables(), |share| share.world_cables()),
+        ),
     );
     sinks.add(out.tensions, PerSolveSink::tensions(root, dir, structure));
     sinks.add(
@@ -549,4 +654,39 @@ fn sinks<'s>(
     }
     sinks.add(out.summary, SummarySink::new(output));
     sinks
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solvers::latin::SearchPolicy;
+
+    /// The ranks keep shares of the links only for micro-macro alone with no reference and
+    /// without K's factor, on several ranks, every rank when no file reads a link.
+    #[test]
+    fn links_are_shared_only_where_nothing_needs_the_whole_structure() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/paper.toml");
+        let alone = [
+            "solver.reference=\"none\"".to_string(),
+            "output.geometric_term=false".to_string(),
+        ];
+        let mut case = crate::case::load_with(&path, &alone).unwrap();
+        let mm = [Method::MicroMacro];
+        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::AllButRank0);
+        assert_eq!(Sharing::of(&case, &mm, false, 1), Sharing::Whole);
+        assert_eq!(Sharing::of(&case, &mm, true, 4), Sharing::Whole);
+        let both = [Method::MicroMacro, Method::MonoLatin];
+        assert_eq!(Sharing::of(&case, &both, false, 4), Sharing::Whole);
+        let o = &mut case.output;
+        (o.tensions, o.forces, o.reactions, o.plots) = (false, false, false, false);
+        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::EveryRank);
+        case.output.vtk = true;
+        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::AllButRank0);
+        case.solver.latin.policy = SearchPolicy::Status;
+        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::Whole);
+        let with_reference = crate::case::load_with(&path, &alone[1..]).unwrap();
+        assert_eq!(Sharing::of(&with_reference, &mm, false, 2), Sharing::Whole);
+        // The run's own solvers (the paper's four) keep the whole structure.
+        assert_eq!(Sharing::of_run(&case, 2), Sharing::Whole);
+    }
 }

@@ -4,7 +4,7 @@
 use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
-use crate::solvers::{Solution, Status};
+use crate::solvers::{Equilibrium, NoEquilibrium, Solution, Status};
 
 /// What the sweep found of an answer beyond its solver's stop.
 pub(super) struct Verdict {
@@ -20,11 +20,14 @@ pub(super) struct Verdict {
 /// energy decreases without bound (no equilibrium exists: [`Status::NoEquilibrium`]); with
 /// `checks.eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer
 /// where it is negative is an unstable equilibrium ([`Status::Unstable`]).
+///
+/// `certificate` tests a direction for no equilibrium ([`crate::solvers::no_equilibrium`] on
+/// the whole structure, or the solver's own test over the shares of the links the ranks keep).
 pub(super) fn assess(
     solution: &mut Solution,
     prepared: &Prepared,
-    load: &[f64],
     checks: AnswerChecks,
+    certificate: impl FnOnce(&Equilibrium) -> Option<NoEquilibrium>,
 ) -> Verdict {
     let s = &prepared.structure;
     if !results::is_finite(solution) {
@@ -38,7 +41,7 @@ pub(super) fn assess(
     // asked for a runaway.
     let found = solution.info.no_equilibrium.clone().or_else(|| {
         (!solution.info.status.converged())
-            .then(|| crate::solvers::no_equilibrium(s, &solution.equilibrium, load))
+            .then(|| certificate(&solution.equilibrium))
             .flatten()
     });
     if let Some(none) = found {

@@ -7,7 +7,7 @@
 
 use super::{auto_dm, Exchange, LatinSettings, Partition, SearchDirection, SearchPolicy};
 use crate::solvers::SetupError;
-use crate::structure::Structure;
+use crate::structure::{GeometricModel, Structure};
 
 /// What the LATIN solver needs of the whole structure, whichever share of it a rank keeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,14 +74,18 @@ pub struct LinkShare {
     /// The settings and the number of ranks it was made for.
     pub(super) settings: LatinSettings,
     pub(super) ranks: usize,
+    /// The substructures this rank holds.
+    held: std::ops::Range<usize>,
+    /// Cables of the whole structure, unilateral or not ([`Structure::n_cables`]).
+    cables: usize,
 }
 
 impl LinkShare {
-    /// Whether a solve with `settings` on `structure` can run on shares of the links: not when
+    /// Whether a solve with `settings` under `model` can run on shares of the links: not when
     /// every iteration reads the whole state (status-following l classifies every cable, and
     /// the prestress's geometric stiffness is one operator of the whole structure).
-    pub fn possible(structure: &Structure, settings: &LatinSettings) -> bool {
-        settings.policy != SearchPolicy::Status && structure.geometric.is_none()
+    pub fn possible(model: GeometricModel, settings: &LatinSettings) -> bool {
+        settings.policy != SearchPolicy::Status && !model.has_geometric_stiffness()
     }
 
     /// The share rank `rank` of `ranks` keeps of `whole` under `settings`: the structure of
@@ -95,7 +99,7 @@ impl LinkShare {
         ranks: usize,
     ) -> Result<Option<(Structure, LinkShare)>, SetupError> {
         settings.validate(whole)?;
-        if !Self::possible(whole, settings) {
+        if !Self::possible(whole.model, settings) || whole.geometric.is_some() {
             return Ok(None);
         }
         let mut partition = Partition::new(whole, settings.subdomains, settings.weak);
@@ -121,6 +125,8 @@ impl LinkShare {
             world,
             settings: *settings,
             ranks,
+            held,
+            cables: whole.n_cables(),
         };
         Ok(Some((structure, share)))
     }
@@ -128,6 +134,16 @@ impl LinkShare {
     /// Links of the whole structure.
     pub fn world_links(&self) -> usize {
         self.world.links
+    }
+
+    /// Cables of the whole structure ([`Structure::n_cables`]).
+    pub fn world_cables(&self) -> usize {
+        self.cables
+    }
+
+    /// The whole structure's index of each link the rank keeps, in the kept structure's order.
+    pub fn kept_world_links(&self) -> Vec<usize> {
+        self.world_links[self.held.clone()].concat()
     }
 }
 
