@@ -332,6 +332,39 @@ fn cli_check_prints_the_partition() {
         "{stdout}"
     );
     assert!(lines.contains(&"micro-macro:"), "{stdout}");
+    // The macro system: the 270 forces and the substructures' kernel columns, its factor sized.
+    let number = |key: &str| -> usize {
+        let line = lines.iter().find(|l| l.starts_with(key)).expect(key);
+        line[key.len()..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let system = lines
+        .iter()
+        .find(|l| l.starts_with("macro system"))
+        .unwrap();
+    assert_eq!(
+        number("macro system"),
+        270 + number("kernel cols"),
+        "{stdout}"
+    );
+    assert!(
+        system.contains("factorised and solved on every MPI rank"),
+        "{stdout}"
+    );
+    let entries: usize = system
+        .split("factor ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(entries >= number("macro system"), "{stdout}");
 }
 
 #[test]

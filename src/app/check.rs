@@ -462,6 +462,15 @@ impl CheckReport {
                 )?,
             }
             writeln!(f, "  kernel cols   {}", r.kernel_columns)?;
+            let (unknowns, entries) = r.macro_system;
+            if unknowns > 0 {
+                writeln!(
+                    f,
+                    "  macro system  {unknowns} unknowns, its LDLt factor {entries} entries \
+                     ({:.1} MB; factorised and solved on every MPI rank)",
+                    8.0 * entries as f64 / 1e6
+                )?;
+            }
             let origin = if settings.dm.is_some() {
                 "solver.dm".to_string()
             } else {

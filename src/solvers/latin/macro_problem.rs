@@ -85,6 +85,11 @@ struct Factor {
 pub struct SingularMacroProblem;
 
 impl MacroProblem {
+    /// Entries of its `L D Lᵀ` factor (every rank holds one: it is solved on every rank).
+    pub fn factor_entries(&self) -> usize {
+        self.factor.as_ref().map_or(0, |f| f.values.len())
+    }
+
     /// Assemble and factorise the macro matrix; `Err` if it is singular.
     pub fn new(
         subs: &[Substructure],

@@ -92,6 +92,9 @@ pub struct PartitionReport {
     pub redundant_nodes: usize,
     /// Macro force unknowns.
     pub macro_dofs: usize,
+    /// Unknowns of the macro system (forces and kernel amplitudes) and entries of its
+    /// `L D Lᵀ` factor, which every process holds.
+    pub macro_system: (usize, usize),
     /// Kernel columns of all the substructures.
     pub kernel_columns: usize,
     /// Free dofs of the largest substructure.
@@ -498,6 +501,7 @@ impl<'s> Latin<'s> {
             dropped_interfaces: self.dropped_interfaces,
             redundant_nodes: self.redundant_nodes,
             macro_dofs: self.macro_problem.n_forces,
+            macro_system: (self.macro_problem.n, self.macro_problem.factor_entries()),
             kernel_columns: self.substructures.iter().map(|s| s.kernel.ncols()).sum(),
             max_substructure_dofs: self
                 .substructures
