@@ -265,7 +265,7 @@ fn run_command(
         * case.load.alphas.len();
     let mut reporter = Reporter::new(quiet, solves);
     let exchange = ranks.exchange();
-    let result = run_on(&case, &options, &exchange, &mut |event| {
+    let result = run_on(case, &options, &exchange, &mut |event| {
         reporter.run_event(event)
     });
     if ranks.size() > 1 {

@@ -43,6 +43,15 @@ pub struct Geometry {
     pub grid_roles: Option<Vec<GridRole>>,
 }
 
+impl Geometry {
+    /// Drop the members (and their grid roles), once a structure has been built of them: a
+    /// run keeps its structure, not the description it was built from.
+    pub fn release_members(&mut self) {
+        self.members = Vec::new();
+        self.grid_roles = None;
+    }
+}
+
 /// Displacement components of one node held at prescribed values (`U|Γu = Ud`, docs/method.md §7).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NodeFix {
