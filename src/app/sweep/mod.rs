@@ -112,7 +112,8 @@ pub fn run(
 
 /// [`run`] on the processes of `exchange` (MPI ranks: every one calls it alike): micro-macro's
 /// substructures are shared among them ([`crate::solvers::latin::Exchange`]), the other
-/// solvers run alike on each, and rank 0 alone writes files.
+/// solvers run alike on each, and rank 0 alone writes files. It takes the case, whose members
+/// it releases once the structure is built of them.
 pub fn run_on(
     mut case: Case,
     options: &RunOptions,
