@@ -7,7 +7,7 @@ use super::anderson::{Anderson, Pieces};
 use super::indicator::Residuals;
 use super::local_stage::LocalLaw;
 use super::state::{LatinState, SubState};
-use super::{link_share, Latin, SearchPolicy, StopOn};
+use super::{Latin, SearchPolicy, StopOn};
 use crate::solvers::{
     unit_direction, Equilibrium, LinksAlong, Measure, NoEquilibrium, Progress, Solver, Status,
 };
@@ -146,16 +146,17 @@ impl Latin<'_> {
     /// links' order: the others' gathered from the ranks holding them (on one process,
     /// `mine` itself, laid out).
     fn per_link(&self, mine: Vec<f64>) -> Vec<f64> {
-        if let Some(world_links) = self.world_links {
-            return link_share::per_world_link(self.exchange, world_links, self.world.links, mine);
-        }
         let all = match self.exchange.size() {
             1 => mine,
             _ => self.exchange.all_gather(&mine),
         };
-        let mut out = vec![0.0; self.structure.links.len()];
-        let links = self.substructures.iter().flat_map(|sub| &sub.links);
-        links.zip(all).for_each(|(&i, v)| out[i] = v);
+        let mut out = vec![0.0; self.world.links];
+        // Where each substructure's links lie in the whole structure, in its links' order.
+        let places: Box<dyn Iterator<Item = &usize>> = match self.world_links {
+            Some(world_links) => Box::new(world_links.iter().flatten()),
+            None => Box::new(self.substructures.iter().flat_map(|sub| &sub.links)),
+        };
+        places.zip(all).for_each(|(&i, v)| out[i] = v);
         out
     }
 

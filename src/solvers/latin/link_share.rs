@@ -5,7 +5,7 @@
 //! and, per substructure, where its links' values go in the world's link order (the answer is
 //! gathered whole, link by link).
 
-use super::{auto_dm, Exchange, LatinSettings, Partition, SearchDirection, SearchPolicy};
+use super::{auto_dm, LatinSettings, Partition, SearchDirection, SearchPolicy};
 use crate::solvers::SetupError;
 use crate::structure::{GeometricModel, Structure};
 
@@ -145,26 +145,4 @@ impl LinkShare {
     pub fn kept_world_links(&self) -> Vec<usize> {
         self.world_links[self.held.clone()].concat()
     }
-}
-
-/// A value per link of the whole structure: the held substructures' `mine` (in their links'
-/// order) and the others' gathered from the ranks holding them, placed by `world_links` (per
-/// substructure, its links' indices in the whole).
-pub(super) fn per_world_link(
-    exchange: &dyn Exchange,
-    world_links: &[Vec<usize>],
-    links: usize,
-    mine: Vec<f64>,
-) -> Vec<f64> {
-    let all = match exchange.size() {
-        1 => mine,
-        _ => exchange.all_gather(&mine),
-    };
-    let mut out = vec![0.0; links];
-    world_links
-        .iter()
-        .flatten()
-        .zip(all)
-        .for_each(|(&i, v)| out[i] = v);
-    out
 }
