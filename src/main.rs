@@ -289,9 +289,10 @@ fn run_command(
                  {whole}; rank 0 kept the whole structure (it writes files that read every link)",
                 ranks.size() - 1
             ),
-            (false, false) => "MPI: every rank kept the whole structure (only a run of \
-                               micro-macro alone with reference = \"none\" shares out its links)"
-                .to_string(),
+            (false, false) => format!(
+                "MPI: every rank kept the whole structure ({})",
+                Sharing::WHEN_SHARED
+            ),
         };
         if set_up {
             reporter.line(&kept_line);

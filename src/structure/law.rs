@@ -99,6 +99,15 @@ pub fn gap_slack(link: &Link, trial: f64, scale: f64) -> bool {
     link.unilateral && trial < -SLACK_GAP_TOLERANCE * scale
 }
 
+/// The cables' force scale of [`SlackRule::Gap`] over `links` with their trial tensions:
+/// `max(|t0|, |t0 + k e|)` over the unilateral cables (0 without any). A maximum, so the scale
+/// of several groups of links is the largest of theirs.
+pub fn gap_scale<'a>(links: impl Iterator<Item = (&'a Link, f64)>) -> f64 {
+    links
+        .filter(|(l, _)| l.unilateral)
+        .fold(0.0f64, |m, (l, t)| m.max(l.prestress.abs()).max(t.abs()))
+}
+
 /// Per link: a unilateral cable that is slack by `rule`, from the trial tensions.
 pub fn slack_flags(s: &Structure, trial: &[f64], rule: SlackRule) -> Vec<bool> {
     match rule {
@@ -109,12 +118,7 @@ pub fn slack_flags(s: &Structure, trial: &[f64], rule: SlackRule) -> Vec<bool> {
             .map(|(l, &t)| l.unilateral && tension(l, t) == 0.0)
             .collect(),
         SlackRule::Gap => {
-            let scale = s
-                .links
-                .iter()
-                .zip(trial)
-                .filter(|(l, _)| l.unilateral)
-                .fold(0.0f64, |m, (l, t)| m.max(l.prestress.abs()).max(t.abs()));
+            let scale = gap_scale(s.links.iter().zip(trial.iter().copied()));
             s.links
                 .iter()
                 .zip(trial)

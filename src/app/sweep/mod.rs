@@ -239,6 +239,11 @@ pub enum Sharing {
 }
 
 impl Sharing {
+    /// Which runs share out their links, as `check` and `run` say it.
+    pub const WHEN_SHARED: &'static str = "only a run of micro-macro alone with reference = \
+         \"none\", output.geometric_term = false and the default search policy shares out its \
+         links";
+
     /// The sharing of a run of `case` by `methods` on `ranks` ranks that keeps K's factor or
     /// not (`keeps_taut`).
     pub fn of(case: &Case, methods: &[Method], keeps_taut: bool, ranks: usize) -> Sharing {
@@ -278,21 +283,24 @@ impl Sharing {
     }
 
     /// What `check` says of it.
-    pub fn describe(self) -> &'static str {
+    pub fn describe(self) -> String {
         match self {
             Sharing::Whole => {
-                "every rank keeps the whole structure (only a run of micro-macro alone with \
-                 reference = \"none\", output.geometric_term = false and the default search \
-                 policy shares out its links)"
+                format!(
+                    "every rank keeps the whole structure ({})",
+                    Self::WHEN_SHARED
+                )
             }
             Sharing::AllButRank0 => {
                 "ranks 1 and up keep only their substructures' links; rank 0 keeps the whole \
                  structure for the files that read every link (tensions, forces, reactions, vtk, \
                  plots, stability, homogenised: turn them off and every rank keeps its share)"
+                    .to_string()
             }
             Sharing::EveryRank => {
                 "every rank keeps only its substructures' links (nodes, supports and loads \
                  whole); the ranks judge and measure each answer together"
+                    .to_string()
             }
         }
     }

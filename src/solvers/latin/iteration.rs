@@ -399,12 +399,11 @@ impl Latin<'_> {
         let trial: Vec<f64> = held_links()
             .map(|&i| law::trial_tension(&s.links[i], s.link_dofs[i].elongation(&u)))
             .collect();
-        let scale = held_links()
-            .zip(&trial)
-            .filter(|(&i, _)| s.links[i].unilateral)
-            .fold(0.0f64, |m, (&i, t)| {
-                m.max(s.links[i].prestress.abs()).max(t.abs())
-            });
+        let scale = law::gap_scale(
+            held_links()
+                .map(|&i| &s.links[i])
+                .zip(trial.iter().copied()),
+        );
         let scale = match self.exchange.size() {
             1 => scale,
             _ => self
