@@ -427,6 +427,48 @@ fn check_prints_the_model() {
     }
 }
 
+/// The default partition (issue 41): substructures of about 16 × 16 modules, at least 4 × 4
+/// of them, printed by `check` with where it comes from; a given `solver.subdomains` is named.
+#[test]
+fn check_prints_the_default_partition_and_why() {
+    let partition = |modules: [usize; 2], extra: &str| {
+        let file = Temp::file(
+            "default-partition",
+            &format!(
+                "[grid]\nmodules = [{}, {}]\n[supports]\nclamp = \"lower-all-edges\"\n\
+                 [load]\nalpha = [0.01]\n[solver]\nmethods = [\"micro-macro\"]\n{extra}\
+                 [output]\ngeometric_term = false\n",
+                modules[0], modules[1]
+            ),
+        );
+        let o = tensolve(&["check", file.arg()]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        text.lines()
+            .find(|l| l.trim_start().starts_with("substructures"))
+            .unwrap_or_else(|| panic!("no substructures line in:\n{text}"))
+            .to_string()
+    };
+    // 16 x 16: the paper's 4 x 4; 40 x 24: at least 4 a side; 96 x 200: round(n / 16).
+    for (modules, count, shape) in [
+        ([16, 16], 16, "4 x 4"),
+        ([40, 24], 16, "4 x 4"),
+        ([96, 200], 78, "6 x 13"),
+        ([3, 20], 12, "3 x 4"),
+    ] {
+        let line = partition(modules, "");
+        assert!(
+            line.contains(&format!("substructures {count} ({shape}: default")),
+            "{modules:?}: {line}"
+        );
+    }
+    let line = partition([96, 200], "subdomains = [2, 3]\n");
+    assert!(
+        line.contains("substructures 6 (2 x 3: solver.subdomains)"),
+        "{line}"
+    );
+}
+
 #[test]
 fn output_switches_limit_the_files() {
     let file = Temp::file(

@@ -95,6 +95,8 @@ pub struct LatinReport {
     pub settings: LatinSettings,
     /// Its partition.
     pub partition: PartitionReport,
+    /// Where its partition comes from: `solver.subdomains`, or the default's rule.
+    pub partition_origin: &'static str,
 }
 
 /// What `tensolve check` found.
@@ -112,6 +114,19 @@ pub struct CheckReport {
     pub memory: MemoryEstimate,
     /// The memory available, and which limit says so (`None` when none can be read).
     pub available: Option<Available>,
+}
+
+/// Why `method`'s partition of `case` is what it is, for `check`.
+fn partition_origin(case: &Case, method: Method) -> &'static str {
+    match (method, case.solver.subdomains_given, case.grid.is_some()) {
+        (Method::MonoLatin, ..) => "one substructure, the monodomain solver",
+        (_, true, _) => "solver.subdomains",
+        (_, false, true) => {
+            "default: per axis max(round(modules / 16), 4), substructures of about 16 x 16 \
+             modules, at least 16 of them"
+        }
+        (_, false, false) => "default for a general structure: one box",
+    }
 }
 
 /// Check `case` (read from `path`), with `available` the memory this process could use before
@@ -210,6 +225,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
             Ok(latin) => report.latin.push(LatinReport {
                 method,
                 settings,
+                partition_origin: partition_origin(case, method),
                 partition: latin.report(),
             }),
             Err(e) => {
@@ -431,13 +447,14 @@ impl CheckReport {
             method,
             settings,
             partition: r,
+            partition_origin,
         } in &self.latin
         {
             let [sx, sy] = settings.subdomains;
             writeln!(f, "{}:", method.name())?;
             writeln!(
                 f,
-                "  substructures {} ({sx} x {sy}), largest {} free dofs",
+                "  substructures {} ({sx} x {sy}: {partition_origin}), largest {} free dofs",
                 r.substructures, r.max_substructure_dofs
             )?;
             writeln!(

@@ -25,6 +25,7 @@ mod typed;
 pub use tables::read_geometry;
 
 pub use error::CaseError;
+pub use solver::default_subdomains;
 pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
 
 use serde::Deserialize;

@@ -41,6 +41,7 @@ pub(super) fn solver_choice(
         choice.latin.tolerance = tol;
     }
     latin_settings(&raw, modules, &mut choice.latin)?;
+    choice.subdomains_given = raw.subdomains.is_some();
     if let Some(reference) = raw.reference {
         choice.reference = reference;
     }
@@ -69,10 +70,8 @@ fn latin_settings(
     // A general structure may be cut into any number of boxes (empty ones are refused at
     // set-up); up to 1000 along each axis.
     let [nx, ny] = modules.unwrap_or([1000, 1000]);
-    // The paper's partition, limited to the grid.
-    let [dx, dy] = latin.subdomains;
     let default = match modules {
-        Some(_) => [dx.min(nx), dy.min(ny)],
+        Some(grid) => default_subdomains(grid),
         None => [1, 1],
     };
     let [sx, sy] = raw.subdomains.map_or(default, |s| s.0);
@@ -154,6 +153,26 @@ fn latin_settings(
         latin.residual_tolerance = Some(tol);
     }
     Ok(())
+}
+
+/// Modules along a side of the substructure the default partition aims at: at 16 × 16
+/// micro-macro's iterations stay near twice the bilateral floor while each substructure's
+/// factor stays small (docs/performance.md, "micro-macro at scale").
+pub const DEFAULT_SUBSTRUCTURE_SIDE: usize = 16;
+
+/// Substructures along each axis the default partition never goes below (where the grid has
+/// as many modules): 4 × 4 = 16 substructures, one for each of 16 threads, and the paper's
+/// partition of its 16 × 16 grid.
+pub const DEFAULT_MIN_SUBDOMAINS: usize = 4;
+
+/// The default partition of a grid of `modules`: per axis `max(round(n / 16), 4)`, at most one
+/// substructure per module. It depends on the grid alone (not on the machine's threads), so that
+/// a case gives the same iterates everywhere.
+pub fn default_subdomains(modules: [usize; 2]) -> [usize; 2] {
+    modules.map(|n| {
+        let by_size = (n + DEFAULT_SUBSTRUCTURE_SIDE / 2) / DEFAULT_SUBSTRUCTURE_SIDE;
+        by_size.max(DEFAULT_MIN_SUBDOMAINS).min(n)
+    })
 }
 
 /// Refuse a solver named twice in `methods` (its files would overwrite each other).

@@ -115,6 +115,8 @@ pub struct SolverChoice {
     pub latin: LatinSettings,
     /// What LATIN's e is measured against.
     pub reference: ReferenceChoice,
+    /// Whether `solver.subdomains` was given (else the partition is the default's).
+    pub subdomains_given: bool,
 }
 
 impl Default for SolverChoice {
@@ -125,6 +127,7 @@ impl Default for SolverChoice {
             pcg_lcp: PcgLcpSettings::default(),
             latin: LatinSettings::default(),
             reference: ReferenceChoice::default(),
+            subdomains_given: false,
         }
     }
 }

@@ -72,8 +72,10 @@ pub const PAPER_DM: f64 = 3.92e6;
 /// Settings of one LATIN solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LatinSettings {
-    /// Substructures along x and y; `[1, 1]` is the monodomain solver. Default `[4, 4]` (the
-    /// paper's), limited to the grid by the case.
+    /// Substructures along x and y; `[1, 1]` is the monodomain solver. The case's default on a
+    /// grid is `crate::case::default_subdomains` (substructures of about 16 × 16 modules, at
+    /// least 4 × 4 of them: the paper's `[4, 4]` on its grid); this value, `[4, 4]`, serves
+    /// settings built without a case.
     pub subdomains: [usize; 2],
     /// Interface search direction d_m, N/m. Default `None`: `c p k̄ / √H` with c =
     /// [`super::DM_FACTOR`] and p the macro basis's degree (see [`super::auto_dm`]), which
