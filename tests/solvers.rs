@@ -246,3 +246,49 @@ fn a_released_taut_factor_refuses_the_solvers_that_need_it() {
         );
     }
 }
+
+/// newton on every thread (issue 41): from `SparseCholesky::PARALLEL_MIN_ORDER` unknowns K's
+/// factor factorizes and solves on rayon's threads; on one thread and on two it takes the same
+/// iterations to the same slack set and the same displacements (to round-off).
+#[test]
+fn newton_on_two_threads_gives_the_one_thread_answer() {
+    use tensolve::linalg::SparseCholesky;
+    use tensolve::solvers::newton::{Newton, NewtonSettings};
+    use tensolve::solvers::{AnySolver, Silent};
+    let case = case::parse(
+        "[grid]\nmodules = [80, 80]\n[supports]\nclamp = \"lower-all-edges\"\n\
+         [load]\nalpha = [0.06]\n[solver]\nmethods = [\"newton\"]\n",
+    )
+    .expect("case");
+    let s = case.structure();
+    assert!(
+        s.n_free >= SparseCholesky::PARALLEL_MIN_ORDER,
+        "{}",
+        s.n_free
+    );
+    let f: Vec<f64> = s.unit_load.iter().map(|v| 0.06 * v).collect();
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| {
+                let parallel = SparseCholesky::whole_problem_par(s.n_free) != faer::Par::Seq;
+                assert_eq!(parallel, threads > 1, "{threads} thread(s)");
+                let taut = TautStiffness::new(&s).expect("regular");
+                Newton::new(&s, &taut, NewtonSettings::default())
+                    .expect("newton")
+                    .solve(&f, None, &mut Silent)
+            })
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(one.info.status.converged() && two.info.status.converged());
+    assert_eq!(one.info.iterations, two.info.iterations);
+    assert!(one.equilibrium.slack_count() > 0);
+    assert_eq!(one.equilibrium.slack, two.equilibrium.slack);
+    let d = relative_difference(
+        &one.equilibrium.displacements,
+        &two.equilibrium.displacements,
+    );
+    assert!(d < 1e-9, "displacements differ by {d:e}");
+}
