@@ -135,22 +135,6 @@ impl std::fmt::Debug for SparseCholesky {
 }
 
 impl SparseCholesky {
-    /// From this many unknowns on, a factor that serves a whole solve alone (not one of many
-    /// factored side by side, as LATIN's substructures are) runs its numeric factorization and
-    /// its solves on rayon's threads: faer's supernodal kernels then split the large fronts.
-    pub const PARALLEL_MIN_ORDER: usize = 50_000;
-
-    /// The parallelism for a factor of order `n` that serves a whole solve alone:
-    /// [`Par::rayon`] on every thread of the current pool from
-    /// [`SparseCholesky::PARALLEL_MIN_ORDER`] unknowns on, [`Par::Seq`] below it or on one thread.
-    pub fn whole_problem_par(n: usize) -> Par {
-        if n >= Self::PARALLEL_MIN_ORDER && rayon::current_num_threads() > 1 {
-            Par::rayon(0)
-        } else {
-            Par::Seq
-        }
-    }
-
     /// Symbolic analysis of `pattern` (lower triangle). `par`: faer's parallelism inside one
     /// factorization (use `Par::Seq` when factorizations already run in parallel).
     pub fn analyse(pattern: &StiffnessPattern, par: Par) -> SparseCholesky {

@@ -6,6 +6,7 @@ use crate::linalg::{
     factorize_counting_zero_modes, NodeOrdering, SparseCholesky, StiffnessPattern,
 };
 use crate::structure::{law, prestress_stability, Structure};
+use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
 /// coordinates rather than AMD (smaller structures keep AMD, which needs no geometry); the
@@ -39,9 +40,7 @@ impl TautStiffness {
         } else {
             NodeOrdering::Amd
         };
-        // K's factor serves newton, pcg-lcp and the reference solve alone: parallel when large.
-        let par = SparseCholesky::whole_problem_par(pattern.n);
-        let factor = SparseCholesky::analyse_ordered(&pattern, par, ordering);
+        let factor = SparseCholesky::analyse_ordered(&pattern, Par::Seq, ordering);
         (pattern, factor)
     }
 
