@@ -12,10 +12,24 @@
 //! (`cables.unilateral = false`) on the same partition, newton's and mono-latin's time beside
 //! it; e against newton. `-- table status` adds the status-following policy of before
 //! (`search_direction = "status"`); `-- table quick` stops at 64 × 64.
+//!
+//! `cargo bench --bench latin -- atscale` prints the table of issue 41 ("micro-macro at scale")
+//! on the **default** partition and settings: grids of n × n modules clamped on all lower edges
+//! at ≈ 14.6 % slack (n = 128 α 0.0375, 256 α 0.01, 512 α 0.0025; `-- atscale 1024` adds 1024
+//! α 0.000625, `-- atscale quick` stops at 256): micro-macro's iterations, rebuilds, η and r(U)
+//! at the stop, set-up and solve seconds; the bilateral count (`cables.unilateral = false`) on
+//! the same partition; newton's iterations and seconds and e of micro-macro against newton
+//! (up to 512 × 512). Run it with `RAYON_NUM_THREADS` set to compare thread counts.
+//!
+//! `cargo bench --bench latin -- factor` times K's factor on 256 × 256 modules (590 k free
+//! dofs; AMD order) with faer's parallelism `Par::rayon(t)`, t = 1, 2, 4 … threads: the
+//! numeric factorization, a solve of one right-hand side and of a block of 16 (medians of 3).
+//! It is why K's factor stays sequential (docs/performance.md, "newton on several threads").
 
 use criterion::{criterion_group, Criterion};
 use std::path::Path;
 use std::time::Duration;
+use tensolve::linalg::SparseCholesky;
 use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::{AnySolver, Reference, Silent, Solver, TautStiffness};
@@ -242,12 +256,192 @@ fn table(args: &[String]) {
     }
 }
 
+/// One row of the at-scale table: micro-macro at the case's defaults on `structure`.
+struct ScaleRow {
+    iterations: usize,
+    rebuilds: usize,
+    eta: f64,
+    residual: f64,
+    converged: bool,
+    setup: f64,
+    solve: f64,
+    elongations: Vec<f64>,
+}
+
+fn scale_row(
+    structure: &tensolve::structure::Structure,
+    settings: LatinSettings,
+    load: &[f64],
+) -> ScaleRow {
+    let clock = std::time::Instant::now();
+    let mut solver = Latin::new(structure, settings).expect("set-up");
+    let setup = clock.elapsed().as_secs_f64();
+    let clock = std::time::Instant::now();
+    let mut state = solver.init(load);
+    let converged = loop {
+        if let Some(status) = solver.progress(&state).stop {
+            break status.converged();
+        }
+        if state.iteration >= settings.max_iterations {
+            break false;
+        }
+        solver.next_iter(&mut state);
+    };
+    let solve = clock.elapsed().as_secs_f64();
+    ScaleRow {
+        iterations: state.iteration,
+        rebuilds: state.rebuilds,
+        eta: state.eta,
+        residual: state.residual,
+        converged,
+        setup,
+        solve,
+        elongations: solver.elongations(&state),
+    }
+}
+
+fn atscale(args: &[String]) {
+    tensolve::app::allocator::retain_freed_memory();
+    let mut grids = vec![(128, 0.0375), (256, 0.01), (512, 0.0025)];
+    if args.iter().any(|a| a == "quick") {
+        grids.truncate(2);
+    }
+    if args.iter().any(|a| a == "1024") {
+        grids.push((1024, 0.000625));
+    }
+    println!("threads: {}", rayon::current_num_threads());
+    println!(
+        "| grid | partition (default) | micro-macro iterations (rebuilds) | η, r(U) at stop | bilateral | set-up s | solve s | newton iterations, s | e vs newton |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (n, alpha) in grids {
+        let case_text = |extra: &str| {
+            format!(
+                "[grid]\nmodules = [{n}, {n}]\n[supports]\nclamp = \"lower-all-edges\"\n\
+                 [load]\nalpha = [{alpha}]\n{extra}\n[solver]\nmethods = [\"micro-macro\"]\n"
+            )
+        };
+        let case = tensolve::case::parse(&case_text("")).expect("case");
+        let settings = case
+            .solver
+            .latin_settings(tensolve::solvers::Method::MicroMacro)
+            .expect("micro-macro settings");
+        let structure = case.structure();
+        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let row = scale_row(&structure, settings, &load);
+        let (newton, error) = if n <= 512 {
+            let clock = std::time::Instant::now();
+            let taut = TautStiffness::new(&structure).expect("regular");
+            let answer = Newton::new(&structure, &taut, NewtonSettings::default())
+                .expect("newton")
+                .solve(&load, None, &mut Silent);
+            let seconds = clock.elapsed().as_secs_f64();
+            let reference = Reference::new(&structure, &answer.equilibrium.displacements);
+            (
+                format!("{}, {seconds:.2}", answer.info.iterations),
+                format!("{:.1e}", reference.error(&row.elongations)),
+            )
+        } else {
+            ("–".to_string(), "–".to_string())
+        };
+        drop(structure);
+        let bilateral_case =
+            tensolve::case::parse(&case_text("[cables]\nunilateral = false")).expect("case");
+        let bilateral_structure = bilateral_case.structure();
+        let bilateral = scale_row(&bilateral_structure, settings, &load);
+        let [sx, sy] = settings.subdomains;
+        println!(
+            "| {n} × {n} | {} of {} × {} ({sx} × {sy}) | {}{} ({}) | {:.1e}, {:.1e} | {}{} | {:.2} | {:.2} | {newton} | {error} |",
+            sx * sy,
+            n / sx,
+            n / sy,
+            row.iterations,
+            if row.converged { "" } else { " not converged" },
+            row.rebuilds,
+            row.eta,
+            row.residual,
+            bilateral.iterations,
+            if bilateral.converged { "" } else { " not converged" },
+            row.setup,
+            row.solve,
+        );
+    }
+}
+
+/// Median of three timings of `f`, seconds.
+fn median3(mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..3)
+        .map(|_| {
+            let clock = std::time::Instant::now();
+            f();
+            clock.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[1]
+}
+
+fn factor_table() {
+    let case = tensolve::case::parse(
+        "[grid]\nmodules = [256, 256]\n[supports]\nclamp = \"lower-all-edges\"\n\
+         [load]\nalpha = [0.01]\n[solver]\nmethods = [\"newton\"]\n",
+    )
+    .expect("case");
+    let structure = case.structure();
+    let taut = TautStiffness::new(&structure).expect("regular");
+    let n = structure.n_free;
+    println!("| threads | factorize s | solve 1 column s | solve 16 columns s |");
+    println!("|---|---|---|---|");
+    let most = rayon::current_num_threads();
+    let mut threads = 1;
+    while threads <= most {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let (factorize, one, block) = pool.install(|| {
+            let par = match threads {
+                1 => faer::Par::Seq,
+                _ => faer::Par::rayon(threads),
+            };
+            let mut factor = SparseCholesky::analyse(&taut.pattern, par);
+            let pattern = &taut.pattern;
+            let factorize = median3(|| factor.factorize(pattern, &taut.values).expect("spd"));
+            let rhs: Vec<f64> = (0..n).map(|k| ((k * 7919) % 1013) as f64).collect();
+            let one = median3(|| {
+                let mut x = rhs.clone();
+                factor.solve_in_place(&mut x);
+            });
+            let block = median3(|| {
+                let mut x: Vec<f64> = rhs.iter().cycle().take(16 * n).copied().collect();
+                factor
+                    .solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, 16));
+            });
+            (factorize, one, block)
+        });
+        println!("| {threads} | {factorize:.3} | {one:.4} | {block:.3} |");
+        threads = if threads == most {
+            most + 1
+        } else {
+            (2 * threads).min(most)
+        };
+    }
+}
+
 criterion_group!(benches, latin);
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     if args.iter().any(|a| a == "table") {
         table(&args);
+        return;
+    }
+    if args.iter().any(|a| a == "factor") {
+        factor_table();
+        return;
+    }
+    if args.iter().any(|a| a == "atscale") {
+        atscale(&args);
         return;
     }
     benches();
