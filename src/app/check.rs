@@ -125,7 +125,10 @@ fn partition_origin(case: &Case, method: Method) -> &'static str {
             "default: per axis max(round(modules / 16), 4), substructures of about 16 x 16 \
              modules, at least 16 of them"
         }
-        (_, false, false) => "default for a general structure: one box",
+        (_, false, false) => {
+            "default for a general structure: boxes of the plan of about 833 nodes each (one \
+             below 1666 nodes)"
+        }
     }
 }
 

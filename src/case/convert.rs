@@ -29,7 +29,11 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     // 4. The load and its factors.
     let mut load = load::load(&raw.load, grid.is_some(), &geometry, &index_of)?;
     // 5. The solvers and their settings.
-    let solver = solver::solver_choice(raw.solver, grid.as_ref().map(|g| g.modules))?;
+    let solver = solver::solver_choice(
+        raw.solver,
+        grid.as_ref().map(|g| g.modules),
+        &geometry.nodes,
+    )?;
     // 6. The files to write.
     let output = output::output_choice(raw.output)?;
     // 7. `large` follows the load path: its α in increasing order (docs/method.md §8).

@@ -10,11 +10,12 @@ use crate::solvers::latin::{LatinSettings, SearchDirection, MAX_MACRO_DEGREE};
 /// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
 const MAX_ANDERSON_DEPTH: usize = 50;
 
-/// `[solver]` of a grid of `modules` (`None`: a general structure): the solvers' settings, the case's tolerance and
-/// iteration cap applied to every one of them.
+/// `[solver]` of a grid of `modules` (`None`: a general structure of `nodes`): the solvers'
+/// settings, the case's tolerance and iteration cap applied to every one of them.
 pub(super) fn solver_choice(
     raw: RawSolver,
     modules: Option<[usize; 2]>,
+    nodes: &[[f64; 3]],
 ) -> Result<SolverChoice, CaseError> {
     let mut choice = SolverChoice::default();
     if let Some(methods) = &raw.methods {
@@ -40,7 +41,7 @@ pub(super) fn solver_choice(
         choice.pcg_lcp.tolerance = tol;
         choice.latin.tolerance = tol;
     }
-    latin_settings(&raw, modules, &mut choice.latin)?;
+    latin_settings(&raw, modules, nodes, &mut choice.latin)?;
     choice.subdomains_given = raw.subdomains.is_some();
     if let Some(reference) = raw.reference {
         choice.reference = reference;
@@ -60,11 +61,12 @@ pub(super) fn solver_choice(
     Ok(choice)
 }
 
-/// The LATIN keys of `[solver]` on a grid of `modules` (`None`: a general structure), set in
-/// `latin`.
+/// The LATIN keys of `[solver]` on a grid of `modules` (`None`: a general structure of
+/// `nodes`), set in `latin`.
 fn latin_settings(
     raw: &RawSolver,
     modules: Option<[usize; 2]>,
+    nodes: &[[f64; 3]],
     latin: &mut LatinSettings,
 ) -> Result<(), CaseError> {
     // A general structure may be cut into any number of boxes (empty ones are refused at
@@ -72,7 +74,7 @@ fn latin_settings(
     let [nx, ny] = modules.unwrap_or([1000, 1000]);
     let default = match modules {
         Some(grid) => default_subdomains(grid),
-        None => [1, 1],
+        None => default_boxes(nodes),
     };
     let [sx, sy] = raw.subdomains.map_or(default, |s| s.0);
     if sx == 0 || sy == 0 || sx > nx || sy > ny {
@@ -175,6 +177,37 @@ pub fn default_subdomains(modules: [usize; 2]) -> [usize; 2] {
     })
 }
 
+/// Nodes of a general structure per substructure the default partition aims at: those of
+/// 16 × 16 modules of the grid (833 on the paper's).
+pub const DEFAULT_SUBSTRUCTURE_NODES: usize = 833;
+
+/// The default partition of a general structure of `nodes` into boxes of its plan: about
+/// [`DEFAULT_SUBSTRUCTURE_NODES`] nodes a box, laid out as the plan's sides' ratio; one box
+/// (the monodomain) below twice that.
+pub fn default_boxes(nodes: &[[f64; 3]]) -> [usize; 2] {
+    let count = (nodes.len() + DEFAULT_SUBSTRUCTURE_NODES / 2) / DEFAULT_SUBSTRUCTURE_NODES;
+    if count < 2 {
+        return [1, 1];
+    }
+    let side = |k: usize| {
+        let (low, high) = nodes
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p[k]), h.max(p[k]))
+            });
+        (high - low).max(0.0)
+    };
+    let (wx, wy) = (side(0), side(1));
+    // sx / sy = wx / wy and sx · sy = count; a side of no width gets one box.
+    let sx = match (wx > 0.0, wy > 0.0) {
+        (true, true) => ((count as f64 * wx / wy).sqrt().round() as usize).clamp(1, count),
+        (true, false) => count,
+        _ => 1,
+    };
+    let sy = (count as f64 / sx as f64).round().max(1.0) as usize;
+    [sx, sy.min(1000)]
+}
+
 /// Refuse a solver named twice in `methods` (its files would overwrite each other).
 pub(crate) fn check_distinct_methods(
     key: &'static str,
@@ -211,5 +244,49 @@ fn search_direction(l: &toml::Value) -> Result<SearchDirection, CaseError> {
             shown(other),
             "give \"stiffness\" (l = k on every link) or a number of N/m",
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_partition_of_a_grid_aims_at_16_modules_a_side() {
+        for (modules, expected) in [
+            ([16, 16], [4, 4]),
+            ([71, 71], [4, 4]),
+            ([72, 64], [5, 4]),
+            ([128, 128], [8, 8]),
+            ([512, 256], [32, 16]),
+            ([3, 1024], [3, 64]),
+        ] {
+            assert_eq!(default_subdomains(modules), expected, "{modules:?}");
+        }
+    }
+
+    #[test]
+    fn default_boxes_of_a_structure_follow_its_node_count_and_plan() {
+        let plan = |count: usize, wx: f64, wy: f64| -> Vec<[f64; 3]> {
+            let side = (count as f64).sqrt().ceil() as usize;
+            (0..count)
+                .map(|k| {
+                    let (i, j) = (k % side, k / side);
+                    [
+                        wx * i as f64 / side as f64,
+                        wy * j as f64 / side as f64,
+                        0.0,
+                    ]
+                })
+                .collect()
+        };
+        assert_eq!(default_boxes(&plan(12, 1.0, 1.0)), [1, 1]);
+        assert_eq!(default_boxes(&plan(1200, 1.0, 1.0)), [1, 1]);
+        // The softened 128 x 128 grid's 49 665 nodes: 60 boxes of a square plan.
+        assert_eq!(default_boxes(&plan(49_665, 128.0, 128.0)), [8, 8]);
+        // 5 boxes of a plan twice as long as wide.
+        assert_eq!(default_boxes(&plan(4_000, 2.0, 1.0)), [3, 2]);
+        // A mast: a plan of no width along y.
+        assert_eq!(default_boxes(&plan(4_000, 2.0, 0.0)), [5, 1]);
     }
 }
