@@ -122,8 +122,8 @@ fn partition_origin(case: &Case, method: Method) -> &'static str {
         (Method::MonoLatin, ..) => "one substructure, the monodomain solver",
         (_, true, _) => "solver.subdomains",
         (_, false, true) => {
-            "default: per axis max(round(modules / 16), 4), substructures of about 16 x 16 \
-             modules, at least 16 of them"
+            "default: per axis max(round(modules / 16), 4) and at most the modules, substructures of \
+             about 16 x 16 modules"
         }
         (_, false, false) => {
             "default for a general structure: boxes of the plan of about 833 nodes each (one \
