@@ -343,3 +343,31 @@ fn internal_slope_is_the_gradient_along_d() {
         "{lean} against {assembled}"
     );
 }
+
+/// Under `large` `solver.max_iterations` caps each increment: a cap too low for the arch's
+/// increments to converge ends at `limit_point` (the increments are halved), and the message
+/// says the cap, not the structure, may be the cause.
+#[test]
+fn a_low_cap_under_large_is_named_in_the_limit_point_message() {
+    let arch = von_mises_arch();
+    let out = arch.dir.0.join("out-cap");
+    let run = tensolve(&[
+        "run",
+        arch.dir.0.join("case.toml").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "solver.max_iterations=1",
+        "--set",
+        "load.alpha=[2.0]",
+    ]);
+    assert_eq!(code(&run), 1, "{}", stderr(&run));
+    let rows = read_csv(&out.join("summary.csv"));
+    assert_eq!(rows[0]["status"], "limit_point", "{:?}", rows[0]);
+    assert!(
+        stderr(&run).contains("each given 1 Newton step(s) by solver.max_iterations"),
+        "{}",
+        stderr(&run)
+    );
+}

@@ -140,7 +140,9 @@ pub struct LoadPathEnd {
     /// energy is not convex along the way from the last equilibrium to it (the path crossed a
     /// limit point and snapped through).
     pub branch_jumps: usize,
-    /// At a limit point: the ids of the cables taut at the last equilibrium and slack at the
-    /// end of the last increment tried (a loss of equilibrium where they go slack).
+    /// At a limit point: the ids of the cables taut at the last equilibrium that went slack
+    /// in the last increment tried (a loss of equilibrium where they go slack).
     pub slackened: Vec<u64>,
+    /// The Newton steps each increment was given before it was halved.
+    pub increment_steps: usize,
 }

@@ -89,9 +89,20 @@ fn limit_point_reason(row: &SummaryRow, solution: &Solution) -> String {
         _ => "the load path could not be followed to this load".to_string(),
     };
     reason.push_str(&format!(
-        " (increments halved below {} of the path)",
+        " (increments halved below {} of the path",
         crate::solvers::newton::MIN_INCREMENT
     ));
+    // A cap below the default makes increments fail that more steps would converge.
+    match path.map(|p| p.increment_steps) {
+        Some(steps) if steps < crate::solvers::newton::INCREMENT_MAX_STEPS => {
+            reason.push_str(&format!(
+                ", each given {steps} Newton step(s) by solver.max_iterations: raise it to \
+                 {} before reading this as a limit point)",
+                crate::solvers::newton::INCREMENT_MAX_STEPS
+            ))
+        }
+        _ => reason.push(')'),
+    }
     if let Some(path) = path {
         if path.branch_jumps > 0 {
             reason.push_str(

@@ -645,6 +645,7 @@ impl Solver for LargeNewton<'_> {
             },
             branch_jumps: state.branch_jumps,
             slackened: state.slackened.clone(),
+            increment_steps: self.increment_max_steps(),
         })
     }
 
