@@ -217,6 +217,23 @@ fn format_row(r: &SummaryRow) -> String {
         r.equilibrium_residual,
         1e3 * r.solve_seconds
     );
+    // The load path (`large`): where a limit point stopped it, and a row solved from an
+    // equilibrium before the previous row's (that one did not reach its α).
+    if let (Some(from), Some(reached)) = (r.path_from, r.path_reached) {
+        if r.status == tensolve::solvers::Status::LimitPoint {
+            line.push_str(&format!(
+                ", path from alpha = {} stopped at alpha = {}",
+                alpha_label(from),
+                alpha_label(reached)
+            ));
+        } else if r.path_restarted {
+            line.push_str(&format!(
+                ", path from alpha = {} (the last equilibrium before the rows that did not \
+                 reach their alpha)",
+                alpha_label(from)
+            ));
+        }
+    }
     if !r.status.no_answer()
         && !r.updates_geometry
         && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT

@@ -70,6 +70,15 @@ pub struct SummaryRow {
     /// Converged because the stopping measure is at round-off (not a column: the solve line
     /// says so instead of printing the measure, [`crate::solvers::SolveInfo::at_roundoff`]).
     pub at_roundoff: bool,
+    /// The α whose equilibrium the solve's load path started from (`large`: the solver's
+    /// last equilibrium reached), `None` for a solve with no load path.
+    pub path_from: Option<f64>,
+    /// The α of the last equilibrium reached on that path: α itself when it converged,
+    /// less at a limit point.
+    pub path_reached: Option<f64>,
+    /// The path did not start at this solver's previous row: the rows since did not reach
+    /// their α (a limit point), so this one was solved from the last equilibrium before them.
+    pub path_restarted: bool,
 }
 
 impl SummaryRow {
@@ -107,6 +116,9 @@ impl SummaryRow {
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
             at_roundoff: solution.info.at_roundoff && solution.info.status.converged(),
+            path_from: None,
+            path_reached: None,
+            path_restarted: false,
         }
     }
 }
@@ -147,7 +159,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached";
 
 fn csv_io(e: csv::Error) -> std::io::Error {
     std::io::Error::other(e)
@@ -170,7 +182,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -205,6 +217,8 @@ pub fn summary_line(r: &SummaryRow) -> String {
                 .map(|v| format!("{v:e}"))
                 .unwrap_or_default()
         ),
+        r.path_from.map(alpha_label).unwrap_or_default(),
+        r.path_reached.map(alpha_label).unwrap_or_default(),
     )
 }
 

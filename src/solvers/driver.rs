@@ -113,6 +113,7 @@ pub fn drive_from<S: Solver + ?Sized>(
         clock.time(|| solver.next_iter(&mut state));
     };
     let equilibrium: Equilibrium = clock.time(|| solver.iterate(&state));
+    let load_path = solver.load_path(&state);
     Solution {
         equilibrium,
         info: SolveInfo {
@@ -124,6 +125,7 @@ pub fn drive_from<S: Solver + ?Sized>(
             solve_seconds: clock.seconds(),
             at_roundoff: status == Status::Converged && progress.at_roundoff,
             no_equilibrium: runaway,
+            load_path,
         },
     }
 }

@@ -34,7 +34,7 @@ pub use residual::{
 };
 pub use solution::{Equilibrium, Solution};
 pub use solver::{stop_when, Progress, Solver};
-pub use status::{Measure, SolveInfo, Status};
+pub use status::{LoadPathEnd, Measure, SolveInfo, Status};
 pub use taut::TautStiffness;
 
 use thiserror::Error;

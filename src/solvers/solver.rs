@@ -87,6 +87,12 @@ pub trait Solver {
     /// The iterate as an equilibrium state: displacements U and tensions τ.
     fn iterate(&self, state: &Self::State) -> Equilibrium;
 
+    /// How far the solve followed its load path, for a solver that follows one (`large`);
+    /// `None` by default.
+    fn load_path(&self, _state: &Self::State) -> Option<super::LoadPathEnd> {
+        None
+    }
+
     /// A no-equilibrium certificate the solver found itself (docs/method.md §8), beside the
     /// driver's own check of the iterates. None by default.
     fn runaway(&self, _state: &Self::State) -> Option<super::NoEquilibrium> {

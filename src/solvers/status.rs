@@ -126,4 +126,23 @@ pub struct SolveInfo {
     pub at_roundoff: bool,
     /// With [`Status::NoEquilibrium`] found by the driver: the runaway direction's certificate.
     pub no_equilibrium: Option<super::NoEquilibrium>,
+    /// How far a solver that follows a load path (`large`) followed it; `None` for the others.
+    pub load_path: Option<LoadPathEnd>,
+}
+
+/// How far a solve followed its load path, from the solver's last equilibrium to its load.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadPathEnd {
+    /// The fraction of the path at whose load the last equilibrium on it was reached: 1 when
+    /// the solve converged at its load, less at a limit point.
+    pub reached: f64,
+    /// Increments whose equilibrium was rejected because it lies on another branch: the
+    /// energy is not convex along the way from the last equilibrium to it (the path crossed a
+    /// limit point and snapped through).
+    pub branch_jumps: usize,
+    /// At a limit point: the ids of the cables taut at the last equilibrium that went slack
+    /// in the last increment tried (a loss of equilibrium where they go slack).
+    pub slackened: Vec<u64>,
+    /// The Newton steps each increment was given before it was halved.
+    pub increment_steps: usize,
 }

@@ -399,6 +399,39 @@ pub struct CurrentGeometry {
     pub rows: Vec<SparseRow>,
 }
 
+/// `Σ τ ∇ℓ·d` at displacements U (free dofs): the slope along d of the members' energy in
+/// the exact-length law (`large`), the work of the tensions at U on the change d — what
+/// `∇Π(U)·d` is less the load's `F·d`, without assembling the gradient. d moves free dofs
+/// alone (held components do not change).
+pub fn internal_slope(s: &Structure, u: &[f64], d: &[f64]) -> f64 {
+    let component = |v: &[f64], node: usize, k: usize, held: f64| {
+        let dof = s.dof_of[3 * node + k];
+        if dof == CLAMPED {
+            held
+        } else {
+            v[dof]
+        }
+    };
+    let mut slope = 0.0;
+    for l in &s.links {
+        let d0: [f64; 3] = std::array::from_fn(|k| s.nodes[l.b][k] - s.nodes[l.a][k]);
+        let du: [f64; 3] = std::array::from_fn(|k| {
+            component(u, l.b, k, s.prescribed[3 * l.b + k])
+                - component(u, l.a, k, s.prescribed[3 * l.a + k])
+        });
+        let dd: [f64; 3] =
+            std::array::from_fn(|k| component(d, l.b, k, 0.0) - component(d, l.a, k, 0.0));
+        let v: [f64; 3] = std::array::from_fn(|k| d0[k] + du[k]);
+        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        // ℓ − L = (2 d0·Δu + Δu·Δu) / (ℓ + L), as in `CurrentGeometry::of`.
+        let squares: f64 = (0..3).map(|k| 2.0 * d0[k] * du[k] + du[k] * du[k]).sum();
+        let trial = current_trial_tension(s, l, squares / (len + l.length));
+        // τ ∇ℓ·d = τ n·(d_b − d_a).
+        slope += tension(l, trial) * (v[0] * dd[0] + v[1] * dd[1] + v[2] * dd[2]) / len;
+    }
+    slope
+}
+
 impl CurrentGeometry {
     /// The geometry at displacements U (free dofs; held components at their prescribed value).
     pub fn of(s: &Structure, u: &[f64]) -> CurrentGeometry {

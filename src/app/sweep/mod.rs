@@ -393,6 +393,9 @@ struct Sweep<'s> {
     /// Each solver's converged answer at the previous α: its warm start (newton and pcg-lcp
     /// use it; they stop on the same criterion as from a cold start).
     previous: Vec<Option<Equilibrium>>,
+    /// Each solver's load path (`large`): the α of its last equilibrium reached, where its
+    /// next solve's path starts (0: the prestressed state), and the α of its previous row.
+    paths: Vec<PathStart>,
     /// The checks made of every answer with K's factor.
     checks: AnswerChecks,
     rows: Vec<SummaryRow>,
@@ -419,6 +422,7 @@ impl<'s> Sweep<'s> {
             sharing,
             prepared,
             previous: vec![None; solvers.len()],
+            paths: vec![PathStart::default(); solvers.len()],
             solvers,
             reference,
             sinks,
@@ -507,6 +511,9 @@ impl<'s> Sweep<'s> {
             None => None,
         };
         let (structure, alpha) = (&self.prepared.structure, key.alpha);
+        // 6b. Where the solve's load path started and how far it went, before the verdict
+        //     below may judge the answer otherwise (the solver's path moved on all the same).
+        let path = self.paths[index].follow(alpha, &solution);
         // 7. What the answer is beyond the solver's own stop: no equilibrium, or an unstable
         //    one (docs/method.md §8).
         let solver = &self.solvers[index].solver;
@@ -523,6 +530,7 @@ impl<'s> Sweep<'s> {
             .then(|| solution.equilibrium.clone());
         // 8. A non-finite answer (or a row it would give) is reported, never written.
         let row = results::is_finite(&solution).then(|| {
+            let path = path.as_ref();
             let eq = &solution.equilibrium;
             let measures = match together {
                 Some(share) => AnswerMeasures::over_shares(
@@ -543,6 +551,7 @@ impl<'s> Sweep<'s> {
                 (verdict.min_tangent_eigenvalue, verdict.geometric_term),
                 self.solvers[index].setup_seconds,
             )
+            .on_path(path)
         });
         let Some(row) = row.filter(SummaryRow::is_finite) else {
             self.sinks.end(key, SolveEnd::NonFinite)?;
@@ -578,6 +587,58 @@ impl<'s> Sweep<'s> {
     fn close(mut self) -> Result<(Vec<SummaryRow>, Vec<String>), RunError> {
         self.sinks.close()?;
         Ok((self.rows, self.failures))
+    }
+}
+
+/// Where a solver's load path stands in the sweep (`large`, whose solves each start from the
+/// solver's last equilibrium).
+#[derive(Debug, Clone, Copy, Default)]
+struct PathStart {
+    /// The α of the solver's last equilibrium reached at a row's load (0: the prestressed
+    /// state).
+    alpha: f64,
+    /// The α of the solver's previous row, when there was one.
+    previous_row: Option<f64>,
+}
+
+/// A solve's load path in the sweep: where it started, how far it went, and whether it
+/// started elsewhere than at the solver's previous row.
+#[derive(Debug, Clone, Copy)]
+struct FollowedPath {
+    from: f64,
+    reached: f64,
+    restarted: bool,
+}
+
+impl PathStart {
+    /// The path of `solution`, the solve at `alpha`, and the start of the next one; `None`
+    /// for a solver that follows no load path.
+    fn follow(&mut self, alpha: f64, solution: &Solution) -> Option<FollowedPath> {
+        let end = solution.info.load_path.as_ref()?;
+        let from = self.alpha;
+        let followed = FollowedPath {
+            from,
+            // The α at fraction `reached` of the path from `from` to `alpha`.
+            reached: from + end.reached * (alpha - from),
+            restarted: self.previous_row.is_some_and(|row| row != from),
+        };
+        if solution.info.status.converged() {
+            self.alpha = alpha;
+        }
+        self.previous_row = Some(alpha);
+        Some(followed)
+    }
+}
+
+impl SummaryRow {
+    /// The row with its load path's columns.
+    fn on_path(mut self, path: Option<&FollowedPath>) -> SummaryRow {
+        if let Some(path) = path {
+            self.path_from = Some(path.from);
+            self.path_reached = Some(path.reached);
+            self.path_restarted = path.restarted;
+        }
+        self
     }
 }
 

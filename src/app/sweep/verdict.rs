@@ -74,6 +74,56 @@ pub(super) fn assess(
     }
 }
 
+/// Why a `limit_point` row stopped: where its load path started and ended, and what stopped
+/// it (an equilibrium on another branch, increments that no longer converge, cables going
+/// slack).
+fn limit_point_reason(row: &SummaryRow, solution: &Solution) -> String {
+    let path = solution.info.load_path.as_ref();
+    let mut reason = match (row.path_from, row.path_reached) {
+        (Some(from), Some(reached)) => format!(
+            "the load path from alpha = {} (the last equilibrium reached) was followed to \
+             alpha = {} and no further",
+            alpha_label(from),
+            alpha_label(reached)
+        ),
+        _ => "the load path could not be followed to this load".to_string(),
+    };
+    reason.push_str(&format!(
+        " (increments halved below {} of the path",
+        crate::solvers::newton::MIN_INCREMENT
+    ));
+    // A cap below the default makes increments fail that more steps would converge.
+    match path.map(|p| p.increment_steps) {
+        Some(steps) if steps < crate::solvers::newton::INCREMENT_MAX_STEPS => {
+            reason.push_str(&format!(
+                ", each given {steps} Newton step(s) by solver.max_iterations: raise it to \
+                 {} before reading this as a limit point)",
+                crate::solvers::newton::INCREMENT_MAX_STEPS
+            ))
+        }
+        _ => reason.push(')'),
+    }
+    if let Some(path) = path {
+        if path.branch_jumps > 0 {
+            reason.push_str(
+                ": beyond it the equilibria found lie on another branch, reached across a \
+                 region where the energy is not convex (a snap-through past the limit point)",
+            );
+        }
+        if !path.slackened.is_empty() {
+            reason.push_str(&format!(
+                "; a loss of equilibrium where cable(s) {} go slack",
+                path.slackened
+                    .iter()
+                    .map(|i| i.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+    }
+    reason
+}
+
 /// The failure line of a row that did not converge: how it ended, and for no equilibrium the
 /// cables that went slack and the nodes of the mode.
 pub(super) fn not_converged_message(
@@ -103,11 +153,11 @@ pub(super) fn not_converged_message(
                 .join(", ")
         ),
         (None, Status::LimitPoint) => format!(
-            "{head}: limit point: the load path could not be followed to this load (load \
-             increments halved below {} of the path from the last equilibrium); no \
-             displacement or tension file is written, and its row says converged = false, \
-             status = limit_point",
-            crate::solvers::newton::MIN_INCREMENT
+            "{head}: limit point: {}; no displacement or tension file is written, and its row \
+             says converged = false, status = limit_point. Loads up to the limit stay on the \
+             path; beyond it the structure snaps through or collapses (no static answer on \
+             its path)",
+            limit_point_reason(row, solution)
         ),
         (None, Status::BeyondModel) => format!(
             "{head}: beyond the model: the answer moves a node by {:.3e} m, more than the \

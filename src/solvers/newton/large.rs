@@ -13,21 +13,32 @@
 //! state, U = 0 under no load, at first) and walks to its load in increments, first the whole
 //! way; an increment that does not converge within [`INCREMENT_MAX_STEPS`] steps is halved and
 //! retried from the last equilibrium, down to [`MIN_INCREMENT`] of the path, below which the
-//! solve ends at a limit point ([`Status::LimitPoint`]), never as converged.
+//! solve ends at a limit point ([`Status::LimitPoint`]), never as converged. A retry
+//! assembles and factorizes its Hessian afresh: the failed attempt's factor (nearly singular
+//! near a limit point) is no chord for it. An increment's equilibrium is accepted only when
+//! it lies on the path: the energy at the increment's load is convex along the segment from
+//! the last equilibrium to it (`LargeNewton::on_the_path`); one reached across a region where it is not
+//! (past a limit point, on a snapped-through branch) is rejected and the increment halved, so
+//! that a solve's verdict depends on its load alone, not on the α before it. Loads beyond a
+//! limit point of the path end `LimitPoint`, whatever the α list.
 //!
 //! Stopping measure: [`Measure::EquilibriumResidual`] with the current unit vectors, the
 //! stricter load-relative form ≤ tolerance, as for the linear newton.
 
 use super::NewtonSettings;
-use crate::linalg::{dot, SparseCholesky, StiffnessPattern};
+use crate::linalg::{dot, norm, SparseCholesky, StiffnessPattern};
 use crate::solvers::{
-    current_unbalances, Equilibrium, Measure, Progress, Solver, Status, TautStiffness,
+    current_unbalances, Equilibrium, LoadPathEnd, Measure, Progress, Solver, Status, TautStiffness,
 };
 use crate::structure::law::{self, CurrentGeometry, SlackRule};
 use crate::structure::Structure;
 
-/// Newton steps one load increment may take before it is halved.
+/// Newton steps one load increment may take before it is halved (fewer when
+/// `solver.max_iterations` is smaller: under `large` the cap is per increment).
 pub const INCREMENT_MAX_STEPS: usize = 30;
+/// Points (besides the last equilibrium) at which the slope of the energy along an
+/// increment's segment is sampled for `LargeNewton::on_the_path`.
+const SEGMENT_SAMPLES: usize = 4;
 /// An increment whose r(U) is at or below this after [`INCREMENT_MAX_STEPS`] steps without
 /// meeting the tolerance sits at round-off: the solve ends `Stalled` rather than halving.
 const ROUNDOFF_RESIDUAL: f64 = 1e-12;
@@ -63,6 +74,8 @@ pub struct LargeWork {
     pub halvings: usize,
     /// Solves started from the prediction extrapolated from the last equilibria.
     pub predicted_starts: usize,
+    /// Increments whose equilibrium lay on another branch (rejected, the increment halved).
+    pub branch_jumps: usize,
 }
 
 /// newton on the exact-length law, set up for one structure.
@@ -93,6 +106,8 @@ struct Evaluation {
     gradient: Vec<f64>,
     residual: f64,
     load_residual: f64,
+    /// r(U)'s scale, `‖F‖ + ‖|B|ᵀ|τ|‖`, N.
+    scale: f64,
 }
 
 /// The iterate of a solve along its load path.
@@ -111,6 +126,15 @@ pub struct LargeState {
     iteration: usize,
     increment_steps: usize,
     stop: Option<Status>,
+    /// Increments of this solve whose equilibrium lay on another branch.
+    branch_jumps: usize,
+    /// At a limit point: the cables taut at the last equilibrium that went slack in the last
+    /// increment tried, when it did not converge (ids).
+    slackened: Vec<u64>,
+    /// The cables slack at some iterate of the increment being tried.
+    slack_on_the_way: Vec<bool>,
+    /// The last increment halved was halved for an equilibrium on another branch.
+    jumped: bool,
 }
 
 impl<'s> LargeNewton<'s> {
@@ -162,7 +186,60 @@ impl<'s> LargeNewton<'s> {
             } else {
                 f64::INFINITY
             },
+            scale: sizes.scale,
         }
+    }
+
+    /// Whether the equilibrium `state.u` at the increment's load lies on the path from the
+    /// last one, `state.u_done`: the energy Π at that load is convex along the segment
+    /// between them, its slope `ψ(s) = ∇Π(U_done + s d)·d` (`d = U − U_done`) never
+    /// decreasing, sampled at [`SEGMENT_SAMPLES`] points. An equilibrium reached across a
+    /// region where Π is concave along d (a snap-through past a limit point: a von Mises arch
+    /// passing flat) is not on the path. Near an equilibrium of the path Π is convex (its
+    /// tangent is positive definite), so a short enough increment along the path passes.
+    fn on_the_path(&self, state: &LargeState) -> bool {
+        let d: Vec<f64> = state
+            .u
+            .iter()
+            .zip(&state.u_done)
+            .map(|(u, v)| u - v)
+            .collect();
+        let size = norm(&d);
+        if size == 0.0 || !size.is_finite() {
+            return size == 0.0;
+        }
+        let load_work = dot(&state.load, &d);
+        // ψ(s) = Σ τ ∇ℓ·d − F·d at U_done + s d.
+        let slope_at = |fraction: f64| {
+            let u: Vec<f64> = state
+                .u_done
+                .iter()
+                .zip(&d)
+                .map(|(v, d)| v + fraction * d)
+                .collect();
+            law::internal_slope(self.structure, &u, &d) - load_work
+        };
+        let mut previous = slope_at(0.0);
+        // Round-off of ψ: each end is an equilibrium to the tolerance only (|∇Π| up to
+        // tolerance × scale there), and ψ(0) is −ΔF·d up to that.
+        let noise = 10.0 * (self.settings.tolerance + 1e-12) * state.eval.scale * size
+            + 1e-6 * previous.abs();
+        for k in 1..=SEGMENT_SAMPLES {
+            let slope = match k {
+                SEGMENT_SAMPLES => dot(&state.eval.gradient, &d),
+                _ => slope_at(k as f64 / SEGMENT_SAMPLES as f64),
+            };
+            if !slope.is_finite() || slope < previous - noise {
+                return false;
+            }
+            previous = slope;
+        }
+        true
+    }
+
+    /// The Newton steps one increment may take: [`INCREMENT_MAX_STEPS`], or the cap when lower.
+    fn increment_max_steps(&self) -> usize {
+        INCREMENT_MAX_STEPS.min(self.settings.max_iterations).max(1)
     }
 
     /// `ΔU = −H⁻¹ ∇Π`: a chord step with the last factor while chord steps contract the
@@ -282,12 +359,30 @@ impl<'s> LargeNewton<'s> {
     /// Halve the increment and retry it from the last equilibrium, or stop at a limit point.
     fn halve(&mut self, state: &mut LargeState) {
         self.work.halvings += 1;
+        // The retry assembles its Hessian: the failed attempt's factor, nearly singular near a
+        // limit point, would steer every retry off the path as a chord.
+        self.chord = false;
         state.increment *= 0.5;
         if state.increment < MIN_INCREMENT {
             state.stop = Some(Status::LimitPoint);
+            let s = self.structure;
             state.u = state.u_done.clone();
-            state.load = path_load(&state.start, &state.target, state.done);
+            // The answer is the last equilibrium; its stopping value is measured at the
+            // solve's load, the α of its row, not at the load where it is an equilibrium.
+            state.load = state.target.clone();
             state.eval = self.evaluate(&state.load, &state.u);
+            // Cables that went slack on the way of an increment that found no equilibrium (one
+            // that found it on another branch says so itself).
+            if !state.jumped {
+                let done = law::slack_flags(s, &state.eval.trial, SlackRule::Gap);
+                state.slackened = s
+                    .links
+                    .iter()
+                    .zip(state.slack_on_the_way.iter().zip(&done))
+                    .filter(|(_, (&tried, &done))| tried && !done)
+                    .map(|(link, _)| link.id)
+                    .collect();
+            }
             return;
         }
         state.u = state.u_done.clone();
@@ -297,6 +392,7 @@ impl<'s> LargeNewton<'s> {
     /// The load of `done + increment`, evaluated at the current displacements.
     fn begin_increment(&self, state: &mut LargeState) {
         state.increment_steps = 0;
+        state.slack_on_the_way.iter_mut().for_each(|x| *x = false);
         state.load = path_load(&state.start, &state.target, state.done + state.increment);
         state.eval = self.evaluate(&state.load, &state.u);
     }
@@ -365,6 +461,14 @@ impl<'s> LargeNewton<'s> {
     /// solve (at the target) or moves the path on.
     fn settle(&mut self, state: &mut LargeState) {
         while state.stop.is_none() && self.converged(&state.eval) {
+            if !self.on_the_path(state) {
+                // An equilibrium on another branch: the path is not followed across.
+                state.branch_jumps += 1;
+                self.work.branch_jumps += 1;
+                state.jumped = true;
+                self.halve(state);
+                continue;
+            }
             if state.done + state.increment >= 1.0 {
                 state.stop = Some(Status::Converged);
                 let reached = (state.target.clone(), state.u.clone());
@@ -401,8 +505,13 @@ impl Solver for LargeNewton<'_> {
         self.structure
     }
 
+    /// The path's own limits end every solve first (at most [`INCREMENT_MAX_STEPS`] steps
+    /// for each of at most `1 / MIN_INCREMENT` increments and their halvings): the cap
+    /// `solver.max_iterations` bounds each increment instead
+    /// (`LargeNewton::increment_max_steps`), so a limit point is never reported as a cap.
     fn max_iterations(&self) -> usize {
-        self.settings.max_iterations
+        let halvings = MIN_INCREMENT.recip().log2() as usize + 1;
+        (MIN_INCREMENT.recip() as usize + halvings + 1) * INCREMENT_MAX_STEPS
     }
 
     /// From the last equilibrium reached, the whole path in one increment first, started from
@@ -442,6 +551,10 @@ impl Solver for LargeNewton<'_> {
             iteration: 0,
             increment_steps: 0,
             stop: None,
+            branch_jumps: 0,
+            slackened: Vec::new(),
+            slack_on_the_way: vec![false; self.structure.links.len()],
+            jumped: false,
         };
         self.settle(&mut state);
         state
@@ -476,8 +589,15 @@ impl Solver for LargeNewton<'_> {
                     self.chord = false;
                 }
                 state.eval = eval;
+                // Slack with its gap open: a cable at τ = 0 with a closed gap is not.
+                let slack = law::slack_flags(self.structure, &state.eval.trial, SlackRule::Gap);
+                state
+                    .slack_on_the_way
+                    .iter_mut()
+                    .zip(slack)
+                    .for_each(|(seen, now)| *seen |= now);
                 self.settle(state);
-                if state.stop.is_none() && state.increment_steps >= INCREMENT_MAX_STEPS {
+                if state.stop.is_none() && state.increment_steps >= self.increment_max_steps() {
                     if state.eval.residual <= ROUNDOFF_RESIDUAL {
                         // At round-off (a load tiny against the prestress, or a tolerance f64
                         // does not resolve): no smaller increment would do better. On the way,
@@ -488,12 +608,14 @@ impl Solver for LargeNewton<'_> {
                             self.advance(state);
                         }
                     } else {
+                        state.jumped = false;
                         self.halve(state);
                         self.settle(state);
                     }
                 }
             }
             None => {
+                state.jumped = false;
                 self.halve(state);
                 self.settle(state);
             }
@@ -513,6 +635,18 @@ impl Solver for LargeNewton<'_> {
             at_roundoff: false,
             stop: state.stop,
         }
+    }
+
+    fn load_path(&self, state: &LargeState) -> Option<LoadPathEnd> {
+        Some(LoadPathEnd {
+            reached: match state.stop {
+                Some(Status::Converged) => 1.0,
+                _ => state.done,
+            },
+            branch_jumps: state.branch_jumps,
+            slackened: state.slackened.clone(),
+            increment_steps: self.increment_max_steps(),
+        })
     }
 
     /// `e = ℓ(U) − L`.
