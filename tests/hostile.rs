@@ -76,6 +76,8 @@ fn assert_every_file_has_a_row(dir: &Path) {
             .strip_prefix("tensions/")
             .or_else(|| f.strip_prefix("displacements/"))
             .or_else(|| f.strip_prefix("history/"))
+            .or_else(|| f.strip_prefix("forces/"))
+            .or_else(|| f.strip_prefix("reactions/"))
         {
             let stem = stem.trim_end_matches(".csv");
             assert!(rows.contains(stem), "`{f}` has no summary row: {rows:?}");
@@ -340,8 +342,9 @@ fn d7_a_killed_sweep_shows_no_file_without_its_row() {
         .collect();
     assert!(hidden.is_empty(), "{hidden:?}");
     assert_eq!(summary(&dir.0).len(), 1);
-    // summary, tensions, displacements, forces, reactions (issue 27 added the last two).
-    assert_eq!(files(&dir.0).len(), 5, "{:?}", files(&dir.0));
+    // summary, tensions, displacements, forces, reactions (issue 27 added the last two),
+    // reaction_totals.csv (issue 42: the reactions' sums, out of their table).
+    assert_eq!(files(&dir.0).len(), 6, "{:?}", files(&dir.0));
 }
 
 #[test]
@@ -1043,4 +1046,37 @@ fn r5_a_failed_rerun_leaves_nothing_of_the_previous_run() {
         "{}",
         stderr(&out)
     );
+}
+
+// ---- Issue 42: the third adversarial review ----
+
+/// T7: the creation of `summary.csv` fails after the first solve's files are published (a full
+/// disk exactly there; here a directory planted under its name, which fails the same step):
+/// the run ends with exit 1 naming `summary.csv`, and the solve's files are withdrawn, so no
+/// result file is left without its row.
+#[test]
+fn t7_a_summary_that_cannot_be_created_leaves_no_file_without_its_row() {
+    let dir = Temp::dir("t7-out");
+    std::fs::create_dir_all(dir.0.join("summary.csv/x")).unwrap();
+    let case = Temp::file(
+        "t7",
+        &small_case(
+            "[\"newton\", \"mono-latin\"]",
+            "[0.5, 1.0]",
+            "[output]\nstability = true\n",
+        ),
+    );
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 1, "{}", stderr(&out));
+    let summary = dir.0.join("summary.csv");
+    assert!(
+        stderr(&out).starts_with(&format!("error: could not write `{}`:", summary.display())),
+        "{}",
+        stderr(&out)
+    );
+    // No file but the planted directory: no tensions/, displacements/, forces/, reactions/,
+    // history/ file, and no stability.csv or reaction_totals.csv row of a solve without its
+    // summary row.
+    assert!(dir.0.join("summary.csv/x").is_dir());
+    assert_eq!(files(&dir.0), BTreeSet::new(), "{}", stderr(&out));
 }

@@ -15,7 +15,10 @@ use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolv
 use crate::case::{Case, ReferenceChoice};
 use crate::output::{
     self, alpha_label,
-    sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
+    sinks::{
+        HistorySink, PerSolveSink, PlotsSink, PublishSink, ReactionTotalsSink, StabilitySink,
+        SummarySink,
+    },
     FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results::{self, AnswerMeasures};
@@ -666,6 +669,7 @@ fn sinks<'s>(
     if let Some(taut) = taut {
         sinks.add(out.stability, StabilitySink::new(output, structure, taut));
     }
+    sinks.add(out.reactions, ReactionTotalsSink::new(output, structure));
     sinks.add(out.summary, SummarySink::new(output));
     sinks
 }
