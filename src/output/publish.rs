@@ -14,6 +14,7 @@
 use std::collections::BTreeSet;
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{self, Read, Write};
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Component, Path, PathBuf};
 
 use super::sinks::WriteError;
@@ -39,6 +40,17 @@ pub enum OpenError {
     Busy {
         /// The directory.
         dir: PathBuf,
+    },
+    /// The lock's name is taken by a link (not followed).
+    #[error(
+        "`{}` is a link, not tensolve's lock file: it is not followed; remove it (`rm {}`) and \
+         run again",
+        lock.display(),
+        lock.display()
+    )]
+    LockIsLink {
+        /// The lock's path.
+        lock: PathBuf,
     },
     /// The directory cannot be created, locked or written.
     #[error("output directory `{}` is not writable ({source})", dir.display())]
@@ -90,13 +102,21 @@ pub fn lock_directory(root: &Path) -> Result<File, OpenError> {
         source,
     };
     std::fs::create_dir_all(root).map_err(io_err)?;
+    // O_NOFOLLOW: a link planted under the lock's name is refused, never followed (opening
+    // through it would create a file at its target).
     let lock = OpenOptions::new()
         .read(true)
         .write(true)
         .create(true)
         .truncate(false)
+        .custom_flags(libc::O_NOFOLLOW)
         .open(root.join(LOCK_FILE))
-        .map_err(io_err)?;
+        .map_err(|e| match e.raw_os_error() {
+            Some(libc::ELOOP) => OpenError::LockIsLink {
+                lock: root.join(LOCK_FILE),
+            },
+            _ => io_err(e),
+        })?;
     match lock.try_lock() {
         Ok(()) => Ok(lock),
         Err(TryLockError::WouldBlock) => Err(OpenError::Busy {

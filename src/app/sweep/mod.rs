@@ -329,6 +329,18 @@ fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
         .clone()
         .unwrap_or_else(|| case.solver.methods.clone());
     crate::case::check_distinct_methods("--solver", &methods)?;
+    if case.output.homogenised && !methods.contains(&Method::MicroMacro) {
+        let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();
+        return Err(RunError::Case(crate::case::CaseError::Invalid {
+            key: "output.homogenised".into(),
+            value: "true".into(),
+            fix: format!(
+                "it writes micro-macro's homogenised operators, and this run solves with {} \
+                 only: add \"micro-macro\" to `solver.methods` (or `--solver`), or drop the key",
+                names.join(", ")
+            ),
+        }));
+    }
     Ok(methods)
 }
 
