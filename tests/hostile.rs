@@ -298,6 +298,8 @@ fn d4_a_rerun_leaves_exactly_its_files_and_foreign_ones_alone() {
         // forces/ and reactions/ (issue 27): per-solve files of the rerun too.
         "forces/newton_alpha1.csv",
         "reactions/newton_alpha1.csv",
+        // The reactions' sums per axis (issue 42), a ledger like summary.csv.
+        "reaction_totals.csv",
         "notes.txt",
         "tensions/mine.csv",
     ]
