@@ -154,7 +154,19 @@ impl From<BenchError> for Failure {
     }
 }
 
+/// A write past a file-size limit (`ulimit -f`) raises SIGXFSZ, whose default action ends the
+/// process with no word (exit 153 in a shell). Ignored, the write fails with EFBIG instead,
+/// and the run reports it as an error naming the file (exit 1).
+fn report_file_size_limit_as_write_error() {
+    #[cfg(unix)]
+    // SAFETY: SIG_IGN installs no handler; it is set before any other thread starts.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+}
+
 fn main() -> ExitCode {
+    report_file_size_limit_as_write_error();
     tensolve::app::allocator::retain_freed_memory();
     let cli = Cli::parse();
     let ranks = Ranks::init();

@@ -523,18 +523,11 @@ fn stability_csv_reports_the_smallest_tangent_eigenvalue() {
 
 /// `scripts/peers/peers.py` on a `[structure]` case says it compares grids and names the peer
 /// that takes general structures (it died on `KeyError: 'grid'`). Needs numpy, which CI installs
-/// with openseespy.
+/// with openseespy. A peer check: ignored by a plain `cargo test`, failed where numpy is missing.
 #[test]
+#[ignore = "peer check: needs python3 with numpy (python3 -m pip install numpy); run with -- --include-ignored"]
 fn peers_script_refuses_a_structure_case_plainly() {
-    let numpy = std::process::Command::new("python3")
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !numpy {
-        assert!(std::env::var_os("CI").is_none(), "CI installs numpy");
-        eprintln!("skipped: numpy is not installed");
-        return;
-    }
+    common::require_python(&["numpy"]);
     let o = std::process::Command::new("python3")
         .arg(manifest_path("scripts/peers/peers.py"))
         .args([

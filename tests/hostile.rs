@@ -76,6 +76,8 @@ fn assert_every_file_has_a_row(dir: &Path) {
             .strip_prefix("tensions/")
             .or_else(|| f.strip_prefix("displacements/"))
             .or_else(|| f.strip_prefix("history/"))
+            .or_else(|| f.strip_prefix("forces/"))
+            .or_else(|| f.strip_prefix("reactions/"))
         {
             let stem = stem.trim_end_matches(".csv");
             assert!(rows.contains(stem), "`{f}` has no summary row: {rows:?}");
@@ -296,6 +298,8 @@ fn d4_a_rerun_leaves_exactly_its_files_and_foreign_ones_alone() {
         // forces/ and reactions/ (issue 27): per-solve files of the rerun too.
         "forces/newton_alpha1.csv",
         "reactions/newton_alpha1.csv",
+        // The reactions' sums per axis (issue 42), a ledger like summary.csv.
+        "reaction_totals.csv",
         "notes.txt",
         "tensions/mine.csv",
     ]
@@ -340,8 +344,9 @@ fn d7_a_killed_sweep_shows_no_file_without_its_row() {
         .collect();
     assert!(hidden.is_empty(), "{hidden:?}");
     assert_eq!(summary(&dir.0).len(), 1);
-    // summary, tensions, displacements, forces, reactions (issue 27 added the last two).
-    assert_eq!(files(&dir.0).len(), 5, "{:?}", files(&dir.0));
+    // summary, tensions, displacements, forces, reactions (issue 27 added the last two),
+    // reaction_totals.csv (issue 42: the reactions' sums, out of their table).
+    assert_eq!(files(&dir.0).len(), 6, "{:?}", files(&dir.0));
 }
 
 #[test]
@@ -1043,4 +1048,177 @@ fn r5_a_failed_rerun_leaves_nothing_of_the_previous_run() {
         "{}",
         stderr(&out)
     );
+}
+
+// ---- Issue 42: the third adversarial review ----
+
+/// T7: the creation of `summary.csv` fails after the first solve's files are published (a full
+/// disk exactly there; here a directory planted under its name, which fails the same step):
+/// the run ends with exit 1 naming `summary.csv`, and the solve's files are withdrawn, so no
+/// result file is left without its row.
+#[test]
+fn t7_a_summary_that_cannot_be_created_leaves_no_file_without_its_row() {
+    let dir = Temp::dir("t7-out");
+    std::fs::create_dir_all(dir.0.join("summary.csv/x")).unwrap();
+    let case = Temp::file(
+        "t7",
+        &small_case(
+            "[\"newton\", \"mono-latin\"]",
+            "[0.5, 1.0]",
+            "[output]\nstability = true\n",
+        ),
+    );
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 1, "{}", stderr(&out));
+    let summary = dir.0.join("summary.csv");
+    assert!(
+        stderr(&out).starts_with(&format!("error: could not write `{}`:", summary.display())),
+        "{}",
+        stderr(&out)
+    );
+    // No file but the planted directory: no tensions/, displacements/, forces/, reactions/,
+    // history/ file, and no stability.csv or reaction_totals.csv row of a solve without its
+    // summary row.
+    assert!(dir.0.join("summary.csv/x").is_dir());
+    assert_eq!(files(&dir.0), BTreeSet::new(), "{}", stderr(&out));
+}
+
+/// T10: a file-size limit (`ulimit -f`) below a result file's size: the write fails and the
+/// run says which file, with exit 1, instead of being killed by SIGXFSZ with no word.
+#[test]
+fn t10_a_file_size_limit_is_a_write_error_naming_the_file() {
+    let dir = Temp::dir("t10-out");
+    let case = Temp::file("t10", &small_case("[\"newton\"]", "[1.0]", ""));
+    // 1 block (512 or 1024 bytes by the shell): the 192 cables' tensions take more.
+    let line = format!(
+        "ulimit -f 1; exec '{}' run '{}' --out '{}' --quiet",
+        env!("CARGO_BIN_EXE_tensolve"),
+        case.arg(),
+        dir.arg()
+    );
+    let out = Command::new("sh").args(["-c", &line]).output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "ended by {:?}: {}",
+        out.status,
+        stderr(&out)
+    );
+    let message = stderr(&out);
+    assert!(
+        message.starts_with(&format!("error: could not write `{}/", dir.arg()))
+            && message.contains("ulimit -f"),
+        "{message}"
+    );
+    assert!(!dir.0.join("summary.csv").exists());
+    assert_every_file_has_a_row(&dir.0);
+}
+
+/// T11: a bad `--set` among several: the message names that one, not every override given.
+#[test]
+fn t11_a_bad_override_is_named_alone() {
+    let case = Temp::file("t11", &small_case("[\"newton\"]", "[1.0]", ""));
+    let out = tensolve(&[
+        "check",
+        case.arg(),
+        "--set",
+        "solver.tolerance=1e-8",
+        "--set",
+        "solver.search_direction=\"Newton\"",
+        "--set",
+        "load.alpha=[2.0]",
+    ]);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(
+        message.starts_with("error: --set solver.search_direction=\"Newton\": unknown variant"),
+        "{message}"
+    );
+    assert!(
+        !message.contains("tolerance") && !message.contains("load.alpha"),
+        "{message}"
+    );
+}
+
+/// N11: `output.homogenised` with no micro-macro solve is refused by name (it wrote nothing
+/// and said nothing, exit 0); with micro-macro it is written.
+#[test]
+fn n11_homogenised_output_without_micro_macro_is_refused() {
+    let dir = Temp::dir("n11-out");
+    let case = Temp::file(
+        "n11",
+        &small_case(
+            "[\"newton\", \"mono-latin\"]",
+            "[1.0]",
+            "[output]\nhomogenised = true\n",
+        ),
+    );
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(
+        message.contains("`output.homogenised` = true")
+            && message.contains("newton, mono-latin")
+            && message.contains("micro-macro"),
+        "{message}"
+    );
+    assert!(files(&dir.0).is_empty(), "{:?}", files(&dir.0));
+    let out = tensolve(&[
+        "run",
+        case.arg(),
+        "--out",
+        dir.arg(),
+        "--quiet",
+        "--solver",
+        "micro-macro",
+        "--set",
+        "solver.subdomains=[2, 2]",
+    ]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
+    assert!(files(&dir.0).iter().any(|f| f.starts_with("homogenised/")));
+}
+
+/// N13: a link planted under the lock's name is not followed (it created a file at its
+/// target): the run is refused, naming it, and the target is not created.
+#[test]
+fn n13_a_planted_lock_link_is_refused_and_not_followed() {
+    let dir = Temp::dir("n13-out");
+    let victim = Temp::dir("n13-victim");
+    std::fs::create_dir_all(&dir.0).unwrap();
+    std::os::unix::fs::symlink(&victim.0, dir.0.join(".tensolve.lock")).unwrap();
+    let case = Temp::file("n13", &small_case("[\"newton\"]", "[1.0]", ""));
+    let out = run(&case, &dir.0);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(".tensolve.lock` is a link"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(
+        std::fs::symlink_metadata(&victim.0).is_err(),
+        "the target was created"
+    );
+    assert!(files(&dir.0).is_empty());
+}
+
+/// N14: a newline inside a `--set` value, then another key: refused (the rest was dropped
+/// silently, exit 0), the message on one line.
+#[test]
+fn n14_a_newline_inside_an_override_is_refused() {
+    let case = Temp::file("n14", &small_case("[\"newton\"]", "[1.0]", ""));
+    for set in [
+        "solver.tolerance=1e-8\nsolver.methods=[\"pcg-lcp\"]",
+        "solver.tolerance=1e-8\n[load]\nalpha=[2.0]",
+    ] {
+        let out = tensolve(&["check", case.arg(), "--set", set]);
+        assert_eq!(code(&out), 2, "{set:?}: {}", stderr(&out));
+        let message = stderr(&out);
+        assert!(
+            message.contains("holds more than one value") && message.lines().count() == 1,
+            "{message}"
+        );
+    }
+    // A list written over two lines is one value.
+    let out = tensolve(&["check", case.arg(), "--set", "load.alpha=[0.5,\n1.0]"]);
+    assert_eq!(code(&out), 0, "{}", stderr(&out));
 }

@@ -506,3 +506,33 @@ fn figure_8_of_a_general_structure_says_supports_and_draws_the_undeformed_struct
     );
     assert!(bars[2] < undeformed[members], "one view after the other");
 }
+
+/// D7 (issue 42): α = 0's curve is drawn when the supports take part of the prestress. On the
+/// saddle net (`cases/saddle-net.toml`) the cables to the held boundary load the supports, so
+/// `Bᵀτ₀` is not zero over all dofs, but it is at the free ones: u = 0 with τ = τ₀ is the
+/// answer at zero load, and the figure draws it beside the three solved α.
+#[test]
+fn d7_tensions_draw_alpha_zero_when_supports_take_part_of_the_prestress() {
+    let out = temp_path("tensions-supports");
+    let case = common::manifest_path("cases/saddle-net.toml");
+    let run = common::tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "output.plots=true",
+    ]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let svg = read_svg(&out.join("plots/tensions.svg"));
+    let structure = tensolve::case::load(&case).unwrap().structure();
+    let _ = std::fs::remove_dir_all(&out);
+    // The supports do take part of the prestress: over all dofs Bᵀτ₀ is far from zero.
+    assert!(structure.prestress_imbalance() > 1e-3 * structure.prestress_scale);
+    assert_eq!(svg.series, 4, "α = 0, 0.25, 0.5, 1: {:?}", svg.texts);
+    assert_texts(&svg, "tensions", &["α = 0", "α = 0.25", "α = 0.5", "α = 1"]);
+    // α = 0's curve is τ₀ sorted: one point per cable.
+    let cables = structure.links.iter().filter(|l| l.kind.is_cable()).count();
+    assert!(svg.series_points().iter().all(|p| p.len() == cables));
+}

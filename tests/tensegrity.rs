@@ -410,28 +410,14 @@ fn refusals_name_the_mode_the_model_and_the_solver() {
     );
 }
 
-/// Whether the OpenSees peer can run here: openseespy imports.
-fn opensees_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import openseespy.opensees"])
-        .output()
-        .is_ok_and(|o| o.status.success())
-}
-
 /// newton's `large` answers against OpenSees `corotTruss` (initial stress, Eneg = 0 for cables):
 /// displacements and tensions to 1e-6 relative, the same slack sets
-/// (`scripts/peers/corot_compare.py`). CI installs openseespy (`.ci/run`), so there the test
-/// cannot be skipped; elsewhere it says it was skipped.
+/// (`scripts/peers/corot_compare.py`). A peer check: ignored by a plain `cargo test`, failed
+/// where openseespy or numpy is missing; CI runs it (`.ci/run` installs them).
 #[test]
+#[ignore = "peer check: needs python3 with openseespy and numpy (python3 -m pip install openseespy numpy); run with -- --include-ignored"]
 fn large_answers_agree_with_opensees_corot_truss() {
-    if !opensees_available() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have openseespy (.ci/run installs it)"
-        );
-        eprintln!("skipped: openseespy is not installed (pip install openseespy numpy)");
-        return;
-    }
+    common::require_python(&["openseespy.opensees", "numpy"]);
     for name in SHIPPED {
         let out = Temp::dir(&format!("corot-{name}"));
         let run = tensolve(&["run", &case_path(name), "--out", out.arg(), "--quiet"]);

@@ -361,3 +361,81 @@ fn the_readme_command_reproduces_the_papers_section_5() {
         assert!(line.contains(", e = "), "{line}");
     }
 }
+
+/// The words of a documented shell command: split at spaces, single quotes grouping.
+fn shell_words(command: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let (mut word, mut quoted, mut started) = (String::new(), false, false);
+    for c in command.chars() {
+        match c {
+            '\'' => (quoted, started) = (!quoted, true),
+            ' ' if !quoted => {
+                if started {
+                    words.push(std::mem::take(&mut word));
+                }
+                started = false;
+            }
+            _ => {
+                word.push(c);
+                started = true;
+            }
+        }
+    }
+    if started {
+        words.push(word);
+    }
+    words
+}
+
+/// D9 (issue 42): the guide's command for the paper grid with `large` runs as written (it
+/// failed: the case lists pcg-lcp, which does not take `large`), and gives the figures the
+/// guide quotes beside it (289.0 mm and 500 slack cables at α = 1, 86.1 mm and 88 at 0.5).
+#[test]
+fn d9_the_guides_large_paper_grid_command_runs_and_gives_its_figures() {
+    let guide = std::fs::read_to_string(manifest_path("docs/guide.md")).unwrap();
+    let lead = "**The paper's grid with `large`**";
+    let after = &guide[guide.find(lead).expect("the guide's paragraph") + lead.len()..];
+    let command = after
+        .split('`')
+        .nth(1)
+        .expect("the command in backquotes")
+        .replace('\n', " ");
+    let words = shell_words(&command);
+    assert_eq!(words[..2], ["tensolve", "run"], "{command}");
+    let case = manifest_path(&words[2]);
+    let out = Temp::dir("guide-large");
+    let mut args: Vec<&str> = vec!["run", case.to_str().unwrap()];
+    args.extend(words[3..].iter().map(String::as_str));
+    args.extend(["--out", out.arg(), "--quiet"]);
+    let o = tensolve(&args);
+    assert_eq!(o.status.code(), Some(0), "{command}: {}", stderr(&o));
+    let summary = std::fs::read_to_string(out.0.join("summary.csv")).unwrap();
+    let header: Vec<&str> = summary.lines().next().unwrap().split(',').collect();
+    let at = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let rows: Vec<Vec<&str>> = summary
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 5, "{summary}");
+    for (alpha, deflection_mm, slack) in [("0.5", 86.1, Some("88")), ("1", 289.0, Some("500"))]
+        .into_iter()
+        .chain([("0.05", 6.84, None), ("0.25", 36.7, None)])
+    {
+        let row = rows
+            .iter()
+            .find(|r| r[at("alpha")] == alpha)
+            .unwrap_or_else(|| panic!("α = {alpha}: {summary}"));
+        assert_eq!(row[at("status")], "converged", "α = {alpha}");
+        let mm = 1e3 * row[at("max_deflection")].parse::<f64>().unwrap();
+        // The guide's figures, to the digits it gives.
+        let digits = if deflection_mm < 10.0 { 0.005 } else { 0.05 };
+        assert!(
+            (mm - deflection_mm).abs() <= digits,
+            "α = {alpha}: {mm} mm, the guide says {deflection_mm}"
+        );
+        if let Some(slack) = slack {
+            assert_eq!(row[at("slack_cables")], slack, "α = {alpha}");
+        }
+    }
+}

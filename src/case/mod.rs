@@ -141,7 +141,7 @@ pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Ca
     }
     let raw =
         raw::RawCase::deserialize(toml::Value::Table(table)).map_err(|e| CaseError::Override {
-            set: overrides.join(" "),
+            set: culprits(text, overrides).join(" "),
             reason: e.to_string().trim_end().to_string(),
         })?;
     convert::convert(raw, base).map_err(|e| match e {
@@ -162,10 +162,38 @@ pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Ca
     })
 }
 
+/// The overrides a failed deserialisation is due to: those that each make the case file,
+/// which reads alone, fail on their own; every override when that does not single any out.
+fn culprits<'o>(text: &str, overrides: &'o [String]) -> Vec<&'o str> {
+    // Whether the case file reads with `set` alone (none: the file as written).
+    let reads = |set: Option<&str>| -> bool {
+        let Ok(mut table) = toml::from_str::<toml::Table>(text) else {
+            return false;
+        };
+        set.is_none_or(|set| apply_override(&mut table, set).is_ok())
+            && raw::RawCase::deserialize(toml::Value::Table(table)).is_ok()
+    };
+    let all = || overrides.iter().map(String::as_str).collect();
+    if !reads(None) {
+        return all();
+    }
+    let bad: Vec<&str> = overrides
+        .iter()
+        .map(String::as_str)
+        .filter(|set| !reads(Some(set)))
+        .collect();
+    if bad.is_empty() {
+        all()
+    } else {
+        bad
+    }
+}
+
 /// Set one `key=value` (dotted key, TOML value) in the case's table, creating tables on the way.
 fn apply_override(table: &mut toml::Table, set: &str) -> Result<(), CaseError> {
     let error = |reason: String| CaseError::Override {
-        set: set.to_string(),
+        // A newline shown as `\n`: the message stays one line.
+        set: set.replace('\n', "\\n"),
         reason,
     };
     let Some((key, value)) = set.split_once('=') else {
@@ -181,15 +209,23 @@ fn apply_override(table: &mut toml::Table, set: &str) -> Result<(), CaseError> {
             "`{key}` is not a dotted key such as solver.dm"
         )));
     }
-    let value: toml::Value = toml::from_str::<toml::Table>(&format!("v = {value}"))
-        .ok()
-        .and_then(|mut t| t.remove("v"))
-        .ok_or_else(|| {
-            error(format!(
-                "`{value}` is not a TOML value; quote strings (solver.methods=[\"newton\"]), \
-                 write lists in brackets ([0.5, 1.0])"
-            ))
-        })?;
+    let parsed = toml::from_str::<toml::Table>(&format!("v = {value}")).ok();
+    // One TOML value and nothing more: what follows a newline (another key, a table header)
+    // would be parsed beside `v`.
+    if parsed.as_ref().is_some_and(|t| t.len() > 1) {
+        return Err(error(format!(
+            "`{}` holds more than one value (a newline, then another key or table): give each \
+             key its own --set",
+            value.replace('\n', "\\n")
+        )));
+    }
+    let value: toml::Value = parsed.and_then(|mut t| t.remove("v")).ok_or_else(|| {
+        error(format!(
+            "`{}` is not a TOML value; quote strings (solver.methods=[\"newton\"]), write lists \
+             in brackets ([0.5, 1.0])",
+            value.replace('\n', "\\n")
+        ))
+    })?;
     let (last, parents) = path.split_last().expect("a key has at least one part");
     let mut node = table;
     for part in parents {

@@ -14,6 +14,7 @@
 use std::collections::BTreeSet;
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{self, Read, Write};
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Component, Path, PathBuf};
 
 use super::sinks::WriteError;
@@ -40,6 +41,17 @@ pub enum OpenError {
         /// The directory.
         dir: PathBuf,
     },
+    /// The lock's name is taken by a link (not followed).
+    #[error(
+        "`{}` is a link, not tensolve's lock file: it is not followed; remove it (`rm {}`) and \
+         run again",
+        lock.display(),
+        lock.display()
+    )]
+    LockIsLink {
+        /// The lock's path.
+        lock: PathBuf,
+    },
     /// The directory cannot be created, locked or written.
     #[error("output directory `{}` is not writable ({source})", dir.display())]
     Io {
@@ -58,6 +70,16 @@ struct Ledger {
     len: u64,
 }
 
+/// What the current solve has made visible, so that it can be withdrawn whole.
+#[derive(Default)]
+struct SolveRecord {
+    /// The files its commit published, under their final names.
+    files: Vec<PathBuf>,
+    /// The ledgers it appended a row to, with each one's length before that row (`None`: the
+    /// row created the ledger).
+    rows: Vec<(PathBuf, Option<u64>)>,
+}
+
 /// An output directory opened for one run: locked, with a private staging directory.
 pub struct OutputDir {
     root: PathBuf,
@@ -67,6 +89,8 @@ pub struct OutputDir {
     manifest: File,
     ledgers: std::collections::BTreeMap<PathBuf, Ledger>,
     published: BTreeSet<PathBuf>,
+    /// The current solve's published files and rows (since its commit).
+    solve: SolveRecord,
 }
 
 /// Create `root` if needed and lock it for this process (`.tensolve.lock`, released when the
@@ -78,13 +102,21 @@ pub fn lock_directory(root: &Path) -> Result<File, OpenError> {
         source,
     };
     std::fs::create_dir_all(root).map_err(io_err)?;
+    // O_NOFOLLOW: a link planted under the lock's name is refused, never followed (opening
+    // through it would create a file at its target).
     let lock = OpenOptions::new()
         .read(true)
         .write(true)
         .create(true)
         .truncate(false)
+        .custom_flags(libc::O_NOFOLLOW)
         .open(root.join(LOCK_FILE))
-        .map_err(io_err)?;
+        .map_err(|e| match e.raw_os_error() {
+            Some(libc::ELOOP) => OpenError::LockIsLink {
+                lock: root.join(LOCK_FILE),
+            },
+            _ => io_err(e),
+        })?;
     match lock.try_lock() {
         Ok(()) => Ok(lock),
         Err(TryLockError::WouldBlock) => Err(OpenError::Busy {
@@ -129,6 +161,7 @@ impl OutputDir {
             manifest: file,
             ledgers: Default::default(),
             published: BTreeSet::new(),
+            solve: SolveRecord::default(),
         })
     }
 
@@ -146,6 +179,7 @@ impl OutputDir {
     /// Publish every staged file under its final name. On error, the files this commit had
     /// already published are removed again: a solve is published whole or not at all.
     pub fn commit(&mut self) -> Result<(), WriteError> {
+        self.solve = SolveRecord::default();
         let staging = self.staging().to_path_buf();
         let staged = staged_files(&staging).map_err(WriteError::at(&staging))?;
         if staged.is_empty() {
@@ -167,8 +201,36 @@ impl OutputDir {
                 let _ = std::fs::remove_file(path);
             }
             let _ = self.discard();
+        } else {
+            self.solve.files = done;
         }
         result
+    }
+
+    /// Take back what the current solve made visible: the files its commit published and the
+    /// ledger rows it appended (a ledger its row created is removed). Called when one of its
+    /// rows cannot be written (a full disk, a file-size limit): its files would have no
+    /// `summary.csv` row. Best effort: removing needs no space.
+    pub fn withdraw(&mut self) {
+        let solve = std::mem::take(&mut self.solve);
+        for path in &solve.files {
+            let _ = std::fs::remove_file(path);
+        }
+        for (rel, before) in solve.rows.into_iter().rev() {
+            match before {
+                Some(len) => {
+                    if let Some(ledger) = self.ledgers.get_mut(&rel) {
+                        if ledger.file.set_len(len).is_ok() {
+                            ledger.len = len;
+                        }
+                    }
+                }
+                None => {
+                    self.ledgers.remove(&rel);
+                    let _ = std::fs::remove_file(self.root.join(&rel));
+                }
+            }
+        }
     }
 
     /// Drop every staged file unpublished (a solve with no finite answer).
@@ -196,6 +258,7 @@ impl OutputDir {
             self.record(std::slice::from_ref(&rel))?;
             std::fs::rename(&staged, self.root.join(&rel))?;
             let len = text.len() as u64;
+            self.solve.rows.push((rel.clone(), None));
             self.ledgers.insert(rel, Ledger { file, len });
             return Ok(());
         }
@@ -203,6 +266,7 @@ impl OutputDir {
         let text = format!("{line}\n");
         match ledger.file.write_all(text.as_bytes()) {
             Ok(()) => {
+                self.solve.rows.push((rel, Some(ledger.len)));
                 ledger.len += text.len() as u64;
                 Ok(())
             }

@@ -9,15 +9,19 @@
 //! | [`PlotsSink`] | `plots/*.svg`, at the end of the sweep |
 //! | [`PublishSink`] | publishes what the sinks above staged: the solve's commit point |
 //! | [`StabilitySink`] | `stability.csv`, one row appended after every solve |
+//! | [`ReactionTotalsSink`] | `reaction_totals.csv`, one row appended after every solve with an answer |
 //! | [`SummarySink`] | `summary.csv`, one row appended after every solve |
 //!
 //! The sinks above [`PublishSink`] write into the run's private staging directory; nothing of
 //! a solve is visible before it publishes, and a solve without a finite answer is discarded.
+//! A ledger row that cannot be written (a full disk, a file-size limit) withdraws the solve's
+//! published files and the rows it had appended: no file is left without its `summary.csv` row.
 
 use super::{
-    history_column, result_path, stability_line, summary_line, vtu_path, write_displacements,
-    write_forces, write_reactions, write_tensions, write_vtu, FigureData, FigureSettings,
-    HistoryWriter, OutputDir, StabilityRow, SummaryRow, STABILITY_HEADER, SUMMARY_HEADER,
+    history_column, reaction_totals, reaction_totals_line, result_path, stability_line,
+    summary_line, vtu_path, write_displacements, write_forces, write_reactions, write_tensions,
+    write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow, SummaryRow,
+    REACTION_TOTALS_HEADER, STABILITY_HEADER, SUMMARY_HEADER,
 };
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Method, Solution, TautStiffness};
@@ -29,12 +33,25 @@ use thiserror::Error;
 
 /// A file that could not be written.
 #[derive(Debug, Error)]
-#[error("could not write `{}`: {source}", path.display())]
+#[error("could not write `{}`: {source}{}", path.display(), advice(source))]
 pub struct WriteError {
     /// The file (or, for the figures, their directory), under its final name.
     pub path: PathBuf,
     /// Why.
     pub source: io::Error,
+}
+
+/// What to do about a write that failed for want of room: a full disk or a file-size limit.
+fn advice(source: &io::Error) -> &'static str {
+    match source.kind() {
+        io::ErrorKind::StorageFull => {
+            " (the disk is full: free some space, or pass `--out` with a directory on another disk)"
+        }
+        io::ErrorKind::FileTooLarge => {
+            " (a file-size limit, `ulimit -f`, is below this file's size: raise it)"
+        }
+        _ => "",
+    }
 }
 
 impl WriteError {
@@ -402,6 +419,33 @@ impl Sink for StabilitySink<'_> {
     }
 }
 
+/// `reaction_totals.csv`: the sums of a solve's reactions per axis, one row appended per solve
+/// with an answer (the reactions' own table, `reactions/…`, holds one row per held component).
+pub struct ReactionTotalsSink<'s> {
+    out: &'s RefCell<OutputDir>,
+    structure: &'s Structure,
+}
+
+impl<'s> ReactionTotalsSink<'s> {
+    /// `reaction_totals.csv` in `out`, of `structure`'s reactions.
+    pub fn new(out: &'s RefCell<OutputDir>, structure: &'s Structure) -> Self {
+        ReactionTotalsSink { out, structure }
+    }
+}
+
+impl Sink for ReactionTotalsSink<'_> {
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { solution, .. } = end else {
+            return Ok(());
+        };
+        let name = "reaction_totals.csv";
+        let totals = reaction_totals(self.structure, &solution.equilibrium, key.alpha)
+            .map_err(|e| withdrawn(self.out, name, e))?;
+        let line = reaction_totals_line(key.method.name(), key.alpha, totals);
+        append(self.out, name, REACTION_TOTALS_HEADER, &line)
+    }
+}
+
 /// `summary.csv`, one row appended after every solve, once its files are published: the row
 /// says the solve is complete. A row is one write, so the file always ends with a whole row.
 pub struct SummarySink<'s> {
@@ -424,16 +468,27 @@ impl Sink for SummarySink<'_> {
     }
 }
 
-/// Append `line` to the ledger `name` of `out`.
+/// Append `line` to the ledger `name` of `out`. When it cannot be written, the solve's files
+/// and rows are withdrawn ([`OutputDir::withdraw`]): they would have no `summary.csv` row.
 fn append(
     out: &RefCell<OutputDir>,
     name: &str,
     header: &str,
     line: &str,
 ) -> Result<(), WriteError> {
+    let appended = out.borrow_mut().append(name, header, line);
+    appended.map_err(|e| withdrawn(out, name, e))
+}
+
+/// Withdraw the current solve from `out` after `source` kept its ledger `name` from being
+/// written; the error names that ledger.
+fn withdrawn(out: &RefCell<OutputDir>, name: &str, source: io::Error) -> WriteError {
     let mut out = out.borrow_mut();
-    let path = out.root().join(name);
-    out.append(name, header, line).map_err(WriteError::at(path))
+    out.withdraw();
+    WriteError {
+        path: out.root().join(name),
+        source,
+    }
 }
 
 /// Every sink of a sweep behind one: the solve's observer and its ending, in order.

@@ -1,5 +1,5 @@
 //! CSV tables: `summary.csv`, `tensions/{solver}_alpha{α}.csv`,
-//! `displacements/{solver}_alpha{α}.csv`, `forces/…`, `reactions/…`.
+//! `displacements/{solver}_alpha{α}.csv`, `forces/…`, `reactions/…`, `reaction_totals.csv`.
 
 use super::write_atomic;
 use crate::results;
@@ -161,8 +161,12 @@ impl SummaryRow {
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
 pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached";
 
+/// A CSV writer's error as an I/O error of the same kind (a full disk stays `StorageFull`).
 fn csv_io(e: csv::Error) -> std::io::Error {
-    std::io::Error::other(e)
+    match e.kind() {
+        csv::ErrorKind::Io(io) => std::io::Error::new(io.kind(), e),
+        _ => std::io::Error::other(e),
+    }
 }
 
 /// The line of `summary.csv` of `r` (no newline). A row that is no answer
@@ -348,9 +352,12 @@ pub fn write_forces(
     Ok(path)
 }
 
+/// The axes of a held component, in the order of [`results::Reaction::component`].
+const AXES: [&str; 3] = ["x", "y", "z"];
+
 /// Write `dir/reactions/{solver}_alpha{α}.csv`: per held component (node id, `x`, `y` or
-/// `z`) its reaction (N, [`results::reactions`]), then three rows of node `sum`: the sum of
-/// the reactions per component; returns its path.
+/// `z`) its reaction (N, [`results::reactions`]), one row each and nothing else (their sums
+/// are `reaction_totals.csv`'s row, [`reaction_totals`]); returns its path.
 pub fn write_reactions(
     dir: &Path,
     solver: &str,
@@ -358,27 +365,43 @@ pub fn write_reactions(
     s: &Structure,
     eq: &Equilibrium,
 ) -> std::io::Result<PathBuf> {
-    const AXES: [&str; 3] = ["x", "y", "z"];
     let path = result_path(dir, "reactions", solver, alpha);
     let states = crate::structure::law::member_states(s, &eq.displacements);
     let reactions = results::reactions(s, eq, alpha, &states);
     finite("reaction", reactions.iter().map(|r| r.force))?;
-    let mut sums = [0.0; 3];
-    for r in &reactions {
-        sums[r.component] += r.force;
-    }
-    let rows = reactions
-        .iter()
-        .map(|r| {
-            [
-                s.node_ids[r.node].to_string(),
-                AXES[r.component].to_string(),
-                r.force.to_string(),
-            ]
-        })
-        .chain((0..3).map(|c| ["sum".to_string(), AXES[c].to_string(), sums[c].to_string()]));
+    let rows = reactions.iter().map(|r| {
+        [
+            s.node_ids[r.node].to_string(),
+            AXES[r.component].to_string(),
+            r.force.to_string(),
+        ]
+    });
     write_rows(&path, ["node", "component", "reaction_N"], rows)?;
     Ok(path)
+}
+
+/// Header line of `reaction_totals.csv`: per solve with an answer, the sum of its reactions
+/// along x, y and z (N).
+pub const REACTION_TOTALS_HEADER: &str = "solver,alpha,reaction_x_N,reaction_y_N,reaction_z_N";
+
+/// The sums of the reactions per axis at load factor `alpha` (Σ R over the held components of
+/// each axis; with the load, `Σ R + Σ F = 0` to the solve's residual). `InvalidData` when one
+/// is not finite.
+pub fn reaction_totals(s: &Structure, eq: &Equilibrium, alpha: f64) -> std::io::Result<[f64; 3]> {
+    let states = crate::structure::law::member_states(s, &eq.displacements);
+    let reactions = results::reactions(s, eq, alpha, &states);
+    finite("reaction", reactions.iter().map(|r| r.force))?;
+    let mut totals = [0.0; 3];
+    for r in &reactions {
+        totals[r.component] += r.force;
+    }
+    Ok(totals)
+}
+
+/// The line of `reaction_totals.csv` of the solve by `solver` at `alpha` (no newline).
+pub fn reaction_totals_line(solver: &str, alpha: f64, totals: [f64; 3]) -> String {
+    let [x, y, z] = totals;
+    format!("{solver},{},{x},{y},{z}", alpha_label(alpha))
 }
 
 /// Write `dir/displacements/{solver}_alpha{α}.csv`: per node, its initial position and

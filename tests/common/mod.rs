@@ -165,3 +165,22 @@ pub fn dense_stiffness(s: &Structure) -> nalgebra::DMatrix<f64> {
     }
     k
 }
+
+/// Fails the test, saying what to install, unless python3 imports every module of `modules`:
+/// a peer check that cannot run is a failure, never a pass (it is ignored unless asked for).
+pub fn require_python(modules: &[&str]) {
+    for module in modules {
+        let imports = Command::new("python3")
+            .args(["-c", &format!("import {module}")])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        let package = module.split('.').next().unwrap_or(module);
+        assert!(
+            imports,
+            "this peer check needs python3's `{module}`, which does not import here: install \
+             it with `python3 -m pip install {package}` (.ci/run installs every peer), or run \
+             `cargo test --release` without --include-ignored / --ignored to leave the peer \
+             checks out"
+        );
+    }
+}

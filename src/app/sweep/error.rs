@@ -91,6 +91,14 @@ impl From<OpenError> for RunError {
                 dir: dir.display().to_string(),
                 reason: source.to_string(),
             },
+            OpenError::LockIsLink { ref lock } => RunError::OutputDir {
+                dir: lock
+                    .parent()
+                    .unwrap_or(lock.as_path())
+                    .display()
+                    .to_string(),
+                reason: e.to_string(),
+            },
         }
     }
 }

@@ -15,7 +15,10 @@ use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolv
 use crate::case::{Case, ReferenceChoice};
 use crate::output::{
     self, alpha_label,
-    sinks::{HistorySink, PerSolveSink, PlotsSink, PublishSink, StabilitySink, SummarySink},
+    sinks::{
+        HistorySink, PerSolveSink, PlotsSink, PublishSink, ReactionTotalsSink, StabilitySink,
+        SummarySink,
+    },
     FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results::{self, AnswerMeasures};
@@ -326,6 +329,18 @@ fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
         .clone()
         .unwrap_or_else(|| case.solver.methods.clone());
     crate::case::check_distinct_methods("--solver", &methods)?;
+    if case.output.homogenised && !methods.contains(&Method::MicroMacro) {
+        let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();
+        return Err(RunError::Case(crate::case::CaseError::Invalid {
+            key: "output.homogenised".into(),
+            value: "true".into(),
+            fix: format!(
+                "it writes micro-macro's homogenised operators, and this run solves with {} \
+                 only: add \"micro-macro\" to `solver.methods` (or `--solver`), or drop the key",
+                names.join(", ")
+            ),
+        }));
+    }
     Ok(methods)
 }
 
@@ -727,6 +742,7 @@ fn sinks<'s>(
     if let Some(taut) = taut {
         sinks.add(out.stability, StabilitySink::new(output, structure, taut));
     }
+    sinks.add(out.reactions, ReactionTotalsSink::new(output, structure));
     sinks.add(out.summary, SummarySink::new(output));
     sinks
 }

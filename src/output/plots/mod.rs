@@ -4,7 +4,7 @@
 //!
 //! | file | figure |
 //! |---|---|
-//! | `tensions.svg` | sorted cable tensions, one series per α (first solver), α = 0 always among them — Figure 6 |
+//! | `tensions.svg` | sorted cable tensions, one series per α (first solver), α = 0 among them whenever its answer is known — Figure 6 |
 //! | `slack_fraction.svg` | slack fraction against α, one series per solver — Figure 7 |
 //! | `deformed_alpha{α}.svg` | the deformed grid at the largest α, displacements × `output.amplification`, oblique view and top view, τ in colour — Figure 8 |
 //! | `error_{solver}.svg`, `eta_{solver}.svg` | e and η per iteration up to `output.max_plot_iterations`, one series per α — Figures 9, 10 |

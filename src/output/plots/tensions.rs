@@ -1,17 +1,25 @@
 //! `tensions.svg` (paper Figure 6): every cable's tension τ sorted increasingly, one series per
-//! α, from the first solver of the case. α = 0 is always shown: when the case does not solve
-//! it, its curve is the prestress τ₀ itself, the exact solution at zero load (u = 0) of a
-//! self-balanced prestress.
+//! α, from the first solver of the case. α = 0 is shown whenever its answer is known: when the
+//! case does not solve it, its curve is the prestress τ₀ itself, the exact solution at zero load
+//! (u = 0) of a prestress balanced at the free nodes (supports may take part of it) with no
+//! settlement.
 
 use super::alpha_text;
 use super::chart::{LineChart, Scale, Series};
 use super::palette::ordered_colour;
 use crate::structure::Structure;
 
-/// The cable tensions at α = 0 when the prestress balances itself (`max |Bᵀτ₀|` below 1e-9 of
-/// its scale): τ₀, sorted; None otherwise.
+/// The cable tensions at α = 0 when u = 0 is the answer there: the prestress balances at the
+/// free dofs (`max |Bᵀτ₀|` over them below 1e-9 of its scale; the supports take the rest) and
+/// no support is settled (a settlement is applied at every α). τ₀, sorted; None otherwise.
 pub fn at_rest(s: &Structure) -> Option<(f64, Vec<f64>)> {
-    if s.prestress_imbalance() > 1e-9 * s.prestress_scale.abs().max(f64::MIN_POSITIVE) {
+    let free_imbalance = s
+        .free_prestress_imbalance()
+        .iter()
+        .flat_map(|(force, _)| force.iter())
+        .fold(0.0_f64, |m, f| m.max(f.abs()));
+    let settled = s.prescribed.iter().any(|&u| u != 0.0);
+    if settled || free_imbalance > 1e-9 * s.prestress_scale.abs().max(f64::MIN_POSITIVE) {
         return None;
     }
     let mut tensions: Vec<f64> = s
