@@ -209,7 +209,7 @@ pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> 
         |i| {
             let l = &s.links[i];
             let left_out = match s.model {
-                GeometricModel::Prestress => eq.tensions[i] - l.prestress,
+                GeometricModel::Prestress => eq.tensions[i] - law::given_prestress(s, l),
                 _ => eq.tensions[i],
             };
             left_out / l.length
@@ -237,12 +237,9 @@ pub fn member_nodal_forces(
         l.row_along(n, &every).scatter(t, &mut f);
     }
     if let (GeometricModel::Prestress, Some(g)) = (s.model, &s.geometric) {
-        let mut u = vec![0.0; every.len()];
-        for (global, &d) in s.dof_of.iter().enumerate() {
-            if d != crate::structure::CLAMPED {
-                u[global] = eq.displacements[d];
-            }
-        }
+        // U on every component, the prescribed U_d included (K_G couples the free nodes to
+        // a moved support).
+        let u = s.full_displacements(&eq.displacements);
         let weights = g.weights();
         let geometric = law::geometric_force_on(s, |i| weights[i], &u, &every, every.len());
         f.iter_mut().zip(&geometric).for_each(|(fi, gi)| *fi += gi);

@@ -436,7 +436,7 @@ impl<'s> Sweep<'s> {
         events: &mut dyn FnMut(RunEvent<'_>),
     ) -> Result<(), RunError> {
         let structure = &self.prepared.structure;
-        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let load = structure.load(alpha);
         if self.reference.needed() {
             events(RunEvent::Stage(&format!(
                 "reference solve at alpha = {}",
