@@ -202,3 +202,137 @@ fn prestress_with_a_settlement_is_the_linearisation_on_the_whole_displacement() 
         }
     }
 }
+
+/// A case directory with `nodes.csv`, `members.csv` and `case.toml` (its `[structure]` naming
+/// the two tables, then `rest`).
+fn case_dir(tag: &str, nodes: &str, members: &str, rest: &str) -> Temp {
+    let dir = Temp::dir(tag);
+    std::fs::create_dir_all(&dir.0).unwrap();
+    std::fs::write(dir.0.join("nodes.csv"), nodes).unwrap();
+    std::fs::write(dir.0.join("members.csv"), members).unwrap();
+    std::fs::write(
+        dir.0.join("case.toml"),
+        format!("[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n{rest}"),
+    )
+    .unwrap();
+    dir
+}
+
+fn case_file(dir: &Temp) -> String {
+    dir.0.join("case.toml").to_str().unwrap().to_string()
+}
+
+/// The shipped simplex (cases/simplex.toml's tables and supports), its members' `young`
+/// multiplied by `young` and their prestress by `prestress`.
+fn scaled_simplex(tag: &str, young: f64, prestress: f64) -> Temp {
+    let nodes = std::fs::read_to_string(manifest_path("cases/simplex/nodes.csv")).unwrap();
+    let members = read_csv(&manifest_path("cases/simplex/members.csv"));
+    let mut table = String::from("member,a,b,kind,young,section,prestress\n");
+    for m in &members {
+        table.push_str(&format!(
+            "{},{},{},{},{:e},{},{:e}\n",
+            m["member"],
+            m["a"],
+            m["b"],
+            m["kind"],
+            number(m, "young") * young,
+            m["section"],
+            number(m, "prestress") * prestress
+        ));
+    }
+    let case = std::fs::read_to_string(manifest_path("cases/simplex.toml")).unwrap();
+    // The case's own sections after [structure], whose table paths are replaced.
+    let rest: String = case
+        .lines()
+        .filter(|l| {
+            !l.starts_with("nodes = \"") && !l.starts_with("members = \"") && *l != "[structure]"
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    case_dir(tag, &nodes, &table, &rest)
+}
+
+fn output_text(o: &std::process::Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(o))
+}
+
+/// D4: E in GPa (the simplex's E divided by 1e9) under `prestress` and `large` is refused
+/// naming the unit slip: the prestress strain t0/(E·S) and the units, not only "the prestress
+/// does not stiffen"; `check` warns of it too.
+#[test]
+fn young_modulus_in_gpa_is_refused_as_a_unit_slip() {
+    let dir = scaled_simplex("d4-gpa", 1e-9, 1.0);
+    for model in ["prestress", "large"] {
+        let out = Temp::dir(&format!("d4-{model}"));
+        let run = tensolve(&[
+            "run",
+            &case_file(&dir),
+            "--out",
+            out.arg(),
+            "--quiet",
+            "--set",
+            &format!("model.geometry=\"{model}\""),
+        ]);
+        let err = stderr(&run);
+        assert_eq!(run.status.code(), Some(2), "{model}: {err}");
+        assert!(
+            err.contains("t0/(E·S)") && err.contains("unit slip") && err.contains("not GPa"),
+            "{model}: {err}"
+        );
+    }
+    let check = tensolve(&[
+        "check",
+        &case_file(&dir),
+        "--set",
+        "model.geometry=\"prestress\"",
+    ]);
+    let text = output_text(&check);
+    assert!(
+        text.contains("warning: member") && text.contains("t0/(E·S)"),
+        "{text}"
+    );
+}
+
+/// T6: `check` never says "solvable" of a case it then refuses: the simplex with its
+/// prestress scaled by 1e-9 (a stiffening too small for f64 beside E·S) and by 1e6 (a unit
+/// slip: bars that buckle under it) is prestress-stable in its mechanism, but `K + K_G(t0)` is not positive
+/// definite, and the output says which.
+#[test]
+fn check_says_solvable_only_of_what_it_does_not_refuse() {
+    for (tag, scale, why) in [
+        ("t6-tiny", 1e-9, "too little to tell from a zero mode"),
+        // Bars at −4.9e9 N: a prestress strain t0/(E·S) of 6.3e2, a unit slip.
+        ("t6-huge", 1e6, "t0/(E·S) is 6.3e2"),
+    ] {
+        let dir = scaled_simplex(tag, 1.0, scale);
+        for model in ["linear", "prestress"] {
+            let check = tensolve(&[
+                "check",
+                &case_file(&dir),
+                "--set",
+                &format!("model.geometry=\"{model}\""),
+            ]);
+            let text = output_text(&check);
+            assert_eq!(check.status.code(), Some(2), "{tag} {model}: {text}");
+            assert!(!text.contains("solvable with"), "{tag} {model}: {text}");
+            assert!(
+                text.contains("K + K_G(t0) is not positive definite") && text.contains(why),
+                "{tag} {model}: {text}"
+            );
+        }
+    }
+}
+
+/// T9: `check` prints one m: on a 40 × 1 grid held on its lower x edges (78 mechanisms, more
+/// than the sparse count's 64) the counts line and the prestress-stability line agree.
+#[test]
+fn check_prints_one_count_of_mechanisms() {
+    let case = Temp::file(
+        "t9-strip",
+        "[grid]\nmodules = [40, 1]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\nalpha = [1]\n",
+    );
+    let check = tensolve(&["check", case.arg()]);
+    let text = output_text(&check);
+    assert!(text.contains(", 78 mechanism(s)"), "{text}");
+    assert!(!text.contains("64 mechanism"), "{text}");
+}

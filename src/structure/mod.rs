@@ -19,7 +19,8 @@ pub use grid::{module_nodes, GridLayout, GridRole};
 pub use law::{GeometricModel, GeometricStiffness};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use stability::{
-    largest_moving_nodes, prestress_stability, Mode, PrestressStability, DENSE_LIMIT,
+    indefinite_reason, largest_moving_nodes, prestress_stability, unit_slip_sentence,
+    unit_slip_strain, Mode, PrestressStability, DENSE_LIMIT, PRESTRESS_STRAIN_WARNING,
 };
 pub use statics::{
     equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
