@@ -336,3 +336,169 @@ fn check_prints_one_count_of_mechanisms() {
     assert!(text.contains(", 78 mechanism(s)"), "{text}");
     assert!(!text.contains("64 mechanism"), "{text}");
 }
+
+/// T8: the simplex with no equilibrium at tiny and large α is said to have none (status
+/// `no_equilibrium`, naming the slack cables), never "beyond the model … a unit slip": newton
+/// at every α (before: beyond the model at 1e-12 and 1e-6, its runaway's `B U` all round-off),
+/// pcg-lcp at 1 and 1e3 (before: beyond the model at 1e3, its iterate no mechanism while its
+/// slack set leaves one). pcg-lcp at tiny α stops on iterates that lengthen the diagonals
+/// (issue 42, T3's).
+#[test]
+fn no_equilibrium_at_any_alpha_is_not_beyond_the_model() {
+    for (solver, alphas, rows_expected) in [
+        ("newton", "[1e-12, 1e-9, 1e-6, 1.0, 1e3]", 5),
+        ("pcg-lcp", "[1.0, 1e3]", 2),
+    ] {
+        let out = Temp::dir(&format!("t8-noeq-{solver}"));
+        let run = tensolve(&[
+            "run",
+            manifest_path("cases/simplex-no-equilibrium.toml")
+                .to_str()
+                .unwrap(),
+            "--out",
+            out.arg(),
+            "--quiet",
+            "--solver",
+            solver,
+            "--set",
+            &format!("load.alpha={alphas}"),
+        ]);
+        let err = stderr(&run);
+        assert_eq!(run.status.code(), Some(1), "{err}");
+        let rows = read_csv(&out.0.join("summary.csv"));
+        assert_eq!(rows.len(), rows_expected, "{err}");
+        for row in &rows {
+            assert_eq!(
+                row["status"], "no_equilibrium",
+                "{solver} at {}: {err}",
+                row["alpha"]
+            );
+        }
+        assert!(
+            !err.contains("beyond the model") && !err.contains("unit slip"),
+            "{err}"
+        );
+        assert!(err.contains("cable(s) 90, 91, 92 slack"), "{err}");
+    }
+}
+
+/// Three members from clamped nodes 0, 1, 2 to node 3 above them: s = 0, m = 0.
+const TRIPOD_NODES: &str = "node,x,y,z\n0,0,0,0\n1,2,0,0\n2,1,1.7,0\n3,1,0.6,1.5\n";
+
+/// The tripod with members 0 and 1 bars and member 2 (from node 2) of `kind`.
+fn tripod(tag: &str, kind: &str, rest: &str) -> Temp {
+    let members: String = (0..3)
+        .map(|i| {
+            let kind = if i == 2 { kind } else { "bar" };
+            format!("{i},{i},3,{kind},2.1e11,1e-4,0\n")
+        })
+        .collect();
+    case_dir(
+        tag,
+        TRIPOD_NODES,
+        &format!("member,a,b,kind,young,section,prestress\n{members}"),
+        &format!("[[supports.fix]]\nnodes = [0, 1, 2]\n{rest}"),
+    )
+}
+
+/// D11: the failure lines advise what can be done: `prestress.from = "self-stress"` on a
+/// structure with no self-stress state (s = 0) does not advise a table prestress (none
+/// balances); a no equilibrium there does not advise prestressing its cables; a missing column
+/// says `density` is optional; a mechanism that is a rigid rotation is named so.
+#[test]
+fn advice_names_only_what_the_structure_allows() {
+    // prestress.from with s = 0.
+    let dir = tripod(
+        "d11-from-s0",
+        "bar",
+        "[prestress]\nfrom = \"self-stress\"\nmember = 0\nforce = 100.0\n[load]\nalpha = [1.0]\n",
+    );
+    let check = tensolve(&["check", &case_file(&dir)]);
+    let err = stderr(&check);
+    assert_eq!(check.status.code(), Some(2), "{err}");
+    assert!(err.contains("s = 0"), "{err}");
+    assert!(
+        !err.contains("give each member's prestress in the members table"),
+        "{err}"
+    );
+    // No equilibrium with s = 0: the load pushes node 3 towards node 2, the cable slackens,
+    // and node 3 turns about the line of the bars' feet.
+    let dir = tripod(
+        "d11-noeq-s0",
+        "cable",
+        "[[load.point]]\nnodes = [3]\nforce = [0.0, 1000.0, 0.0]\n[load]\nalpha = [1.0]\n\
+         [solver]\nmethods = [\"newton\", \"pcg-lcp\"]\n",
+    );
+    let out = Temp::dir("d11-noeq-out");
+    let run = tensolve(&["run", &case_file(&dir), "--out", out.arg(), "--quiet"]);
+    let err = stderr(&run);
+    assert!(err.contains("no equilibrium"), "{err}");
+    assert!(!err.contains("prestress those cables"), "{err}");
+    assert!(err.contains("no self-stress state"), "{err}");
+    // A members table without its prestress column.
+    let dir = case_dir(
+        "d11-column",
+        TRIPOD_NODES,
+        "member,a,b,kind,young,section\n0,0,3,bar,2.1e11,1e-4\n",
+        "[[supports.fix]]\nnodes = [0, 1, 2]\n[load]\nalpha = [1.0]\n",
+    );
+    let check = tensolve(&["check", &case_file(&dir)]);
+    let err = stderr(&check);
+    assert_eq!(check.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(
+            "`member,a,b,kind,young,section,prestress`, optionally followed by `,density`"
+        ),
+        "{err}"
+    );
+    // A rigid tetrahedron of bars held at nodes 0 and 1 only: it turns about the line 0–1.
+    let members: String = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+        .iter()
+        .enumerate()
+        .map(|(i, (a, b))| format!("{i},{a},{b},bar,2.1e11,1e-4,0\n"))
+        .collect();
+    let dir = case_dir(
+        "d11-rotation",
+        TRIPOD_NODES,
+        &format!("member,a,b,kind,young,section,prestress\n{members}"),
+        "[[supports.fix]]\nnodes = [0, 1]\n[load]\nalpha = [1.0]\n",
+    );
+    let check = tensolve(&["check", &case_file(&dir)]);
+    let text = output_text(&check);
+    assert_eq!(check.status.code(), Some(2), "{text}");
+    assert!(
+        text.contains("a rigid-body rotation about the axis through")
+            && text.contains("along (1.00, 0.00, 0.00)"),
+        "{text}"
+    );
+}
+
+/// D11: E in GPa on the paper grid under `linear` moves nodes by 2.4e8 m: both rows are
+/// refused as beyond the model, naming the unit slip first (the prestress strain), and the
+/// geometric-term warning, which counts converged rows only, does not quote them (before:
+/// "changes the answer by … up to 13671045077.5 %").
+#[test]
+fn refused_rows_are_not_quoted_by_the_geometric_term_warning() {
+    let out = Temp::dir("d11-gpa-grid");
+    let run = tensolve(&[
+        "run",
+        manifest_path("cases/paper-exact.toml").to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--set",
+        "cables.young=100",
+        "--set",
+        "bars.young=200",
+        "--set",
+        "load.alpha=[1.0]",
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("beyond the model"), "{err}");
+    let (slip, load) = (
+        err.find("unit slip").expect("names the unit slip"),
+        err.find("too large for it").unwrap_or(usize::MAX),
+    );
+    assert!(slip < load, "{err}");
+    assert!(!err.contains("leave out a geometric term"), "{err}");
+}

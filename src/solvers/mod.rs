@@ -25,7 +25,8 @@ pub use mechanism_by_substructures::{
 };
 pub use method::{Method, Settings};
 pub use no_equilibrium::{
-    no_equilibrium, no_equilibrium_along, unit_direction, LinksAlong, NoEquilibrium, UnitDirection,
+    no_equilibrium, no_equilibrium_along, no_equilibrium_of_answer, no_equilibrium_of_slack_set,
+    unit_direction, LinksAlong, NoEquilibrium, UnitDirection,
 };
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use residual::{

@@ -516,7 +516,8 @@ impl<'s> Sweep<'s> {
             self.checks,
             |eq| match together {
                 Some(_) => solver.no_equilibrium_along(&eq.displacements, load),
-                None => crate::solvers::no_equilibrium(structure, eq, load),
+                None => crate::solvers::no_equilibrium(structure, eq, load)
+                    .or_else(|| crate::solvers::no_equilibrium_of_answer(structure, eq, load)),
             },
         );
         self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
