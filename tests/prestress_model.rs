@@ -502,3 +502,46 @@ fn refused_rows_are_not_quoted_by_the_geometric_term_warning() {
     assert!(slip < load, "{err}");
     assert!(!err.contains("leave out a geometric term"), "{err}");
 }
+
+/// D6: a guyed mast (10 m bar, three guys at 10 kN) under a wind at its top slackens its two
+/// leeward guys at α = 2 and 4; bar and windward guy then leave a neutral mechanism (a turn
+/// about the line through the foot and the anchor: `large` reports 0 N/m). With `prestress`
+/// the tangent judging the answer has the geometric stiffness of its own tensions, the slack
+/// guys' none: 0 N/m, converged, in every solver (before: K_G(t0) with the slack guys' share,
+/// −340 N/m, `unstable`).
+#[test]
+fn slack_cables_carry_no_geometric_stiffness() {
+    let nodes = "node,x,y,z\n0,0.0,0.0,0.0\n1,0.0,0.0,10.0\n2,-6.0,0.0,0.0\n\
+                 3,3.0,-5.196152422706632,0.0\n4,3.0,5.196152422706632,0.0\n";
+    let members = "member,a,b,kind,young,section,prestress\n\
+                   0,0,1,bar,2.1e11,2.0e-3,-25724.787771376323\n\
+                   1,1,2,cable,1.5e11,1.0e-4,10000.0\n\
+                   2,1,3,cable,1.5e11,1.0e-4,10000.0\n\
+                   3,1,4,cable,1.5e11,1.0e-4,10000.0\n";
+    let dir = case_dir(
+        "d6-mast",
+        nodes,
+        members,
+        "[[supports.fix]]\nnodes = [0, 2, 3, 4]\n\
+         [[load.point]]\nnodes = [1]\nforce = [10000.0, 0.0, 0.0]\n\
+         [load]\nalpha = [1.0, 2.0, 4.0]\n[model]\ngeometry = \"prestress\"\n\
+         [solver]\nmethods = [\"newton\", \"pcg-lcp\", \"mono-latin\", \"micro-macro\"]\n",
+    );
+    let out = Temp::dir("d6-mast-out");
+    let run = tensolve(&["run", &case_file(&dir), "--out", out.arg(), "--quiet"]);
+    let err = stderr(&run);
+    let rows = read_csv(&out.0.join("summary.csv"));
+    assert_eq!(rows.len(), 12, "{err}");
+    for row in &rows {
+        let (alpha, status) = (&row["alpha"], &row["status"]);
+        assert_eq!(status, "converged", "{} at {alpha}: {err}", row["solver"]);
+        let eigenvalue = number(row, "min_tangent_eigenvalue");
+        if alpha == "1" {
+            assert_eq!(row["slack_cables"], "0");
+            assert!(eigenvalue > 1e5, "{eigenvalue}");
+        } else {
+            assert_eq!(row["slack_cables"], "2");
+            assert_eq!(eigenvalue, 0.0, "{} at {alpha}", row["solver"]);
+        }
+    }
+}

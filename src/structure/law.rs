@@ -303,6 +303,19 @@ impl GeometricStiffness {
         }
     }
 
+    /// `K_G(τ) = Σ (τ_i / L_i)(I − n nᵀ)` on the initial geometry with per-link tensions τ: a
+    /// slack cable (τ = 0) carries no geometric stiffness.
+    pub fn of_tensions(s: &Structure, tensions: &[f64]) -> GeometricStiffness {
+        let mut g = GeometricStiffness::of_prestress(s);
+        g.weights = s
+            .links
+            .iter()
+            .zip(tensions)
+            .map(|(l, t)| t / l.length)
+            .collect();
+        g
+    }
+
     /// `values += K_G` (lower triangle on `pattern`, built from the structure's link rows).
     pub fn add_to(&self, pattern: &StiffnessPattern, values: &mut [f64]) {
         for (i, (rows, &w)) in self.rows.iter().zip(&self.weights).enumerate() {
