@@ -213,11 +213,18 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         memory: MemoryEstimate::new(StructureSize::of(&case.geometry), &run),
         available,
     };
-    let regular = match zero_modes {
+    let mut regular = match zero_modes {
         Some(0) => Ok(()),
         Some(modes) => Err(TautStiffness::refusal(&s, modes)),
         None => TautStiffness::new(&s).map(drop),
     };
+    // The refusal's count of K's zero modes (m: k > 0 on every member) is the sparse one,
+    // capped; the dense test's is exact, and the output says one m.
+    if let (Err(SetupError::Mechanism { zero_modes, .. }), Some(st)) =
+        (&mut regular, &report.model.stability)
+    {
+        *zero_modes = st.mechanisms;
+    }
     if let Err(e) = regular {
         report.error = Some(e);
         return report;

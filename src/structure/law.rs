@@ -293,10 +293,10 @@ impl GeometricStiffness {
             let along: f64 = (0..3).map(|k| l.direction[k] * relative[k]).sum();
             // (I − n nᵀ) ΔU_d, times t0/L.
             for (node, end_sign) in [(l.a, -1.0), (l.b, 1.0)] {
-                for k in 0..3 {
+                for (k, (&r, &n)) in relative.iter().zip(&l.direction).enumerate() {
                     let d = s.dof_of[3 * node + k];
                     if d != CLAMPED {
-                        out[d] += sign * end_sign * w * (relative[k] - along * l.direction[k]);
+                        out[d] += sign * end_sign * w * (r - along * n);
                     }
                 }
             }
