@@ -209,7 +209,7 @@ pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> 
         |i| {
             let l = &s.links[i];
             let left_out = match s.model {
-                GeometricModel::Prestress => eq.tensions[i] - l.prestress,
+                GeometricModel::Prestress => eq.tensions[i] - law::given_prestress(s, l),
                 _ => eq.tensions[i],
             };
             left_out / l.length
@@ -237,12 +237,9 @@ pub fn member_nodal_forces(
         l.row_along(n, &every).scatter(t, &mut f);
     }
     if let (GeometricModel::Prestress, Some(g)) = (s.model, &s.geometric) {
-        let mut u = vec![0.0; every.len()];
-        for (global, &d) in s.dof_of.iter().enumerate() {
-            if d != crate::structure::CLAMPED {
-                u[global] = eq.displacements[d];
-            }
-        }
+        // U on every component, the prescribed U_d included (K_G couples the free nodes to
+        // a moved support).
+        let u = s.full_displacements(&eq.displacements);
         let weights = g.weights();
         let geometric = law::geometric_force_on(s, |i| weights[i], &u, &every, every.len());
         f.iter_mut().zip(&geometric).for_each(|(fi, gi)| *fi += gi);
@@ -347,8 +344,8 @@ pub const EIGENVALUE_FULL_DOFS: usize = 20_000;
 
 /// Smallest eigenvalue (N/m) of the tangent stiffness at an equilibrium, under the structure's
 /// model (docs/method.md §3, §8): `Bᵀ k B` over the members that carry load there (bars,
-/// bilateral cables, taut unilateral cables), plus `K_G(t0)` with the prestress's geometric
-/// stiffness, or the Hessian of the exact-length energy on the current geometry (`large`).
+/// bilateral cables, taut unilateral cables), plus with `prestress` the geometric stiffness of
+/// the answer's tensions `K_G(τ)` (slack cables none), or the Hessian of the exact-length energy on the current geometry (`large`).
 /// 0 when the taut members form a mechanism; negative at an unstable equilibrium (below
 /// `−mean diagonal` it is reported as `−mean diagonal`).
 pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> f64 {
@@ -359,6 +356,25 @@ pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautS
             let current = CurrentGeometry::of(s, &eq.displacements);
             let trial: Vec<f64> = current.trial_tensions(s);
             current.assemble_tangent(s, &trial, pattern, &mut values);
+        }
+        // With `prestress`, the geometric stiffness of the answer's own tensions, K_G(τ): a
+        // slack cable carries no force, so no geometric stiffness, and a loaded member's
+        // changes with its force (docs/method.md §8). K_G(t0) judged a guyed mast whose
+        // leeward guys slackened unstable (−340 N/m) where its one-guy mechanism is neutral
+        // (0 N/m with `large`; issue 42, D6).
+        GeometricModel::Prestress => {
+            pattern.assemble(
+                &s.link_dofs,
+                |i| {
+                    if eq.slack[i] {
+                        0.0
+                    } else {
+                        s.links[i].stiffness
+                    }
+                },
+                &mut values,
+            );
+            law::GeometricStiffness::of_tensions(s, &eq.tensions).add_to(pattern, &mut values);
         }
         _ => law::assemble_tangent(s, pattern, |i| !eq.slack[i], &mut values),
     }

@@ -66,6 +66,14 @@ pub struct ModelReport {
     pub stability: Option<PrestressStability>,
     /// The modes the prestress does not stiffen, described (nodes they move most).
     pub unstiffened_modes: Vec<String>,
+    /// When the prestress stiffens every mechanism: whether `K + K_G(t0)` is positive definite
+    /// too (the models with geometric stiffness solve only then), and if not, why.
+    pub geometric_regular: Option<Result<(), String>>,
+    /// Whether m is a lower bound: the sparse count stops at
+    /// [`crate::linalg::ZERO_MODES_COUNTED`] and no dense test counted them all.
+    pub mechanisms_at_least: bool,
+    /// The member with a prestress strain `|t0|/(E·S)` no material takes, and that strain.
+    pub prestress_strain: Option<(u64, f64)>,
     /// The load factors.
     pub alphas: Vec<f64>,
     /// The solvers.
@@ -180,6 +188,9 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         member_stiffness: range(s.links.iter().map(|l| l.stiffness)),
         stability: None,
         unstiffened_modes: Vec::new(),
+        geometric_regular: None,
+        mechanisms_at_least: false,
+        prestress_strain: crate::structure::unit_slip_strain(&s),
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
     };
@@ -193,8 +204,25 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
                 .enumerate()
                 .map(|(k, mode)| mode.describe(&s, k + 1))
                 .collect();
+            // The dense test's m is exact; the sparse count stops at ZERO_MODES_COUNTED.
+            if st.mechanisms != model.counts.mechanisms {
+                model.counts = EquilibriumCounts::new(&s, st.mechanisms);
+            }
+            // Mᵀ K_G M positive definite does not make K + K_G(t0) so (a prestress too small
+            // to resolve, or one that buckles the bars): the models with geometric stiffness
+            // solve only when it is.
+            if st.stable() {
+                let with_geometric = s.clone().with_model(GeometricModel::Prestress);
+                model.geometric_regular = Some(
+                    TautStiffness::new(&with_geometric)
+                        .map(drop)
+                        .map_err(|_| crate::structure::indefinite_reason(&s, Some(st))),
+                );
+            }
         }
     }
+    model.mechanisms_at_least =
+        model.stability.is_none() && model.counts.mechanisms >= crate::linalg::ZERO_MODES_COUNTED;
     let mut report = CheckReport {
         model,
         stiffness_regular: false,
@@ -203,11 +231,18 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         memory: MemoryEstimate::new(StructureSize::of(&case.geometry), &run),
         available,
     };
-    let regular = match zero_modes {
+    let mut regular = match zero_modes {
         Some(0) => Ok(()),
         Some(modes) => Err(TautStiffness::refusal(&s, modes)),
         None => TautStiffness::new(&s).map(drop),
     };
+    // The refusal's count of K's zero modes (m: k > 0 on every member) is the sparse one,
+    // capped; the dense test's is exact, and the output says one m.
+    if let (Err(SetupError::Mechanism { zero_modes, .. }), Some(st)) =
+        (&mut regular, &report.model.stability)
+    {
+        *zero_modes = st.mechanisms;
+    }
     if let Err(e) = regular {
         report.error = Some(e);
         return report;
@@ -335,6 +370,13 @@ impl CheckReport {
                  {STIFFNESS_RATIO_WARNING:.0e}): is E given in Pa on every member (not GPa), S in m²?"
             )?;
         }
+        if let Some((id, strain)) = m.prestress_strain {
+            writeln!(
+                f,
+                "  warning: {}",
+                crate::structure::unit_slip_sentence(id, strain)
+            )?;
+        }
         if m.lengths[1] > LENGTH_WARNING {
             writeln!(
                 f,
@@ -374,13 +416,41 @@ impl CheckReport {
         )?;
         writeln!(f, "  at free dofs  {:.3e} N", m.free_prestress_imbalance)?;
         let c = &m.counts;
-        writeln!(
-            f,
-            "equilibrium     A = B^T is {} x {}, rank {}: {} self-stress state(s), {} mechanism(s) (rigid motions included)",
-            c.free_dofs, c.members, c.rank, c.self_stress_states, c.mechanisms
-        )?;
+        if m.mechanisms_at_least {
+            writeln!(
+                f,
+                "equilibrium     A = B^T is {} x {}, rank at most {}: at least {} self-stress \
+                 state(s), at least {} mechanism(s) (rigid motions included; counted up to {}, \
+                 every one above {} free dofs)",
+                c.free_dofs,
+                c.members,
+                c.rank,
+                c.self_stress_states,
+                c.mechanisms,
+                crate::linalg::ZERO_MODES_COUNTED,
+                crate::structure::DENSE_LIMIT
+            )?;
+        } else {
+            writeln!(
+                f,
+                "equilibrium     A = B^T is {} x {}, rank {}: {} self-stress state(s), {} mechanism(s) (rigid motions included)",
+                c.free_dofs, c.members, c.rank, c.self_stress_states, c.mechanisms
+            )?;
+        }
         if c.mechanisms > 0 {
             match &m.stability {
+                Some(st) if st.stable() && matches!(m.geometric_regular, Some(Err(_))) => writeln!(
+                    f,
+                    "                prestress-stable in its {} mechanism(s) (smallest \
+                         eigenvalue of M^T K_G M {:.3e} N/m), but K + K_G(t0) is not positive \
+                         definite, so no model solves it: {}",
+                    st.mechanisms,
+                    st.smallest().unwrap_or(0.0),
+                    match &m.geometric_regular {
+                        Some(Err(reason)) => reason.as_str(),
+                        _ => "",
+                    }
+                )?,
                 Some(st) if st.stable() => writeln!(
                     f,
                     "                prestress-stable: the prestress stiffens all {} mechanism(s) \

@@ -174,7 +174,13 @@ fn self_stress_state(
                     format!(
                         "\"self-stress\" on a structure with s = {s} non-trivial self-stress state(s) ({trivial_text})"
                     ),
-                    "it needs exactly one (s = 1): give each member's prestress in the members table instead",
+                    if s == 0 {
+                        // No self-stress state: no non-zero prestress is in equilibrium, so a
+                        // table prestress cannot balance either.
+                        "it needs exactly one (s = 1), and with none no non-zero prestress is in equilibrium (a members-table prestress would not balance either): add members so that the structure has a self-stress state, or leave the prestress at 0"
+                    } else {
+                        "it needs exactly one (s = 1): give each member's prestress in the members table instead"
+                    },
                 ));
             }
             Err(DenseSelfStressRefusal::TooLarge) => {
@@ -184,7 +190,11 @@ fn self_stress_state(
                         "\"self-stress\" on a structure with s = {} self-stress states and m = {} mechanism(s)",
                         c.self_stress_states, c.mechanisms
                     ),
-                    "it needs exactly one state (s = 1) and, with mechanisms, a structure of at most 1500 free dofs: give each member's prestress in the members table instead",
+                    if c.self_stress_states == 0 {
+                        "it needs exactly one state (s = 1), and with none no non-zero prestress is in equilibrium (a members-table prestress would not balance either): add members so that the structure has a self-stress state, or leave the prestress at 0"
+                    } else {
+                        "it needs exactly one state (s = 1) and, with mechanisms, a structure of at most 1500 free dofs: give each member's prestress in the members table instead"
+                    },
                 ));
             }
             Err(DenseSelfStressRefusal::ZeroComponent) => {

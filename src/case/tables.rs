@@ -39,10 +39,17 @@ impl Table<'_> {
             .comment(Some(b'#'))
             .from_reader(text.as_bytes());
         let mut records = reader.records();
+        // The required columns, then the optional ones said as such (a header without them is
+        // whole).
         let expected = || {
-            let mut all: Vec<&str> = required.to_vec();
-            all.extend(optional.iter().copied());
-            all.join(",")
+            let mut text = format!("`{}`", required.join(","));
+            if !optional.is_empty() {
+                text.push_str(&format!(
+                    ", optionally followed by `,{}`",
+                    optional.join(",")
+                ));
+            }
+            text
         };
         let header = match records.next() {
             None => {
@@ -50,10 +57,7 @@ impl Table<'_> {
                     1,
                     "header",
                     "",
-                    format!(
-                        "the file is empty: start it with the header `{}`",
-                        expected()
-                    ),
+                    format!("the file is empty: start it with the header {}", expected()),
                 ))
             }
             Some(Err(e)) => return Err(self.csv_error(e)),
@@ -73,7 +77,7 @@ impl Table<'_> {
                 line,
                 "header",
                 &names.join(","),
-                format!("the header must be `{}`", expected()),
+                format!("the header must be {}", expected()),
             ));
         }
         let mut rows = Vec::new();

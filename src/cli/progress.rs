@@ -149,7 +149,9 @@ impl Reporter {
             }
             RunEvent::LinksKept { kept, whole } => self.links_kept = Some((kept, whole)),
             RunEvent::Row(row) => {
-                if row.needs_large() {
+                // Rows refused (beyond the model, no equilibrium, unstable, not converged) have no
+                // answer whose geometric term means anything.
+                if row.needs_large() && row.converged {
                     let value = row.geometric_term.unwrap_or(0.0);
                     self.geometric.0 += 1;
                     if self.geometric.1.as_ref().is_none_or(|(v, _)| value > *v) {

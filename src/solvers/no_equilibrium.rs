@@ -28,6 +28,12 @@ const MECHANISM_TOLERANCE: f64 = 1e-6;
 /// smooth deflection (r(U) = 1e-12) has every member's length change below 1e-6 of ‖U‖.
 const RUNAWAY_ENERGY_RATIO: f64 = 1e-3;
 
+/// A length change along a unit direction at most this (m per m) is the round-off of `B d`,
+/// not a stretch: once a runaway ‖U‖ passes 1e16 times its finite part, `B U` is round-off
+/// alone, and its `‖U‖ Σ k e(d)²` (1e-3 N·m at ‖U‖ = 1e22 on the simplex) outweighed the work of
+/// a small load (issue 42, T8: no equilibrium at α = 1e-6 read as beyond the model).
+const ROUNDOFF_ELONGATION: f64 = 1e-12;
+
 /// The no-equilibrium certificate of an answer whose displacements U have run away: with
 /// `d = U / ‖U‖`, `B_bars d = 0`, `B_cables d ≤ 0`, `F·d > 0` (to `MECHANISM_TOLERANCE`),
 /// the stretch energy negligible against the load's work (`RUNAWAY_ENERGY_RATIO`),
@@ -48,6 +54,78 @@ pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<No
         part.slack.into_iter().map(|(_, id)| id).collect(),
         load,
     )
+}
+
+/// The certificate of an answer's slack set, when its displacements are none (docs/method.md
+/// §8: "confirm with the LP on the final slack set"): `d = P F`, the load projected on the
+/// mechanisms of the links the answer keeps (bars, taut cables: the null space of their `BᵀB`,
+/// dense), tested like any direction. A solver stopped early on a runaway (pcg-lcp's
+/// proportioning steps) leaves a U that is no mechanism, though its slack set leaves one.
+/// `None` above [`crate::structure::DENSE_LIMIT`] free dofs, without slack cables, under
+/// `large`, or when the load does not work on those mechanisms.
+pub fn no_equilibrium_of_slack_set(
+    s: &Structure,
+    slack: &[bool],
+    load: &[f64],
+) -> Option<NoEquilibrium> {
+    let n = s.n_free;
+    if n == 0
+        || n > crate::structure::DENSE_LIMIT
+        || s.model == GeometricModel::Large
+        || !slack.iter().any(|&x| x)
+    {
+        return None;
+    }
+    let mut btb = nalgebra::DMatrix::<f64>::zeros(n, n);
+    for (row, _) in s.link_dofs.iter().zip(slack).filter(|(_, &x)| !x) {
+        for (p, cp) in row.iter() {
+            for (q, cq) in row.iter() {
+                btb[(p, q)] += cp * cq;
+            }
+        }
+    }
+    let eig = nalgebra::SymmetricEigen::new(btb);
+    let largest = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // d = Σ (v·F) v over the null vectors v (eigenvalues of BᵀB below 1e-10 of the largest).
+    let mut d = vec![0.0; n];
+    for (i, _) in eig
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .filter(|(_, &v)| v <= 1e-10 * largest)
+    {
+        let v = eig.eigenvectors.column(i);
+        let along: f64 = v.iter().zip(load).map(|(a, b)| a * b).sum();
+        d.iter_mut()
+            .zip(v.iter())
+            .for_each(|(x, vk)| *x += along * vk);
+    }
+    if norm(&d) <= MECHANISM_TOLERANCE * norm(load) {
+        return None;
+    }
+    no_equilibrium_along(s, &d, load)
+}
+
+/// [`no_equilibrium_of_slack_set`] of an answer whose displacements are no certificate: its
+/// own slack set, else the unilateral cables that its U shortens (a solver stopped on a
+/// runaway may still hold them taut: pcg-lcp stalled at α = 1e-9 on the simplex with no
+/// equilibrium, its diagonals at 1.2e9 N).
+pub fn no_equilibrium_of_answer(
+    s: &Structure,
+    eq: &Equilibrium,
+    load: &[f64],
+) -> Option<NoEquilibrium> {
+    no_equilibrium_of_slack_set(s, &eq.slack, load).or_else(|| {
+        let shortened: Vec<bool> = s
+            .links
+            .iter()
+            .zip(&s.link_dofs)
+            .map(|(l, row)| l.unilateral && row.elongation(&eq.displacements) < 0.0)
+            .collect();
+        (shortened != eq.slack)
+            .then(|| no_equilibrium_of_slack_set(s, &shortened, load))
+            .flatten()
+    })
 }
 
 /// `d = U / ‖U‖` and ‖U‖, the direction a certificate is tested along: `None` under the
@@ -101,10 +179,12 @@ impl LinksAlong {
                 if e < -MECHANISM_TOLERANCE {
                     part.slack.push((i, l.id));
                 }
-                part.stretch += l.stiffness * e.max(0.0).powi(2);
+                if e > ROUNDOFF_ELONGATION {
+                    part.stretch += l.stiffness * e * e;
+                }
             } else if e.abs() > MECHANISM_TOLERANCE {
                 return None;
-            } else {
+            } else if e.abs() > ROUNDOFF_ELONGATION {
                 part.stretch += l.stiffness * e * e;
             }
         }

@@ -114,19 +114,22 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
             .as_ref()
             .map(|st| rows(st, false))
             .unwrap_or_default();
+        let slip = crate::structure::unit_slip_strain(s)
+            .map(|(id, strain)| format!("{}; ", crate::structure::unit_slip_sentence(id, strain)))
+            .unwrap_or_default();
         let detail = match &stability {
             Some(st) if !st.stable() => format!(
-                "{} of its {} mechanism(s) not stiffened: {} (every node's motion in \
+                "{slip}{} of its {} mechanism(s) not stiffened: {} (every node's motion in \
                  mechanisms.csv of the output directory, written by `run`); add members or \
                  supports, or change the prestress",
                 st.unstiffened().count(),
                 st.mechanisms,
                 unstiffened(st)
             ),
-            _ => "`K + K_G(t0)` is not positive definite (a mechanism the prestress does not \
-                  stiffen, or a compressed bar that buckles under its own prestress); add \
-                  members or supports, or change the prestress"
-                .to_string(),
+            _ => format!(
+                "`K + K_G(t0)` is not positive definite: {}",
+                crate::structure::indefinite_reason(s, stability.as_ref())
+            ),
         };
         return SetupError::NotPrestressStable {
             model: s.model.name(),
@@ -135,20 +138,46 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
         };
     }
     let grid = s.layout.is_some();
+    // Mᵀ K_G M positive definite does not make K + K_G(t0) so (a prestress too small to
+    // resolve, or one that buckles the bars): "solvable" only when it is.
+    let geometric_regular = |st: &crate::structure::PrestressStability| {
+        let with_geometric = s
+            .clone()
+            .with_model(crate::structure::GeometricModel::Prestress);
+        match TautStiffness::new(&with_geometric) {
+            Ok(_) => Ok(()),
+            Err(_) => Err(crate::structure::indefinite_reason(s, Some(st))),
+        }
+    };
     match stability {
-        Some(st) if st.mechanisms > 0 && st.stable() => SetupError::Mechanism {
-            zero_modes,
-            where_: " (every node's motion in mechanisms.csv of the output directory, written \
+        Some(st) if st.mechanisms > 0 && st.stable() => match geometric_regular(&st) {
+            Err(reason) => SetupError::Mechanism {
+                zero_modes,
+                where_: " (every node's motion in mechanisms.csv of the output directory, \
+                         written by `run`)"
+                    .to_string(),
+                modes: rows(&st, true),
+                advice: format!(
+                    "its prestress stiffens all {} mechanism(s) (the smallest by {:.3e} N/m), but \
+                     K + K_G(t0) is not positive definite, so no model solves it: {reason}",
+                    st.mechanisms,
+                    st.smallest().unwrap_or(0.0)
+                ),
+            },
+            Ok(()) => SetupError::Mechanism {
+                zero_modes,
+                where_: " (every node's motion in mechanisms.csv of the output directory, written \
                      by `run`)"
-                .to_string(),
-            modes: rows(&st, true),
-            advice: format!(
-                "it is prestress-stable (its prestress stiffens all {} mechanism(s), the \
+                    .to_string(),
+                modes: rows(&st, true),
+                advice: format!(
+                    "it is prestress-stable (its prestress stiffens all {} mechanism(s), the \
                  smallest by {:.3e} N/m): solvable with `model.geometry = \"prestress\"` or \
                  `\"large\"`",
-                st.mechanisms,
-                st.smallest().unwrap_or(0.0)
-            ),
+                    st.mechanisms,
+                    st.smallest().unwrap_or(0.0)
+                ),
+            },
         },
         stability => SetupError::Mechanism {
             zero_modes,

@@ -19,7 +19,8 @@ pub use grid::{module_nodes, GridLayout, GridRole};
 pub use law::{GeometricModel, GeometricStiffness};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use stability::{
-    largest_moving_nodes, prestress_stability, Mode, PrestressStability, DENSE_LIMIT,
+    indefinite_reason, largest_moving_nodes, prestress_stability, unit_slip_sentence,
+    unit_slip_strain, Mode, PrestressStability, DENSE_LIMIT, PRESTRESS_STRAIN_WARNING,
 };
 pub use statics::{
     equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
@@ -334,6 +335,21 @@ impl Structure {
             .has_geometric_stiffness()
             .then(|| GeometricStiffness::of_prestress(&self));
         self
+    }
+
+    /// The load the solvers take at α, on the free dofs: `α F`, less with `prestress` the
+    /// geometric force of the prescribed displacements, `K_G,fd(t0) U_d` (docs/method.md §8:
+    /// the linearisation `(K + K_G) U = F` on the whole U, settlement included, moves the
+    /// held columns to the right-hand side; their axial part `K_fd U_d` is the links'
+    /// effective prestress). Prescribed displacements are never scaled by α.
+    pub fn load(&self, alpha: f64) -> Vec<f64> {
+        let mut load: Vec<f64> = self.unit_load.iter().map(|f| alpha * f).collect();
+        if self.model == GeometricModel::Prestress {
+            if let Some(g) = &self.geometric {
+                g.add_settlement_force(self, -1.0, &mut load);
+            }
+        }
+        load
     }
 
     /// The nodes' bounding box, m: `[min, max]` per axis (infinite bounds without nodes).

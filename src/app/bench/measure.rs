@@ -158,12 +158,7 @@ pub fn measure(
     let reference_method = reference_method(case)?;
     let mut series = Vec::new();
     for &alpha in &case.load.alphas {
-        let load: Vec<f64> = prepared
-            .structure
-            .unit_load
-            .iter()
-            .map(|f| alpha * f)
-            .collect();
+        let load = prepared.structure.load(alpha);
         on_progress(Progress::Reference {
             method: reference_method,
             alpha,

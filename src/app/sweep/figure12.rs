@@ -55,7 +55,7 @@ fn write_module_comparison(
             }
         }
         let structure = &prepared.structure;
-        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let load = structure.load(alpha);
         let mut reference = ReferenceSource::new(&grid_case, &solvers, &prepared)?;
         let cold = vec![None; solvers.len()];
         let reference_solution = reference.solve(&load, &mut solvers, &cold);

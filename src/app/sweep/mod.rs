@@ -455,7 +455,7 @@ impl<'s> Sweep<'s> {
         events: &mut dyn FnMut(RunEvent<'_>),
     ) -> Result<(), RunError> {
         let structure = &self.prepared.structure;
-        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let load = structure.load(alpha);
         if self.reference.needed() {
             events(RunEvent::Stage(&format!(
                 "reference solve at alpha = {}",
@@ -538,7 +538,8 @@ impl<'s> Sweep<'s> {
             self.checks,
             |eq| match together {
                 Some(_) => solver.no_equilibrium_along(&eq.displacements, load),
-                None => crate::solvers::no_equilibrium(structure, eq, load),
+                None => crate::solvers::no_equilibrium(structure, eq, load)
+                    .or_else(|| crate::solvers::no_equilibrium_of_answer(structure, eq, load)),
             },
         );
         self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))

@@ -14,6 +14,40 @@ pub(super) struct Verdict {
     pub geometric_term: Option<f64>,
     /// Why the answer is no equilibrium, when it is none.
     pub no_equilibrium: Option<crate::solvers::NoEquilibrium>,
+    /// What the advice of a failure line may name: the structure's self-stress states s (a
+    /// no equilibrium's cables can be prestressed only when s > 0), whether the model has
+    /// geometric stiffness already, and a unit slip the members table shows.
+    pub advice: Advice,
+}
+
+/// The facts a failure line's advice rests on (issue 42, D11).
+#[derive(Default)]
+pub(super) struct Advice {
+    /// The self-stress states s, counted when no equilibrium was found.
+    pub self_stress_states: Option<usize>,
+    /// Whether the model has geometric stiffness (`prestress`, `large`).
+    pub geometric: bool,
+    /// A unit slip the members table shows (a prestress strain no material takes).
+    pub unit_slip: Option<String>,
+    /// The structure's own size, m.
+    pub size: f64,
+    /// How the solver itself ended, when it did not converge on an answer found beyond the
+    /// model (then the answer is an iterate it stopped on, not something the load did).
+    pub stopped: Option<Status>,
+}
+
+impl Advice {
+    fn of(prepared: &Prepared) -> Advice {
+        let s = &prepared.structure;
+        Advice {
+            self_stress_states: None,
+            geometric: s.model.has_geometric_stiffness(),
+            unit_slip: crate::structure::unit_slip_strain(s)
+                .map(|(id, strain)| crate::structure::unit_slip_sentence(id, strain)),
+            size: s.size(),
+            stopped: None,
+        }
+    }
 }
 
 /// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
@@ -30,26 +64,32 @@ pub(super) fn assess(
     certificate: impl FnOnce(&Equilibrium) -> Option<NoEquilibrium>,
 ) -> Verdict {
     let s = &prepared.structure;
+    let mut advice = Advice::of(prepared);
     if !results::is_finite(solution) {
         return Verdict {
             min_tangent_eigenvalue: None,
             geometric_term: None,
             no_equilibrium: None,
+            advice,
         };
     }
-    // A converged answer is an equilibrium (r(U) within its tolerance): only the others are
-    // asked for a runaway.
+    // A converged answer is an equilibrium (r(U) within its tolerance): only the others, and
+    // an answer beyond the model (a runaway its solver stopped on), are asked for a runaway.
+    let beyond = results::beyond_model(s, &solution.equilibrium);
     let found = solution.info.no_equilibrium.clone().or_else(|| {
-        (!solution.info.status.converged())
+        (!solution.info.status.converged() || beyond)
             .then(|| certificate(&solution.equilibrium))
             .flatten()
     });
     if let Some(none) = found {
         solution.info.status = Status::NoEquilibrium;
+        advice.self_stress_states =
+            Some(crate::structure::equilibrium_counts(s).self_stress_states);
         return Verdict {
             min_tangent_eigenvalue: None,
             geometric_term: None,
             no_equilibrium: Some(none),
+            advice,
         };
     }
     // The run keeps K's factor whenever a check is asked (`Workload::keeps_taut`).
@@ -62,7 +102,8 @@ pub(super) fn assess(
     }
     // A model on the initial geometry whose answer moves a node by more than the structure's
     // own size has left its domain: converged or not, no answer of it.
-    if results::beyond_model(s, &solution.equilibrium) {
+    if beyond {
+        advice.stopped = (!solution.info.status.converged()).then_some(solution.info.status);
         solution.info.status = Status::BeyondModel;
     }
     Verdict {
@@ -71,6 +112,7 @@ pub(super) fn assess(
             .filter(|_| checks.geometric_term)
             .and_then(|taut| results::geometric_term(s, &solution.equilibrium, taut)),
         no_equilibrium: None,
+        advice,
     }
 }
 
@@ -124,6 +166,36 @@ fn limit_point_reason(row: &SummaryRow, solution: &Solution) -> String {
     reason
 }
 
+/// What to do about a no equilibrium: members or supports always; prestressing the slack
+/// cables only where a self-stress state exists (s > 0), the geometric stiffness only where the
+/// model has none.
+fn no_equilibrium_advice(advice: &Advice) -> String {
+    let mut ways = vec!["add members or supports".to_string()];
+    match advice.self_stress_states {
+        Some(0) => {}
+        _ => ways.push("prestress those cables".to_string()),
+    }
+    if !advice.geometric {
+        ways.push("model the geometric stiffness (`model.geometry`)".to_string());
+    }
+    let last = ways.pop().unwrap_or_default();
+    let mut text = if ways.is_empty() {
+        last
+    } else {
+        format!("{} or {last}", ways.join(", "))
+    };
+    if let Some(first) = text.get(0..1) {
+        text = first.to_uppercase() + &text[1..];
+    }
+    if advice.self_stress_states == Some(0) {
+        text.push_str(
+            " (the structure has no self-stress state, s = 0: no prestress of its cables is in \
+             equilibrium)",
+        );
+    }
+    text
+}
+
 /// The failure line of a row that did not converge: how it ended, and for no equilibrium the
 /// cables that went slack and the nodes of the mode.
 pub(super) fn not_converged_message(
@@ -143,14 +215,14 @@ pub(super) fn not_converged_message(
             "{head}: no equilibrium: with cable(s) {} slack, a mechanism is left that the load \
              works on (it moves nodes {}), so the energy decreases without bound; no \
              displacement or tension file is written, and its row says converged = false, \
-             status = no_equilibrium. Add members or supports, prestress those cables, or model \
-             the geometric stiffness (`model.geometry`)",
+             status = no_equilibrium. {}",
             ids(&none.slack_cables),
             none.mode_nodes
                 .iter()
                 .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
                 .collect::<Vec<_>>()
-                .join(", ")
+                .join(", "),
+            no_equilibrium_advice(&verdict.advice)
         ),
         (None, Status::LimitPoint) => format!(
             "{head}: limit point: {}; no displacement or tension file is written, and its row \
@@ -161,11 +233,25 @@ pub(super) fn not_converged_message(
         ),
         (None, Status::BeyondModel) => format!(
             "{head}: beyond the model: the answer moves a node by {:.3e} m, more than the \
-             structure's own size; a model on the initial geometry does not describe that (a \
-             unit slip, such as E in GPa or coordinates in mm? `tensolve check` prints the \
-             magnitudes); no displacement or tension file is written, and its row says \
+             structure's own size ({:.3e} m); a model on the initial geometry does not describe \
+             that: {}; no displacement or tension file is written, and its row says \
              converged = false, status = beyond_model",
-            row.max_deflection
+            row.max_deflection,
+            verdict.advice.size,
+            match (&verdict.advice.unit_slip, verdict.advice.stopped) {
+                (Some(slip), _) => slip.clone(),
+                (None, Some(stopped)) => format!(
+                    "the solver stopped without converging ({stopped:?}) on that iterate, \
+                     which is no answer: a runaway no certificate of no equilibrium was found \
+                     for, or a solver that lost its way (compare the case's other solvers)"
+                ),
+                (None, None) =>
+                    "the load at this alpha is too large for it: lower alpha, or solve \
+                         with model.geometry = \"large\" (newton), which follows the geometry; \
+                         the members table's magnitudes show no unit slip (`tensolve check` \
+                         prints them)"
+                        .to_string(),
+            }
         ),
         (None, Status::Unstable) => format!(
             "{head}: an unstable equilibrium: the residual criterion holds, but the tangent \

@@ -9,7 +9,7 @@ use super::partition::SubstructureTopology;
 use super::shapes::Shapes;
 use super::Interface;
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
-use crate::structure::law::transverse_pair;
+use crate::structure::law::{given_prestress, transverse_pair};
 use crate::structure::{LinkDofs, Structure, CLAMPED};
 use nalgebra::DMatrix;
 use std::sync::Arc;
@@ -419,7 +419,7 @@ fn geometric_rows(
         .flat_map(|(j, &i)| {
             let l = &structure.links[i];
             let (p, q) = transverse_pair(l.direction);
-            let w = l.prestress / l.length;
+            let w = given_prestress(structure, l) / l.length;
             [
                 (j, l.row_along(p, local_dof), w),
                 (j, l.row_along(q, local_dof), w),
