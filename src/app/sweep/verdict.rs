@@ -4,6 +4,7 @@
 use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
+use crate::results::uniqueness::{self, Uniqueness};
 use crate::solvers::{Equilibrium, NoEquilibrium, Solution, Status};
 
 /// What the sweep found of an answer beyond its solver's stop.
@@ -14,6 +15,8 @@ pub(super) struct Verdict {
     pub geometric_term: Option<f64>,
     /// Why the answer is no equilibrium, when it is none.
     pub no_equilibrium: Option<crate::solvers::NoEquilibrium>,
+    /// Whether a converged answer is the only equilibrium, when checked ([`checked_uniqueness`]).
+    pub uniqueness: Option<Uniqueness>,
 }
 
 /// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
@@ -27,6 +30,7 @@ pub(super) fn assess(
     solution: &mut Solution,
     prepared: &Prepared,
     checks: AnswerChecks,
+    load: &[f64],
     certificate: impl FnOnce(&Equilibrium) -> Option<NoEquilibrium>,
 ) -> Verdict {
     let s = &prepared.structure;
@@ -35,6 +39,7 @@ pub(super) fn assess(
             min_tangent_eigenvalue: None,
             geometric_term: None,
             no_equilibrium: None,
+            uniqueness: None,
         };
     }
     // A converged answer is an equilibrium (r(U) within its tolerance): only the others are
@@ -50,6 +55,7 @@ pub(super) fn assess(
             min_tangent_eigenvalue: None,
             geometric_term: None,
             no_equilibrium: Some(none),
+            uniqueness: None,
         };
     }
     // The run keeps K's factor whenever a check is asked (`Workload::keeps_taut`).
@@ -71,6 +77,42 @@ pub(super) fn assess(
             .filter(|_| checks.geometric_term)
             .and_then(|taut| results::geometric_term(s, &solution.equilibrium, taut)),
         no_equilibrium: None,
+        uniqueness: solution
+            .info
+            .status
+            .converged()
+            .then(|| checked_uniqueness(prepared, checks, &solution.equilibrium, load))
+            .flatten(),
+    }
+}
+
+/// Whether the converged answer `eq` is the only equilibrium ([`uniqueness::uniqueness`]), on
+/// K's pattern and analysis when the run keeps them, else on its own analysis; `None` (not
+/// checked) where the ranks keep shares of the links, and above
+/// [`uniqueness::UNCHECKED_ABOVE_DOFS`] free dofs unless the run factorizes a tangent per row
+/// anyway (`checks.eigenvalue`).
+fn checked_uniqueness(
+    prepared: &Prepared,
+    checks: AnswerChecks,
+    eq: &Equilibrium,
+    load: &[f64],
+) -> Option<Uniqueness> {
+    let s = &prepared.structure;
+    let small = s.n_free <= uniqueness::UNCHECKED_ABOVE_DOFS;
+    match &prepared.taut {
+        _ if prepared.share.is_some() => None,
+        Some(taut) if small || checks.eigenvalue => Some(uniqueness::uniqueness(
+            s,
+            eq,
+            load,
+            &taut.pattern,
+            &taut.factor,
+        )),
+        None if small => {
+            let (pattern, analysed) = crate::solvers::TautStiffness::analyse(s);
+            Some(uniqueness::uniqueness(s, eq, load, &pattern, &analysed))
+        }
+        _ => None,
     }
 }
 
