@@ -87,10 +87,11 @@ pub(super) fn assess(
 }
 
 /// Whether the converged answer `eq` is the only equilibrium ([`uniqueness::uniqueness`]), on
-/// K's pattern and analysis when the run keeps them, else on its own analysis; `None` (not
-/// checked) where the ranks keep shares of the links, and above
-/// [`uniqueness::UNCHECKED_ABOVE_DOFS`] free dofs unless the run factorizes a tangent per row
-/// anyway (`checks.eigenvalue`).
+/// K's pattern and analysis when the run keeps them (up to [`uniqueness::CHECKED_UP_TO_DOFS`]
+/// free dofs, or at any size where the run factorizes a tangent per row anyway:
+/// `checks.eigenvalue`), else on its own analysis (up to
+/// [`uniqueness::OWN_ANALYSIS_UP_TO_DOFS`]); `None` (not checked) beyond, and where the ranks
+/// keep shares of the links.
 fn checked_uniqueness(
     prepared: &Prepared,
     checks: AnswerChecks,
@@ -98,17 +99,12 @@ fn checked_uniqueness(
     load: &[f64],
 ) -> Option<Uniqueness> {
     let s = &prepared.structure;
-    let small = s.n_free <= uniqueness::UNCHECKED_ABOVE_DOFS;
     match &prepared.taut {
         _ if prepared.share.is_some() => None,
-        Some(taut) if small || checks.eigenvalue => Some(uniqueness::uniqueness(
-            s,
-            eq,
-            load,
-            &taut.pattern,
-            &taut.factor,
-        )),
-        None if small => {
+        Some(taut) if s.n_free <= uniqueness::CHECKED_UP_TO_DOFS || checks.eigenvalue => Some(
+            uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor),
+        ),
+        None if s.n_free <= uniqueness::OWN_ANALYSIS_UP_TO_DOFS => {
             let (pattern, analysed) = crate::solvers::TautStiffness::analyse(s);
             Some(uniqueness::uniqueness(s, eq, load, &pattern, &analysed))
         }
