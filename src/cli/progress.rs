@@ -238,8 +238,8 @@ fn format_row(r: &SummaryRow) -> String {
     if let Some(not_unique) = r.uniqueness.as_ref().filter(|u| !u.is_unique()) {
         line.push_str(&format!(
             "\n  warning: {} at alpha = {}: the answer is not unique: the members that carry \
-             force leave a motion free that the load does no work on and no taut cable resists \
-             (it moves nodes {}); along it lie other equilibria of the same energy, and another \
+             force leave a motion free that the load does no work on and that stretches no \
+             cable (it moves nodes {}); along it lie other equilibria of the same energy, and another \
              solver may return one of them (summary.csv: unique = false). Members or supports \
              that hold that motion, or prestress that keeps its cables taut, make it unique",
             r.solver,

@@ -103,7 +103,8 @@ pub fn gap_slack(link: &Link, trial: f64, scale: f64) -> bool {
 /// cables' force `scale`: bars and bilateral cables always; a unilateral cable when
 /// `t0 + k e > SLACK_GAP_TOLERANCE · scale`. A cable within that zero either way has its gap
 /// closed and no force: [`gap_slack`] does not call it slack, yet it resists only elongation
-/// (what the uniqueness check, `crate::uniqueness`, treats it as, whichever solver found it).
+/// (what the uniqueness check, `crate::results::uniqueness`, treats it as, whichever solver
+/// found it).
 pub fn carries_force(link: &Link, trial: f64, scale: f64) -> bool {
     !link.unilateral || trial > SLACK_GAP_TOLERANCE * scale
 }
