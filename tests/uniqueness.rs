@@ -156,3 +156,80 @@ fn answers_held_by_their_taut_members_are_unique() {
         assert_eq!(row["unique"], "true", "{row:?}");
     }
 }
+
+/// The mast's answers at α = 2 are a segment: newton's and pcg-lcp's ends and every point
+/// between them are equilibria (r(U) at round-off) of one energy, computed here from the law
+/// itself; each is flagged not unique with the top as the free motion's node, whether its
+/// leeward guy is at zero tension with its gap closed (newton's end, where the gap rule calls
+/// it taut) or slack with its gap open (the rest): the check classifies the cable by the same
+/// rule whichever solver left it there.
+#[test]
+fn every_answer_between_the_solvers_answers_is_an_equilibrium_of_one_energy_and_not_unique() {
+    use tensolve::results::equilibrium_residual;
+    use tensolve::results::uniqueness::{uniqueness, Uniqueness};
+    use tensolve::solvers::newton::{Newton, NewtonSettings};
+    use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
+    use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
+    use tensolve::structure::law;
+
+    let case = tensolve::case::load(&manifest_path("tests/data/my-mast.toml")).unwrap();
+    let s = case.structure();
+    let taut = TautStiffness::new(&s).unwrap();
+    let load: Vec<f64> = s.unit_load.iter().map(|f| 2.0 * f).collect();
+    let newton = Newton::new(&s, &taut, NewtonSettings::default())
+        .unwrap()
+        .solve(&load, None, &mut Silent);
+    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&load, None, &mut Silent);
+    assert!(newton.info.status.converged() && pcg.info.status.converged());
+    let (a, b) = (
+        &pcg.equilibrium.displacements,
+        &newton.equilibrium.displacements,
+    );
+    // The energy Σ φ(e) − F·U, φ(e) = ∫₀ᵉ τ = (τ(e)² − t0²) / 2k with τ = t0 + k e (clipped
+    // at 0 on cables).
+    let energy = |u: &[f64]| -> f64 {
+        let stored: f64 = s
+            .links
+            .iter()
+            .zip(law::trial_tensions(&s, u))
+            .map(|(l, t)| (law::tension(l, t).powi(2) - l.prestress.powi(2)) / (2.0 * l.stiffness))
+            .sum();
+        stored - load.iter().zip(u).map(|(f, x)| f * x).sum::<f64>()
+    };
+    let (pattern, analysed) = TautStiffness::analyse(&s);
+    let e0 = energy(a);
+    let mut slack_counts = Vec::new();
+    for step in 0..=4 {
+        let w = step as f64 / 4.0;
+        let u: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + w * (y - x)).collect();
+        let tensions: Vec<f64> = s
+            .links
+            .iter()
+            .zip(law::trial_tensions(&s, &u))
+            .map(|(l, t)| law::tension(l, t))
+            .collect();
+        let eq = Equilibrium::classified(&s, u.clone(), tensions);
+        assert!(equilibrium_residual(&s, &eq, &load) < 1e-12, "at {w}");
+        let e = energy(&u);
+        assert!(
+            (e - e0).abs() <= 1e-12 * e0.abs(),
+            "at {w}: {e} against {e0}"
+        );
+        slack_counts.push(eq.slack_count());
+        match uniqueness(&s, &eq, &load, &pattern, &analysed) {
+            Uniqueness::NotUnique { nodes } => {
+                assert_eq!(nodes.len(), 1, "at {w}: {nodes:?}");
+                assert_eq!(nodes[0].0, 1, "at {w}: {nodes:?}");
+                assert!(
+                    (nodes[0].1[1].abs() - 1.0).abs() < 1e-9,
+                    "at {w}: {nodes:?}"
+                );
+            }
+            Uniqueness::Unique => panic!("at {w}: called unique"),
+        }
+    }
+    // Newton's end keeps one guy at zero tension, gap closed: taut by the gap rule.
+    assert_eq!(slack_counts, [2, 2, 2, 2, 1]);
+    // The energy of the report.
+    assert!((e0 - (-402.5004)).abs() < 1e-3, "{e0}");
+}
