@@ -67,7 +67,11 @@ impl Uniqueness {
             Uniqueness::Unique => String::new(),
             Uniqueness::NotUnique { nodes } => nodes
                 .iter()
-                .map(|(id, u)| format!("{id} ({:.2}, {:.2}, {:.2})", u[0], u[1], u[2]))
+                .map(|(id, u)| {
+                    // Rounded first, so that round-off reads 0.00, not -0.00.
+                    let [x, y, z] = u.map(|c| (100.0 * c).round() / 100.0 + 0.0);
+                    format!("{id} ({x:.2}, {y:.2}, {z:.2})")
+                })
                 .collect::<Vec<_>>()
                 .join(", "),
         }
