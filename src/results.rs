@@ -1,6 +1,8 @@
 //! Quantities derived from an equilibrium, computed independently of the solver that produced
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
+pub mod uniqueness;
+
 use crate::linalg::{norm, smallest_eigenvalues};
 use crate::solvers::{relative_unbalance, Equilibrium, Solution, TautStiffness};
 use crate::structure::law::{self, CurrentGeometry};

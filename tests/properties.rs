@@ -1,7 +1,8 @@
 //! Property tests (issue 5): random grids up to 5 × 5 with random supports, loads up to the
 //! paper's magnitude and random partitions — mechanisms are refused (and truly are), the
-//! rest is solved by all four solvers, which agree and satisfy the laws; and the case loader
-//! never panics, whatever it is fed.
+//! rest is solved by all four solvers, which agree and satisfy the laws; guyed masts whose
+//! solvers all converge agree, or every row says the answer is not unique (issue 42); and the
+//! case loader never panics, whatever it is fed.
 
 mod common;
 
@@ -204,5 +205,194 @@ proptest! {
             prop_assert!(!content.contains("nan") && !content.contains("inf"), "{}", file.display());
         }
         let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// A guyed mast (issue 42, D1): a bar pinned at the origin up to the top at height `h`, and
+/// `guys` cables from the top to anchors on a circle of `radius`, evenly spaced from azimuth
+/// `phi`, each prestressed to `t0` (the bar's compression balances them), under `load` at the
+/// top, solved by all four solvers at α = 0.5 to 4.
+struct Mast {
+    guys: usize,
+    phi: f64,
+    h: f64,
+    radius: f64,
+    t0: f64,
+    load: [f64; 3],
+}
+
+/// The case of `mast`, written with its tables into `dir`; returns the case file.
+fn write_mast(dir: &std::path::Path, mast: &Mast) -> std::path::PathBuf {
+    let Mast {
+        guys,
+        phi,
+        h,
+        radius,
+        t0,
+        load,
+    } = *mast;
+    let methods = "[\"newton\", \"pcg-lcp\", \"mono-latin\", \"micro-macro\"]";
+    std::fs::create_dir_all(dir).unwrap();
+    let mut nodes = String::from("node,x,y,z\n0,0,0,0\n");
+    nodes.push_str(&format!("1,0,0,{h:e}\n"));
+    let length = radius.hypot(h);
+    let mut members = String::from("member,a,b,kind,young,section,prestress\n");
+    // Each guy pulls the top down by t0 h / L; the bar holds them all.
+    members.push_str(&format!(
+        "0,0,1,bar,2.1e11,2.0e-3,{:e}\n",
+        -(guys as f64) * t0 * h / length
+    ));
+    for g in 0..guys {
+        let theta = phi + std::f64::consts::TAU * g as f64 / guys as f64;
+        nodes.push_str(&format!(
+            "{},{:e},{:e},0\n",
+            g + 2,
+            radius * theta.cos(),
+            radius * theta.sin()
+        ));
+        members.push_str(&format!(
+            "{},1,{},cable,1.5e11,1.0e-4,{t0:e}\n",
+            g + 1,
+            g + 2
+        ));
+    }
+    std::fs::write(dir.join("nodes.csv"), nodes).unwrap();
+    std::fs::write(dir.join("members.csv"), members).unwrap();
+    let anchors: Vec<String> = (0..guys).map(|g| (g + 2).to_string()).collect();
+    let text = format!(
+        "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n[[supports.fix]]\nnodes = [0, {}]\n\
+         [[load.point]]\nnodes = [1]\nforce = [{:e}, {:e}, {:e}]\n[load]\nalpha = [0.5, 1.0, 2.0, 4.0]\n\
+         [solver]\nmethods = {methods}\n[output]\nplots = false\ndir = \"out\"\n",
+        anchors.join(", "), load[0], load[1], load[2]
+    );
+    let path = dir.join("mast.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The rows of a run's `summary.csv`, as (column → value) maps.
+fn summary_rows(dir: &std::path::Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut reader = csv::Reader::from_path(dir.join("summary.csv")).unwrap();
+    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    reader
+        .records()
+        .map(|r| {
+            header
+                .iter()
+                .cloned()
+                .zip(r.unwrap().iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+/// Every free displacement of a `displacements/` file, in node order.
+fn displacements(dir: &std::path::Path, solver: &str, alpha: &str) -> Vec<f64> {
+    let mut reader =
+        csv::Reader::from_path(dir.join(format!("displacements/{solver}_alpha{alpha}.csv")))
+            .unwrap();
+    reader
+        .records()
+        .flat_map(|r| {
+            let r = r.unwrap();
+            (4..7)
+                .map(move |c| r[c].parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// What a converged row's solver states it stops on (README, "stops on"): the tolerance of its
+/// stopping measure and of r(U), each `None` when it states none.
+fn stated(case: &case::Case, solver: &str) -> (Option<f64>, Option<f64>) {
+    use tensolve::solvers::latin::StopOn;
+    use tensolve::solvers::Method;
+    let method = Method::from_name(solver).expect("a solver name");
+    match method {
+        Method::Newton => (
+            Some(case.solver.newton.tolerance),
+            Some(case.solver.newton.tolerance),
+        ),
+        Method::PcgLcp => (
+            Some(case.solver.pcg_lcp.tolerance),
+            Some(case.solver.pcg_lcp.tolerance),
+        ),
+        Method::MonoLatin | Method::MicroMacro => {
+            let s = case.solver.latin_settings(method).unwrap();
+            match s.stop_on {
+                StopOn::Eta => (Some(s.tolerance), None),
+                StopOn::Residual => (None, Some(s.residual_tolerance())),
+                StopOn::Both => (Some(s.tolerance), Some(s.residual_tolerance())),
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(config(24))]
+
+    /// Guyed masts of 3 to 5 guys under a load along a guy (where with three guys both
+    /// leeward ones slacken and the top is free across the load: many equilibria) or in any
+    /// direction, at α = 0.5 to 4: the solvers that all converge at an α agree on the answer,
+    /// or every one of them says it is not unique (`unique = false`); and no converged row is
+    /// above its stated tolerance, every converged row says `unique`, and no other row does.
+    #[test]
+    fn solvers_that_all_converge_agree_or_say_the_answer_is_not_unique(
+        guys in 3usize..=5,
+        phi in 0.0f64..std::f64::consts::TAU,
+        h in 4.0f64..15.0,
+        radius in 3.0f64..10.0,
+        t0 in 1e3f64..2e4,
+        along_guy in any::<bool>(),
+        azimuth in 0.0f64..std::f64::consts::TAU,
+        size in 0.1f64..3.0,
+        vertical in -1.0f64..1.0,
+    ) {
+        // Along a guy: pulling the top away from the guy at phi (it stays taut).
+        let psi = if along_guy { phi + std::f64::consts::PI } else { azimuth };
+        let f = size * t0;
+        let load = [f * psi.cos(), f * psi.sin(), vertical * f];
+        let dir = common::Temp::dir("mast-unique");
+        let mast = Mast { guys, phi, h, radius, t0, load };
+        let path = write_mast(&dir.0, &mast);
+        let case = case::load(&path).unwrap();
+        let out_dir = dir.0.join("out");
+        let out = common::tensolve(&["run", path.to_str().unwrap(), "--quiet", "--out", out_dir.to_str().unwrap()]);
+        prop_assert!(matches!(common::code(&out), 0 | 1), "{}", common::stderr(&out));
+        let rows = summary_rows(&out_dir);
+        let mut alphas: Vec<String> = rows.iter().map(|r| r["alpha"].clone()).collect();
+        alphas.dedup();
+        for alpha in alphas {
+            let at_alpha: Vec<_> = rows.iter().filter(|r| r["alpha"] == alpha).collect();
+            for row in &at_alpha {
+                let at = format!("{} at alpha = {alpha}", row["solver"]);
+                if row["converged"] != "true" {
+                    prop_assert_eq!(row["unique"].as_str(), "", "{}", at);
+                    continue;
+                }
+                prop_assert_eq!(row["status"].as_str(), "converged", "{}", at);
+                prop_assert!(row["unique"] == "true" || row["unique"] == "false", "{}: {:?}", at, row["unique"]);
+                let (measure_tol, r_tol) = stated(&case, &row["solver"]);
+                let r: f64 = row["equilibrium_residual"].parse().unwrap();
+                let m: f64 = row["residual"].parse().unwrap();
+                prop_assert!(r_tol.is_none_or(|tol| r <= tol), "{}: r(U) = {:e}", at, r);
+                prop_assert!(measure_tol.is_none_or(|tol| m <= tol), "{}: measure = {:e}", at, m);
+            }
+            if at_alpha.len() < 4 || at_alpha.iter().any(|r| r["converged"] != "true") {
+                continue;
+            }
+            let answers: Vec<Vec<f64>> = at_alpha.iter().map(|r| displacements(&out_dir, &r["solver"], &alpha)).collect();
+            let size = answers[0].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let spread = answers.iter().flat_map(|a| a.iter().zip(&answers[0]).map(|(x, y)| (x - y).abs())).fold(0.0f64, f64::max);
+            if spread > 1e-6 * size + 1e-12 {
+                for row in &at_alpha {
+                    prop_assert_eq!(
+                        row["unique"].as_str(), "false",
+                        "{} at alpha = {} differs from newton's answer by {:e} (of {:e}) and says unique",
+                        row["solver"], alpha, spread, size
+                    );
+                }
+            }
+        }
     }
 }

@@ -161,7 +161,9 @@ impl Reporter {
                 }
                 let mut text = format_row(row);
                 if let Some(e) = self.last_error.take() {
-                    text.push_str(&format!(", e = {e:.1e}"));
+                    // Beside the row's numbers, before the warnings under it.
+                    let end = text.find('\n').unwrap_or(text.len());
+                    text.insert_str(end, &format!(", e = {e:.1e}"));
                 }
                 self.line(&text);
                 self.tick();
@@ -250,6 +252,18 @@ fn format_row(r: &SummaryRow) -> String {
             100.0 * r.max_member_rotation,
             r.max_deflection,
             100.0 * tensolve::results::SMALL_DISPLACEMENT_LIMIT
+        ));
+    }
+    if let Some(not_unique) = r.uniqueness.as_ref().filter(|u| !u.is_unique()) {
+        line.push_str(&format!(
+            "\n  warning: {} at alpha = {}: the answer is not unique: the members that carry \
+             force leave a motion free that the load does no work on and that stretches no \
+             cable (it moves nodes {}); along it lie other equilibria of the same energy, and another \
+             solver may return one of them (summary.csv: unique = false). Members or supports \
+             that hold that motion, or prestress that keeps its cables taut, make it unique",
+            r.solver,
+            alpha_label(r.alpha),
+            not_unique.motion_nodes()
         ));
     }
     line

@@ -63,6 +63,9 @@ pub struct SummaryRow {
     /// The relative change of the answer the geometric term the model leaves out would make
     /// ([`results::geometric_term`]); `None` for `large` and without displacements.
     pub geometric_term: Option<f64>,
+    /// Whether a converged answer is the only equilibrium, when checked (column `unique`; the
+    /// run warns of the free motion of one that is not).
+    pub uniqueness: Option<results::uniqueness::Uniqueness>,
     /// Set-up of the solver for this structure, s.
     pub setup_seconds: f64,
     /// This solve, s.
@@ -113,6 +116,7 @@ impl SummaryRow {
             max_member_rotation: measures.max_member_rotation,
             updates_geometry: measures.updates_geometry,
             geometric_term,
+            uniqueness: None,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
             at_roundoff: solution.info.at_roundoff && solution.info.status.converged(),
@@ -159,7 +163,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique";
 
 /// A CSV writer's error as an I/O error of the same kind (a full disk stays `StorageFull`).
 fn csv_io(e: csv::Error) -> std::io::Error {
@@ -186,7 +190,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -223,6 +227,10 @@ pub fn summary_line(r: &SummaryRow) -> String {
         ),
         r.path_from.map(alpha_label).unwrap_or_default(),
         r.path_reached.map(alpha_label).unwrap_or_default(),
+        r.uniqueness
+            .as_ref()
+            .map(|u| u.is_unique().to_string())
+            .unwrap_or_default(),
     )
 }
 

@@ -99,6 +99,16 @@ pub fn gap_slack(link: &Link, trial: f64, scale: f64) -> bool {
     link.unilateral && trial < -SLACK_GAP_TOLERANCE * scale
 }
 
+/// Whether `link` carries force at trial tension `trial` by the gap rule's zero against the
+/// cables' force `scale`: bars and bilateral cables always; a unilateral cable when
+/// `t0 + k e > SLACK_GAP_TOLERANCE · scale`. A cable within that zero either way has its gap
+/// closed and no force: [`gap_slack`] does not call it slack, yet it resists only elongation
+/// (what the uniqueness check, `crate::results::uniqueness`, treats it as, whichever solver
+/// found it).
+pub fn carries_force(link: &Link, trial: f64, scale: f64) -> bool {
+    !link.unilateral || trial > SLACK_GAP_TOLERANCE * scale
+}
+
 /// The cables' force scale of [`SlackRule::Gap`] over `links` with their trial tensions:
 /// `max(|t0|, |t0 + k e|)` over the unilateral cables (0 without any). A maximum, so the scale
 /// of several groups of links is the largest of theirs.

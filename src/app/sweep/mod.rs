@@ -536,6 +536,7 @@ impl<'s> Sweep<'s> {
             &mut solution,
             self.prepared,
             self.checks,
+            load,
             |eq| match together {
                 Some(_) => solver.no_equilibrium_along(&eq.displacements, load),
                 None => crate::solvers::no_equilibrium(structure, eq, load)
@@ -559,7 +560,7 @@ impl<'s> Sweep<'s> {
                 ),
                 None => AnswerMeasures::of(structure, eq, load),
             };
-            SummaryRow::new(
+            let mut row = SummaryRow::new(
                 key.method.name(),
                 alpha,
                 &measures,
@@ -567,7 +568,9 @@ impl<'s> Sweep<'s> {
                 (verdict.min_tangent_eigenvalue, verdict.geometric_term),
                 self.solvers[index].setup_seconds,
             )
-            .on_path(path)
+            .on_path(path);
+            row.uniqueness = verdict.uniqueness.clone();
+            row
         });
         let Some(row) = row.filter(SummaryRow::is_finite) else {
             self.sinks.end(key, SolveEnd::NonFinite)?;

@@ -4,6 +4,7 @@
 use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
+use crate::results::uniqueness::{self, Uniqueness};
 use crate::solvers::{Equilibrium, NoEquilibrium, Solution, Status};
 
 /// What the sweep found of an answer beyond its solver's stop.
@@ -18,6 +19,8 @@ pub(super) struct Verdict {
     /// no equilibrium's cables can be prestressed only when s > 0), whether the model has
     /// geometric stiffness already, and a unit slip the members table shows.
     pub advice: Advice,
+    /// Whether a converged answer is the only equilibrium, when checked ([`checked_uniqueness`]).
+    pub uniqueness: Option<Uniqueness>,
 }
 
 /// The facts a failure line's advice rests on (issue 42, D11).
@@ -61,6 +64,7 @@ pub(super) fn assess(
     solution: &mut Solution,
     prepared: &Prepared,
     checks: AnswerChecks,
+    load: &[f64],
     certificate: impl FnOnce(&Equilibrium) -> Option<NoEquilibrium>,
 ) -> Verdict {
     let s = &prepared.structure;
@@ -71,6 +75,7 @@ pub(super) fn assess(
             geometric_term: None,
             no_equilibrium: None,
             advice,
+            uniqueness: None,
         };
     }
     // A converged answer is an equilibrium (r(U) within its tolerance): only the others, and
@@ -90,6 +95,7 @@ pub(super) fn assess(
             geometric_term: None,
             no_equilibrium: Some(none),
             advice,
+            uniqueness: None,
         };
     }
     // The run keeps K's factor whenever a check is asked (`Workload::keeps_taut`).
@@ -113,6 +119,38 @@ pub(super) fn assess(
             .and_then(|taut| results::geometric_term(s, &solution.equilibrium, taut)),
         no_equilibrium: None,
         advice,
+        uniqueness: solution
+            .info
+            .status
+            .converged()
+            .then(|| checked_uniqueness(prepared, checks, &solution.equilibrium, load))
+            .flatten(),
+    }
+}
+
+/// Whether the converged answer `eq` is the only equilibrium ([`uniqueness::uniqueness`]), on
+/// K's pattern and analysis when the run keeps them (up to [`uniqueness::CHECKED_UP_TO_DOFS`]
+/// free dofs, or at any size where the run factorizes a tangent per row anyway:
+/// `checks.eigenvalue`), else on its own analysis (up to
+/// [`uniqueness::OWN_ANALYSIS_UP_TO_DOFS`]); `None` (not checked) beyond, and where the ranks
+/// keep shares of the links.
+fn checked_uniqueness(
+    prepared: &Prepared,
+    checks: AnswerChecks,
+    eq: &Equilibrium,
+    load: &[f64],
+) -> Option<Uniqueness> {
+    let s = &prepared.structure;
+    match &prepared.taut {
+        _ if prepared.share.is_some() => None,
+        Some(taut) if s.n_free <= uniqueness::CHECKED_UP_TO_DOFS || checks.eigenvalue => Some(
+            uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor),
+        ),
+        None if s.n_free <= uniqueness::OWN_ANALYSIS_UP_TO_DOFS => {
+            let (pattern, analysed) = crate::solvers::TautStiffness::analyse(s);
+            Some(uniqueness::uniqueness(s, eq, load, &pattern, &analysed))
+        }
+        _ => None,
     }
 }
 
