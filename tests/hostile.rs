@@ -809,7 +809,10 @@ fn e3_one_module_per_substructure_sets_up_a_regular_macro_problem() {
     let out = tensolve(&["check", case.arg()]);
     assert_eq!(code(&out), 0, "{}", stderr(&out));
     let report = String::from_utf8_lossy(&out.stdout);
-    assert!(report.contains("substructures 4096 (64 x 64)"), "{report}");
+    assert!(
+        report.contains("substructures 4096 (64 x 64: solver.subdomains)"),
+        "{report}"
+    );
     let short = Temp::file(
         "e3-one-run",
         &format!("{text}max_iterations = 3\n[output]\ntensions = false\ndisplacements = false\n"),
