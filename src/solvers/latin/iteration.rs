@@ -16,9 +16,10 @@ use crate::structure::Structure;
 use rayon::prelude::*;
 
 /// A LATIN answer whose η meets the tolerance is converged only with r(U) at most this many
-/// times the tolerance (or [`EQUILIBRIUM_CHECK_FLOOR`]): at the paper's stop (η = 1e-6) r(U)
-/// is 5e-7 to 1.5e-6.
-const EQUILIBRIUM_CHECK: f64 = 100.0;
+/// times the tolerance (or [`EQUILIBRIUM_CHECK_FLOOR`]): at η = 1e-6 r(U) is 5e-7 to 1.5e-6 on
+/// the paper's plain method, up to 5.1e-5 with micro-macro's defaults on the paper case; the
+/// one-module-wide strips of issue 42 (T5) sit at 1e-2 and 0.43.
+const EQUILIBRIUM_CHECK: f64 = 1000.0;
 
 /// ... and r(U) at most this is an equilibrium whatever the tolerance: micro-macro's own
 /// accuracy on the paper case is 1.65e-10.
