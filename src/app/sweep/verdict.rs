@@ -153,9 +153,8 @@ fn off_equilibrium(row: &SummaryRow, measure: Measure) -> &'static str {
     match measure == Measure::Indicator && far_below {
         true => {
             ". eta is far below r(U): the iteration may have settled on a fixed point that is \
-             not the equilibrium, which more iterations do not change (as with substructures \
-             one module wide along a long interface: give every substructure at least 2 \
-             modules across, `solver.subdomains`, or use mono-latin)"
+             not the equilibrium, which more iterations do not change: try another \
+             `solver.subdomains`, or mono-latin"
         }
         false => "",
     }

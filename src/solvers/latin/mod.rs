@@ -262,12 +262,7 @@ pub fn auto_dm(structure: &Structure, substructures: usize, degree: usize) -> f6
 
 /// What to change when the macro problem of `settings` is singular with macro bases of
 /// `degree`; `takes`: the largest lower degree with which it sets up, if any.
-fn singular_macro_advice(
-    structure: &Structure,
-    settings: &LatinSettings,
-    degree: usize,
-    takes: Option<usize>,
-) -> String {
+fn singular_macro_advice(settings: &LatinSettings, degree: usize, takes: Option<usize>) -> String {
     let asked = match settings.macro_degree {
         Some(_) => format!("`solver.macro_degree` = {degree}"),
         None => format!("the default macro degree here, {degree}"),
@@ -275,29 +270,13 @@ fn singular_macro_advice(
     if let Some(largest) = takes {
         return format!(
             "{asked} is more than this partition's interfaces take (degrees 1 to 16 are valid, \
-             but the higher fields of neighbouring interfaces leave a mode undetermined on \
-             small substructures); the largest degree this partition takes is {largest}: set \
-             `solver.macro_degree` to at most {largest}"
+             but on small substructures a high degree leaves the macro problem singular); the \
+             largest degree this partition takes is {largest}: set `solver.macro_degree` to at \
+             most {largest}"
         );
     }
-    let [sx, sy] = settings.subdomains;
-    // One module across a substructure (the narrowest of an uneven split).
-    let narrow = structure
-        .layout
-        .as_ref()
-        .is_some_and(|l| l.nx / sx.max(1) < 2 || l.ny / sy.max(1) < 2);
-    let mut advice = Vec::new();
-    if narrow {
-        advice.push(format!(
-            "`solver.subdomains` = [{sx}, {sy}] makes substructures one module wide, a \
-             partition whose macro problem is singular along long interfaces (a 2 × 12 grid \
-             on [2, 1]) and whose iteration settles off the equilibrium along shorter ones: \
-             give every substructure at least 2 modules across (fewer subdomains), or use \
-             mono-latin"
-        ));
-    } else {
-        advice.push("try another `solver.subdomains` (fewer, larger substructures)".to_string());
-    }
+    let mut advice =
+        vec!["try another `solver.subdomains` (fewer, larger substructures)".to_string()];
     if settings.weak != WeakInterfaces::Macro {
         advice.push("`solver.weak_interfaces = \"macro\"`".to_string());
     }
@@ -418,7 +397,7 @@ impl<'s> Latin<'s> {
                     build(&lower).is_ok()
                 });
                 return Err(SetupError::SingularMacroProblem {
-                    advice: singular_macro_advice(structure, &settings, world.macro_degree, takes),
+                    advice: singular_macro_advice(&settings, world.macro_degree, takes),
                 });
             }
             built => built?,
