@@ -4,7 +4,7 @@
 use super::numbers::{number, positive, shown};
 use super::raw::RawSolver;
 use super::{CaseError, SolverChoice};
-use crate::solvers::latin::{LatinSettings, SearchDirection, MAX_MACRO_DEGREE};
+use crate::solvers::latin::{LatinSettings, SearchDirection, SearchPolicy, MAX_MACRO_DEGREE};
 
 /// The deepest Anderson history a case may ask for: each level keeps two vectors of the size
 /// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
@@ -124,6 +124,24 @@ fn latin_settings(
                 "solver.forcing",
                 number(rho),
                 "give the forcing term ρ of the inexact Newton status steps between 0 and 1 (exclusive), e.g. 0.3",
+            ));
+        }
+        // The forcing term of the inexact Newton status steps: with the other search
+        // directions there are none, and a value given would do nothing (issue 42, T12).
+        if latin.policy != SearchPolicy::Newton {
+            return Err(CaseError::invalid(
+                "solver.forcing",
+                number(rho),
+                format!(
+                    "`solver.forcing` is the forcing term of `solver.search_direction = \"newton\"` \
+                     and does nothing with `search_direction = \"{}\"`: remove it, or set \
+                     `solver.search_direction = \"newton\"`",
+                    match latin.policy {
+                        SearchPolicy::Stiffness => "stiffness",
+                        SearchPolicy::Status => "status",
+                        SearchPolicy::Newton => "newton",
+                    }
+                ),
             ));
         }
         latin.forcing = rho;

@@ -69,7 +69,9 @@ pub fn drive_from<S: Solver + ?Sized>(
     let mut runaway = None;
     let (status, progress) = loop {
         let progress = solver.progress(&state);
-        if progress.iteration > 0 || S::INIT_IS_ITERATE {
+        // A start guess that is no iterate of the method is reported only when the solve ends
+        // on it (converged at iteration 0): a history is never a header alone (issue 42, M11).
+        if progress.iteration > 0 || S::INIT_IS_ITERATE || progress.stop.is_some() {
             observer.iteration(&IterationRecord {
                 iteration: progress.iteration,
                 stopping_value: progress.stopping_value,

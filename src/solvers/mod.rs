@@ -137,9 +137,13 @@ pub enum SetupError {
     /// The LATIN macro problem is singular.
     #[error(
         "the macro problem is singular: an interface or a rigid mode is left undetermined; \
-         try `solver.weak_interfaces = \"macro\"` or another `solver.subdomains`"
+         {advice}"
     )]
-    SingularMacroProblem,
+    SingularMacroProblem {
+        /// What to change: the largest macro degree the partition takes, or the partition
+        /// (never a setting already in force, issue 42 M10).
+        advice: String,
+    },
 }
 
 /// One row of `mechanisms.csv`: a node (its id), the mode (from 1), its motion (unit mode).

@@ -5,11 +5,18 @@
 //! The variables are scaled, `x = k^{1/2} λ`, so that the scaled W has spectrum in [0, 1]
 //! (a Jacobi preconditioning that also fixes the step length of the expansion steps).
 //!
-//! Stopping measure: [`Measure::ComplementarityResidual`], `‖min(k λ, τ)‖ / ‖t0_c‖` — the method's
-//! complementarity residual with the slack gap λ expressed as the force k λ so that both
-//! arguments are in N.
+//! Stopping measure: [`Measure::ComplementarityResidual`], `‖min(k λ, τ)‖ / ‖k_c B_c K⁻¹ F‖` —
+//! the method's complementarity residual with the slack gap λ expressed as the force k λ so
+//! that both arguments are in N, relative to the tensions the load brings into play (the
+//! prestress left out, as newton's stop: relative to the prestress, λ = 0 passed at α = 1e-10
+//! 46 % off, issue 42 T3); relative to `‖t0_c‖` at zero load.
+//!
+//! No equilibrium: a descent direction of zero curvature that keeps λ ≥ 0 (`dᵀW̃d = 0`,
+//! `d ≥ 0`) is a mechanism left by the cables it opens, along which the energy decreases
+//! without bound; the solver stops there with its certificate ([`Solver::runaway`]) rather
+//! than divide by `dᵀW̃d`.
 
-use super::{stop_when, Equilibrium, Measure, Progress, Solver, TautStiffness};
+use super::{stop_when, Equilibrium, Measure, NoEquilibrium, Progress, Solver, TautStiffness};
 use crate::linalg::{dot, norm, SparseCholesky};
 use crate::structure::law;
 use crate::structure::Structure;
@@ -38,6 +45,9 @@ const EXPANSION_STEP: f64 = 1.9;
 const PROPORTIONING: f64 = 1.0;
 /// The gradient is recomputed from scratch this often, to stop round-off drift.
 const REFRESH_EVERY: usize = 50;
+/// A direction d with `dᵀW̃d` at most this fraction of `dᵀd` has no curvature: W̃'s spectrum is
+/// in [0, 1], and round-off leaves about 1e-16 of a null direction.
+const NULL_CURVATURE: f64 = 1e-12;
 
 /// The pcg-lcp solver, set up for one structure.
 pub struct PcgLcp<'s> {
@@ -49,7 +59,7 @@ pub struct PcgLcp<'s> {
     cables: Vec<usize>,
     /// `k^{1/2}` of each of them.
     sqrt_k: Vec<f64>,
-    /// `‖t0_c‖`, the prestress part of the complementarity residual's scale.
+    /// `‖t0_c‖`, the complementarity residual's scale at zero load.
     prestress_norm: f64,
     /// Scratch on the free dofs.
     nodal: Vec<f64>,
@@ -68,13 +78,18 @@ pub struct PcgLcpState {
     /// Scratch `W̃ p`.
     wp: Vec<f64>,
     since_refresh: usize,
-    /// `‖t0_c‖ + ‖k_c B_c K⁻¹ F‖`: the scale of the complementarity residual, so that it is
-    /// relative both at zero prestress (homogeneous in α) and at zero load.
+    /// `‖k_c B_c K⁻¹ F‖` (`‖t0_c‖` at zero load): the scale of the complementarity residual,
+    /// the tensions the load brings into play, so that it is homogeneous in α however large
+    /// the prestress.
     scale: f64,
     residual: f64,
     iteration: usize,
-    /// `pᵀ W̃ p ≤ 0`: no further progress is possible.
+    /// A descent direction of no curvature that the certificate does not confirm: no further
+    /// progress is possible.
     stalled: bool,
+    /// The no-equilibrium certificate of a descent direction of no curvature (see the module
+    /// text).
+    runaway: Option<NoEquilibrium>,
 }
 
 impl<'s> PcgLcp<'s> {
@@ -128,9 +143,8 @@ impl<'s> PcgLcp<'s> {
         state.since_refresh = 0;
     }
 
-    /// `‖min(k λ, τ)‖ / (‖t0_c‖ + ‖k_c B_c K⁻¹ F‖)`, with `k λ = k^{1/2} x` and
-    /// `τ = k^{1/2} g` (absolute only when both prestress and load vanish, where λ = 0 is
-    /// exact).
+    /// `‖min(k λ, τ)‖ / scale`, with `k λ = k^{1/2} x` and `τ = k^{1/2} g` (absolute only
+    /// when both prestress and load vanish, where λ = 0 is exact).
     fn residual_of(&self, x: &[f64], g: &[f64], scale: f64) -> f64 {
         let r: f64 = x
             .iter()
@@ -170,6 +184,41 @@ impl<'s> PcgLcp<'s> {
         u
     }
 
+    /// A descent direction `d ≥ 0` of the scaled slack gaps with no curvature (`W̃d ≈ 0`):
+    /// the displacements change by `ΔU = −K⁻¹ B_cᵀ k^{1/2} d` per unit step, every cable d
+    /// opens shortens by its gap and the others keep their length; the certificate is tested
+    /// along ΔU. `None` when ΔU is no runaway (round-off of a tiny but real curvature).
+    fn runaway_along(&mut self, d: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
+        let s = self.structure;
+        let mut change = vec![0.0; s.n_free];
+        for (j, &i) in self.cables.iter().enumerate() {
+            s.link_dofs[i].scatter(-self.sqrt_k[j] * d[j], &mut change);
+        }
+        self.factor.solve_in_place(&mut change);
+        super::no_equilibrium_along(s, &change, load)
+    }
+
+    /// Whether the step along `−direction` (a descent direction, `gᵀdirection > 0`) has no
+    /// curvature (`curvature = directionᵀW̃direction`): then, when it never reaches a bound,
+    /// the energy is unbounded below along it (a certificate, `state.runaway`) or, where the
+    /// certificate does not hold and the curvature is not positive, the solve stalls.
+    /// `false`: the step can be taken.
+    fn unbounded(&mut self, st: &mut PcgLcpState, direction: &[f64], curvature: f64) -> bool {
+        if curvature > NULL_CURVATURE * dot(direction, direction) {
+            return false;
+        }
+        // x moves by −t·direction: it reaches a bound where a component of direction is > 0.
+        if direction.iter().all(|&di| di <= 0.0) {
+            let opening: Vec<f64> = direction.iter().map(|d| -d).collect();
+            st.runaway = self.runaway_along(&opening, &st.load);
+            if st.runaway.is_some() {
+                return true;
+            }
+        }
+        st.stalled = curvature <= 0.0;
+        st.stalled
+    }
+
     /// The first MPRGP state for `load` at the scaled slack gaps `x` (`None`: λ = 0).
     fn state_from(&mut self, load: &[f64], x: Option<Vec<f64>>) -> PcgLcpState {
         let s = self.structure;
@@ -190,15 +239,20 @@ impl<'s> PcgLcp<'s> {
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| sk * s.link_dofs[i].elongation(&u_load) + s.links[i].prestress / sk)
             .collect();
-        // The residual's scale: the prestress and the load's tensions (scale-free in α, sound
-        // at zero prestress).
+        // The residual's scale: the load's tensions k_c B_c K⁻¹ F (homogeneous in α, as
+        // newton's load-relative stop), the prestress at zero load.
         let load_tensions: Vec<f64> = self
             .cables
             .iter()
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| sk * sk * s.link_dofs[i].elongation(&u_load))
             .collect();
-        let scale = self.prestress_norm + norm(&load_tensions);
+        let load_scale = norm(&load_tensions);
+        let scale = if load_scale > 0.0 {
+            load_scale
+        } else {
+            self.prestress_norm
+        };
         let cold = x.is_none();
         let x = x.unwrap_or_else(|| vec![0.0; m]);
         let g = q.clone();
@@ -215,6 +269,7 @@ impl<'s> PcgLcp<'s> {
             residual: f64::INFINITY,
             iteration: 0,
             stalled: false,
+            runaway: None,
         };
         if !cold {
             // g = W̃ x + q̃, p on its free face.
@@ -302,9 +357,9 @@ impl Solver for PcgLcp<'_> {
         if dot(&beta, &beta) <= PROPORTIONING * PROPORTIONING * reduced {
             self.apply_w(&st.p, &mut wp);
             let pwp = dot(&st.p, &wp);
-            if pwp <= 0.0 {
+            let p = st.p.clone();
+            if self.unbounded(st, &p, pwp) {
                 st.wp = wp;
-                st.stalled = true;
                 return;
             }
             let cg_step = dot(&st.g, &st.p) / pwp;
@@ -335,9 +390,15 @@ impl Solver for PcgLcp<'_> {
                 st.p = free_part(&st.x, &st.g);
             }
         } else {
-            // Proportioning: release bound variables whose gradient pulls them free.
+            // Proportioning: release bound variables whose gradient pulls them free (β ≤ 0,
+            // x moves by −step β ≥ 0; with βᵀW̃β = 0 it would move without bound).
             self.apply_w(&beta, &mut wp);
-            let step = dot(&st.g, &beta) / dot(&beta, &wp);
+            let curvature = dot(&beta, &wp);
+            if self.unbounded(st, &beta, curvature) {
+                st.wp = wp;
+                return;
+            }
+            let step = dot(&st.g, &beta) / curvature;
             axpy(-step, &beta, &mut st.x);
             axpy(-step, &wp, &mut st.g);
             st.p = free_part(&st.x, &st.g);
@@ -363,6 +424,10 @@ impl Solver for PcgLcp<'_> {
             at_roundoff: false,
             stop,
         }
+    }
+
+    fn runaway(&self, state: &PcgLcpState) -> Option<NoEquilibrium> {
+        state.runaway.clone()
     }
 
     fn elongations(&self, state: &PcgLcpState) -> Vec<f64> {

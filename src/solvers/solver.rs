@@ -49,7 +49,8 @@ pub trait Solver {
 
     /// Whether the state `init` returns is an iterate of the method that observers see as
     /// iteration 0 (the LATIN solvers' first linear stage). A start guess that is not a result
-    /// of the method (newton's U = 0, pcg-lcp's λ = 0) is not reported.
+    /// of the method (newton's U = 0, pcg-lcp's λ = 0) is reported only when the solve ends on
+    /// it.
     const INIT_IS_ITERATE: bool;
 
     /// What [`Progress::stopping_value`] measures.

@@ -79,8 +79,8 @@ pub enum Measure {
     /// (`newton`, which stops when `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)`, the stricter, meets
     /// the tolerance too).
     EquilibriumResidual,
-    /// Relative complementarity residual `‖min(kλ, τ)‖ / (‖t0_c‖ + ‖k_c B_c K⁻¹ F‖)` of the
-    /// cable LCP (`pcg-lcp`).
+    /// Relative complementarity residual `‖min(kλ, τ)‖ / ‖k_c B_c K⁻¹ F‖` of the cable LCP
+    /// (`pcg-lcp`; relative to `‖t0_c‖` at zero load).
     ComplementarityResidual,
     /// The LATIN indicator η between the two half-steps (paper §5.3).
     Indicator,

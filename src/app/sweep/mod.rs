@@ -574,9 +574,14 @@ impl<'s> Sweep<'s> {
         });
         let Some(row) = row.filter(SummaryRow::is_finite) else {
             self.sinks.end(key, SolveEnd::NonFinite)?;
+            // The solver's certificate said no equilibrium before its iterate overflowed.
+            let found = match verdict.no_equilibrium {
+                Some(_) => "no equilibrium (the solver's certificate holds), and its iterate ",
+                None => "",
+            };
             self.failures.push(format!(
-                "{} at alpha = {}: produced non-finite values after {} iterations; no row \
-                 and no files written for it",
+                "{} at alpha = {}: {found}produced non-finite values after {} iterations; no \
+                 row and no files written for it",
                 key.method.name(),
                 alpha_label(alpha),
                 solution.info.iterations,

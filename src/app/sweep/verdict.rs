@@ -5,7 +5,7 @@ use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
 use crate::results::uniqueness::{self, Uniqueness};
-use crate::solvers::{Equilibrium, NoEquilibrium, Solution, Status};
+use crate::solvers::{Equilibrium, Measure, NoEquilibrium, Solution, Status};
 
 /// What the sweep found of an answer beyond its solver's stop.
 pub(super) struct Verdict {
@@ -69,20 +69,14 @@ pub(super) fn assess(
 ) -> Verdict {
     let s = &prepared.structure;
     let mut advice = Advice::of(prepared);
-    if !results::is_finite(solution) {
-        return Verdict {
-            min_tangent_eigenvalue: None,
-            geometric_term: None,
-            no_equilibrium: None,
-            advice,
-            uniqueness: None,
-        };
-    }
+    // The solver's own certificate holds whatever its last iterate (issue 42, D2); a
+    // non-finite answer has no direction to test, and nothing else to judge.
+    let finite = results::is_finite(solution);
     // A converged answer is an equilibrium (r(U) within its tolerance): only the others, and
     // an answer beyond the model (a runaway its solver stopped on), are asked for a runaway.
-    let beyond = results::beyond_model(s, &solution.equilibrium);
+    let beyond = finite && results::beyond_model(s, &solution.equilibrium);
     let found = solution.info.no_equilibrium.clone().or_else(|| {
-        (!solution.info.status.converged() || beyond)
+        (finite && (!solution.info.status.converged() || beyond))
             .then(|| certificate(&solution.equilibrium))
             .flatten()
     });
@@ -94,6 +88,15 @@ pub(super) fn assess(
             min_tangent_eigenvalue: None,
             geometric_term: None,
             no_equilibrium: Some(none),
+            advice,
+            uniqueness: None,
+        };
+    }
+    if !finite {
+        return Verdict {
+            min_tangent_eigenvalue: None,
+            geometric_term: None,
+            no_equilibrium: None,
             advice,
             uniqueness: None,
         };
@@ -298,12 +301,84 @@ pub(super) fn not_converged_message(
             row.min_tangent_eigenvalue.unwrap_or(f64::NAN)
         ),
         _ => format!(
-            "{head}: not converged after {} iterations ({:?}), {} = {:e}; its row says \
-             converged = false",
+            "{head}: not converged after {} iterations ({:?}), {}; its row says \
+             converged = false{}",
             row.iterations,
             solution.info.status,
-            solution.info.measure.short_name(),
-            row.stopping_value
+            stopping_values(row, solution.info.measure),
+            off_equilibrium(row, solution.info.measure)
         ),
+    }
+}
+
+/// The stopping measure's value and, where it is not r(U), r(U) beside it: either may be the
+/// criterion that failed (issue 42, M7).
+fn stopping_values(row: &SummaryRow, measure: Measure) -> String {
+    let own = format!("{} = {:e}", measure.short_name(), row.stopping_value);
+    match measure {
+        Measure::EquilibriumResidual => own,
+        _ => format!("{own}, r(U) = {:e}", row.equilibrium_residual),
+    }
+}
+
+/// LATIN's η far below r(U): what that says (issue 42, T5), or nothing.
+fn off_equilibrium(row: &SummaryRow, measure: Measure) -> &'static str {
+    let far_below = row.stopping_value * 100.0 < row.equilibrium_residual;
+    match measure == Measure::Indicator && far_below {
+        true => {
+            ". eta is far below r(U): the iteration may have settled on a fixed point that is \
+             not the equilibrium, which more iterations do not change: try another \
+             `solver.subdomains`, or mono-latin"
+        }
+        false => "",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solvers::SolveInfo;
+
+    /// A solver's own no-equilibrium certificate holds even when its last iterate is not
+    /// finite (issue 42, D2): the row says no equilibrium, not "non-finite values".
+    #[test]
+    fn a_solvers_certificate_holds_on_a_non_finite_answer() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/simplex.toml");
+        let case = crate::case::load_with(&path, &[]).unwrap();
+        let prepared = crate::app::setup::prepare(&case).unwrap();
+        let s = &prepared.structure;
+        let none = NoEquilibrium {
+            slack_cables: vec![90],
+            mode_nodes: vec![(3, [1.0, 0.0, 0.0])],
+        };
+        let mut solution = Solution {
+            equilibrium: Equilibrium {
+                displacements: vec![f64::NAN; s.n_free],
+                tensions: vec![0.0; s.links.len()],
+                slack: vec![false; s.links.len()],
+            },
+            info: SolveInfo {
+                status: Status::MaxIterations,
+                iterations: 2,
+                measure: Measure::ComplementarityResidual,
+                stopping_value: f64::NAN,
+                rebuilds: 0,
+                solve_seconds: 0.0,
+                at_roundoff: false,
+                no_equilibrium: Some(none),
+                load_path: None,
+            },
+        };
+        let checks = AnswerChecks {
+            eigenvalue: false,
+            geometric_term: false,
+        };
+        let load = vec![0.0; s.n_free];
+        let verdict = assess(&mut solution, &prepared, checks, &load, |_| None);
+        assert_eq!(solution.info.status, Status::NoEquilibrium);
+        assert_eq!(
+            verdict.no_equilibrium.map(|n| n.slack_cables),
+            Some(vec![90])
+        );
     }
 }

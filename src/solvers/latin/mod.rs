@@ -260,6 +260,33 @@ pub fn auto_dm(structure: &Structure, substructures: usize, degree: usize) -> f6
     DM_FACTOR * degree.max(1) as f64 / compliance / h.sqrt()
 }
 
+/// What to change when the macro problem of `settings` is singular with macro bases of
+/// `degree`; `takes`: the largest lower degree with which it sets up, if any.
+fn singular_macro_advice(settings: &LatinSettings, degree: usize, takes: Option<usize>) -> String {
+    let asked = match settings.macro_degree {
+        Some(_) => format!("`solver.macro_degree` = {degree}"),
+        None => format!("the default macro degree here, {degree}"),
+    };
+    if let Some(largest) = takes {
+        return format!(
+            "{asked} is more than this partition's interfaces take (degrees 1 to 16 are valid, \
+             but on small substructures a high degree leaves the macro problem singular); the \
+             largest degree this partition takes is {largest}: set `solver.macro_degree` to at \
+             most {largest}"
+        );
+    }
+    let mut advice =
+        vec!["try another `solver.subdomains` (fewer, larger substructures)".to_string()];
+    if settings.weak != WeakInterfaces::Macro {
+        advice.push("`solver.weak_interfaces = \"macro\"`".to_string());
+    }
+    let advice = advice.join("; or ");
+    match degree > 1 {
+        true => format!("{advice} (degree 1 is singular too: {asked} is not the cause)"),
+        false => advice,
+    }
+}
+
 /// Memory all dense substructure inverses together may take (see
 /// [`crate::linalg::SpdSolver::new`]).
 const DENSE_BUDGET_BYTES: usize = 16 << 20;
@@ -349,16 +376,32 @@ impl<'s> Latin<'s> {
             dense: dense_bytes <= DENSE_BUDGET_BYTES,
             keep_z: settings.keep_z,
         };
-        let (substructures, macro_problem) = operators::build(
-            structure,
-            partition,
-            &interfaces.list,
-            &holders,
-            &base_search,
-            dm,
-            storage,
-            (exchange, held.clone()),
-        )?;
+        let build = |interfaces: &Interfaces| {
+            operators::build(
+                structure,
+                partition,
+                &interfaces.list,
+                &holders,
+                &base_search,
+                dm,
+                storage,
+                (exchange, held.clone()),
+            )
+        };
+        let (substructures, macro_problem) = match build(&interfaces) {
+            Err(SetupError::SingularMacroProblem { .. }) => {
+                // The largest degree below the one asked for that sets up, if any: tried
+                // downwards, so the degree named is the largest that does (issue 42, T4).
+                let takes = (1..world.macro_degree).rev().find(|&degree| {
+                    let lower = Interfaces::new(structure, partition, settings.weak, degree);
+                    build(&lower).is_ok()
+                });
+                return Err(SetupError::SingularMacroProblem {
+                    advice: singular_macro_advice(&settings, world.macro_degree, takes),
+                });
+            }
+            built => built?,
+        };
         let dof_ownership = residual::DofOwnership::of(&substructures, structure.n_free);
         let mut latin = Latin {
             structure,

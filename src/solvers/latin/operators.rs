@@ -63,8 +63,11 @@ pub(super) fn build(
     let mut substructures: Vec<Substructure> = built.into_iter().flatten().collect();
     let all: Vec<usize> = (0..substructures.len()).collect();
     share_homogenised(&mut substructures, &all, exchange, &held);
-    let macro_problem = MacroProblem::new(&substructures, interfaces, dm)
-        .map_err(|_| SetupError::SingularMacroProblem)?;
+    let macro_problem = MacroProblem::new(&substructures, interfaces, dm).map_err(|_| {
+        SetupError::SingularMacroProblem {
+            advice: String::new(),
+        }
+    })?;
     Ok((substructures, macro_problem))
 }
 

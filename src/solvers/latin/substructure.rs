@@ -4,14 +4,13 @@
 //! homogenised flexibility `L_E = K⁺_E − I/d_m`.
 
 use super::kernel::{substructure_kernel, InterfaceTrace};
-use super::macro_basis::orthonormal_columns;
 use super::partition::SubstructureTopology;
 use super::shapes::Shapes;
 use super::Interface;
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
 use crate::structure::law::{given_prestress, transverse_pair};
 use crate::structure::{LinkDofs, Structure, CLAMPED};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
 /// E's view of one of its interfaces.
@@ -532,22 +531,56 @@ const GAP_RELATIVE: f64 = 1e-6;
 /// the numerical null space of K*_E, which also holds the internal mechanisms of small
 /// substructures (a one-module substructure has three) that rigid motions miss. `None` when
 /// an eigenvalue falls between the null and regular bounds.
+///
+/// Q_E has as many columns as K*_E has null eigenvalues (at least the rigid motions'): a null
+/// eigenvector that repeats a rigid motion differs from it by round-off over the spectral gap
+/// (6e-9 on a one-module-wide strip), which a dependence test relative to round-off took for a
+/// mode of its own; that noise, normalised, made a regular direction a kernel one, whose
+/// stiffness the iteration then left out: a fixed point off the equilibrium (issue 42, T5).
+/// The completion takes, one by one, the null eigenvector farthest from the columns kept.
 fn complete_kernel(k_star: &DMatrix<f64>, rigid: DMatrix<f64>, dm: f64) -> Option<DMatrix<f64>> {
     let m = k_star.nrows();
     if m == 0 {
         return Some(rigid);
     }
     let eig = k_star.clone().symmetric_eigen();
-    let mut fields: Vec<Vec<f64>> = rigid
-        .column_iter()
-        .map(|c| c.iter().copied().collect())
-        .collect();
+    let mut null: Vec<DVector<f64>> = Vec::new();
     for (i, &value) in eig.eigenvalues.iter().enumerate() {
         if value.abs() <= NULL_RELATIVE * dm {
-            fields.push(eig.eigenvectors.column(i).iter().copied().collect());
+            null.push(eig.eigenvectors.column(i).into_owned());
         } else if value.abs() < GAP_RELATIVE * dm {
             return None;
         }
     }
-    Some(orthonormal_columns(&fields, m))
+    let columns = null.len().max(rigid.ncols());
+    let mut kept: Vec<DVector<f64>> = rigid.column_iter().map(|c| c.into_owned()).collect();
+    // v minus its projection on the columns kept (twice, for orthogonality to round-off).
+    let remainder = |v: &DVector<f64>, kept: &[DVector<f64>]| {
+        let mut r = v.clone();
+        for _ in 0..2 {
+            for q in kept {
+                let along = q.dot(&r);
+                r.axpy(-along, q, 1.0);
+            }
+        }
+        r
+    };
+    while kept.len() < columns {
+        let farthest = null
+            .iter()
+            .map(|v| remainder(v, &kept))
+            .max_by(|a, b| a.norm().total_cmp(&b.norm()));
+        match farthest {
+            Some(r) if r.norm() > DEPENDENT_NULL_VECTOR => kept.push(r.normalize()),
+            _ => break,
+        }
+    }
+    Some(match kept.is_empty() {
+        true => DMatrix::zeros(m, 0),
+        false => DMatrix::from_columns(&kept),
+    })
 }
+
+/// A null eigenvector (unit) whose part off the kernel columns kept is at most this repeats
+/// them.
+const DEPENDENT_NULL_VECTOR: f64 = 1e-3;

@@ -784,3 +784,51 @@ fn the_macro_solve_stays_refined_to_the_end_once_r_u_is_near_its_tolerance() {
     assert_eq!(accuracy(0.5 * near), 0.0);
     assert_eq!(accuracy(4.0 * near), 0.0);
 }
+
+/// Substructures one module wide (a 2 × 10 grid on [2, 1]): each strip, clamped along one
+/// line, has one rigid motion left, the rotation about that line, and K*_E one null
+/// eigenvalue. The null eigenvector repeating the rigid motion to 6e-9 was kept as a second
+/// kernel column on one strip (issue 42, T5): a regular direction treated as a kernel one.
+#[test]
+fn a_strip_one_module_wide_has_one_kernel_column_per_null_mode() {
+    let spec = GridSpec {
+        modules: [2, 10],
+        ..GridSpec::default()
+    };
+    let s = Structure::grid(&spec, &LoadPattern::default());
+    let strips = LatinSettings {
+        subdomains: [2, 1],
+        ..LatinSettings::default()
+    };
+    let latin = Latin::new(&s, strips).unwrap();
+    let columns: Vec<usize> = latin
+        .substructures
+        .iter()
+        .map(|e| e.kernel.ncols())
+        .collect();
+    assert_eq!(columns, [1, 1]);
+}
+
+/// With `stop_on = "eta"`, η met while r(U) is far above the tolerance is a fixed point off
+/// the equilibrium: stalled, never converged (issue 42, T5); with r(U) near η, converged.
+#[test]
+fn an_eta_met_off_the_equilibrium_is_never_converged() {
+    let s = grid_structure(4);
+    let eta_only = LatinSettings {
+        stop_on: super::StopOn::Eta,
+        ..settings([2, 2], WeakInterfaces::Macro)
+    };
+    let mut latin = Latin::new(&s, eta_only).unwrap();
+    let mut state = latin.init(&load(&s, 1.0));
+    state.eta = 1e-2 * eta_only.tolerance;
+    state.residual = 1e4 * eta_only.tolerance;
+    assert_eq!(
+        latin.progress(&state).stop,
+        Some(crate::solvers::Status::Stalled)
+    );
+    state.residual = eta_only.tolerance;
+    assert_eq!(
+        latin.progress(&state).stop,
+        Some(crate::solvers::Status::Converged)
+    );
+}
