@@ -73,6 +73,40 @@ fn a_macro_degree_the_partition_cannot_take_is_refused_with_the_largest_it_can()
     }
 }
 
+/// The default macro degree is a guess from the substructures' size: where the partition takes
+/// less (a braced 64 × 8 grid on its default 4 × 4 partition: degree 2 by size, 1 taken), the
+/// default is the largest it takes, with its d_m, and the run converges to newton's slack set.
+#[test]
+fn the_default_macro_degree_falls_back_to_what_the_partition_takes() {
+    let case = Temp::file(
+        "default-degree",
+        "[grid]\nmodules = [64, 8]\nmodule = \"braced\"\n[supports]\n\
+         clamp = \"lower-all-edges\"\n[load]\nalpha = [0.5]\n[solver]\n\
+         methods = [\"micro-macro\", \"newton\"]\n[output]\ngeometric_term = false\n",
+    );
+    let o = check(&case, &["solver.macro_degree=2"]);
+    assert_eq!(
+        code(&o),
+        2,
+        "degree 2 is refused when asked: {}",
+        stderr(&o)
+    );
+    let o = check(&case, &[]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        report.contains("(degree 1 on strong interfaces: default"),
+        "{report}"
+    );
+    let dir = Temp::dir("default-degree-out");
+    let o = tensolve(&["run", case.arg(), "--out", dir.arg(), "--quiet"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let rows = summary_rows(&dir.0);
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| r["converged"] == "true"), "{rows:?}");
+    assert_eq!(rows[0]["slack_cables"], rows[1]["slack_cables"]);
+}
+
 /// A 2 × `long` grid clamped on its x-edges, split into two strips one module wide, solved by
 /// newton and micro-macro.
 fn strips(long: usize, stop_on: &str) -> Temp {

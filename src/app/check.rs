@@ -541,7 +541,7 @@ impl CheckReport {
             )?;
             let degree_origin = match settings.macro_degree {
                 Some(_) => "solver.macro_degree",
-                None => "default round(H/4), 1 to 16",
+                None => "default round(H/4), 1 to 16, at most what the partition takes",
             };
             match r.strong_interfaces {
                 0 => writeln!(f, "  macro dofs    {}", r.macro_dofs)?,

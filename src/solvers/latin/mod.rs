@@ -342,13 +342,13 @@ impl<'s> Latin<'s> {
     fn set_up(
         structure: &'s Structure,
         partition: &Partition,
-        world: WorldFacts,
+        mut world: WorldFacts,
         world_links: Option<&'s [Vec<usize>]>,
         settings: LatinSettings,
         exchange: &'s dyn Exchange,
     ) -> Result<Self, SetupError> {
-        let dm = world.dm;
-        let interfaces = Interfaces::new(structure, partition, settings.weak, world.macro_degree);
+        let mut interfaces =
+            Interfaces::new(structure, partition, settings.weak, world.macro_degree);
         let base_search: Vec<f64> = structure
             .links
             .iter()
@@ -376,7 +376,7 @@ impl<'s> Latin<'s> {
             dense: dense_bytes <= DENSE_BUDGET_BYTES,
             keep_z: settings.keep_z,
         };
-        let build = |interfaces: &Interfaces| {
+        let build = |interfaces: &Interfaces, dm: f64| {
             operators::build(
                 structure,
                 partition,
@@ -388,20 +388,45 @@ impl<'s> Latin<'s> {
                 (exchange, held.clone()),
             )
         };
-        let (substructures, macro_problem) = match build(&interfaces) {
+        // d_m at the degree p: the default `c p k̄ / √H` is linear in p (`auto_dm`).
+        let dm_at = |degree: usize| match settings.dm {
+            Some(dm) => dm,
+            None => world.dm * degree.max(1) as f64 / world.macro_degree.max(1) as f64,
+        };
+        let (substructures, macro_problem) = match build(&interfaces, world.dm) {
             Err(SetupError::SingularMacroProblem { .. }) => {
                 // The largest degree below the one asked for that sets up, if any: tried
                 // downwards, so the degree named is the largest that does (issue 42, T4).
-                let takes = (1..world.macro_degree).rev().find(|&degree| {
+                let takes = (1..world.macro_degree).rev().find_map(|degree| {
                     let lower = Interfaces::new(structure, partition, settings.weak, degree);
-                    build(&lower).is_ok()
+                    build(&lower, dm_at(degree))
+                        .ok()
+                        .map(|built| (degree, lower, built))
                 });
-                return Err(SetupError::SingularMacroProblem {
-                    advice: singular_macro_advice(&settings, world.macro_degree, takes),
-                });
+                match (settings.macro_degree, takes) {
+                    // The default degree is a guess from the substructures' size: where the
+                    // partition takes less, the largest it takes is the default (and d_m with
+                    // it); `check` prints both.
+                    (None, Some((degree, lower, built))) => {
+                        world.dm = dm_at(degree);
+                        world.macro_degree = degree;
+                        interfaces = lower;
+                        built
+                    }
+                    (_, takes) => {
+                        return Err(SetupError::SingularMacroProblem {
+                            advice: singular_macro_advice(
+                                &settings,
+                                world.macro_degree,
+                                takes.map(|t| t.0),
+                            ),
+                        })
+                    }
+                }
             }
             built => built?,
         };
+        let dm = world.dm;
         let dof_ownership = residual::DofOwnership::of(&substructures, structure.n_free);
         let mut latin = Latin {
             structure,
