@@ -406,6 +406,7 @@ fn check_case(ranks: &Ranks, case: case::Case, path: PathBuf) -> Result<(), RunE
     // What check itself allocates (a rank factorization, the LATIN set-ups) must fit first.
     // The memory available is read once, before check builds anything: read later, what check
     // itself holds (the structure, the set-ups) would count against the run.
+    tensolve::app::sweep::outputs_have_their_solvers(&case, &case.solver.methods)?;
     let available = host::available();
     let own = MemoryEstimate::new(StructureSize::of(&case.geometry), &Workload::check(&case));
     memory::ensure_fits_in(&own, "check", available.clone())?;

@@ -1166,6 +1166,14 @@ fn n11_homogenised_output_without_micro_macro_is_refused() {
         "{message}"
     );
     assert!(files(&dir.0).is_empty(), "{:?}", files(&dir.0));
+    // check refuses what run refuses (this session's adversarial pass: it said nothing).
+    let out = tensolve(&["check", case.arg()]);
+    assert_eq!(code(&out), 2, "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("`output.homogenised` = true"),
+        "{}",
+        stderr(&out)
+    );
     let out = tensolve(&[
         "run",
         case.arg(),

@@ -329,9 +329,19 @@ fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
         .clone()
         .unwrap_or_else(|| case.solver.methods.clone());
     crate::case::check_distinct_methods("--solver", &methods)?;
+    outputs_have_their_solvers(case, &methods)?;
+    Ok(methods)
+}
+
+/// Refuse an output that a solver of `methods` must write and none does: `output.homogenised`
+/// without micro-macro (`run` and `check` alike).
+pub fn outputs_have_their_solvers(
+    case: &Case,
+    methods: &[Method],
+) -> Result<(), crate::case::CaseError> {
     if case.output.homogenised && !methods.contains(&Method::MicroMacro) {
         let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();
-        return Err(RunError::Case(crate::case::CaseError::Invalid {
+        return Err(crate::case::CaseError::Invalid {
             key: "output.homogenised".into(),
             value: "true".into(),
             fix: format!(
@@ -339,9 +349,9 @@ fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
                  only: add \"micro-macro\" to `solver.methods` (or `--solver`), or drop the key",
                 names.join(", ")
             ),
-        }));
+        });
     }
-    Ok(methods)
+    Ok(())
 }
 
 /// Every solver of `methods` set up for `prepared` with the settings of `case`, in order.
