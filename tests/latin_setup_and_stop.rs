@@ -5,25 +5,7 @@
 
 mod common;
 
-use common::{code, stderr, tensolve, Temp};
-use std::collections::HashMap;
-use std::path::Path;
-
-/// The summary's rows as column → value.
-fn summary_rows(dir: &Path) -> Vec<HashMap<String, String>> {
-    let text = std::fs::read_to_string(dir.join("summary.csv")).expect("summary.csv");
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
-}
+use common::{code, stderr, summary_rows, tensolve, Temp};
 
 /// `tensolve check case --set …` (sets up every solver of the case).
 fn check(case: &Temp, sets: &[&str]) -> std::process::Output {

@@ -6,25 +6,10 @@
 
 mod common;
 
-use common::{code, manifest_path, stderr, tensolve, Temp};
+use common::{code, csv_rows, manifest_path, stderr, tensolve, Temp};
 use std::collections::HashMap;
-use std::path::Path;
 
 type Row = HashMap<String, String>;
-
-fn read_csv(path: &Path) -> Vec<Row> {
-    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            header
-                .iter()
-                .cloned()
-                .zip(rec.unwrap().iter().map(String::from))
-                .collect()
-        })
-        .collect()
-}
 
 fn number(row: &Row, key: &str) -> f64 {
     row[key]
@@ -68,7 +53,7 @@ impl CaseDir {
             "--set",
             &format!("load.alpha=[{list}]"),
         ]);
-        let rows = read_csv(&out.join("summary.csv"));
+        let rows = csv_rows(&out.join("summary.csv"));
         (run, rows)
     }
 }
@@ -258,7 +243,7 @@ fn simplex_snap_through_is_a_limit_point() {
         "--quiet",
     ]);
     assert_eq!(code(&run), 1, "{}", stderr(&run));
-    let rows = read_csv(&out.join("summary.csv"));
+    let rows = csv_rows(&out.join("summary.csv"));
     let statuses: Vec<&str> = rows.iter().map(|r| r["status"].as_str()).collect();
     assert_eq!(
         statuses,
@@ -363,7 +348,7 @@ fn a_low_cap_under_large_is_named_in_the_limit_point_message() {
         "load.alpha=[2.0]",
     ]);
     assert_eq!(code(&run), 1, "{}", stderr(&run));
-    let rows = read_csv(&out.join("summary.csv"));
+    let rows = csv_rows(&out.join("summary.csv"));
     assert_eq!(rows[0]["status"], "limit_point", "{:?}", rows[0]);
     assert!(
         stderr(&run).contains("each given 1 Newton step(s) by solver.max_iterations"),

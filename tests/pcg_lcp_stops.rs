@@ -4,25 +4,7 @@
 
 mod common;
 
-use common::{code, manifest_path, stderr, tensolve, Temp};
-use std::collections::HashMap;
-use std::path::Path;
-
-/// The summary's rows as column → value.
-fn summary_rows(dir: &Path) -> Vec<HashMap<String, String>> {
-    let text = std::fs::read_to_string(dir.join("summary.csv")).expect("summary.csv");
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
-}
+use common::{code, manifest_path, stderr, summary_rows, tensolve, Temp};
 
 /// `tensolve run case --out dir` with the overrides.
 fn run(case: &str, out: &Temp, sets: &[&str]) -> std::process::Output {

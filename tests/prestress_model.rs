@@ -3,24 +3,10 @@
 
 mod common;
 
-use common::{manifest_path, stderr, tensolve, Temp};
+use common::{csv_rows, manifest_path, stderr, tensolve, Temp};
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
 use std::path::Path;
-
-fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
-    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            header
-                .iter()
-                .cloned()
-                .zip(rec.unwrap().iter().map(String::from))
-                .collect()
-        })
-        .collect()
-}
 
 fn number(row: &HashMap<String, String>, key: &str) -> f64 {
     row[key]
@@ -36,8 +22,8 @@ fn independent_linearisation(case: &Path, alpha: f64) -> HashMap<String, [f64; 3
     let c: toml::Value = toml::from_str(&text).unwrap();
     let base = case.parent().unwrap();
     let table = |key: &str| base.join(c["structure"][key].as_str().unwrap());
-    let nodes = read_csv(&table("nodes"));
-    let members = read_csv(&table("members"));
+    let nodes = csv_rows(&table("nodes"));
+    let members = csv_rows(&table("members"));
     let index: HashMap<String, usize> = nodes
         .iter()
         .enumerate()
@@ -163,7 +149,7 @@ fn prestress_with_a_settlement_is_the_linearisation_on_the_whole_displacement() 
         "load.alpha=[0.25, 0.5]",
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let rows = read_csv(&out.0.join("summary.csv"));
+    let rows = csv_rows(&out.0.join("summary.csv"));
     assert_eq!(rows.len(), 8);
     for row in &rows {
         assert_eq!(
@@ -183,7 +169,7 @@ fn prestress_with_a_settlement_is_the_linearisation_on_the_whole_displacement() 
             .flat_map(|u| u.iter())
             .fold(0.0f64, |m, v| m.max(v.abs()));
         for solver in ["newton", "pcg-lcp", "mono-latin", "micro-macro"] {
-            let got = read_csv(
+            let got = csv_rows(
                 &out.0
                     .join(format!("displacements/{solver}_alpha{alpha}.csv")),
             );
@@ -226,7 +212,7 @@ fn case_file(dir: &Temp) -> String {
 /// multiplied by `young` and their prestress by `prestress`.
 fn scaled_simplex(tag: &str, young: f64, prestress: f64) -> Temp {
     let nodes = std::fs::read_to_string(manifest_path("cases/simplex/nodes.csv")).unwrap();
-    let members = read_csv(&manifest_path("cases/simplex/members.csv"));
+    let members = csv_rows(&manifest_path("cases/simplex/members.csv"));
     let mut table = String::from("member,a,b,kind,young,section,prestress\n");
     for m in &members {
         table.push_str(&format!(
@@ -369,7 +355,7 @@ fn no_equilibrium_at_any_alpha_is_not_beyond_the_model() {
         ]);
         let err = stderr(&run);
         assert_eq!(run.status.code(), Some(1), "{err}");
-        let rows = read_csv(&out.0.join("summary.csv"));
+        let rows = csv_rows(&out.0.join("summary.csv"));
         assert_eq!(rows.len(), rows_expected, "{err}");
         for row in &rows {
             assert_eq!(
@@ -534,7 +520,7 @@ fn slack_cables_carry_no_geometric_stiffness() {
     let out = Temp::dir("d6-mast-out");
     let run = tensolve(&["run", &case_file(&dir), "--out", out.arg(), "--quiet"]);
     let err = stderr(&run);
-    let rows = read_csv(&out.0.join("summary.csv"));
+    let rows = csv_rows(&out.0.join("summary.csv"));
     assert_eq!(rows.len(), 12, "{err}");
     for row in &rows {
         let (alpha, status) = (&row["alpha"], &row["status"]);

@@ -7,27 +7,10 @@
 
 mod common;
 
-use common::{code, manifest_path, stderr, tensolve, Temp};
-use std::collections::HashMap;
+use common::{code, manifest_path, stderr, summary_rows, tensolve, Temp};
 use std::path::Path;
 
 const SOLVERS: [&str; 4] = ["newton", "pcg-lcp", "mono-latin", "micro-macro"];
-
-/// The rows of `summary.csv`, as (column → value) maps.
-fn summary(dir: &Path) -> Vec<HashMap<String, String>> {
-    let mut reader = csv::Reader::from_path(dir.join("summary.csv")).unwrap();
-    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
-    reader
-        .records()
-        .map(|r| {
-            header
-                .iter()
-                .cloned()
-                .zip(r.unwrap().iter().map(String::from))
-                .collect()
-        })
-        .collect()
-}
 
 /// (ux, uy, uz) of node `node` in a `displacements/` file.
 fn displacement(dir: &Path, solver: &str, alpha: &str, node: &str) -> [f64; 3] {
@@ -65,7 +48,7 @@ fn the_mast_with_both_leeward_guys_slack_is_not_unique_in_every_solver() {
     let err = stderr(&out);
     // Converged rows, however many answers: exit 0.
     assert_eq!(code(&out), 0, "{err}");
-    let rows = summary(&dir.0);
+    let rows = summary_rows(&dir.0);
     assert_eq!(rows.len(), 8);
     for row in &rows {
         let at = format!("{} at alpha = {}", row["solver"], row["alpha"]);
@@ -129,7 +112,7 @@ fn answers_held_by_their_taut_members_are_unique() {
     let (dir, out) = run_mast("[0.5, 1.0]");
     assert_eq!(code(&out), 0, "{}", stderr(&out));
     assert!(!stderr(&out).contains("not unique"), "{}", stderr(&out));
-    let rows = summary(&dir.0);
+    let rows = summary_rows(&dir.0);
     assert_eq!(rows.len(), 8);
     assert!(rows.iter().all(|r| r["unique"] == "true"), "{rows:?}");
 
@@ -148,7 +131,7 @@ fn answers_held_by_their_taut_members_are_unique() {
         "output.plots=false",
     ]);
     assert_eq!(code(&out), 0, "{}", stderr(&out));
-    let rows = summary(&dir.0);
+    let rows = summary_rows(&dir.0);
     assert_eq!(rows.len(), 2);
     for row in &rows {
         let slack: usize = row["slack_cables"].parse().unwrap();

@@ -184,3 +184,23 @@ pub fn require_python(modules: &[&str]) {
         );
     }
 }
+
+/// The rows of a CSV file as maps from its header's names to the values.
+pub fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    r.records()
+        .map(|rec| {
+            header
+                .iter()
+                .cloned()
+                .zip(rec.unwrap().iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+/// The rows of `dir`'s summary.csv ([`csv_rows`]).
+pub fn summary_rows(dir: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    csv_rows(&dir.join("summary.csv"))
+}
