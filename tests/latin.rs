@@ -327,7 +327,7 @@ fn cli_check_prints_the_partition() {
     // The paper's 24 × 9 + 18 × 3: substructures of 4 × 4 modules keep the first-order basis.
     assert!(
         lines.contains(
-            &"macro dofs    270 (degree 1 on strong interfaces: default round(H/4), 1 to 16)"
+            &"macro dofs    270 (degree 1 on strong interfaces: default round(H/4), 1 to 16, at most what the partition takes)"
         ),
         "{stdout}"
     );
