@@ -76,6 +76,31 @@ fn pcg_lcp_finds_no_equilibrium_at_a_tiny_load() {
     assert_eq!(rows[0]["status"], "no_equilibrium");
 }
 
+/// Below α ≈ 1e-162 the load's entries square to 0: ‖F‖ and pcg-lcp's complementarity
+/// residual underflowed, and both exact solvers said `converged` at U = 0 where no equilibrium
+/// exists (this session's adversarial pass). `norm` scales what would underflow.
+#[test]
+fn no_equilibrium_is_found_at_a_load_whose_squares_underflow() {
+    let case = manifest_path("cases/simplex-no-equilibrium.toml");
+    for alpha in ["1e-165", "1e-300"] {
+        let out = Temp::dir("noeq-underflow");
+        let o = run(
+            case.to_str().unwrap(),
+            &out,
+            &[
+                &format!("load.alpha=[{alpha}]"),
+                "solver.methods=[\"newton\", \"pcg-lcp\"]",
+            ],
+        );
+        assert_eq!(code(&o), 1, "{alpha}: {}", stderr(&o));
+        let rows = summary_rows(&out.0);
+        assert_eq!(rows.len(), 2);
+        for row in &rows {
+            assert_eq!(row["status"], "no_equilibrium", "{alpha}: {row:?}");
+        }
+    }
+}
+
 /// Below α ≈ 1e-4 no prestressed cable of the braced paper grid goes slack and the answer is
 /// homogeneous in α; pcg-lcp's answer at α = 1e-10 was 46 % off that line (issue 42, T3).
 #[test]

@@ -34,10 +34,40 @@ pub use spectrum::{
 
 /// Euclidean norm.
 pub fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    let sum: f64 = v.iter().map(|x| x * x).sum();
+    if sum.is_normal() || sum.is_nan() || v.iter().all(|&x| x == 0.0) {
+        return sum.sqrt();
+    }
+    // x² underflowed (entries below about 1e-154: a load factor of 1e-165 made ‖F‖ = 0 and its
+    // rows "converged" at U = 0) or overflowed (above about 1e154): `m √(Σ (x/m)²)`, m the
+    // largest |x|.
+    let largest = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if !largest.is_finite() {
+        return largest;
+    }
+    largest * v.iter().map(|x| (x / largest).powi(2)).sum::<f64>().sqrt()
 }
 
 /// Dot product `Σ a_k b_k` (over the shorter slice if the lengths differ).
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod norm_tests {
+    use super::norm;
+
+    #[test]
+    fn norm_scales_what_would_underflow_or_overflow() {
+        assert_eq!(norm(&[]), 0.0);
+        assert_eq!(norm(&[0.0, 0.0]), 0.0);
+        assert_eq!(norm(&[3.0, 4.0]), 5.0);
+        // x² underflows to 0 below about 1e-162, overflows above about 1e154.
+        let tiny = norm(&[3e-170, 4e-170]);
+        assert!((tiny / 5e-170 - 1.0).abs() < 1e-15, "{tiny:e}");
+        let huge = norm(&[3e200, 4e200]);
+        assert!((huge / 5e200 - 1.0).abs() < 1e-15, "{huge:e}");
+        assert!(norm(&[1.0, f64::NAN]).is_nan());
+        assert_eq!(norm(&[1e-170, f64::INFINITY]), f64::INFINITY);
+    }
 }

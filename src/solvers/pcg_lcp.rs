@@ -146,13 +146,14 @@ impl<'s> PcgLcp<'s> {
     /// `‖min(k λ, τ)‖ / scale`, with `k λ = k^{1/2} x` and `τ = k^{1/2} g` (absolute only
     /// when both prestress and load vanish, where λ = 0 is exact).
     fn residual_of(&self, x: &[f64], g: &[f64], scale: f64) -> f64 {
-        let r: f64 = x
+        // Through `norm`, which scales what would underflow (a load factor of 1e-165).
+        let products: Vec<f64> = x
             .iter()
             .zip(g)
             .zip(&self.sqrt_k)
-            .map(|((xi, gi), sk)| (sk * xi.min(*gi)).powi(2))
-            .sum::<f64>()
-            .sqrt();
+            .map(|((xi, gi), sk)| sk * xi.min(*gi))
+            .collect();
+        let r = norm(&products);
         if scale > 0.0 {
             r / scale
         } else {
