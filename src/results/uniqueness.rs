@@ -8,8 +8,8 @@
 //! the search for v only where `K_c` is singular.
 
 use crate::linalg::{
-    dot, factorize_or_find_singular, norm, smallest_eigenvalues, SparseCholesky, SparseRow,
-    StiffnessPattern, ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
+    dot, norm, smallest_eigenvalue_bound, smallest_eigenvalues, SparseCholesky, SparseRow,
+    StiffnessPattern, PROBE_ITERATIONS, ZERO_MODES_COUNTED,
 };
 use crate::solvers::Equilibrium;
 use crate::structure::law::{self, CurrentGeometry};
@@ -101,7 +101,7 @@ pub fn uniqueness(
         .collect();
     // With every member carrying force, K_c on the initial geometry is K with every cable taut,
     // regular by the set-up's mechanism check: nothing to factorize.
-    if s.model != GeometricModel::Large && carrying.iter().all(|&c| c) {
+    if s.model == GeometricModel::Linear && carrying.iter().all(|&c| c) {
         return Uniqueness::Unique;
     }
     // K_c: the tangent over the members that carry force.
@@ -117,13 +117,36 @@ pub fn uniqueness(
                 .collect();
             current.assemble_tangent(s, &trial_c, pattern, &mut values);
         }
+        // With `prestress`, the geometric stiffness of the answer's own tensions K_G(τ), as
+        // the stability check (`smallest_tangent_eigenvalue`) judges it: a slack cable none.
+        None if s.model == GeometricModel::Prestress => {
+            pattern.assemble(
+                &s.link_dofs,
+                |i| match carrying[i] {
+                    true => s.links[i].stiffness,
+                    false => 0.0,
+                },
+                &mut values,
+            );
+            law::GeometricStiffness::of_tensions(s, &eq.tensions).add_to(pattern, &mut values);
+        }
         None => law::assemble_tangent(s, pattern, |i| carrying[i], &mut values),
     }
     let mut factor = analysed.share_symbolic();
-    if !factorize_or_find_singular(pattern, &values, &mut factor) {
+    // Singular as `min_tangent_eigenvalue` calls it (below TANGENT_ZERO_RELATIVE of the mean
+    // diagonal): under `prestress` and `large` a free motion's stiffness is round-off, not an
+    // exact zero pivot, and a stricter test flipped `unique` from row to row.
+    let threshold = crate::results::TANGENT_ZERO_RELATIVE * pattern.mean_diagonal(&values);
+    let singular = match factor.factorize(pattern, &values) {
+        Err(_) => true,
+        Ok(()) => {
+            smallest_eigenvalue_bound(pattern, &values, &factor, PROBE_ITERATIONS) < threshold
+        }
+    };
+    if !singular {
         return Uniqueness::Unique;
     }
-    let null = null_basis(pattern, &values, &mut factor);
+    let null = null_basis(pattern, &values, &mut factor, threshold);
     let null = without_load_work(null, load, &eq.tensions);
     if null.is_empty() {
         return Uniqueness::Unique;
@@ -173,15 +196,15 @@ fn size(m: &[f64; 3]) -> f64 {
 }
 
 /// An orthonormal basis of the null space of the (singular) matrix `values`: the Ritz vectors of
-/// eigenvalue within [`ZERO_MODE_RELATIVE`] of the mean diagonal either way (at most
+/// eigenvalue within `threshold` (the tangent's zero) either way (at most
 /// [`ZERO_MODES_COUNTED`]).
 fn null_basis(
     pattern: &StiffnessPattern,
     values: &[f64],
     factor: &mut SparseCholesky,
+    threshold: f64,
 ) -> Vec<Vec<f64>> {
     let n = pattern.n;
-    let threshold = ZERO_MODE_RELATIVE * pattern.mean_diagonal(values);
     let mut block = 8.min(n);
     loop {
         let eig = smallest_eigenvalues(pattern, values, factor, block, 30, 1e-3);
