@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{manifest_path, stderr, tensolve, Temp};
+use common::{csv_rows, manifest_path, stderr, tensolve, Temp};
 use std::path::Path;
 use std::process::Command;
 use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
@@ -14,20 +14,6 @@ use tensolve::structure::law::CurrentGeometry;
 use tensolve::structure::{GeometricModel, Structure};
 
 const SHIPPED: [&str; 4] = ["simplex", "prism4", "tower", "saddle-net"];
-
-fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
-    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            header
-                .iter()
-                .cloned()
-                .zip(rec.unwrap().iter().map(String::from))
-                .collect()
-        })
-        .collect()
-}
 
 fn number(row: &std::collections::HashMap<String, String>, key: &str) -> f64 {
     row[key]
@@ -64,7 +50,7 @@ fn shipped_tensegrities_solve_with_both_geometric_models() {
                 &format!("model.geometry=\"{model}\""),
             ]);
             assert!(run.status.success(), "{name} {model}: {}", stderr(&run));
-            let rows = read_csv(&out.0.join("summary.csv"));
+            let rows = csv_rows(&out.0.join("summary.csv"));
             assert_eq!(rows.len(), 3 * solvers.split(',').count(), "{name} {model}");
             for row in &rows {
                 assert_eq!(row["status"], "converged", "{name} {model}");
@@ -102,7 +88,7 @@ fn known_answers_of_the_shipped_cases() {
     let out = Temp::dir("tower");
     let run = tensolve(&["run", &case_path("tower"), "--out", out.arg(), "--quiet"]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let tensions = read_csv(&out.0.join("tensions/newton_alpha1.csv"));
+    let tensions = csv_rows(&out.0.join("tensions/newton_alpha1.csv"));
     let slack: Vec<&str> = tensions
         .iter()
         .filter(|r| number(r, "tension") == 0.0)
@@ -112,7 +98,7 @@ fn known_answers_of_the_shipped_cases() {
     let out = Temp::dir("simplex");
     let run = tensolve(&["run", &case_path("simplex"), "--out", out.arg(), "--quiet"]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let rows = read_csv(&out.0.join("summary.csv"));
+    let rows = csv_rows(&out.0.join("summary.csv"));
     let deflection = number(&rows[2], "max_deflection");
     assert!((deflection - 0.055611).abs() < 1e-6, "{deflection}");
 }
@@ -246,7 +232,7 @@ fn no_equilibrium_is_said_plainly() {
         3,
         "{err}"
     );
-    let rows = read_csv(&out.0.join("summary.csv"));
+    let rows = csv_rows(&out.0.join("summary.csv"));
     assert_eq!(rows.len(), 3);
     for row in &rows {
         assert_eq!(row["converged"], "false");
@@ -355,7 +341,7 @@ fn refusals_name_the_mode_the_model_and_the_solver() {
     }
     // `run` wrote where the mode is: every node's motion in the unit mode, the pinned bottom
     // still, the top moving.
-    let modes = read_csv(&dir.0.join("out/mechanisms.csv"));
+    let modes = csv_rows(&dir.0.join("out/mechanisms.csv"));
     assert_eq!(modes.len(), 6);
     for row in &modes {
         assert_eq!(row["mode"], "1");
@@ -468,7 +454,7 @@ fn self_stress_of_a_prestress_stable_mechanism() {
         "--quiet",
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let rows = read_csv(&out.join("summary.csv"));
+    let rows = csv_rows(&out.join("summary.csv"));
     let deflection = number(&rows[2], "max_deflection");
     assert!((deflection - 0.055611).abs() < 1e-6, "{deflection}");
     let linear = tensolve(&[
@@ -499,7 +485,7 @@ fn large_solves_its_alphas_in_increasing_order() {
         "load.alpha=[1.0, 0.25, 0.5]",
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let alphas: Vec<String> = read_csv(&out.0.join("summary.csv"))
+    let alphas: Vec<String> = csv_rows(&out.0.join("summary.csv"))
         .iter()
         .map(|r| r["alpha"].clone())
         .collect();
@@ -525,7 +511,7 @@ fn paper_grid_with_prestress_stiffness_four_solvers_agree() {
         "load.alpha=[1.0]",
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let rows = read_csv(&out.0.join("summary.csv"));
+    let rows = csv_rows(&out.0.join("summary.csv"));
     assert_eq!(rows.len(), 4);
     let reference = number(&rows[0], "max_deflection");
     for row in &rows {
