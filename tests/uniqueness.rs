@@ -208,7 +208,7 @@ fn every_answer_between_the_solvers_answers_is_an_equilibrium_of_one_energy_and_
                     "at {w}: {nodes:?}"
                 );
             }
-            Uniqueness::Unique => panic!("at {w}: called unique"),
+            other => panic!("at {w}: called {other:?}"),
         }
     }
     // Newton's end keeps one guy at zero tension, gap closed: taut by the gap rule.
@@ -252,4 +252,41 @@ fn a_zero_tangent_eigenvalue_under_the_geometric_models_is_not_unique() {
         }
         assert!(rows.iter().any(|r| r["unique"] == "false"), "{sets:?}");
     }
+}
+
+/// Under `prestress`, a load that works on the free rotation of the mast (1 N along y besides
+/// the wind) meets no resistance from the tangent of the answer's own tensions: the rows said
+/// `converged` with the top moving against the load (−5.87 mm); now `unstable`, naming node 1,
+/// and no `unique` (this session's adversarial pass).
+#[test]
+fn a_load_on_a_motion_the_answers_tangent_does_not_resist_is_unstable() {
+    let case = manifest_path("tests/data/my-mast.toml");
+    let dir = Temp::dir("unique-loaded");
+    let out = tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        dir.arg(),
+        "--set",
+        "model.geometry=\"prestress\"",
+        "--set",
+        "load.alpha=[2.0]",
+        "--set",
+        "load.point=[{nodes=[1],force=[10000.0,1.0,0.0]}]",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(code(&out), 1, "{err}");
+    let rows = summary_rows(&dir.0);
+    assert_eq!(rows.len(), 4);
+    for row in &rows {
+        let at = format!("{} at alpha = {}", row["solver"], row["alpha"]);
+        assert_eq!(row["converged"], "false", "{at}");
+        assert_eq!(row["unique"], "", "{at}");
+    }
+    let unstable = rows.iter().filter(|r| r["status"] == "unstable").count();
+    assert!(unstable >= 3, "{rows:?}");
+    assert!(
+        err.contains("does not resist (it moves nodes 1 (0.00, 1.00, 0.00))"),
+        "{err}"
+    );
 }

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use tensolve::app::bench::Progress;
 use tensolve::app::sweep::RunEvent;
 use tensolve::output::{alpha_label, SummaryRow};
+use tensolve::results::uniqueness::Uniqueness;
 use tensolve::solvers::{IterationRecord, Measure};
 
 /// Progress on stderr: a bar on a terminal (lines printed above it, a spinner and what is
@@ -254,7 +255,11 @@ fn format_row(r: &SummaryRow) -> String {
             100.0 * tensolve::results::SMALL_DISPLACEMENT_LIMIT
         ));
     }
-    if let Some(not_unique) = r.uniqueness.as_ref().filter(|u| !u.is_unique()) {
+    if let Some(not_unique) = r
+        .uniqueness
+        .as_ref()
+        .filter(|u| matches!(u, Uniqueness::NotUnique { .. }))
+    {
         line.push_str(&format!(
             "\n  warning: {} at alpha = {}: the answer is not unique: the members that carry \
              force leave a motion free that the load does no work on and that stretches no \

@@ -227,10 +227,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         ),
         r.path_from.map(alpha_label).unwrap_or_default(),
         r.path_reached.map(alpha_label).unwrap_or_default(),
-        r.uniqueness
-            .as_ref()
-            .map(|u| u.is_unique().to_string())
-            .unwrap_or_default(),
+        r.uniqueness.as_ref().map_or("", |u| u.column()),
     )
 }
 

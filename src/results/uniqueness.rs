@@ -53,6 +53,14 @@ pub enum Uniqueness {
         /// largest first.
         nodes: Vec<(u64, [f64; 3])>,
     },
+    /// `prestress`: the load works on a motion that the tangent of the answer's own tensions,
+    /// `K_c + K_G(τ)`, does not resist and that stretches no cable at zero tension: no
+    /// equilibrium of that tangent holds there (the solve's `K_G(t0)` keeps the slack cables'
+    /// share, which the answer's tensions do not have). The row is not converged.
+    LoadedFreeMotion {
+        /// The nodes the motion moves most, as for [`Uniqueness::NotUnique`].
+        nodes: Vec<(u64, [f64; 3])>,
+    },
 }
 
 impl Uniqueness {
@@ -61,11 +69,21 @@ impl Uniqueness {
         matches!(self, Uniqueness::Unique)
     }
 
+    /// `summary.csv`'s `unique`: `true`, `false`, or empty where the row is no equilibrium
+    /// ([`Uniqueness::LoadedFreeMotion`]).
+    pub fn column(&self) -> &'static str {
+        match self {
+            Uniqueness::Unique => "true",
+            Uniqueness::NotUnique { .. } => "false",
+            Uniqueness::LoadedFreeMotion { .. } => "",
+        }
+    }
+
     /// `1 (0.00, 1.00, 0.00), 4 (…)`: the nodes of a free motion; empty when unique.
     pub fn motion_nodes(&self) -> String {
         match self {
             Uniqueness::Unique => String::new(),
-            Uniqueness::NotUnique { nodes } => nodes
+            Uniqueness::NotUnique { nodes } | Uniqueness::LoadedFreeMotion { nodes } => nodes
                 .iter()
                 .map(|(id, u)| {
                     // Rounded first, so that round-off reads 0.00, not -0.00.
@@ -147,24 +165,36 @@ pub fn uniqueness(
         return Uniqueness::Unique;
     }
     let null = null_basis(pattern, &values, &mut factor, threshold);
-    let null = without_load_work(null, load, &eq.tensions);
-    if null.is_empty() {
-        return Uniqueness::Unique;
-    }
-    // Per cable at zero tension with its gap closed: its elongation rate along each basis
-    // motion (the rows of ∇ℓ with `large`).
+    // Per cable at zero tension with its gap closed: its elongation rate along a motion (the
+    // rows of ∇ℓ with `large`).
     let row = |i: usize| -> &SparseRow {
         match &current {
             Some(c) => &c.rows[i],
             None => &s.link_dofs[i],
         }
     };
-    let at_zero: Vec<Vec<f64>> = s
-        .links
+    let at_zero_cables: Vec<usize> = (0..s.links.len())
+        .filter(|&i| !carrying[i] && !law::gap_slack(&s.links[i], trial[i], scale))
+        .collect();
+    if s.model == GeometricModel::Prestress {
+        if let Some(v) = loaded_motion(&null, load, &eq.tensions) {
+            let held = at_zero_cables
+                .iter()
+                .any(|&i| row(i).elongation(&v).abs() > FREE_TOLERANCE);
+            if !held {
+                return Uniqueness::LoadedFreeMotion {
+                    nodes: named_nodes(s, &v),
+                };
+            }
+        }
+    }
+    let null = without_load_work(null, load, &eq.tensions);
+    if null.is_empty() {
+        return Uniqueness::Unique;
+    }
+    let at_zero: Vec<Vec<f64>> = at_zero_cables
         .iter()
-        .enumerate()
-        .filter(|&(i, l)| !carrying[i] && !law::gap_slack(l, trial[i], scale))
-        .map(|(i, _)| {
+        .map(|&i| {
             null.iter()
                 .map(|v| row(i).elongation(v))
                 .collect::<Vec<f64>>()
@@ -178,17 +208,38 @@ pub fn uniqueness(
             for (basis, &w) in null.iter().zip(&c) {
                 v.iter_mut().zip(basis).for_each(|(x, b)| *x += w * b);
             }
-            let nodes = largest_moving_nodes(s, &v, NAMED_NODES);
-            let largest = nodes.first().map_or(0.0, |(_, m)| size(m));
             Uniqueness::NotUnique {
-                nodes: nodes
-                    .into_iter()
-                    // Round-off on the nodes the motion leaves in place is no motion.
-                    .filter(|(_, m)| size(m) >= FREE_TOLERANCE * largest)
-                    .collect(),
+                nodes: named_nodes(s, &v),
             }
         }
     }
+}
+
+/// The nodes the motion `v` moves most, with their motion, largest first.
+fn named_nodes(s: &Structure, v: &[f64]) -> Vec<(u64, [f64; 3])> {
+    let nodes = largest_moving_nodes(s, v, NAMED_NODES);
+    let largest = nodes.first().map_or(0.0, |(_, m)| size(m));
+    nodes
+        .into_iter()
+        // Round-off on the nodes the motion leaves in place is no motion.
+        .filter(|(_, m)| size(m) >= FREE_TOLERANCE * largest)
+        .collect()
+}
+
+/// The combination of `basis` (orthonormal) the load works on, of unit norm, where `F·v` is
+/// beyond [`FREE_TOLERANCE`] of the forces at play; `None` where the load does no work on it.
+fn loaded_motion(basis: &[Vec<f64>], load: &[f64], tensions: &[f64]) -> Option<Vec<f64>> {
+    let forces = norm(load).max(tensions.iter().fold(0.0f64, |m, t| m.max(t.abs())));
+    let work: Vec<f64> = basis.iter().map(|v| dot(load, v)).collect();
+    let size = norm(&work);
+    if basis.is_empty() || size <= FREE_TOLERANCE * forces {
+        return None;
+    }
+    let mut v = vec![0.0; basis[0].len()];
+    for (b, w) in basis.iter().zip(&work) {
+        v.iter_mut().zip(b).for_each(|(x, y)| *x += w / size * y);
+    }
+    Some(v)
 }
 
 fn size(m: &[f64; 3]) -> f64 {

@@ -115,6 +115,17 @@ pub(super) fn assess(
         advice.stopped = (!solution.info.status.converged()).then_some(solution.info.status);
         solution.info.status = Status::BeyondModel;
     }
+    let uniqueness = solution
+        .info
+        .status
+        .converged()
+        .then(|| checked_uniqueness(prepared, checks, &solution.equilibrium, load))
+        .flatten();
+    // A motion the answer's own tangent does not resist and the load works on: no
+    // equilibrium of that tangent, so no converged row.
+    if matches!(uniqueness, Some(Uniqueness::LoadedFreeMotion { .. })) {
+        solution.info.status = Status::Unstable;
+    }
     Verdict {
         min_tangent_eigenvalue,
         geometric_term: taut
@@ -122,12 +133,7 @@ pub(super) fn assess(
             .and_then(|taut| results::geometric_term(s, &solution.equilibrium, taut)),
         no_equilibrium: None,
         advice,
-        uniqueness: solution
-            .info
-            .status
-            .converged()
-            .then(|| checked_uniqueness(prepared, checks, &solution.equilibrium, load))
-            .flatten(),
+        uniqueness,
     }
 }
 
@@ -294,6 +300,26 @@ pub(super) fn not_converged_message(
                         .to_string(),
             }
         ),
+        (None, Status::Unstable)
+            if matches!(
+                verdict.uniqueness,
+                Some(Uniqueness::LoadedFreeMotion { .. })
+            ) =>
+        {
+            format!(
+                "{head}: an unstable equilibrium: the residual criterion holds, but the load \
+                 works on a motion that the tangent with the answer's own tensions, \
+                 K + K_G(τ), does not resist (it moves nodes {}): no equilibrium of that tangent \
+                 is there (the solve's K + K_G(t0) keeps the slack cables' share of the \
+                 geometric stiffness; compare model.geometry = \"large\"); its row says \
+                 converged = false, status = unstable",
+                verdict
+                    .uniqueness
+                    .as_ref()
+                    .map(Uniqueness::motion_nodes)
+                    .unwrap_or_default()
+            )
+        }
         (None, Status::Unstable) => format!(
             "{head}: an unstable equilibrium: the residual criterion holds, but the tangent \
              stiffness has a negative eigenvalue ({:.3e} N/m): a saddle of the energy, which a \
