@@ -290,3 +290,32 @@ fn a_load_on_a_motion_the_answers_tangent_does_not_resist_is_unstable() {
         "{err}"
     );
 }
+
+/// `bench` measures e against newton's answer: where that answer is one of several equilibria
+/// (the mast at α = 2 and 4) it says so, naming the free motion's node, and not at α = 1
+/// (this session's adversarial pass: e of 0.18 and 0.39 with no word).
+#[test]
+fn bench_says_when_its_reference_is_not_unique() {
+    let case = manifest_path("tests/data/my-mast.toml");
+    let dir = Temp::dir("unique-bench");
+    let out = tensolve(&[
+        "bench",
+        case.to_str().unwrap(),
+        "--out",
+        dir.arg(),
+        "--set",
+        "load.alpha=[1.0, 2.0, 4.0]",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(code(&out), 0, "{err}");
+    for alpha in ["2", "4"] {
+        assert!(
+            err.contains(&format!(
+                "warning: the reference at alpha = {alpha}: the answer is not unique (a motion \
+                 free of the load moves nodes 1 (0.00, "
+            )),
+            "{alpha}: {err}"
+        );
+    }
+    assert!(!err.contains("the reference at alpha = 1:"), "{err}");
+}

@@ -286,6 +286,13 @@ pub fn report_bench(reporter: &Reporter, progress: Progress) {
             method.name(),
             alpha_label(alpha)
         )),
+        Progress::ReferenceNotUnique { alpha, nodes } => reporter.line(&format!(
+            "  warning: the reference at alpha = {}: the answer is not unique (a motion free \
+             of the load moves nodes {nodes}): other equilibria of the same energy lie along \
+             it, so a solver's e against this one may stay large although it converged to \
+             another (run's summary.csv: unique = false)",
+            alpha_label(alpha)
+        )),
         Progress::Done(series) => {
             let last = series.samples.last();
             reporter.line(&format!(

@@ -6,7 +6,8 @@ use super::BenchError;
 use crate::app::setup::{set_up, Prepared};
 use crate::case::{Case, SolverChoice};
 use crate::output::alpha_label;
-use crate::solvers::{Method, Recorder, Reference, SetupError, Silent, Status};
+use crate::results::uniqueness::{self, Uniqueness};
+use crate::solvers::{Equilibrium, Method, Recorder, Reference, SetupError, Silent, Status};
 
 /// One iterate of one solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,6 +105,14 @@ pub enum Progress<'a> {
     },
     /// A solver at α is measured.
     Done(&'a Series),
+    /// The reference at α is one of several equilibria of the same energy (its `unique` would
+    /// read `false` in `run`): e against it says how far an answer is from that one.
+    ReferenceNotUnique {
+        /// The load factor.
+        alpha: f64,
+        /// The nodes the free motion moves most, as `run`'s warning names them.
+        nodes: &'a str,
+    },
 }
 
 /// As `run` judges it: an answer on the initial geometry moving a node by more than the
@@ -123,14 +132,14 @@ pub fn reference_method(case: &Case) -> Result<Method, BenchError> {
         .ok_or(BenchError::NoReference)
 }
 
-/// The reference at one α: `method` at its default (tight) settings; refused unless it
-/// converged.
+/// The reference at one α: `method` at its default (tight) settings, and its answer; refused
+/// unless it converged.
 fn reference(
     prepared: &Prepared,
     method: Method,
     load: &[f64],
     alpha: f64,
-) -> Result<Reference, BenchError> {
+) -> Result<(Reference, Equilibrium), BenchError> {
     let mut solver = set_up(method, &SolverChoice::default(), prepared)?;
     let mut solution = solver.solver.solve(load, None, &mut Silent);
     mark_beyond_model(prepared, &mut solution);
@@ -142,10 +151,25 @@ fn reference(
             residual: solution.info.stopping_value,
         });
     }
-    Ok(Reference::new(
-        &prepared.structure,
-        &solution.equilibrium.displacements,
+    Ok((
+        Reference::new(&prepared.structure, &solution.equilibrium.displacements),
+        solution.equilibrium,
     ))
+}
+
+/// The free motion's nodes when the converged reference `eq` is not the only equilibrium, as
+/// `run` checks it (on K's analysis up to [`uniqueness::CHECKED_UP_TO_DOFS`] free dofs);
+/// `None` when it is unique or not checked.
+fn reference_not_unique(prepared: &Prepared, eq: &Equilibrium, load: &[f64]) -> Option<String> {
+    let s = &prepared.structure;
+    let taut = prepared
+        .taut
+        .as_ref()
+        .filter(|_| s.n_free <= uniqueness::CHECKED_UP_TO_DOFS)?;
+    match uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor) {
+        u @ Uniqueness::NotUnique { .. } => Some(u.motion_nodes()),
+        _ => None,
+    }
 }
 
 /// Run every solver of the case at every α of it against a reference solved by the case's
@@ -163,7 +187,14 @@ pub fn measure(
             method: reference_method,
             alpha,
         });
-        let reference = reference(prepared, reference_method, &load, alpha)?;
+        let (reference, answer) = reference(prepared, reference_method, &load, alpha)?;
+        if let Some(nodes) = reference_not_unique(prepared, &answer, &load) {
+            on_progress(Progress::ReferenceNotUnique {
+                alpha,
+                nodes: &nodes,
+            });
+        }
+        drop(answer);
         for &method in &case.solver.methods {
             on_progress(Progress::Solve { method, alpha });
             let measured = measure_series(case, prepared, method, alpha, &load, &reference)?;
