@@ -365,18 +365,7 @@ pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautS
         // leeward guys slackened unstable (−340 N/m) where its one-guy mechanism is neutral
         // (0 N/m with `large`; issue 42, D6).
         GeometricModel::Prestress => {
-            pattern.assemble(
-                &s.link_dofs,
-                |i| {
-                    if eq.slack[i] {
-                        0.0
-                    } else {
-                        s.links[i].stiffness
-                    }
-                },
-                &mut values,
-            );
-            law::GeometricStiffness::of_tensions(s, &eq.tensions).add_to(pattern, &mut values);
+            law::assemble_prestress_tangent(s, pattern, |i| !eq.slack[i], &eq.tensions, &mut values)
         }
         _ => law::assemble_tangent(s, pattern, |i| !eq.slack[i], &mut values),
     }

@@ -2,6 +2,7 @@
 //! then each solver asked for, with the set-up time it is charged.
 
 use crate::case::{Case, SolverChoice};
+use crate::results::uniqueness;
 use crate::solvers::latin::{Exchange, Homogenised, Latin, LatinSettings, LinkShare, OneProcess};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
@@ -106,6 +107,32 @@ impl AnswerChecks {
 }
 
 impl Prepared {
+    /// Whether the converged answer `eq` is the only equilibrium
+    /// ([`crate::results::uniqueness::uniqueness`]), on K's pattern and analysis when the run
+    /// keeps them (up to [`uniqueness::CHECKED_UP_TO_DOFS`] free dofs, or at any size where
+    /// the run factorizes a tangent per row anyway: `factorizes_anyway`), else on its own
+    /// analysis (up to [`uniqueness::OWN_ANALYSIS_UP_TO_DOFS`]); `None` (not checked) beyond,
+    /// and where the ranks keep shares of the links.
+    pub fn checked_uniqueness(
+        &self,
+        eq: &crate::solvers::Equilibrium,
+        load: &[f64],
+        factorizes_anyway: bool,
+    ) -> Option<uniqueness::Uniqueness> {
+        let s = &self.structure;
+        match &self.taut {
+            _ if self.share.is_some() => None,
+            Some(taut) if s.n_free <= uniqueness::CHECKED_UP_TO_DOFS || factorizes_anyway => Some(
+                uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor),
+            ),
+            None if s.n_free <= uniqueness::OWN_ANALYSIS_UP_TO_DOFS => {
+                let (pattern, analysed) = TautStiffness::analyse(s);
+                Some(uniqueness::uniqueness(s, eq, load, &pattern, &analysed))
+            }
+            _ => None,
+        }
+    }
+
     /// The structure of `case` without its mechanism check: for an MPI rank whose run never
     /// solves with K's factor, which takes rank 0's check instead of factorizing K itself.
     pub fn unchecked(case: &Case) -> Prepared {

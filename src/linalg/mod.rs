@@ -27,9 +27,9 @@ pub use pcg::{preconditioned_cg, CgOutcome};
 pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{
-    factorize_counting_zero_modes, factorize_or_find_singular, smallest_eigenvalue_bound,
-    smallest_eigenvalues, zero_mode_count, zero_modes, SmallestEigenvalues, PROBE_ITERATIONS,
-    ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
+    factorize_counting_zero_modes, factorize_or_find_singular, factorize_or_find_singular_below,
+    smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, zero_modes,
+    SmallestEigenvalues, PROBE_ITERATIONS, ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
 };
 
 /// Euclidean norm.

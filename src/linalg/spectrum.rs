@@ -221,11 +221,22 @@ pub fn factorize_or_find_singular(
     values: &[f64],
     factor: &mut SparseCholesky,
 ) -> bool {
+    factorize_or_find_singular_below(pattern, values, factor, ZERO_MODE_RELATIVE)
+}
+
+/// [`factorize_or_find_singular`] with an eigenvalue below `relative` × mean diagonal counted
+/// as zero (the tangent's zero of `min_tangent_eigenvalue` is looser than an exact zero mode's).
+pub fn factorize_or_find_singular_below(
+    pattern: &StiffnessPattern,
+    values: &[f64],
+    factor: &mut SparseCholesky,
+    relative: f64,
+) -> bool {
     match factor.factorize(pattern, values) {
         Err(_) => true,
         Ok(()) => {
             smallest_eigenvalue_bound(pattern, values, factor, PROBE_ITERATIONS)
-                < ZERO_MODE_RELATIVE * pattern.mean_diagonal(values)
+                < relative * pattern.mean_diagonal(values)
         }
     }
 }

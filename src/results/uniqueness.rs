@@ -8,8 +8,8 @@
 //! the search for v only where `K_c` is singular.
 
 use crate::linalg::{
-    dot, norm, smallest_eigenvalue_bound, smallest_eigenvalues, SparseCholesky, SparseRow,
-    StiffnessPattern, PROBE_ITERATIONS, ZERO_MODES_COUNTED,
+    dot, factorize_or_find_singular_below, norm, smallest_eigenvalues, SparseCholesky, SparseRow,
+    StiffnessPattern, ZERO_MODES_COUNTED,
 };
 use crate::solvers::Equilibrium;
 use crate::structure::law::{self, CurrentGeometry};
@@ -138,15 +138,7 @@ pub fn uniqueness(
         // With `prestress`, the geometric stiffness of the answer's own tensions K_G(τ), as
         // the stability check (`smallest_tangent_eigenvalue`) judges it: a slack cable none.
         None if s.model == GeometricModel::Prestress => {
-            pattern.assemble(
-                &s.link_dofs,
-                |i| match carrying[i] {
-                    true => s.links[i].stiffness,
-                    false => 0.0,
-                },
-                &mut values,
-            );
-            law::GeometricStiffness::of_tensions(s, &eq.tensions).add_to(pattern, &mut values);
+            law::assemble_prestress_tangent(s, pattern, |i| carrying[i], &eq.tensions, &mut values)
         }
         None => law::assemble_tangent(s, pattern, |i| carrying[i], &mut values),
     }
@@ -154,16 +146,11 @@ pub fn uniqueness(
     // Singular as `min_tangent_eigenvalue` calls it (below TANGENT_ZERO_RELATIVE of the mean
     // diagonal): under `prestress` and `large` a free motion's stiffness is round-off, not an
     // exact zero pivot, and a stricter test flipped `unique` from row to row.
-    let threshold = crate::results::TANGENT_ZERO_RELATIVE * pattern.mean_diagonal(&values);
-    let singular = match factor.factorize(pattern, &values) {
-        Err(_) => true,
-        Ok(()) => {
-            smallest_eigenvalue_bound(pattern, &values, &factor, PROBE_ITERATIONS) < threshold
-        }
-    };
-    if !singular {
+    let relative = crate::results::TANGENT_ZERO_RELATIVE;
+    if !factorize_or_find_singular_below(pattern, &values, &mut factor, relative) {
         return Uniqueness::Unique;
     }
+    let threshold = relative * pattern.mean_diagonal(&values);
     let null = null_basis(pattern, &values, &mut factor, threshold);
     // Per cable at zero tension with its gap closed: its elongation rate along a motion (the
     // rows of ∇ℓ with `large`).
@@ -229,12 +216,8 @@ fn named_nodes(s: &Structure, v: &[f64]) -> Vec<(u64, [f64; 3])> {
 /// The combination of `basis` (orthonormal) the load works on, of unit norm, where `F·v` is
 /// beyond [`FREE_TOLERANCE`] of the forces at play; `None` where the load does no work on it.
 fn loaded_motion(basis: &[Vec<f64>], load: &[f64], tensions: &[f64]) -> Option<Vec<f64>> {
-    let forces = norm(load).max(tensions.iter().fold(0.0f64, |m, t| m.max(t.abs())));
-    let work: Vec<f64> = basis.iter().map(|v| dot(load, v)).collect();
+    let work = load_work(basis, load, tensions)?;
     let size = norm(&work);
-    if basis.is_empty() || size <= FREE_TOLERANCE * forces {
-        return None;
-    }
     let mut v = vec![0.0; basis[0].len()];
     for (b, w) in basis.iter().zip(&work) {
         v.iter_mut().zip(b).for_each(|(x, y)| *x += w / size * y);
@@ -270,15 +253,21 @@ fn null_basis(
     }
 }
 
+/// `F·v` for each v of `basis`, where it is beyond [`FREE_TOLERANCE`] of the forces at play
+/// (`‖F‖`, the largest tension); `None` where the load does no work on the span.
+fn load_work(basis: &[Vec<f64>], load: &[f64], tensions: &[f64]) -> Option<Vec<f64>> {
+    let forces = norm(load).max(tensions.iter().fold(0.0f64, |m, t| m.max(t.abs())));
+    let work: Vec<f64> = basis.iter().map(|v| dot(load, v)).collect();
+    (!basis.is_empty() && norm(&work) > FREE_TOLERANCE * forces).then_some(work)
+}
+
 /// The part of the span of `basis` (orthonormal) the load does no work on: all of it when
 /// `F·v` is within [`FREE_TOLERANCE`] of the forces at play (`‖F‖`, the largest tension) for
 /// every v, else the complement of the one combination it works on.
 fn without_load_work(basis: Vec<Vec<f64>>, load: &[f64], tensions: &[f64]) -> Vec<Vec<f64>> {
-    let forces = norm(load).max(tensions.iter().fold(0.0f64, |m, t| m.max(t.abs())));
-    let work: Vec<f64> = basis.iter().map(|v| dot(load, v)).collect();
-    if norm(&work) <= FREE_TOLERANCE * forces {
+    let Some(work) = load_work(basis.as_slice(), load, tensions) else {
         return basis;
-    }
+    };
     // The coefficient vectors orthogonal to `work`, orthonormalised (Gram–Schmidt).
     let m = basis.len();
     let mut kept: Vec<Vec<f64>> = vec![normalised(work)];

@@ -395,6 +395,24 @@ pub fn assemble_tangent(
     }
 }
 
+/// The `prestress` model's tangent at an answer: `Σ_taut k Bᵢᵀ Bᵢ + K_G(τ)`, the geometric
+/// stiffness of the answer's own `tensions` (a slack cable has none), into `values` on
+/// `pattern` (docs/method.md §8; issue 42, D6).
+pub fn assemble_prestress_tangent(
+    s: &Structure,
+    pattern: &StiffnessPattern,
+    taut: impl Fn(usize) -> bool,
+    tensions: &[f64],
+    values: &mut [f64],
+) {
+    pattern.assemble(
+        &s.link_dofs,
+        |i| if taut(i) { s.links[i].stiffness } else { 0.0 },
+        values,
+    );
+    GeometricStiffness::of_tensions(s, tensions).add_to(pattern, values);
+}
+
 /// `out = (Σ_taut k Bᵢᵀ Bᵢ + K_G(t0)) v + μ v`, link by link ([`assemble_tangent`]'s matrix).
 pub fn tangent_product(s: &Structure, taut: &[bool], mu: f64, v: &[f64], out: &mut [f64]) {
     out.iter_mut().zip(v).for_each(|(o, vi)| *o = mu * vi);

@@ -6,7 +6,7 @@ use super::BenchError;
 use crate::app::setup::{set_up, Prepared};
 use crate::case::{Case, SolverChoice};
 use crate::output::alpha_label;
-use crate::results::uniqueness::{self, Uniqueness};
+use crate::results::uniqueness::Uniqueness;
 use crate::solvers::{Equilibrium, Method, Recorder, Reference, SetupError, Silent, Status};
 
 /// One iterate of one solver.
@@ -158,15 +158,9 @@ fn reference(
 }
 
 /// The free motion's nodes when the converged reference `eq` is not the only equilibrium, as
-/// `run` checks it (on K's analysis up to [`uniqueness::CHECKED_UP_TO_DOFS`] free dofs);
-/// `None` when it is unique or not checked.
+/// `run` checks it ([`Prepared::checked_uniqueness`]); `None` when it is unique or not checked.
 fn reference_not_unique(prepared: &Prepared, eq: &Equilibrium, load: &[f64]) -> Option<String> {
-    let s = &prepared.structure;
-    let taut = prepared
-        .taut
-        .as_ref()
-        .filter(|_| s.n_free <= uniqueness::CHECKED_UP_TO_DOFS)?;
-    match uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor) {
+    match prepared.checked_uniqueness(eq, load, false)? {
         u @ Uniqueness::NotUnique { .. } => Some(u.motion_nodes()),
         _ => None,
     }

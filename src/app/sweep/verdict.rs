@@ -4,7 +4,7 @@
 use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
-use crate::results::uniqueness::{self, Uniqueness};
+use crate::results::uniqueness::Uniqueness;
 use crate::solvers::{Equilibrium, Measure, NoEquilibrium, Solution, Status};
 
 /// What the sweep found of an answer beyond its solver's stop.
@@ -119,7 +119,7 @@ pub(super) fn assess(
         .info
         .status
         .converged()
-        .then(|| checked_uniqueness(prepared, checks, &solution.equilibrium, load))
+        .then(|| prepared.checked_uniqueness(&solution.equilibrium, load, checks.eigenvalue))
         .flatten();
     // A motion the answer's own tangent does not resist and the load works on: no
     // equilibrium of that tangent, so no converged row.
@@ -134,32 +134,6 @@ pub(super) fn assess(
         no_equilibrium: None,
         advice,
         uniqueness,
-    }
-}
-
-/// Whether the converged answer `eq` is the only equilibrium ([`uniqueness::uniqueness`]), on
-/// K's pattern and analysis when the run keeps them (up to [`uniqueness::CHECKED_UP_TO_DOFS`]
-/// free dofs, or at any size where the run factorizes a tangent per row anyway:
-/// `checks.eigenvalue`), else on its own analysis (up to
-/// [`uniqueness::OWN_ANALYSIS_UP_TO_DOFS`]); `None` (not checked) beyond, and where the ranks
-/// keep shares of the links.
-fn checked_uniqueness(
-    prepared: &Prepared,
-    checks: AnswerChecks,
-    eq: &Equilibrium,
-    load: &[f64],
-) -> Option<Uniqueness> {
-    let s = &prepared.structure;
-    match &prepared.taut {
-        _ if prepared.share.is_some() => None,
-        Some(taut) if s.n_free <= uniqueness::CHECKED_UP_TO_DOFS || checks.eigenvalue => Some(
-            uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor),
-        ),
-        None if s.n_free <= uniqueness::OWN_ANALYSIS_UP_TO_DOFS => {
-            let (pattern, analysed) = crate::solvers::TautStiffness::analyse(s);
-            Some(uniqueness::uniqueness(s, eq, load, &pattern, &analysed))
-        }
-        _ => None,
     }
 }
 
