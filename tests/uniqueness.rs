@@ -28,17 +28,18 @@ fn displacement(dir: &Path, solver: &str, alpha: &str, node: &str) -> [f64; 3] {
 }
 
 fn run_mast(alphas: &str) -> (Temp, std::process::Output) {
+    mast("run", &[&format!("load.alpha={alphas}")])
+}
+
+/// `tensolve COMMAND` on the mast with `--set` overrides, into a new directory.
+fn mast(command: &str, sets: &[&str]) -> (Temp, std::process::Output) {
     let dir = Temp::dir("unique-mast");
     let case = manifest_path("tests/data/my-mast.toml");
-    let alpha = format!("load.alpha={alphas}");
-    let out = tensolve(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        dir.arg(),
-        "--set",
-        &alpha,
-    ]);
+    let mut args = vec![command, case.to_str().unwrap(), "--out", dir.arg()];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let out = tensolve(&args);
     (dir, out)
 }
 
@@ -224,7 +225,6 @@ fn every_answer_between_the_solvers_answers_is_an_equilibrium_of_one_energy_and_
 /// at 1.5 of 1.1 … 2 (this session's adversarial pass).
 #[test]
 fn a_zero_tangent_eigenvalue_under_the_geometric_models_is_not_unique() {
-    let case = manifest_path("tests/data/my-mast.toml");
     for sets in [
         vec!["model.geometry=\"prestress\"", "load.alpha=[1.0, 2.0, 4.0]"],
         vec![
@@ -234,12 +234,7 @@ fn a_zero_tangent_eigenvalue_under_the_geometric_models_is_not_unique() {
             "load.alpha=[1.1, 1.15, 1.2, 1.5, 2.0]",
         ],
     ] {
-        let dir = Temp::dir("unique-geometric");
-        let mut args = vec!["run", case.to_str().unwrap(), "--out", dir.arg(), "--quiet"];
-        for s in &sets {
-            args.extend(["--set", s]);
-        }
-        let out = tensolve(&args);
+        let (dir, out) = mast("run", &sets);
         assert_eq!(code(&out), 0, "{sets:?}: {}", stderr(&out));
         let rows = summary_rows(&dir.0);
         assert!(rows.len() >= 5, "{sets:?}");
@@ -260,20 +255,14 @@ fn a_zero_tangent_eigenvalue_under_the_geometric_models_is_not_unique() {
 /// and no `unique` (this session's adversarial pass).
 #[test]
 fn a_load_on_a_motion_the_answers_tangent_does_not_resist_is_unstable() {
-    let case = manifest_path("tests/data/my-mast.toml");
-    let dir = Temp::dir("unique-loaded");
-    let out = tensolve(&[
+    let (dir, out) = mast(
         "run",
-        case.to_str().unwrap(),
-        "--out",
-        dir.arg(),
-        "--set",
-        "model.geometry=\"prestress\"",
-        "--set",
-        "load.alpha=[2.0]",
-        "--set",
-        "load.point=[{nodes=[1],force=[10000.0,1.0,0.0]}]",
-    ]);
+        &[
+            "model.geometry=\"prestress\"",
+            "load.alpha=[2.0]",
+            "load.point=[{nodes=[1],force=[10000.0,1.0,0.0]}]",
+        ],
+    );
     let err = stderr(&out);
     assert_eq!(code(&out), 1, "{err}");
     let rows = summary_rows(&dir.0);
@@ -296,16 +285,7 @@ fn a_load_on_a_motion_the_answers_tangent_does_not_resist_is_unstable() {
 /// (this session's adversarial pass: e of 0.18 and 0.39 with no word).
 #[test]
 fn bench_says_when_its_reference_is_not_unique() {
-    let case = manifest_path("tests/data/my-mast.toml");
-    let dir = Temp::dir("unique-bench");
-    let out = tensolve(&[
-        "bench",
-        case.to_str().unwrap(),
-        "--out",
-        dir.arg(),
-        "--set",
-        "load.alpha=[1.0, 2.0, 4.0]",
-    ]);
+    let (_dir, out) = mast("bench", &["load.alpha=[1.0, 2.0, 4.0]"]);
     let err = stderr(&out);
     assert_eq!(code(&out), 0, "{err}");
     for alpha in ["2", "4"] {
