@@ -3,14 +3,16 @@
 //! Data flows one way, and each module only uses those before it:
 //!
 //! ```text
-//! host, linalg → structure → solvers → results → output
-//!                       ↘       ↓                  ↓
-//!                         case ───────────────→  app (sweep, bench, check)
+//! host, linalg → structure → decomposition → solvers → results → output
+//!                       ↘                      ↓                  ↓
+//!                         case ──────────────────────────────→  app (sweep, bench, check)
 //! ```
 //!
 //! [`host`] reads what the machine lets this process use (its memory); [`linalg`] is sparse
 //! linear algebra knowing nothing of the domain; [`structure`] builds
-//! nodes, links and supports from a plain [`structure::GridSpec`]; [`solvers`] holds the four
+//! nodes, links and supports from a plain [`structure::GridSpec`]; [`decomposition`] cuts it
+//! into substructures and interfaces (and says what processes sharing them exchange);
+//! [`solvers`] holds the four
 //! solvers behind one [`solvers::Solver`] trait and one [`solvers::drive`]r; [`results`]
 //! checks and derives quantities from an answer; [`output`] writes files through one sink per
 //! file family; [`case`] turns a TOML file into those specs and settings; [`app`] runs a case.
@@ -19,6 +21,7 @@
 
 pub mod app;
 pub mod case;
+pub mod decomposition;
 pub mod host;
 pub mod linalg;
 pub mod output;

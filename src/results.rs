@@ -138,7 +138,7 @@ impl AnswerMeasures {
         cables: usize,
         eq: &Equilibrium,
         load: &[f64],
-        exchange: &dyn crate::solvers::latin::Exchange,
+        exchange: &dyn crate::decomposition::Exchange,
     ) -> AnswerMeasures {
         let full = s.full_displacements(&eq.displacements);
         // Per share: the largest cable tension and member rotation, the slack counts.
@@ -396,7 +396,7 @@ pub const TANGENT_ZERO_RELATIVE: f64 = 1e-8;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solvers::latin::OneProcess;
+    use crate::decomposition::OneProcess;
     use crate::solvers::newton::Newton;
     use crate::solvers::{AnySolver, Silent, TautStiffness};
     use crate::structure::{GridSpec, LoadPattern};

@@ -12,8 +12,9 @@ mod common;
 
 use common::{load, paper_structure, paper_text_with, temp_path};
 use std::process::Command;
+use tensolve::decomposition::WeakInterfaces;
 use tensolve::results::relative_difference;
-use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy, WeakInterfaces};
+use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy};
 use tensolve::solvers::newton::Newton;
 use tensolve::solvers::{AnySolver, Reference, Silent, Solution, Solver, TautStiffness};
 use tensolve::structure::Structure;

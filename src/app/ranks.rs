@@ -5,7 +5,7 @@
 //! Without the feature a command runs on one process and this module is a stand-in of size 1.
 
 use crate::case::{self, sources, Case, CaseError};
-use crate::solvers::latin::Exchange;
+use crate::decomposition::Exchange;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 

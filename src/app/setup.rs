@@ -2,8 +2,9 @@
 //! then each solver asked for, with the set-up time it is charged.
 
 use crate::case::{Case, SolverChoice};
+use crate::decomposition::{Exchange, Homogenised, OneProcess};
 use crate::results::uniqueness;
-use crate::solvers::latin::{Exchange, Homogenised, Latin, LatinSettings, LinkShare, OneProcess};
+use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{

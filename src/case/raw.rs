@@ -3,7 +3,8 @@
 //! Nothing here has a default value: [`super::convert`] takes each default from the type it
 //! configures.
 
-use crate::solvers::latin::{SearchPolicy, StopOn, WeakInterfaces};
+use crate::decomposition::WeakInterfaces;
+use crate::solvers::latin::{SearchPolicy, StopOn};
 use crate::solvers::Method;
 use crate::structure::{Clamp, ModuleKind};
 use serde::Deserialize;

@@ -4,7 +4,7 @@
 //! i of the homogenised flexibility `L_E = K⁺_E − I/d_m` (m/N) in columns `L_0 … L_{m−1}`.
 
 use super::write_atomic;
-use crate::solvers::latin::Homogenised;
+use crate::decomposition::Homogenised;
 use std::io;
 use std::path::{Path, PathBuf};
 

@@ -16,13 +16,13 @@
 //!    is `{u(c) : G c = 0}`, of the dimension of ker G, counted on `GᵀG` (one r × r block per
 //!    pair of substructures sharing a node) as K's own zero modes are counted.
 
+use crate::decomposition::{
+    add_to_gram, null_amplitudes, orthonormal_columns, Partition, RigidFrame, SubstructureTopology,
+    WeakInterfaces,
+};
 use crate::linalg::{
     dot, factorize_counting_zero_modes, factorize_or_find_singular, zero_modes, SparseCholesky,
     SparseRow, StiffnessPattern, ZERO_MODES_COUNTED,
-};
-use crate::solvers::latin::partition::SubstructureTopology;
-use crate::solvers::latin::{
-    add_to_gram, null_amplitudes, orthonormal_columns, Partition, RigidFrame, WeakInterfaces,
 };
 use crate::structure::{Structure, CLAMPED};
 use faer::Par;

@@ -64,7 +64,7 @@ impl RunError {
 /// some ranks only (rank 0's files, each rank's memory) goes through it before the next
 /// collective operation.
 pub fn on_every_rank<T>(
-    exchange: &dyn crate::solvers::latin::Exchange,
+    exchange: &dyn crate::decomposition::Exchange,
     result: Result<T, RunError>,
 ) -> Result<T, RunError> {
     if exchange.all(result.is_ok()) {

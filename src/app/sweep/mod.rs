@@ -13,6 +13,7 @@ use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
 use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolver};
 use crate::case::{Case, ReferenceChoice};
+use crate::decomposition::{Exchange, OneProcess};
 use crate::output::{
     self, alpha_label,
     sinks::{
@@ -22,7 +23,7 @@ use crate::output::{
     FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
 };
 use crate::results::{self, AnswerMeasures};
-use crate::solvers::latin::{Exchange, LinkShare, OneProcess};
+use crate::solvers::latin::LinkShare;
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
 };
@@ -114,7 +115,7 @@ pub fn run(
 }
 
 /// [`run`] on the processes of `exchange` (MPI ranks: every one calls it alike): micro-macro's
-/// substructures are shared among them ([`crate::solvers::latin::Exchange`]), the other
+/// substructures are shared among them ([`crate::decomposition::Exchange`]), the other
 /// solvers run alike on each, and rank 0 alone writes files. It takes the case, whose members
 /// it releases once the structure is built of them.
 pub fn run_on(

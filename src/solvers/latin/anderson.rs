@@ -7,9 +7,9 @@
 //! With m = 0 this is `x⁺ = β G(x) + (1 − β) x`: the linear stage is affine in x, so it is
 //! exactly the relaxation of s with μ = β.
 
-use super::exchange::Exchange;
+use crate::decomposition::Exchange;
 #[cfg(test)]
-use super::exchange::OneProcess;
+use crate::decomposition::OneProcess;
 use crate::linalg::{par_update, par_zip_map, CHUNK};
 use nalgebra::DMatrix;
 use rayon::prelude::*;

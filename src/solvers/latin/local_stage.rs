@@ -162,7 +162,7 @@ pub(super) fn interface_local_stage(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solvers::latin::macro_basis::orthonormal_columns;
+    use crate::decomposition::macro_basis::orthonormal_columns;
     use crate::structure::LinkKind;
 
     /// A link 0 → 1 along x of stiffness `k` and prestress `t0`.

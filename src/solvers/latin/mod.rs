@@ -1,4 +1,4 @@
-//! The LATIN solver (docs/method.md §4, paper §3–4): one implementation for `micro-macro` (an `sx × sy`
+//! The LATIN solver (docs/method.md §4, paper §3–4), on the partitions of [`crate::decomposition`]: one implementation for `micro-macro` (an `sx × sy`
 //! partition with a homogenised macro problem) and `mono-latin` (a 1 × 1 partition: no
 //! interfaces, `K = Bᵀ l B`, the augmented Lagrangian method of the paper's §5.4).
 //!
@@ -12,34 +12,27 @@
 //!
 //! | file | what |
 //! |---|---|
-//! | `settings` | [`LatinSettings`], search directions, weak interfaces |
-//! | `partition` | substructures and interfaces of an `sx × sy` partition |
-//! | `interfaces` | interfaces with their macro bases, redundant constraints left out |
-//! | `macro_basis`, `kernel` | the macro fields of an interface; the kernel of K*_E |
+//! | `settings` | [`LatinSettings`], search directions |
 //! | `substructure` | one substructure's operators (K_E, Z_E, K*_E, L_E) |
 //! | `macro_problem` | the homogenised macro problem, factorized once |
 //! | `state` | s and ŝ per substructure |
 //! | `linear_stage`, `local_stage`, `indicator` | the two stages and η |
 //! | `iteration` | the two iteration orders and the `Solver` state machine |
 //! | `anderson` | Anderson acceleration of the fixed point ŝ ↦ local(linear(ŝ)) |
-//! | `exchange`, `neighbours`, `operators`, `ranks` | a solve shared by MPI ranks: what is gathered, what passes point to point, the set-up of each rank's operators, the layout |
+//! | `neighbours`, `operators`, `ranks` | a solve shared by MPI ranks: what passes point to point, the set-up of each rank's operators, the layout |
 //! | `search` | status-following search directions and operator rebuilds |
-//! | `residual` | r(U) of the linear stage's U, substructure by substructure |
+//! | `residual`, `dof_ownership` | r(U) of the linear stage's U, substructure by substructure; which substructure owns each dof |
 
 mod anderson;
-mod exchange;
+mod dof_ownership;
 mod indicator;
-mod interfaces;
 mod iteration;
-mod kernel;
 mod linear_stage;
 mod link_share;
 mod local_stage;
-mod macro_basis;
 mod macro_problem;
 mod neighbours;
 mod operators;
-pub(crate) mod partition;
 mod ranks;
 mod residual;
 mod search;
@@ -51,26 +44,20 @@ mod substructure;
 #[cfg(test)]
 mod tests;
 
-pub use exchange::{block, Exchange, OneProcess};
-pub(crate) use interfaces::Interface;
-pub(crate) use kernel::{add_to_gram, null_amplitudes, RigidFrame};
+#[cfg(test)]
+use crate::decomposition::macro_basis::macro_basis;
+use crate::decomposition::{block, Exchange, Homogenised, MacroDof, OneProcess, WeakInterfaces};
+use crate::decomposition::{Interface, Interfaces, Partition};
 pub use link_share::LinkShare;
 use link_share::WorldFacts;
-#[cfg(test)]
-use macro_basis::macro_basis;
-pub(crate) use macro_basis::orthonormal_columns;
-pub(crate) use partition::Partition;
 pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW, VALUES_PER_SHARED_DOF};
-pub use settings::{
-    LatinSettings, SearchDirection, SearchPolicy, StopOn, WeakInterfaces, PAPER_DM,
-};
+pub use settings::{LatinSettings, SearchDirection, SearchPolicy, StopOn, PAPER_DM};
 pub use state::LatinState;
 pub(crate) use state::{SideState, SubState};
 pub(crate) use substructure::{OperatorStorage, Substructure};
 
 use super::{displacement_residual, SetupError};
 use crate::structure::Structure;
-use interfaces::Interfaces;
 use macro_problem::MacroProblem;
 
 /// What `tensolve check` prints about a partition.
@@ -103,31 +90,6 @@ pub struct PartitionReport {
     pub dm: f64,
     /// The degree of the strong interfaces' macro bases.
     pub macro_degree: usize,
-}
-
-/// One macro dof of a substructure: a column of one of its interfaces' macro bases.
-#[derive(Debug, Clone)]
-pub struct MacroDof {
-    /// The interface (numbered as `check` counts them).
-    pub interface: usize,
-    /// The substructure on the other side.
-    pub neighbour: usize,
-    /// The macro field, with its axes.
-    pub field: String,
-    /// Centroid of the interface, m.
-    pub centroid: [f64; 3],
-}
-
-/// The paper's "second-hand product" of one substructure (its conclusion): its homogenised
-/// flexibility `L_E = K⁺_E − I/d_m` on its macro dofs, with l as set up.
-#[derive(Debug, Clone)]
-pub struct Homogenised {
-    /// The substructure, row by row of the partition.
-    pub substructure: usize,
-    /// Its macro dofs, in the order of `flexibility`'s rows and columns.
-    pub dofs: Vec<MacroDof>,
-    /// L_E, m/N.
-    pub flexibility: nalgebra::DMatrix<f64>,
 }
 
 /// The LATIN solver, set up for one structure and one partition.
@@ -169,7 +131,7 @@ pub struct Latin<'s> {
     /// stage): all of them on one process.
     held: std::ops::Range<usize>,
     /// Which substructure owns each free dof, for r(U).
-    dof_ownership: residual::DofOwnership,
+    dof_ownership: dof_ownership::DofOwnership,
     /// On several ranks, what passes point to point after each linear stage; `None` when
     /// every iteration reads the whole state ([`Latin::reads_whole_state`]) and on one
     /// process.
@@ -427,7 +389,7 @@ impl<'s> Latin<'s> {
             built => built?,
         };
         let dm = world.dm;
-        let dof_ownership = residual::DofOwnership::of(&substructures, structure.n_free);
+        let dof_ownership = dof_ownership::DofOwnership::of(&substructures, structure.n_free);
         let mut latin = Latin {
             structure,
             settings,

@@ -12,7 +12,7 @@
 //! (`Latin::share_whole_state`). Both ranks of a pair build the same lists from the partition,
 //! which every rank knows: what one packs, the other unpacks in the same order.
 
-use super::residual::DofOwnership;
+use super::dof_ownership::DofOwnership;
 use super::state::SubState;
 use super::{block, Exchange, Interface, Substructure};
 use std::ops::Range;

@@ -2,11 +2,11 @@
 //! each builds those of its block, L_E and Q_E of the others are gathered; then the macro
 //! problem they make.
 
-use super::exchange::Exchange;
 use super::macro_problem::MacroProblem;
 use super::shapes::Shapes;
 use super::substructure::OperatorStorage;
 use super::{Interface, Partition, Substructure};
+use crate::decomposition::Exchange;
 use crate::solvers::SetupError;
 use crate::structure::{Structure, CLAMPED};
 use nalgebra::DMatrix;

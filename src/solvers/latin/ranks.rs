@@ -11,8 +11,8 @@
 //! The answer is gathered whole where the driver reads it: at its no-equilibrium checks
 //! (iterations 16, 32, 64, …) and at the end.
 
-use super::interfaces::Interfaces;
 use super::{LatinSettings, Partition};
+use crate::decomposition::interfaces::Interfaces;
 use crate::structure::Structure;
 use std::ops::Range;
 

@@ -1,5 +1,6 @@
 //! Settings of the LATIN solver, each default written once, at its field.
 
+use crate::decomposition::WeakInterfaces;
 use crate::solvers::SetupError;
 use crate::structure::Structure;
 use serde::Deserialize;
@@ -11,20 +12,6 @@ pub enum SearchDirection {
     Stiffness,
     /// The same `l` (N/m) on every link.
     Uniform(f64),
-}
-
-/// What to do with interfaces of three nodes or fewer (docs/method.md §4 "Weak interfaces").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum WeakInterfaces {
-    /// All-macro (R = identity): exact continuity through the macro problem. The default.
-    #[default]
-    Macro,
-    /// All-micro (no macro part): the paper's literal statement; stalls on the paper's case.
-    Micro,
-    /// One-node interfaces whose node lies in another interface are dropped; other weak
-    /// interfaces are all-macro.
-    Drop,
 }
 
 /// How the link search direction l evolves along the iterations (docs: docs/method.md §6).

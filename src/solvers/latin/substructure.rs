@@ -3,10 +3,10 @@
 //! `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, its kernel Q_E, `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and the
 //! homogenised flexibility `L_E = K⁺_E − I/d_m`.
 
-use super::kernel::{substructure_kernel, InterfaceTrace};
-use super::partition::SubstructureTopology;
 use super::shapes::Shapes;
 use super::Interface;
+use crate::decomposition::kernel::{substructure_kernel, InterfaceTrace};
+use crate::decomposition::partition::SubstructureTopology;
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
 use crate::structure::law::{given_prestress, transverse_pair};
 use crate::structure::{LinkDofs, Structure, CLAMPED};

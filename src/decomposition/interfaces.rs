@@ -2,8 +2,8 @@
 //! place among the macro unknowns, redundant exact constraints at crosspoints left out.
 
 use super::macro_basis::labelled_macro_basis;
+use super::partition::WeakInterfaces;
 use super::partition::{InterfaceTopology, Partition};
-use super::WeakInterfaces;
 use crate::structure::Structure;
 use nalgebra::DMatrix;
 
@@ -72,7 +72,7 @@ impl ExactContinuity {
 
 /// The interfaces of `partition` that carry constraints, with their macro bases, and how many
 /// were dropped and how many nodes left out as redundant.
-pub(super) struct Interfaces {
+pub(crate) struct Interfaces {
     /// The interfaces kept, macro offsets in this order.
     pub list: Vec<Interface>,
     /// Interfaces left out (`drop`, or all their nodes redundant).
@@ -84,7 +84,7 @@ pub(super) struct Interfaces {
 impl Interfaces {
     /// The interfaces of `partition`, redundant exact constraints left out, with their bases.
     /// `degree` is the macro basis's ([`super::macro_basis::labelled_macro_basis`]).
-    pub(super) fn new(
+    pub(crate) fn new(
         structure: &Structure,
         partition: &Partition,
         weak: WeakInterfaces,

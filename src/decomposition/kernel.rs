@@ -144,8 +144,8 @@ pub fn substructure_kernel(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solvers::latin::macro_basis::labelled_macro_basis;
-    use crate::solvers::latin::WeakInterfaces;
+    use crate::decomposition::macro_basis::labelled_macro_basis;
+    use crate::decomposition::WeakInterfaces;
 
     /// A substructure whose nodes are the unit square's corners at z = 0 and z = 1, with one
     /// strong interface (the upper corners, all components free: every rigid motion is macro

@@ -5,7 +5,7 @@
 //! modified Gram–Schmidt (twice), dependent fields dropped. Weak interfaces get the identity
 //! (all-macro) or nothing (all-micro).
 
-use super::WeakInterfaces;
+use super::partition::WeakInterfaces;
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
 
 /// Orthonormal columns spanning `fields` (each of length `rows`), dependent ones dropped.

@@ -5,9 +5,23 @@
 //! substructures sharing non-clamped nodes has one interface, its nodes in increasing global
 //! order (the order both sides use).
 
-use super::WeakInterfaces;
 use crate::structure::Structure;
+use serde::Deserialize;
 use std::collections::BTreeMap;
+
+/// What to do with interfaces of three nodes or fewer (docs/method.md §4 "Weak interfaces").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum WeakInterfaces {
+    /// All-macro (R = identity): exact continuity through the macro problem. The default.
+    #[default]
+    Macro,
+    /// All-micro (no macro part): the paper's literal statement; stalls on the paper's case.
+    Micro,
+    /// One-node interfaces whose node lies in another interface are dropped; other weak
+    /// interfaces are all-macro.
+    Drop,
+}
 
 /// Interfaces with at most this many nodes are weak (a 10-field basis cannot be defined).
 pub const WEAK_MAX_NODES: usize = 3;
