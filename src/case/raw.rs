@@ -193,6 +193,7 @@ pub(super) struct RawSolver {
     pub stop_on: Option<StopOn>,
     pub residual_tolerance: Option<f64>,
     pub keep_z: Option<bool>,
+    pub soft_modes: Option<f64>,
     pub macro_degree: Option<usize>,
     pub reference: Option<ReferenceChoice>,
 }

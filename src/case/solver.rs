@@ -162,6 +162,16 @@ fn latin_settings(
         }
         latin.macro_degree = Some(degree);
     }
+    if let Some(theta) = raw.soft_modes {
+        if !(theta.is_finite() && (0.0..1.0).contains(&theta)) {
+            return Err(CaseError::invalid(
+                "solver.soft_modes",
+                number(theta),
+                "give the fraction of d_m below which an interface motion is soft, between 0 (none: the polynomial macro basis alone) and 1 (exclusive), e.g. 0.3",
+            ));
+        }
+        latin.soft_modes = (theta > 0.0).then_some(theta);
+    }
     if let Some(tol) = raw.residual_tolerance {
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
             return Err(CaseError::invalid(

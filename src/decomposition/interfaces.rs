@@ -1,7 +1,7 @@
 //! The interfaces of a partition as the solver uses them: each with its macro basis and its
 //! place among the macro unknowns, redundant exact constraints at crosspoints left out.
 
-use super::macro_basis::labelled_macro_basis;
+use super::macro_basis::{labelled_macro_basis, orthonormal_columns_kept};
 use super::partition::WeakInterfaces;
 use super::partition::{InterfaceTopology, Partition};
 use crate::structure::Structure;
@@ -24,6 +24,25 @@ pub struct Interface {
     pub fields: Vec<String>,
     /// Centroid G of its nodes, m.
     pub centroid: [f64; 3],
+}
+
+impl Interface {
+    /// Its macro basis made of `fields` (one row per free component of its nodes), dependent
+    /// ones dropped, each labelled as `labels` says.
+    pub(crate) fn set_fields(&mut self, fields: &[Vec<f64>], labels: &[String]) {
+        let (basis, kept) = orthonormal_columns_kept(fields, self.basis.nrows());
+        self.fields = kept.iter().map(|&k| labels[k].clone()).collect();
+        self.basis = basis;
+    }
+}
+
+/// The macro offsets of `interfaces` numbered in their order, after their bases changed.
+pub(crate) fn number_macro_dofs(interfaces: &mut [Interface]) {
+    let mut offset = 0;
+    for iface in interfaces {
+        iface.macro_offset = offset;
+        offset += iface.basis.ncols();
+    }
 }
 
 /// Exact (all-macro) continuity constraints node by node, kept independent.

@@ -15,7 +15,10 @@ pub fn orthonormal_columns(fields: &[Vec<f64>], rows: usize) -> DMatrix<f64> {
 
 /// [`orthonormal_columns`], and the indices of the fields kept (column j of the result is
 /// field `kept[j]` made orthogonal to the fields kept before it, and normalised).
-fn orthonormal_columns_kept(fields: &[Vec<f64>], rows: usize) -> (DMatrix<f64>, Vec<usize>) {
+pub(crate) fn orthonormal_columns_kept(
+    fields: &[Vec<f64>],
+    rows: usize,
+) -> (DMatrix<f64>, Vec<usize>) {
     let mut kept: Vec<Vec<f64>> = Vec::new();
     let mut indices = Vec::new();
     for (index, f) in fields.iter().enumerate() {

@@ -20,7 +20,7 @@ pub(crate) mod partition;
 
 pub use exchange::{block, Exchange, OneProcess};
 pub use homogenised::{Homogenised, MacroDof};
-pub(crate) use interfaces::{Interface, Interfaces};
+pub(crate) use interfaces::{number_macro_dofs, Interface, Interfaces};
 pub(crate) use kernel::{add_to_gram, null_amplitudes, RigidFrame};
 pub(crate) use macro_basis::orthonormal_columns;
 pub use partition::WeakInterfaces;

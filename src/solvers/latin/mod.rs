@@ -25,6 +25,7 @@
 
 mod anderson;
 mod dof_ownership;
+mod enrichment;
 mod indicator;
 mod iteration;
 mod linear_stage;
@@ -142,6 +143,8 @@ pub struct Latin<'s> {
     /// its links' indices in the whole structure (`Substructure::links` index the kept ones).
     /// `None` when `structure` is whole.
     world_links: Option<&'s [Vec<usize>]>,
+    /// With `solver.soft_modes`: the soft interface modes in the macro bases.
+    soft_modes: Option<enrichment::SoftModes>,
 }
 
 /// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
@@ -417,6 +420,7 @@ impl<'s> Latin<'s> {
             neighbours: None,
             world,
             world_links,
+            soft_modes: None,
         };
         let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
         for sub in &latin.substructures {
@@ -425,6 +429,17 @@ impl<'s> Latin<'s> {
             }
         }
         latin.side_slots = side_slots;
+        if let (Some(theta), false) = (latin.settings.soft_modes, latin.interfaces.is_empty()) {
+            latin.soft_modes = Some(enrichment::SoftModes::new(
+                theta,
+                partition.clone(),
+                &latin.interfaces,
+                latin.structure.links.len(),
+            ));
+            let all: Vec<usize> = (0..latin.substructures.len()).collect();
+            let search = latin.search.clone();
+            latin.enrich(&all, &search)?;
+        }
         if exchange.size() > 1 && !latin.reads_whole_state() {
             latin.neighbours = Some(neighbours::NeighbourPlan::new(
                 &latin.substructures,

@@ -147,6 +147,10 @@ impl Latin<'_> {
             return false;
         }
         share_homogenised(&mut self.substructures, changed, self.exchange, &held);
+        if self.soft_modes.is_some() {
+            // The soft modes of the changed substructures, and the macro problem anew.
+            return self.enrich(changed, search).is_ok();
+        }
         match self
             .macro_problem
             .refactor(&self.substructures, &self.interfaces)

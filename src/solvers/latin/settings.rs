@@ -110,6 +110,11 @@ pub struct LatinSettings {
     /// true; false computes `Z_E w` by a second solve with K_E's factor in every linear
     /// stage: a fifth less memory on large grids, and a slower iteration.
     pub keep_z: bool,
+    /// Soft interface modes in the macro basis (`super::enrichment`): on each interface, the
+    /// motions that a substructure on either side resists less than this fraction θ of d_m,
+    /// taken at set-up and at each operator rebuild. Default `None`: the polynomial basis
+    /// alone.
+    pub soft_modes: Option<f64>,
 }
 
 impl Default for LatinSettings {
@@ -130,6 +135,7 @@ impl Default for LatinSettings {
             macro_degree: None,
             max_iterations: 1000,
             keep_z: true,
+            soft_modes: None,
         }
     }
 }
@@ -194,6 +200,7 @@ impl LatinSettings {
             anderson: 0,
             policy: SearchPolicy::Stiffness,
             stop_on: StopOn::Eta,
+            soft_modes: None,
             ..self
         }
     }

@@ -232,6 +232,47 @@ impl Substructure {
         rebuilt
     }
 
+    /// E's sides re-read from `interfaces`, whose macro bases changed (not their nodes), and
+    /// where E is held, steps 5–7 of [`Self::new`] on its kept factor: Z_E, K*_E, Q_E, K⁺_E
+    /// and L_E for the new bases.
+    pub(super) fn set_interfaces(
+        &mut self,
+        topology: &SubstructureTopology,
+        structure: &Structure,
+        interfaces: &[Interface],
+        dm: f64,
+        storage: OperatorStorage,
+    ) -> Result<(), SingularSubstructure> {
+        let mut n_macro = 0;
+        for side in &mut self.sides {
+            side.basis = interfaces[side.interface].basis.clone();
+            side.cols = side.basis.ncols();
+            side.macro_offset = n_macro;
+            n_macro += side.cols;
+        }
+        self.n_macro = n_macro;
+        let Some(mut ops) = self.ops.take() else {
+            // Not held here: L_E and Q_E come from the rank that holds E.
+            return Ok(());
+        };
+        let (z, k_star) = self.condense_operators(&ops.factor, dm);
+        let rigid = rigid_kernel(&self.sides, topology, structure, interfaces);
+        let built = complete_kernel(&k_star, rigid, dm)
+            .ok_or(SingularSubstructure)
+            .and_then(|kernel| {
+                let (k_plus, flexibility) = invert(&k_star, &kernel, dm)?;
+                Ok((kernel, k_plus, flexibility))
+            });
+        if let Ok((kernel, k_plus, flexibility)) = &built {
+            self.kernel = kernel.clone();
+            self.flexibility = flexibility.clone();
+            ops.k_plus = k_plus.clone();
+        }
+        (ops.z, ops.k_star) = (storage.keep_z.then_some(z), k_star);
+        self.ops = Some(ops);
+        built.map(|_| ())
+    }
+
     /// Steps 4–7 of [`Self::new`] on E's kept pattern, analysis and kernel.
     fn rebuild_operators(
         &mut self,
