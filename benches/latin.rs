@@ -48,12 +48,12 @@ fn latin(c: &mut Criterion) {
         "/cases/paper.toml"
     )))
     .expect("case loads");
-    let structure = case.structure();
-    let load: Vec<f64> = structure.unit_load.clone();
-    let taut = TautStiffness::new(&structure).expect("regular");
+    let model = case.model();
+    let load: Vec<f64> = model.structure.unit_load.clone();
+    let taut = TautStiffness::new(&model).expect("regular");
     let reference = Reference::new(
-        &structure,
-        &Newton::new(&structure, &taut, NewtonSettings::default())
+        &model,
+        &Newton::new(&model, &taut, NewtonSettings::default())
             .expect("newton")
             .solve(&load, None, &mut Silent)
             .equilibrium
@@ -68,13 +68,13 @@ fn latin(c: &mut Criterion) {
     group.warm_up_time(Duration::from_secs(1));
     group.measurement_time(Duration::from_secs(4));
     for (name, subdomains) in [("mono-latin", [1, 1]), ("micro-macro", [4, 4])] {
-        let mut solver = Latin::new(&structure, settings(subdomains)).expect("set-up");
+        let mut solver = Latin::new(&model, settings(subdomains)).expect("set-up");
         let state = solver.init(&load);
         group.bench_function(format!("{name}/setup"), |b| {
-            b.iter(|| Latin::new(&structure, settings(subdomains)).expect("set-up"))
+            b.iter(|| Latin::new(&model, settings(subdomains)).expect("set-up"))
         });
         group.bench_function(format!("{name}/setup-1thread"), |b| {
-            b.iter(|| one_thread.install(|| Latin::new(&structure, settings(subdomains))))
+            b.iter(|| one_thread.install(|| Latin::new(&model, settings(subdomains))))
         });
         group.bench_function(format!("{name}/iteration"), |b| {
             b.iter_batched_ref(
@@ -92,7 +92,7 @@ fn latin(c: &mut Criterion) {
         });
         group.bench_function(format!("{name}/to-e-1e-3"), |b| {
             b.iter(|| {
-                let mut solver = Latin::new(&structure, settings(subdomains)).expect("set-up");
+                let mut solver = Latin::new(&model, settings(subdomains)).expect("set-up");
                 let mut state = solver.init(&load);
                 while reference.error(&solver.elongations(&state)) >= 1e-3 {
                     solver.next_iter(&mut state);
@@ -127,13 +127,13 @@ fn grid_case(n: usize, alpha: f64, extra: &str) -> String {
 }
 
 fn latin_row(
-    structure: &tensolve::structure::Structure,
+    model: &tensolve::model::Model,
     settings: LatinSettings,
     load: &[f64],
     reference: &Reference,
 ) -> Row {
     let clock = std::time::Instant::now();
-    let mut solver = Latin::new(structure, settings).expect("set-up");
+    let mut solver = Latin::new(model, settings).expect("set-up");
     let setup = clock.elapsed().as_secs_f64();
     // First the iterates' errors against the reference, then the solve timed alone (the same
     // iterates: the solver is deterministic).
@@ -195,15 +195,20 @@ fn table(args: &[String]) {
                 "[cables]\nunilateral = false"
             };
             let case = tensolve::case::parse(&grid_case(n, alpha, extra)).expect("case");
-            let structure = case.structure();
-            let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
-            let taut = TautStiffness::new(&structure).expect("regular");
+            let model = case.model();
+            let load: Vec<f64> = model
+                .structure
+                .unit_load
+                .iter()
+                .map(|f| alpha * f)
+                .collect();
+            let taut = TautStiffness::new(&model).expect("regular");
             let clock = std::time::Instant::now();
-            let newton = Newton::new(&structure, &taut, NewtonSettings::default())
+            let newton = Newton::new(&model, &taut, NewtonSettings::default())
                 .expect("newton")
                 .solve(&load, None, &mut Silent);
             let newton_seconds = clock.elapsed().as_secs_f64();
-            let reference = Reference::new(&structure, &newton.equilibrium.displacements);
+            let reference = Reference::new(&model, &newton.equilibrium.displacements);
             let label = if unilateral { "" } else { " bilateral" };
             println!(
                 "| {n} × {n}{label}: newton | – | – | – | {} | – | – | – | {newton_seconds:.2} (set-up included) |",
@@ -222,7 +227,7 @@ fn table(args: &[String]) {
                         max_iterations: 3000,
                         ..LatinSettings::default()
                     };
-                    let row = latin_row(&structure, settings, &load, &reference);
+                    let row = latin_row(&model, settings, &load, &reference);
                     let name = if unilateral { name } else { "bilateral" };
                     println!(
                         "| {n} × {n}, {} of {h} × {h} | {name} | {} | {} | {}{} | {} | {:.1e} | {:.2} | {:.2} |",
@@ -240,7 +245,7 @@ fn table(args: &[String]) {
             }
             if n == 64 && unilateral {
                 let settings = LatinSettings::default().monodomain();
-                let row = latin_row(&structure, settings, &load, &reference);
+                let row = latin_row(&model, settings, &load, &reference);
                 println!(
                     "| {n} × {n}: mono-latin | inexact Newton | {} | {} | {} | {} | {:.1e} | {:.2} | {:.2} |",
                     show(row.to_1e3),
@@ -256,7 +261,7 @@ fn table(args: &[String]) {
     }
 }
 
-/// One row of the at-scale table: micro-macro at the case's defaults on `structure`.
+/// One row of the at-scale table: micro-macro at the case's defaults on `model`.
 struct ScaleRow {
     iterations: usize,
     rebuilds: usize,
@@ -268,13 +273,9 @@ struct ScaleRow {
     elongations: Vec<f64>,
 }
 
-fn scale_row(
-    structure: &tensolve::structure::Structure,
-    settings: LatinSettings,
-    load: &[f64],
-) -> ScaleRow {
+fn scale_row(model: &tensolve::model::Model, settings: LatinSettings, load: &[f64]) -> ScaleRow {
     let clock = std::time::Instant::now();
-    let mut solver = Latin::new(structure, settings).expect("set-up");
+    let mut solver = Latin::new(model, settings).expect("set-up");
     let setup = clock.elapsed().as_secs_f64();
     let clock = std::time::Instant::now();
     let mut state = solver.init(load);
@@ -326,17 +327,22 @@ fn atscale(args: &[String]) {
             .solver
             .latin_settings(tensolve::solvers::Method::MicroMacro)
             .expect("micro-macro settings");
-        let structure = case.structure();
-        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
-        let row = scale_row(&structure, settings, &load);
+        let model = case.model();
+        let load: Vec<f64> = model
+            .structure
+            .unit_load
+            .iter()
+            .map(|f| alpha * f)
+            .collect();
+        let row = scale_row(&model, settings, &load);
         let (newton, error) = if n <= 512 {
             let clock = std::time::Instant::now();
-            let taut = TautStiffness::new(&structure).expect("regular");
-            let answer = Newton::new(&structure, &taut, NewtonSettings::default())
+            let taut = TautStiffness::new(&model).expect("regular");
+            let answer = Newton::new(&model, &taut, NewtonSettings::default())
                 .expect("newton")
                 .solve(&load, None, &mut Silent);
             let seconds = clock.elapsed().as_secs_f64();
-            let reference = Reference::new(&structure, &answer.equilibrium.displacements);
+            let reference = Reference::new(&model, &answer.equilibrium.displacements);
             (
                 format!("{}, {seconds:.2}", answer.info.iterations),
                 format!("{:.1e}", reference.error(&row.elongations)),
@@ -344,11 +350,11 @@ fn atscale(args: &[String]) {
         } else {
             ("–".to_string(), "–".to_string())
         };
-        drop(structure);
+        drop(model);
         let bilateral_case =
             tensolve::case::parse(&case_text("[cables]\nunilateral = false")).expect("case");
-        let bilateral_structure = bilateral_case.structure();
-        let bilateral = scale_row(&bilateral_structure, settings, &load);
+        let bilateral_model = bilateral_case.model();
+        let bilateral = scale_row(&bilateral_model, settings, &load);
         let [sx, sy] = settings.subdomains;
         println!(
             "| {n} × {n} | {} of {} × {} ({sx} × {sy}) | {}{} ({}) | {:.1e}, {:.1e} | {}{} | {:.2} | {:.2} | {newton} | {error} |",
@@ -387,9 +393,9 @@ fn factor_table() {
          [load]\nalpha = [0.01]\n[solver]\nmethods = [\"newton\"]\n",
     )
     .expect("case");
-    let structure = case.structure();
-    let taut = TautStiffness::new(&structure).expect("regular");
-    let n = structure.n_free;
+    let model = case.model();
+    let taut = TautStiffness::new(&model).expect("regular");
+    let n = model.structure.n_free;
     println!("| threads | factorize s | solve 1 column s | solve 16 columns s |");
     println!("|---|---|---|---|");
     let most = rayon::current_num_threads();

@@ -20,11 +20,16 @@ fn bench_case(c: &mut Criterion, id: &str, file: &str) {
     let case = tensolve::case::load(&path).expect("case loads");
     let alpha = case.load.alphas[0];
     let setup_and_solve = || {
-        let structure = case.structure();
-        let taut = TautStiffness::new(&structure).expect("taut stiffness is regular");
-        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let model = case.model();
+        let taut = TautStiffness::new(&model).expect("taut stiffness is regular");
+        let load: Vec<f64> = model
+            .structure
+            .unit_load
+            .iter()
+            .map(|f| alpha * f)
+            .collect();
         let mut newton =
-            Newton::new(&structure, &taut, NewtonSettings::default()).expect("newton set-up");
+            Newton::new(&model, &taut, NewtonSettings::default()).expect("newton set-up");
         newton.solve(&load, None, &mut Silent).info
     };
     let info = setup_and_solve();

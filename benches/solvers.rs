@@ -15,13 +15,13 @@ use faer::Mat;
 use std::path::Path;
 use std::time::Duration;
 use tensolve::linalg::PROBE_ITERATIONS;
+use tensolve::model::{GeometricModel, Model};
 use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
-use tensolve::structure::{GeometricModel, Structure};
 
-/// Sets a solver up on a structure and its taut stiffness (both borrowed).
-type Build = for<'a> fn(&'a Structure, &'a TautStiffness) -> Box<dyn AnySolver + 'a>;
+/// Sets a solver up on a model and its taut stiffness (both borrowed).
+type Build = for<'a> fn(&'a Model, &'a TautStiffness) -> Box<dyn AnySolver + 'a>;
 
 /// `<name>/setup+solve` (TautStiffness::new + the solver's set-up + solve, from the structure
 /// already built) and `<name>/solve` (set-up done once, outside the timing). The solve is
@@ -29,12 +29,12 @@ type Build = for<'a> fn(&'a Structure, &'a TautStiffness) -> Box<dyn AnySolver +
 fn bench_solver(
     group: &mut BenchmarkGroup<WallTime>,
     name: &str,
-    structure: &Structure,
+    model: &Model,
     load: &[f64],
     build: Build,
 ) {
-    let taut = taut_stiffness(structure);
-    let mut solver = build(structure, &taut);
+    let taut = taut_stiffness(model);
+    let mut solver = build(model, &taut);
     let info = solver.solve(load, None, &mut Silent).info;
     assert!(
         info.status.converged(),
@@ -44,25 +44,25 @@ fn bench_solver(
         info.stopping_value
     );
     group.bench_function(format!("{name}/setup+solve"), |b| {
-        b.iter(|| build(structure, &taut_stiffness(structure)).solve(load, None, &mut Silent))
+        b.iter(|| build(model, &taut_stiffness(model)).solve(load, None, &mut Silent))
     });
     group.bench_function(format!("{name}/solve"), |b| {
         b.iter(|| solver.solve(load, None, &mut Silent))
     });
 }
 
-/// The structure of `cases/paper.toml`.
-fn paper_structure() -> Structure {
+/// The model of `cases/paper.toml`.
+fn paper_model() -> Model {
     tensolve::case::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/cases/paper.toml"
     )))
     .expect("case loads")
-    .structure()
+    .model()
 }
 
-fn taut_stiffness(structure: &Structure) -> TautStiffness {
-    TautStiffness::new(structure).expect("taut stiffness is regular")
+fn taut_stiffness(model: &Model) -> TautStiffness {
+    TautStiffness::new(model).expect("taut stiffness is regular")
 }
 
 /// All benchmarks of one case at one α, in the group `id`.
@@ -75,35 +75,34 @@ fn bench_case(
 ) {
     let mut case = tensolve::case::load(Path::new(path)).expect("case loads");
     case.load.alphas = vec![alpha];
-    let structure = case.structure();
-    let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+    let model = case.model();
+    let load: Vec<f64> = model
+        .structure
+        .unit_load
+        .iter()
+        .map(|f| alpha * f)
+        .collect();
     let mut group = c.benchmark_group(id);
     configure(&mut group);
     group.bench_function("shared-setup", |b| {
         b.iter(|| {
-            let structure = case.structure();
-            let taut = taut_stiffness(&structure);
-            (structure, taut)
+            let model = case.model();
+            let taut = taut_stiffness(&model);
+            (model, taut)
         })
     });
-    bench_solver(&mut group, "newton", &structure, &load, |s, t| {
+    bench_solver(&mut group, "newton", &model, &load, |s, t| {
         Box::new(Newton::new(s, t, NewtonSettings::default()).expect("newton set-up"))
     });
     // The method before factor reuse (a factorization at every step that is not all-taut).
-    bench_solver(
-        &mut group,
-        "newton-refactorise",
-        &structure,
-        &load,
-        |s, t| {
-            let settings = NewtonSettings {
-                reuse_factor: false,
-                ..NewtonSettings::default()
-            };
-            Box::new(Newton::new(s, t, settings).expect("newton set-up"))
-        },
-    );
-    bench_solver(&mut group, "pcg-lcp", &structure, &load, |s, t| {
+    bench_solver(&mut group, "newton-refactorise", &model, &load, |s, t| {
+        let settings = NewtonSettings {
+            reuse_factor: false,
+            ..NewtonSettings::default()
+        };
+        Box::new(Newton::new(s, t, settings).expect("newton set-up"))
+    });
+    bench_solver(&mut group, "pcg-lcp", &model, &load, |s, t| {
         Box::new(PcgLcp::new(s, t, PcgLcpSettings::default()))
     });
     group.finish();
@@ -148,10 +147,10 @@ fn solvers(c: &mut Criterion) {
 /// `pattern+analysis` is the part of `kernels` before the first factorization; the rest is
 /// faer's numeric work.
 fn floor(c: &mut Criterion) {
-    let structure = paper_structure();
-    let load = structure.unit_load.clone();
-    let taut = taut_stiffness(&structure);
-    let mut newton = Newton::new(&structure, &taut, NewtonSettings::default()).expect("set-up");
+    let model = paper_model();
+    let load = model.structure.unit_load.clone();
+    let taut = taut_stiffness(&model);
+    let mut newton = Newton::new(&model, &taut, NewtonSettings::default()).expect("set-up");
     let info = newton.solve(&load, None, &mut Silent).info;
     assert!(info.status.converged(), "{info:?}");
     let work = newton.work();
@@ -164,13 +163,13 @@ fn floor(c: &mut Criterion) {
          substitution with {columns} columns ({work:?})"
     );
     let values = taut.values.clone();
-    let n = structure.n_free;
+    let n = model.structure.n_free;
     let mut group = c.benchmark_group("paper_alpha1_floor");
     group.warm_up_time(Duration::from_secs(1));
     group.measurement_time(Duration::from_secs(4));
     group.bench_function("kernels", |b| {
         b.iter(|| {
-            let (pattern, mut factor) = TautStiffness::analyse(&structure);
+            let (pattern, mut factor) = TautStiffness::analyse(&model.structure);
             for _ in 0..factorizations {
                 factor
                     .factorize(&pattern, &values)
@@ -191,13 +190,12 @@ fn floor(c: &mut Criterion) {
     // The part of `kernels` that is tensolve's own code and faer's symbolic analysis; the rest
     // of `kernels` is faer's numeric work.
     group.bench_function("pattern+analysis", |b| {
-        b.iter(|| TautStiffness::analyse(&structure))
+        b.iter(|| TautStiffness::analyse(&model.structure))
     });
     group.bench_function("newton/setup+solve", |b| {
         b.iter(|| {
-            let taut = taut_stiffness(&structure);
-            let mut newton =
-                Newton::new(&structure, &taut, NewtonSettings::default()).expect("set-up");
+            let taut = taut_stiffness(&model);
+            let mut newton = Newton::new(&model, &taut, NewtonSettings::default()).expect("set-up");
             newton.solve(&load, None, &mut Silent).info
         })
     });
@@ -211,16 +209,16 @@ fn sweep_alphas() -> Vec<f64> {
 
 /// One sweep of `solver` over `alphas`, each α warm-started from the previous answer when
 /// `warm`; returns the summed iterations.
-fn run_sweep(
-    solver: &mut dyn AnySolver,
-    structure: &Structure,
-    alphas: &[f64],
-    warm: bool,
-) -> usize {
+fn run_sweep(solver: &mut dyn AnySolver, model: &Model, alphas: &[f64], warm: bool) -> usize {
     let mut previous: Option<Equilibrium> = None;
     let mut iterations = 0;
     for &alpha in alphas {
-        let load: Vec<f64> = structure.unit_load.iter().map(|f| alpha * f).collect();
+        let load: Vec<f64> = model
+            .structure
+            .unit_load
+            .iter()
+            .map(|f| alpha * f)
+            .collect();
         let start = if warm { previous.as_ref() } else { None };
         let solution = solver.solve_from(&load, start, None, &mut Silent);
         assert!(
@@ -239,8 +237,8 @@ fn run_sweep(
 /// newton `cold-refactorise` also refactorises at every step (no factor reuse: the method
 /// before warm starts). Prints the iterations and factorizations per α of each variant once.
 fn sweep(c: &mut Criterion) {
-    let structure = paper_structure();
-    let taut = taut_stiffness(&structure);
+    let model = paper_model();
+    let taut = taut_stiffness(&model);
     let alphas = sweep_alphas();
     let refactorise = NewtonSettings {
         reuse_factor: false,
@@ -252,8 +250,8 @@ fn sweep(c: &mut Criterion) {
         ("newton/warm", NewtonSettings::default(), true),
     ];
     for (name, settings, warm) in newton_variants {
-        let mut newton = Newton::new(&structure, &taut, settings).expect("newton set-up");
-        let iterations = run_sweep(&mut newton, &structure, &alphas, warm);
+        let mut newton = Newton::new(&model, &taut, settings).expect("newton set-up");
+        let iterations = run_sweep(&mut newton, &model, &alphas, warm);
         let work = newton.work();
         println!(
             "paper_sweep41/{name}: {:.2} iterations, {:.2} factorizations, {:.2} CG-reused steps per alpha ({work:?})",
@@ -263,8 +261,8 @@ fn sweep(c: &mut Criterion) {
         );
     }
     for warm in [false, true] {
-        let mut pcg = PcgLcp::new(&structure, &taut, PcgLcpSettings::default());
-        let iterations = run_sweep(&mut pcg, &structure, &alphas, warm);
+        let mut pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default());
+        let iterations = run_sweep(&mut pcg, &model, &alphas, warm);
         println!(
             "paper_sweep41/pcg-lcp/{}: {:.2} iterations per alpha",
             if warm { "warm" } else { "cold" },
@@ -279,45 +277,45 @@ fn sweep(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| {
                 // A fresh solver per sweep: no factor carried over from the previous sample.
-                let mut newton = Newton::new(&structure, &taut, settings).expect("set-up");
-                run_sweep(&mut newton, &structure, &alphas, warm)
+                let mut newton = Newton::new(&model, &taut, settings).expect("set-up");
+                run_sweep(&mut newton, &model, &alphas, warm)
             })
         });
     }
     for (name, warm) in [("pcg-lcp/cold", false), ("pcg-lcp/warm", true)] {
         group.bench_function(name, |b| {
             b.iter(|| {
-                let mut pcg = PcgLcp::new(&structure, &taut, PcgLcpSettings::default());
-                run_sweep(&mut pcg, &structure, &alphas, warm)
+                let mut pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default());
+                run_sweep(&mut pcg, &model, &alphas, warm)
             })
         });
     }
     // The geometric models (docs/method.md §8) on the same sweep: `prestress` warm-started like
     // `newton/warm`; `large` along its load path (each α from the previous equilibrium).
-    for (name, model) in [
+    for (name, geometry) in [
         ("newton/prestress-warm", GeometricModel::Prestress),
         ("newton/large", GeometricModel::Large),
     ] {
-        let structure = paper_structure().with_model(model);
-        let taut = taut_stiffness(&structure);
-        let solve = |structure: &Structure, taut: &TautStiffness| -> (usize, String) {
-            if model == GeometricModel::Large {
-                let mut large = LargeNewton::new(structure, taut, NewtonSettings::default());
-                let iterations = run_sweep(&mut large, structure, &alphas, true);
+        let model = Model::new(paper_model().structure, geometry);
+        let taut = taut_stiffness(&model);
+        let solve = |model: &Model, taut: &TautStiffness| -> (usize, String) {
+            if geometry == GeometricModel::Large {
+                let mut large = LargeNewton::new(model, taut, NewtonSettings::default());
+                let iterations = run_sweep(&mut large, model, &alphas, true);
                 (iterations, format!("{:?}", large.work()))
             } else {
                 let mut newton =
-                    Newton::new(structure, taut, NewtonSettings::default()).expect("set-up");
-                let iterations = run_sweep(&mut newton, structure, &alphas, true);
+                    Newton::new(model, taut, NewtonSettings::default()).expect("set-up");
+                let iterations = run_sweep(&mut newton, model, &alphas, true);
                 (iterations, format!("{:?}", newton.work()))
             }
         };
-        let (iterations, work) = solve(&structure, &taut);
+        let (iterations, work) = solve(&model, &taut);
         println!(
             "paper_sweep41/{name}: {:.2} iterations per alpha ({work})",
             iterations as f64 / alphas.len() as f64
         );
-        group.bench_function(name, |b| b.iter(|| solve(&structure, &taut)));
+        group.bench_function(name, |b| b.iter(|| solve(&model, &taut)));
     }
     group.finish();
 }

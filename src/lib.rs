@@ -3,15 +3,17 @@
 //! Data flows one way, and each module only uses those before it:
 //!
 //! ```text
-//! host, linalg → structure → decomposition → solvers → results → output
-//!                       ↘                      ↓                  ↓
-//!                         case ──────────────────────────────→  app (sweep, bench, check)
+//! host, linalg → structure → model → decomposition → solvers → results → output
+//!                                ↘                       ↓                  ↓
+//!                                  case ────────────────────────────────→  app (sweep, bench, check)
 //! ```
 //!
 //! [`host`] reads what the machine lets this process use (its memory); [`linalg`] is sparse
 //! linear algebra knowing nothing of the domain; [`structure`] builds
-//! nodes, links and supports from a plain [`structure::GridSpec`]; [`decomposition`] cuts it
-//! into substructures and interfaces (and says what processes sharing them exchange);
+//! nodes, links and supports from a plain [`structure::GridSpec`]; [`model`] is a structure
+//! with the kinematics its members move by (the member law, `K_G`, the current geometry);
+//! [`decomposition`] cuts it into substructures and interfaces (and says what processes
+//! sharing them exchange);
 //! [`solvers`] holds the four
 //! solvers behind one [`solvers::Solver`] trait and one [`solvers::drive`]r; [`results`]
 //! checks and derives quantities from an answer; [`output`] writes files through one sink per
@@ -24,6 +26,7 @@ pub mod case;
 pub mod decomposition;
 pub mod host;
 pub mod linalg;
+pub mod model;
 pub mod output;
 pub mod results;
 pub mod solvers;

@@ -4,9 +4,10 @@
 pub mod uniqueness;
 
 use crate::linalg::{norm, smallest_eigenvalues};
-use crate::solvers::{relative_unbalance, Equilibrium, Solution, TautStiffness};
-use crate::structure::law::{self, CurrentGeometry};
-use crate::structure::{GeometricModel, GridRole, Structure};
+use crate::model::material::{tension, trial_tension};
+use crate::model::{geometric_force, geometric_force_on, relative_unbalance, MemberStates, Model};
+use crate::solvers::{Equilibrium, Solution, TautStiffness};
+use crate::structure::{GridRole, Structure};
 
 /// Every number of a solution is finite (displacements, tensions, stopping measure).
 pub fn is_finite(solution: &Solution) -> bool {
@@ -66,8 +67,9 @@ pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
 /// Whether `eq` is beyond the model: a model on the initial geometry (`linear`, `prestress`)
 /// whose answer moves a node by more than the structure's own size (the diagonal of its
 /// bounding box) has left its domain (a unit slip such as E in GPa, or a load far beyond it).
-pub fn beyond_model(s: &Structure, eq: &Equilibrium) -> bool {
-    s.model != crate::structure::GeometricModel::Large && max_deflection(s, eq) > s.size()
+pub fn beyond_model(model: &Model, eq: &Equilibrium) -> bool {
+    let s = &model.structure;
+    !model.updates_geometry() && max_deflection(s, eq) > s.size()
 }
 
 /// The small-perturbation model (docs/method.md §1: geometry not updated) is trusted while no
@@ -112,16 +114,17 @@ pub struct AnswerMeasures {
 }
 
 impl AnswerMeasures {
-    /// The measures of `eq` under `load` on the whole structure `s`.
-    pub fn of(s: &Structure, eq: &Equilibrium, load: &[f64]) -> AnswerMeasures {
+    /// The measures of `eq` under `load` on the whole model `model`.
+    pub fn of(model: &Model, eq: &Equilibrium, load: &[f64]) -> AnswerMeasures {
+        let s = &model.structure;
         AnswerMeasures {
             cables: s.n_cables(),
             max_tension: max_cable_tension(s, eq),
             max_deflection: max_deflection(s, eq),
-            equilibrium_residual: crate::solvers::displacement_residual(s, &eq.displacements, load),
+            equilibrium_residual: model.residual(&eq.displacements, load),
             slack_by_kind: slack_by_kind(s, eq),
             max_member_rotation: max_member_rotation(s, eq),
-            updates_geometry: s.model == GeometricModel::Large,
+            updates_geometry: model.updates_geometry(),
         }
     }
 
@@ -155,8 +158,8 @@ impl AnswerMeasures {
                     mine[2 + k] += 1.0;
                 }
             }
-            // τ(U) under the exact law, as `displacement_residual` takes it.
-            let t = law::tension(l, law::trial_tension(l, row.elongation(&eq.displacements)));
+            // τ(U) under the exact law, as `Model::residual` takes it.
+            let t = tension(l, trial_tension(l, row.elongation(&eq.displacements)));
             for (d, c) in row.iter() {
                 forces[d] += c * t;
                 magnitudes[d] += (c * t).abs();
@@ -201,21 +204,15 @@ impl AnswerMeasures {
 /// `g = K_G(τ) U` for `linear`, `K_G(τ − t0) U` for `prestress` (whose K_G(t0) is in), and K
 /// the model's stiffness with every cable taut (its factor is at hand). `None` for `large`
 /// (nothing is left out) and without displacements.
-pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> Option<f64> {
+pub fn geometric_term(model: &Model, eq: &Equilibrium, taut: &TautStiffness) -> Option<f64> {
     let size = norm(&eq.displacements);
-    if s.model == GeometricModel::Large || size.is_nan() || size <= 0.0 {
+    if model.updates_geometry() || size.is_nan() || size <= 0.0 {
         return None;
     }
-    let mut force = law::geometric_force(
+    let s = &model.structure;
+    let mut force = geometric_force(
         s,
-        |i| {
-            let l = &s.links[i];
-            let left_out = match s.model {
-                GeometricModel::Prestress => eq.tensions[i] - law::given_prestress(s, l),
-                _ => eq.tensions[i],
-            };
-            left_out / l.length
-        },
+        |i| model.tension_left_out(i, eq.tensions[i]) / s.links[i].length,
         &eq.displacements,
     );
     taut.factor.solve_in_place(&mut force);
@@ -228,22 +225,19 @@ pub fn geometric_term(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> 
 /// `Bᵀτ` on every component; with `prestress`, plus the prestress's geometric force
 /// `K_G(t0) U` as the solver has it (on the free displacements). At a free component it
 /// balances the load to the solve's residual; at a held one it is what the support takes.
-pub fn member_nodal_forces(
-    s: &Structure,
-    eq: &Equilibrium,
-    states: &law::MemberStates,
-) -> Vec<f64> {
+pub fn member_nodal_forces(model: &Model, eq: &Equilibrium, states: &MemberStates) -> Vec<f64> {
+    let s = &model.structure;
     let every: Vec<usize> = (0..3 * s.n_nodes()).collect();
     let mut f = vec![0.0; every.len()];
     for ((l, &t), &n) in s.links.iter().zip(&eq.tensions).zip(&states.directions) {
         l.row_along(n, &every).scatter(t, &mut f);
     }
-    if let (GeometricModel::Prestress, Some(g)) = (s.model, &s.geometric) {
+    if let Some(g) = model.prestress_stiffness() {
         // U on every component, the prescribed U_d included (K_G couples the free nodes to
         // a moved support).
         let u = s.full_displacements(&eq.displacements);
         let weights = g.weights();
-        let geometric = law::geometric_force_on(s, |i| weights[i], &u, &every, every.len());
+        let geometric = geometric_force_on(s, |i| weights[i], &u, &every, every.len());
         f.iter_mut().zip(&geometric).for_each(|(fi, gi)| *fi += gi);
     }
     f
@@ -265,12 +259,13 @@ pub struct Reaction {
 /// The reaction on every held component at load factor `alpha`, node by node, x, y, z: with
 /// the load, they balance the structure as a whole to the solve's residual (`Σ R + Σ F = 0`).
 pub fn reactions(
-    s: &Structure,
+    model: &Model,
     eq: &Equilibrium,
     alpha: f64,
-    states: &law::MemberStates,
+    states: &MemberStates,
 ) -> Vec<Reaction> {
-    let mut f = member_nodal_forces(s, eq, states);
+    let s = &model.structure;
+    let mut f = member_nodal_forces(model, eq, states);
     for &(global, load) in &s.held_load {
         f[global] -= alpha * load;
     }
@@ -344,31 +339,27 @@ pub fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
 /// 1e-10; beyond, one to 1e-4 in at most 10 inverse iterations.
 pub const EIGENVALUE_FULL_DOFS: usize = 20_000;
 
-/// Smallest eigenvalue (N/m) of the tangent stiffness at an equilibrium, under the structure's
-/// model (docs/method.md §3, §8): `Bᵀ k B` over the members that carry load there (bars,
+/// Smallest eigenvalue (N/m) of the tangent stiffness at an equilibrium, under the model
+/// (docs/method.md §3, §8): `Bᵀ k B` over the members that carry load there (bars,
 /// bilateral cables, taut unilateral cables), plus with `prestress` the geometric stiffness of
 /// the answer's tensions `K_G(τ)` (slack cables none), or the Hessian of the exact-length energy on the current geometry (`large`).
 /// 0 when the taut members form a mechanism; negative at an unstable equilibrium (below
 /// `−mean diagonal` it is reported as `−mean diagonal`).
-pub fn smallest_tangent_eigenvalue(s: &Structure, eq: &Equilibrium, taut: &TautStiffness) -> f64 {
+pub fn smallest_tangent_eigenvalue(model: &Model, eq: &Equilibrium, taut: &TautStiffness) -> f64 {
     let pattern = &taut.pattern;
     let mut values = vec![0.0; pattern.nnz()];
-    match s.model {
-        GeometricModel::Large => {
-            let current = CurrentGeometry::of(s, &eq.displacements);
-            let trial: Vec<f64> = current.trial_tensions(s);
-            current.assemble_tangent(s, &trial, pattern, &mut values);
-        }
-        // With `prestress`, the geometric stiffness of the answer's own tensions, K_G(τ): a
-        // slack cable carries no force, so no geometric stiffness, and a loaded member's
-        // changes with its force (docs/method.md §8). K_G(t0) judged a guyed mast whose
-        // leeward guys slackened unstable (−340 N/m) where its one-guy mechanism is neutral
-        // (0 N/m with `large`; issue 42, D6).
-        GeometricModel::Prestress => {
-            law::assemble_prestress_tangent(s, pattern, |i| !eq.slack[i], &eq.tensions, &mut values)
-        }
-        _ => law::assemble_tangent(s, pattern, |i| !eq.slack[i], &mut values),
-    }
+    // With `prestress`, the geometric stiffness of the answer's own tensions, K_G(τ): a slack
+    // cable carries no force, so no geometric stiffness, and a loaded member's changes with
+    // its force (docs/method.md §8). K_G(t0) judged a guyed mast whose leeward guys slackened
+    // unstable (−340 N/m) where its one-guy mechanism is neutral (0 N/m with `large`; issue
+    // 42, D6).
+    model.assemble_answer_tangent(
+        &eq.displacements,
+        &eq.tensions,
+        |i| !eq.slack[i],
+        pattern,
+        &mut values,
+    );
     let mut factor = taut.factor.share_symbolic();
     // Up to 20 000 free dofs, a block of 4 to 1e-10; beyond, where a solve costs 0.1–0.3 s,
     // a single vector to 1e-4 in at most 10 solves (the sign and two digits).
@@ -406,22 +397,38 @@ mod tests {
     /// round-off: the slack families, the largest tension and rotation follow each link.
     #[test]
     fn measures_over_shares_are_the_whole_structures() {
-        let s = Structure::grid(&GridSpec::default(), &LoadPattern::default());
-        let taut = TautStiffness::new(&s).unwrap();
-        let mut newton = Newton::new(&s, &taut, Default::default()).unwrap();
+        let model = Model::linear(Structure::grid(
+            &GridSpec::default(),
+            &LoadPattern::default(),
+        ));
+        let s = &model.structure;
+        let taut = TautStiffness::new(&model).unwrap();
+        let mut newton = Newton::new(&model, &taut, Default::default()).unwrap();
         let load: Vec<f64> = s.unit_load.iter().map(|f| 1.0 * f).collect();
         let eq = newton.solve(&load, None, &mut Silent).equilibrium;
-        let whole = AnswerMeasures::of(&s, &eq, &load);
+        let whole = AnswerMeasures::of(&model, &eq, &load);
         assert_eq!(whole.slack_by_kind.iter().sum::<usize>(), 408);
         let identity: Vec<usize> = (0..s.links.len()).collect();
-        let all = s.keeping_links(&identity).unwrap();
-        let one =
-            AnswerMeasures::over_shares(&all, &identity, s.n_cables(), &eq, &load, &OneProcess);
+        let all = model.keeping_links(&identity).unwrap();
+        let one = AnswerMeasures::over_shares(
+            &all.structure,
+            &identity,
+            s.n_cables(),
+            &eq,
+            &load,
+            &OneProcess,
+        );
         assert_eq!(one, whole);
         let reversed: Vec<usize> = identity.iter().rev().copied().collect();
-        let kept = s.keeping_links(&reversed).unwrap();
-        let other =
-            AnswerMeasures::over_shares(&kept, &reversed, s.n_cables(), &eq, &load, &OneProcess);
+        let kept = model.keeping_links(&reversed).unwrap();
+        let other = AnswerMeasures::over_shares(
+            &kept.structure,
+            &reversed,
+            s.n_cables(),
+            &eq,
+            &load,
+            &OneProcess,
+        );
         let close = (other.equilibrium_residual - whole.equilibrium_residual).abs()
             <= 1e-6 * whole.equilibrium_residual;
         assert!(

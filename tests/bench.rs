@@ -239,15 +239,16 @@ type CappedSolve<'a> = dyn Fn(usize, &mut dyn Observer) -> Solution + 'a;
 #[test]
 fn capped_solves_reproduce_the_iterates() {
     let case = case::parse(SMALL).unwrap();
-    let s = case.structure();
-    let taut = TautStiffness::new(&s).unwrap();
+    let model = case.model();
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
     let load: Vec<f64> = s.unit_load.clone();
     let newton = |max_iterations: usize, observer: &mut dyn Observer| {
         let settings = NewtonSettings {
             max_iterations,
             ..NewtonSettings::default()
         };
-        Newton::new(&s, &taut, settings)
+        Newton::new(&model, &taut, settings)
             .unwrap()
             .solve(&load, None, observer)
     };
@@ -256,7 +257,7 @@ fn capped_solves_reproduce_the_iterates() {
             max_iterations,
             ..PcgLcpSettings::default()
         };
-        PcgLcp::new(&s, &taut, settings).solve(&load, None, observer)
+        PcgLcp::new(&model, &taut, settings).solve(&load, None, observer)
     };
     let solvers: [(&str, &CappedSolve); 2] = [("newton", &newton), ("pcg-lcp", &pcg)];
     for (name, solve) in solvers {

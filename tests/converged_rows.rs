@@ -226,12 +226,9 @@ fn the_residual_of_a_state_without_any_force_is_zero() {
         "[grid]\nmodules = [2, 2]\n[prestress]\nlower_cable = 0\n[load]\nalpha = [0.0]\n",
     )
     .unwrap();
-    let s = case.structure();
-    let zero = vec![0.0; s.n_free];
-    assert_eq!(
-        tensolve::solvers::displacement_residual(&s, &zero, &zero),
-        0.0
-    );
+    let model = case.model();
+    let zero = vec![0.0; model.structure.n_free];
+    assert_eq!(model.residual(&zero, &zero), 0.0);
     let text = "[grid]\nmodules = [2, 2]\n[prestress]\nlower_cable = 0\n[load]\nalpha = [0.0]\n\
                 [solver]\nmethods = [\"newton\", \"pcg-lcp\", \"mono-latin\", \"micro-macro\"]\n\
                 subdomains = [2, 2]\n";

@@ -8,6 +8,7 @@ use nalgebra::DMatrix;
 use proptest::prelude::*;
 use tensolve::app::check::equilibrium_counts;
 use tensolve::case::{self, read_geometry};
+use tensolve::model::Model;
 use tensolve::solvers::latin::{Latin, LatinSettings};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
@@ -28,12 +29,12 @@ fn max_abs(a: &[f64]) -> f64 {
 fn paper_grid_as_tables_reproduces_the_grid() {
     let grid = case::load(&manifest_path("cases/paper.toml"))
         .unwrap()
-        .structure();
+        .model();
     let tables = case::load(&manifest_path("cases/paper-csv.toml"))
         .unwrap()
-        .structure();
-    assert!(tables.layout.is_none());
-    assert_eq!(tables.n_free, grid.n_free);
+        .model();
+    assert!(tables.structure.layout.is_none());
+    assert_eq!(tables.structure.n_free, grid.structure.n_free);
     for (alpha, slack) in [(1.0, 408), (0.5, 36)] {
         let (gn, gp) = solve_both(&grid, alpha);
         let (tn, tp) = solve_both(&tables, alpha);
@@ -78,18 +79,22 @@ fn held(nodes: &[usize], displacement: [f64; 3]) -> Vec<NodeFix> {
         .collect()
 }
 
+/// newton on `s` under the linear model.
 fn newton(s: &Structure, f: &[f64]) -> Solution {
-    let taut = TautStiffness::new(s).unwrap();
-    let sol = Newton::new(s, &taut, NewtonSettings::default())
+    let model = Model::linear(s.clone());
+    let taut = TautStiffness::new(&model).unwrap();
+    let sol = Newton::new(&model, &taut, NewtonSettings::default())
         .unwrap()
         .solve(f, None, &mut Silent);
     assert!(sol.info.status.converged(), "{:?}", sol.info);
     sol
 }
 
+/// pcg-lcp on `s` under the linear model.
 fn pcg(s: &Structure, f: &[f64]) -> Solution {
-    let taut = TautStiffness::new(s).unwrap();
-    let sol = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(f, None, &mut Silent);
+    let model = Model::linear(s.clone());
+    let taut = TautStiffness::new(&model).unwrap();
+    let sol = PcgLcp::new(&model, &taut, PcgLcpSettings::default()).solve(f, None, &mut Silent);
     assert!(sol.info.status.converged(), "{:?}", sol.info);
     sol
 }
@@ -528,6 +533,7 @@ fn four_solvers_agree_on_a_perturbed_general_structure() {
         s.n_cables()
     );
     let p = pcg(&s, &f);
+    let model = Model::linear(s.clone());
     let scale = max_abs(&reference.equilibrium.displacements);
     assert!(
         max_abs_diff(
@@ -540,7 +546,7 @@ fn four_solvers_agree_on_a_perturbed_general_structure() {
             subdomains,
             ..LatinSettings::default()
         };
-        let mut latin = Latin::new(&s, settings).unwrap();
+        let mut latin = Latin::new(&model, settings).unwrap();
         let sol = latin.solve(&f, None, &mut Silent);
         assert_latin_agrees(&sol, &reference, subdomains, 1e-5 * scale);
     }
@@ -576,13 +582,14 @@ fn latin_solvers_agree_with_newton_on_partial_supports_and_a_settlement() {
         s.n_cables()
     );
     let scale = max_abs(&reference.equilibrium.displacements);
+    let model = Model::linear(s.clone());
     for subdomains in [[1, 1], [2, 2], [3, 2]] {
         let settings = LatinSettings {
             subdomains,
             tolerance: 1e-9,
             ..LatinSettings::default()
         };
-        let mut latin = Latin::new(&s, settings).unwrap();
+        let mut latin = Latin::new(&model, settings).unwrap();
         if subdomains != [1, 1] {
             // The partition does cut through the partly held edge (held in z only): some
             // interface has a node with only its x and y rows.
@@ -815,6 +822,7 @@ fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlemen
     assert!(s.prescribed.iter().any(|&u| u == -0.003));
     let (f, reference) = five_percent_slack(&s);
     let scale = max_abs(&reference.equilibrium.displacements);
+    let model = Model::linear(s.clone());
     for subdomains in [[1, 1], [2, 2], [3, 3]] {
         let settings = LatinSettings {
             subdomains,
@@ -824,7 +832,7 @@ fn latin_partitions_down_to_one_module_agree_on_partial_supports_and_a_settlemen
             residual_tolerance: Some(1e-7),
             ..LatinSettings::default()
         };
-        let mut latin = Latin::new(&s, settings).unwrap();
+        let mut latin = Latin::new(&model, settings).unwrap();
         let sol = latin.solve(&f, None, &mut Silent);
         assert_latin_agrees(&sol, &reference, subdomains, 1e-6 * scale);
     }

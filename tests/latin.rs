@@ -10,24 +10,24 @@
 
 mod common;
 
-use common::{load, paper_structure, paper_text_with, temp_path};
+use common::{load, paper_model, paper_text_with, temp_path};
 use std::process::Command;
 use tensolve::decomposition::WeakInterfaces;
+use tensolve::model::Model;
 use tensolve::results::relative_difference;
 use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy};
 use tensolve::solvers::newton::Newton;
 use tensolve::solvers::{AnySolver, Reference, Silent, Solution, Solver, TautStiffness};
-use tensolve::structure::Structure;
 
 /// Interface search direction of the paper, N/m (set explicitly by `settings`).
 const DM: f64 = tensolve::solvers::latin::PAPER_DM;
 
 /// The exact solution (newton from U = 0, default settings) at `alpha`.
-fn newton(s: &Structure, alpha: f64) -> Solution {
+fn newton(s: &Model, alpha: f64) -> Solution {
     let taut = TautStiffness::new(s).expect("taut stiffness is regular");
     let sol = Newton::new(s, &taut, Default::default())
         .expect("newton set-up")
-        .solve(&load(s, alpha), None, &mut Silent);
+        .solve(&load(&s.structure, alpha), None, &mut Silent);
     assert!(sol.info.status.converged(), "newton: {:?}", sol.info);
     sol
 }
@@ -43,14 +43,14 @@ fn settings(subdomains: [usize; 2], weak: WeakInterfaces) -> LatinSettings {
 
 /// e after every linear stage from iteration 0 to `iterations` (init, then next_iter).
 fn error_history(
-    s: &Structure,
+    s: &Model,
     latin: &mut Latin<'_>,
     alpha: f64,
     reference: &Solution,
     iterations: usize,
 ) -> Vec<f64> {
     let reference = Reference::new(s, &reference.equilibrium.displacements);
-    let mut state = latin.init(&load(s, alpha));
+    let mut state = latin.init(&load(&s.structure, alpha));
     let mut history = vec![reference.error(&latin.elongations(&state))];
     while state.iteration < iterations {
         latin.next_iter(&mut state);
@@ -70,10 +70,10 @@ fn first_below(history: &[f64], threshold: f64) -> Option<usize> {
 
 #[test]
 fn micro_macro_rate_on_paper_case() {
-    let s = paper_structure(&[]);
-    let reference = newton(&s, 1.0);
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro).plain()).unwrap();
-    let h = error_history(&s, &mut latin, 1.0, &reference, 80);
+    let model = paper_model(&[]);
+    let reference = newton(&model, 1.0);
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro).plain()).unwrap();
+    let h = error_history(&model, &mut latin, 1.0, &reference, 80);
     let (at_2, at_3) = (first_below(&h, 1e-2), first_below(&h, 1e-3));
     println!(
         "micro-macro 4x4, alpha 1: e < 1e-2 at {at_2:?}, e < 1e-3 at {at_3:?}, e(80) = {:.3e}",
@@ -86,12 +86,12 @@ fn micro_macro_rate_on_paper_case() {
 
 #[test]
 fn mono_latin_rate_on_paper_case() {
-    let s = paper_structure(&[]);
-    let reference = newton(&s, 1.0);
-    let mut latin = Latin::new(&s, settings([1, 1], WeakInterfaces::Macro).plain()).unwrap();
+    let model = paper_model(&[]);
+    let reference = newton(&model, 1.0);
+    let mut latin = Latin::new(&model, settings([1, 1], WeakInterfaces::Macro).plain()).unwrap();
     assert_eq!(latin.report().interfaces, 0);
     assert_eq!(latin.report().substructures, 1);
-    let h = error_history(&s, &mut latin, 1.0, &reference, 15);
+    let h = error_history(&model, &mut latin, 1.0, &reference, 15);
     let at_2 = first_below(&h, 1e-2);
     println!(
         "mono-latin, alpha 1: e < 1e-2 at {at_2:?}, e(15) = {:.3e}",
@@ -103,11 +103,11 @@ fn mono_latin_rate_on_paper_case() {
 
 #[test]
 fn micro_macro_rate_at_small_load() {
-    let s = paper_structure(&[]);
-    let reference = newton(&s, 0.05);
+    let model = paper_model(&[]);
+    let reference = newton(&model, 0.05);
     assert_eq!(reference.equilibrium.slack_count(), 0);
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro).plain()).unwrap();
-    let h = error_history(&s, &mut latin, 0.05, &reference, 40);
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro).plain()).unwrap();
+    let h = error_history(&model, &mut latin, 0.05, &reference, 40);
     let at_4 = first_below(&h, 1e-4);
     println!(
         "micro-macro 4x4, alpha 0.05: e < 1e-2 at {:?}, 1e-3 at {:?}, 1e-4 at {at_4:?}",
@@ -123,10 +123,10 @@ fn micro_macro_rate_at_small_load() {
 
 #[test]
 fn micro_weak_interfaces_stall() {
-    let s = paper_structure(&[]);
-    let reference = newton(&s, 1.0);
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Micro).plain()).unwrap();
-    let h = error_history(&s, &mut latin, 1.0, &reference, 100);
+    let model = paper_model(&[]);
+    let reference = newton(&model, 1.0);
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Micro).plain()).unwrap();
+    let h = error_history(&model, &mut latin, 1.0, &reference, 100);
     println!("weak = micro, alpha 1: e(100) = {:.3e}", h[100]);
     // Measured: 0.806 (docs/method.md: ≈ 0.8).
     assert!(h[100] > 0.1, "e after 100 iterations = {:e}", h[100]);
@@ -136,10 +136,11 @@ fn micro_weak_interfaces_stall() {
 // 4. Tight tolerance: both LATIN solvers end on the exact solution.
 
 fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, budget: usize) {
-    let s = paper_structure(&[]);
-    let reference = newton(&s, alpha);
+    let model = paper_model(&[]);
+    let s = &model.structure;
+    let reference = newton(&model, alpha);
     let mut latin = Latin::new(
-        &s,
+        &model,
         LatinSettings {
             tolerance,
             max_iterations: budget,
@@ -149,8 +150,11 @@ fn assert_ends_on_newton(subdomains: [usize; 2], alpha: f64, tolerance: f64, bud
     .unwrap();
     let mut recorder = tensolve::solvers::Recorder::default();
     let sol = latin.solve(
-        &load(&s, alpha),
-        Some(&Reference::new(&s, &reference.equilibrium.displacements)),
+        &load(s, alpha),
+        Some(&Reference::new(
+            &model,
+            &reference.equilibrium.displacements,
+        )),
         &mut recorder,
     );
     let trace: Vec<(usize, f64, Option<f64>)> = recorder
@@ -216,8 +220,9 @@ fn mono_latin_ends_on_newton_at_tight_tolerance() {
 
 #[test]
 fn mono_latin_solves_linear_case_in_one_iteration() {
-    let s = paper_structure(&[("cables", "unilateral", false.into())]);
-    let reference = newton(&s, 1.0);
+    let model = paper_model(&[("cables", "unilateral", false.into())]);
+    let s = &model.structure;
+    let reference = newton(&model, 1.0);
     // The relaxed iteration measures η between s and the ŝ that fed it, so it knows after
     // iteration 1; the accelerated one (the default) measures η between s and local(s), so it
     // knows after the first linear stage (iteration 0). Inexact Newton status steps (the
@@ -231,7 +236,7 @@ fn mono_latin_solves_linear_case_in_one_iteration() {
         (default.anderson, default.policy, 0),
     ] {
         let mut latin = Latin::new(
-            &s,
+            &model,
             LatinSettings {
                 anderson,
                 policy,
@@ -239,7 +244,7 @@ fn mono_latin_solves_linear_case_in_one_iteration() {
             },
         )
         .unwrap();
-        let sol = latin.solve(&load(&s, 1.0), None, &mut Silent);
+        let sol = latin.solve(&load(s, 1.0), None, &mut Silent);
         let d = relative_difference(
             &sol.equilibrium.displacements,
             &reference.equilibrium.displacements,
@@ -269,10 +274,10 @@ fn uneven_partition_3x5_ends_on_newton() {
 
 #[test]
 fn one_module_per_substructure_ends_on_newton() {
-    let s = paper_structure(&[]);
+    let model = paper_model(&[]);
     // The kernels' dimensions on this partition are checked from B_E in the solver's own
     // tests (src/solvers/latin/tests.rs).
-    if let Err(err) = Latin::new(&s, settings([16, 16], WeakInterfaces::Macro)) {
+    if let Err(err) = Latin::new(&model, settings([16, 16], WeakInterfaces::Macro)) {
         panic!("[16, 16] set-up: {err:?}");
     }
     assert_ends_on_newton([16, 16], 0.5, 1e-8, 20000);

@@ -7,24 +7,22 @@
 
 mod common;
 
-use common::{load, paper_structure, solve_both};
+use common::{load, paper_model, solve_both};
+use tensolve::model::Model;
 use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy, StopOn};
-use tensolve::solvers::{
-    displacement_residual, AnySolver, IterationRecord, Recorder, Reference, Solution,
-};
-use tensolve::structure::Structure;
+use tensolve::solvers::{AnySolver, IterationRecord, Recorder, Reference, Solution};
 
-/// A LATIN solve of `s` at `alpha` against the newton solution `exact`, every iterate kept.
+/// A LATIN solve of `model` at `alpha` against the newton solution `exact`, every iterate kept.
 fn latin_solve(
-    s: &Structure,
+    model: &Model,
     settings: LatinSettings,
     alpha: f64,
     exact: &Solution,
 ) -> (Solution, Vec<IterationRecord>) {
-    let reference = Reference::new(s, &exact.equilibrium.displacements);
+    let reference = Reference::new(model, &exact.equilibrium.displacements);
     let mut records = Recorder::default();
-    let solution = Latin::new(s, settings).expect("set-up").solve(
-        &load(s, alpha),
+    let solution = Latin::new(model, settings).expect("set-up").solve(
+        &load(&model.structure, alpha),
         Some(&reference),
         &mut records,
     );
@@ -40,11 +38,11 @@ fn partition(subdomains: [usize; 2]) -> LatinSettings {
 
 #[test]
 fn braced_paper_case_converges_with_newtons_slack_set() {
-    let s = paper_structure(&[("grid", "module", "braced".into())]);
+    let model = paper_model(&[("grid", "module", "braced".into())]);
     for alpha in [0.05, 0.5, 1.0] {
-        let (exact, _) = solve_both(&s, alpha);
+        let (exact, _) = solve_both(&model, alpha);
         for subdomains in [[1, 1], [4, 4]] {
-            let (sol, records) = latin_solve(&s, partition(subdomains), alpha, &exact);
+            let (sol, records) = latin_solve(&model, partition(subdomains), alpha, &exact);
             let last = records.last().expect("iterates");
             let e = last.error.expect("a reference was given");
             println!(
@@ -76,15 +74,15 @@ fn braced_paper_case_converges_with_newtons_slack_set() {
 
 #[test]
 fn paper_case_micro_macro_eta_has_no_floor() {
-    let s = paper_structure(&[]);
-    let (exact, _) = solve_both(&s, 1.0);
+    let model = paper_model(&[]);
+    let (exact, _) = solve_both(&model, 1.0);
     let settings = LatinSettings {
         stop_on: StopOn::Eta,
         tolerance: 1e-14,
         max_iterations: 140,
         ..partition([4, 4])
     };
-    let (_, records) = latin_solve(&s, settings, 1.0, &exact);
+    let (_, records) = latin_solve(&model, settings, 1.0, &exact);
     let eta = |k: usize| records[k].stopping_value;
     let first = |f: &dyn Fn(&IterationRecord) -> bool| records.iter().position(f);
     let e_below = first(&|r| r.error.unwrap() < 1e-6);
@@ -113,11 +111,11 @@ fn converged_rows_are_accurate_on_a_24_by_10_grid() {
         ("grid", "modules", toml::Value::try_from([24, 10]).unwrap()),
         ("supports", "clamp", "lower-y-edges".into()),
     ]);
-    let s = tensolve::case::parse(&text).unwrap().structure();
-    let (exact, _) = solve_both(&s, 1.0);
+    let model = tensolve::case::parse(&text).unwrap().model();
+    let (exact, _) = solve_both(&model, 1.0);
     let tolerance = LatinSettings::default().tolerance;
     for subdomains in [[2, 2], [6, 2], [12, 5]] {
-        let (sol, records) = latin_solve(&s, partition(subdomains), 1.0, &exact);
+        let (sol, records) = latin_solve(&model, partition(subdomains), 1.0, &exact);
         let e = records.last().unwrap().error.unwrap();
         println!(
             "24x10 {subdomains:?}: {:?} in {} it, e {e:.1e}",
@@ -132,10 +130,11 @@ fn converged_rows_are_accurate_on_a_24_by_10_grid() {
 
 #[test]
 fn equilibrium_residual_is_one_measure_for_every_solver() {
-    let s = paper_structure(&[]);
-    let f = load(&s, 1.0);
-    let (newton, pcg) = solve_both(&s, 1.0);
-    let r = |sol: &Solution| displacement_residual(&s, &sol.equilibrium.displacements, &f);
+    let model = paper_model(&[]);
+    let s = &model.structure;
+    let f = load(s, 1.0);
+    let (newton, pcg) = solve_both(&model, 1.0);
+    let r = |sol: &Solution| model.residual(&sol.equilibrium.displacements, &f);
     let (r_newton, r_pcg) = (r(&newton), r(&pcg));
     println!("r(U): newton {r_newton:.1e}, pcg-lcp {r_pcg:.1e}");
     // newton's own stopping measure is r(U); pcg-lcp's answer meets it too (measured 1.1e-11).
@@ -152,7 +151,7 @@ fn equilibrium_residual_is_one_measure_for_every_solver() {
             max_iterations: 5000,
             ..partition(subdomains)
         };
-        let (sol, records) = latin_solve(&s, settings, 1.0, &newton);
+        let (sol, records) = latin_solve(&model, settings, 1.0, &newton);
         let reported = records.last().unwrap().equilibrium_residual.unwrap();
         let r_latin = r(&sol);
         println!(
@@ -169,15 +168,15 @@ fn equilibrium_residual_is_one_measure_for_every_solver() {
 
 #[test]
 fn plain_method_stays_reachable() {
-    let s = paper_structure(&[]);
-    let (exact, _) = solve_both(&s, 1.0);
+    let model = paper_model(&[]);
+    let (exact, _) = solve_both(&model, 1.0);
     let plain = partition([4, 4]).plain();
     assert_eq!(
         (plain.relaxation, plain.stop_on),
         (1.0, StopOn::Eta),
         "plain: no relaxation, stop on eta"
     );
-    let (sol, records) = latin_solve(&s, plain, 1.0, &exact);
+    let (sol, records) = latin_solve(&model, plain, 1.0, &exact);
     println!(
         "plain micro-macro: {:?} in {} it",
         sol.info.status, sol.info.iterations
@@ -200,8 +199,8 @@ fn homogenised_files_describe_every_macro_dof() {
     let o = common::tensolve(&["run", case.arg(), "--out", out.arg(), "--quiet"]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
     let parsed = tensolve::case::load(&case.0).unwrap();
-    let s = parsed.structure();
-    let latin = Latin::new(&s, parsed.solver.latin).unwrap();
+    let model = parsed.model();
+    let latin = Latin::new(&model, parsed.solver.latin).unwrap();
     let report = latin.report();
     // (interface, field) → (substructure, neighbour, centroid) as each side reports it.
     type Side = (usize, usize, String);
@@ -262,7 +261,7 @@ fn homogenised_files_describe_every_macro_dof() {
 }
 
 /// An n × n grid clamped on all its lower edges (the LATIN scaling series, docs/method.md §9).
-fn clamped_grid(n: usize, unilateral: bool) -> Structure {
+fn clamped_grid(n: usize, unilateral: bool) -> Model {
     let cables = if unilateral {
         ""
     } else {
@@ -272,7 +271,7 @@ fn clamped_grid(n: usize, unilateral: bool) -> Structure {
         "[grid]\nmodules = [{n}, {n}]\n[supports]\nclamp = \"lower-all-edges\"\n[load]\nalpha = [1.0]\n{cables}"
     ))
     .expect("case")
-    .structure()
+    .model()
 }
 
 #[test]
@@ -282,10 +281,10 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
     // policy before it: 56 / 60 iterations with 9 / 12 rebuilds.
     let mut counts = Vec::new();
     for (n, alpha) in [(16, 2.4), (32, 0.6)] {
-        let s = clamped_grid(n, true);
-        let (exact, _) = solve_both(&s, alpha);
+        let model = clamped_grid(n, true);
+        let (exact, _) = solve_both(&model, alpha);
         let parts = [n / 4, n / 4];
-        let (sol, records) = latin_solve(&s, partition(parts), alpha, &exact);
+        let (sol, records) = latin_solve(&model, partition(parts), alpha, &exact);
         let e = records.last().and_then(|r| r.error).expect("error");
         println!(
             "{n} x {n}: {:?} in {} it, {} rebuilds, e = {e:e}",
@@ -307,7 +306,7 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
             policy: SearchPolicy::Status,
             ..partition(parts)
         };
-        let (old, _) = latin_solve(&s, status, alpha, &exact);
+        let (old, _) = latin_solve(&model, status, alpha, &exact);
         assert!(
             old.info.rebuilds >= 2 * sol.info.rebuilds,
             "{n}: status-following {} rebuilds, inexact Newton {}",
@@ -326,9 +325,9 @@ fn inexact_newton_steps_stay_flat_with_few_rebuilds() {
 #[test]
 fn inexact_newton_steps_on_a_bilateral_grid_never_rebuild() {
     // Without unilateral cables the law is linear: the first inner run is the whole solve.
-    let s = clamped_grid(16, false);
-    let (exact, _) = solve_both(&s, 2.4);
-    let (sol, _) = latin_solve(&s, partition([4, 4]), 2.4, &exact);
+    let model = clamped_grid(16, false);
+    let (exact, _) = solve_both(&model, 2.4);
+    let (sol, _) = latin_solve(&model, partition([4, 4]), 2.4, &exact);
     assert!(sol.info.status.converged(), "{:?}", sol.info);
     assert_eq!(sol.info.rebuilds, 0);
     assert_eq!(sol.equilibrium.slack_count(), 0);
@@ -341,9 +340,9 @@ fn larger_substructures_with_a_richer_macro_basis_need_fewer_iterations() {
     // rebuilds; the bilateral case 44; degree 1 (the paper's nine fields, with its d_m) 124;
     // 64 substructures of 4 × 4 modules (degree 1) 76.
     let (n, alpha) = (32, 0.6);
-    let s = clamped_grid(n, true);
-    let (exact, _) = solve_both(&s, alpha);
-    let (sol, records) = latin_solve(&s, partition([2, 2]), alpha, &exact);
+    let model = clamped_grid(n, true);
+    let (exact, _) = solve_both(&model, alpha);
+    let (sol, records) = latin_solve(&model, partition([2, 2]), alpha, &exact);
     let e = records.last().and_then(|r| r.error).expect("error");
     let iterations = sol.info.iterations;
     println!(
@@ -369,7 +368,7 @@ fn larger_substructures_with_a_richer_macro_basis_need_fewer_iterations() {
         macro_degree: Some(1),
         ..partition([2, 2])
     };
-    let (paper_basis, _) = latin_solve(&s, first_order, alpha, &exact);
+    let (paper_basis, _) = latin_solve(&model, first_order, alpha, &exact);
     assert!(
         paper_basis.info.status.converged(),
         "{:?}",
@@ -381,7 +380,7 @@ fn larger_substructures_with_a_richer_macro_basis_need_fewer_iterations() {
         paper_basis.info.iterations
     );
     // And so do 16 times as many substructures of 4 × 4 modules.
-    let (small, _) = latin_solve(&s, partition([8, 8]), alpha, &exact);
+    let (small, _) = latin_solve(&model, partition([8, 8]), alpha, &exact);
     assert!(small.info.status.converged(), "{:?}", small.info);
     assert!(
         iterations < small.info.iterations,
@@ -400,13 +399,13 @@ fn larger_substructures_with_a_richer_macro_basis_need_fewer_iterations() {
 fn soft_interface_modes_cut_the_iterations_and_keep_the_answer() {
     use tensolve::solvers::newton::{Newton, NewtonSettings};
     use tensolve::solvers::{Silent, TautStiffness};
-    let s = paper_structure(&[
+    let model = paper_model(&[
         ("grid", "modules", toml::Value::try_from([64, 64]).unwrap()),
         ("supports", "clamp", toml::Value::from("lower-all-edges")),
     ]);
-    let f = load(&s, 0.15);
-    let taut = TautStiffness::new(&s).expect("taut stiffness is regular");
-    let newton = Newton::new(&s, &taut, NewtonSettings::default())
+    let f = load(&model.structure, 0.15);
+    let taut = TautStiffness::new(&model).expect("taut stiffness is regular");
+    let newton = Newton::new(&model, &taut, NewtonSettings::default())
         .expect("newton set-up")
         .solve(&f, None, &mut Silent);
     let slack = |sol: &Solution| sol.equilibrium.slack.clone();
@@ -421,7 +420,7 @@ fn soft_interface_modes_cut_the_iterations_and_keep_the_answer() {
             soft_modes: theta,
             ..partition([4, 4])
         };
-        let mut latin = Latin::new(&s, settings).expect("set-up");
+        let mut latin = Latin::new(&model, settings).expect("set-up");
         let macro_dofs = latin.report().macro_dofs;
         let solution = latin.solve(&f, None, &mut Recorder::default());
         assert!(

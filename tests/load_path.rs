@@ -291,22 +291,22 @@ fn bracket_loss_of_equilibrium_is_a_limit_point_naming_the_cables() {
     );
 }
 
-/// The path check's slope `Σ τ ∇ℓ·d` (`law::internal_slope`, no gradient assembled) is
+/// The path check's slope `Σ τ ∇ℓ·d` (`Model::internal_slope`, no gradient assembled) is
 /// `∇Π(U)·d + F·d` with the assembled gradient, on the tower displaced far enough that
 /// cables are slack, along a direction that moves every free dof.
 #[test]
 fn internal_slope_is_the_gradient_along_d() {
+    use tensolve::model::{CurrentGeometry, GeometricModel};
     use tensolve::solvers::newton::{LargeNewton, NewtonSettings};
-    use tensolve::solvers::{current_unbalances, drive, Silent, TautStiffness};
-    use tensolve::structure::law::{internal_slope, CurrentGeometry};
-    use tensolve::structure::GeometricModel;
+    use tensolve::solvers::{drive, Silent, TautStiffness};
     let mut case = tensolve::case::load(&manifest_path("cases/tower.toml")).unwrap();
     case.model = GeometricModel::Large;
-    let s = case.structure();
-    let taut = TautStiffness::new(&s).unwrap();
+    let model = case.model();
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
     let load: Vec<f64> = s.unit_load.clone();
     let answer = drive(
-        &mut LargeNewton::new(&s, &taut, NewtonSettings::default()),
+        &mut LargeNewton::new(&model, &taut, NewtonSettings::default()),
         &load,
         None,
         &mut Silent,
@@ -319,10 +319,10 @@ fn internal_slope_is_the_gradient_along_d() {
         .collect();
     let d: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
     let mut gradient = vec![0.0; s.n_free];
-    current_unbalances(&s, &CurrentGeometry::of(&s, &u), &load, &mut gradient);
+    CurrentGeometry::of(s, &u).unbalances(s, &load, &mut gradient);
     let assembled: f64 = gradient.iter().zip(&d).map(|(g, d)| g * d).sum::<f64>()
         + load.iter().zip(&d).map(|(f, d)| f * d).sum::<f64>();
-    let lean = internal_slope(&s, &u, &d);
+    let lean = model.internal_slope(&u, &d);
     assert!(
         (lean - assembled).abs() <= 1e-10 * lean.abs().max(1.0),
         "{lean} against {assembled}"

@@ -61,24 +61,25 @@ proptest! {
     ) {
         let module = if braced { "braced" } else { "standard" };
         let case = case::parse(&case_text(nx, ny, CLAMPS[clamp], [fx, fy, fz], module)).unwrap();
-        let s = case.structure();
-        let taut = match TautStiffness::new(&s) {
+        let model = case.model();
+        let s = &model.structure;
+        let taut = match TautStiffness::new(&model) {
             Err(SetupError::Mechanism { zero_modes, .. }) => {
                 // Refused: K must really have that many zero modes (dense check, independent).
-                prop_assert_eq!(zero_modes, dense_zero_modes(&s));
+                prop_assert_eq!(zero_modes, dense_zero_modes(s));
                 return Ok(());
             }
             Err(other) => panic!("unexpected set-up error {other}"),
             Ok(t) => t,
         };
         let f = s.unit_load.clone();
-        let newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap().solve(&f, None, &mut Silent);
-        let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
+        let newton = Newton::new(&model, &taut, NewtonSettings::default()).unwrap().solve(&f, None, &mut Silent);
+        let pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
         let subdomains = [1 + sx_seed % nx, 1 + sy_seed % ny];
         let latin = |subdomains| {
             // η has a floor near 1e-10 on some small partitions (3e-10 on 4 x 3 in 2 x 2): ask 1e-8.
             let settings = LatinSettings { subdomains, tolerance: 1e-8, max_iterations: 5_000, ..LatinSettings::default() };
-            Latin::new(&s, settings).unwrap().solve(&f, None, &mut Silent)
+            Latin::new(&model, settings).unwrap().solve(&f, None, &mut Silent)
         };
         let solutions = [newton, pcg, latin([1, 1]), latin(subdomains)];
         let reference = solutions[0].equilibrium.displacements.clone();
@@ -98,8 +99,8 @@ proptest! {
             } else {
                 (1e-6, 1e-6, 1e-6)
             };
-            prop_assert!(constitutive_residual(&s, eq) < law, "solver {k}: law");
-            prop_assert!(equilibrium_residual(&s, eq, &f) < balance, "solver {k}: equilibrium");
+            prop_assert!(constitutive_residual(s, eq) < law, "solver {k}: law");
+            prop_assert!(equilibrium_residual(s, eq, &f) < balance, "solver {k}: equilibrium");
             let d = relative_difference(&eq.displacements, &reference);
             prop_assert!(d < agreement || reference.iter().all(|&u| u == 0.0), "solver {k}: |dU|/|U| = {d:e}");
         }

@@ -6,6 +6,7 @@ mod common;
 
 use common::{load, paper_with};
 use tensolve::case::{self, Case};
+use tensolve::model::Model;
 use tensolve::results::{constitutive_residual, equilibrium_residual, relative_difference};
 use tensolve::solvers::latin::{Latin, LatinSettings};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
@@ -34,28 +35,28 @@ fn all_finite(sol: &Solution) -> bool {
 
 /// newton and pcg-lcp (defaults), mono-latin and micro-macro (`latin_tolerance`), in order.
 fn solve_all(
-    s: &Structure,
+    model: &Model,
     alpha: f64,
     subdomains: [usize; 2],
     latin_tolerance: f64,
 ) -> [Solution; 4] {
-    solve_all_with(s, alpha, subdomains, latin_tolerance, None)
+    solve_all_with(model, alpha, subdomains, latin_tolerance, None)
 }
 
 /// As [`solve_all`], with the LATIN residual tolerance given (default: the settings').
 fn solve_all_with(
-    s: &Structure,
+    model: &Model,
     alpha: f64,
     subdomains: [usize; 2],
     latin_tolerance: f64,
     residual_tolerance: Option<f64>,
 ) -> [Solution; 4] {
-    let taut = TautStiffness::new(s).expect("not a mechanism");
-    let f = load(s, alpha);
-    let newton = Newton::new(s, &taut, NewtonSettings::default())
+    let taut = TautStiffness::new(model).expect("not a mechanism");
+    let f = load(&model.structure, alpha);
+    let newton = Newton::new(model, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
+    let pcg = PcgLcp::new(model, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     let latin = |subdomains| {
         let settings = LatinSettings {
             subdomains,
@@ -64,7 +65,7 @@ fn solve_all_with(
             max_iterations: 50_000,
             ..LatinSettings::default()
         };
-        Latin::new(s, settings)
+        Latin::new(model, settings)
             .unwrap()
             .solve(&f, None, &mut Silent)
     };
@@ -101,13 +102,14 @@ fn assert_agree(s: &Structure, alpha: f64, solutions: &[Solution; 4], latin_agre
 
 #[test]
 fn paper_case_far_beyond_its_load() {
-    let s = (paper_with(&[])).structure();
-    let taut = TautStiffness::new(&s).unwrap();
-    let f = load(&s, 3.0);
-    let newton = Newton::new(&s, &taut, NewtonSettings::default())
+    let model = (paper_with(&[])).model();
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
+    let f = load(s, 3.0);
+    let newton = Newton::new(&model, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
+    let pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     for sol in [&newton, &pcg] {
         assert!(sol.info.status.converged() && all_finite(sol));
         assert_eq!(sol.equilibrium.slack_count(), 846); // docs/method.md §2
@@ -122,7 +124,7 @@ fn paper_case_far_beyond_its_load() {
     );
     // micro-macro is slow here: capped, it must say so plainly and stay finite.
     let capped = Latin::new(
-        &s,
+        &model,
         LatinSettings {
             max_iterations: 50,
             ..LatinSettings::default()
@@ -138,13 +140,14 @@ fn paper_case_far_beyond_its_load() {
 #[test]
 fn grid_32_with_x_edges_at_alpha_0_3() {
     // A general truss code's one-step Newton fails here (docs/method.md §2); ours must not.
-    let s = (grid_case([32, 32], "lower-x-edges", "")).structure();
-    let taut = TautStiffness::new(&s).unwrap();
-    let f = load(&s, 0.3);
-    let newton = Newton::new(&s, &taut, NewtonSettings::default())
+    let model = (grid_case([32, 32], "lower-x-edges", "")).model();
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
+    let f = load(s, 0.3);
+    let newton = Newton::new(&model, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&f, None, &mut Silent);
-    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
+    let pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default()).solve(&f, None, &mut Silent);
     assert!(newton.info.status.converged() && newton.info.stopping_value <= 1e-10);
     assert!(pcg.info.status.converged());
     assert_eq!(newton.equilibrium.slack, pcg.equilibrium.slack);
@@ -158,7 +161,7 @@ fn grid_32_with_x_edges_at_alpha_0_3() {
 }
 
 fn zero_modes(case: &Case) -> Option<usize> {
-    match TautStiffness::new(&case.structure()) {
+    match TautStiffness::new(&case.model()) {
         Ok(_) => None,
         Err(SetupError::Mechanism { zero_modes, .. }) => Some(zero_modes),
         Err(other) => panic!("unexpected {other}"),
@@ -176,15 +179,17 @@ fn mechanisms_are_refused_with_their_mode_count() {
     // The same strip clamped along its long edges is fine, and solves.
     let strip = grid_case([1, 8], "lower-x-edges", "");
     assert_eq!(zero_modes(&strip), None);
-    let s = strip.structure();
-    let solutions = solve_all(&s, 1.0, [1, 4], 1e-10);
-    assert_agree(&s, 1.0, &solutions, 1e-6);
+    let model = strip.model();
+    let s = &model.structure;
+    let solutions = solve_all(&model, 1.0, [1, 4], 1e-10);
+    assert_agree(s, 1.0, &solutions, 1e-6);
 }
 
 #[test]
 fn zero_load_leaves_everything_in_place() {
-    let s = (grid_case([4, 4], "lower-x-edges", "")).structure();
-    for sol in solve_all(&s, 0.0, [2, 2], 1e-10) {
+    let model = (grid_case([4, 4], "lower-x-edges", "")).model();
+    let s = &model.structure;
+    for sol in solve_all(&model, 0.0, [2, 2], 1e-10) {
         assert!(sol.info.status.converged());
         assert!(sol
             .equilibrium
@@ -235,12 +240,13 @@ fn degenerate_but_valid_cases_solve_and_agree() {
         ),
     ];
     for (name, case, subdomains) in cases {
-        let s = case.structure();
+        let model = case.model();
+        let s = &model.structure;
         // With cables 100 times stiffer than bars, micro-macro's iterates settle at r(U) of
         // 0.9e-9 to 1.5e-9 depending on d_m (round-off; newton's own floor is 1e-10 lower): its
         // default residual tolerance of 1e-9 sits on that floor, so this case asks for 3e-9.
         let residual_tolerance = name.starts_with("stiff cables").then_some(3e-9);
-        let solutions = solve_all_with(&s, 1.0, subdomains, 1e-10, residual_tolerance);
+        let solutions = solve_all_with(&model, 1.0, subdomains, 1e-10, residual_tolerance);
         println!(
             "{name}: slack {} newton it {} latin it {} / {}",
             solutions[0].equilibrium.slack_count(),
@@ -248,7 +254,7 @@ fn degenerate_but_valid_cases_solve_and_agree() {
             solutions[2].info.iterations,
             solutions[3].info.iterations
         );
-        assert_agree(&s, 1.0, &solutions, 1e-6);
+        assert_agree(s, 1.0, &solutions, 1e-6);
     }
 }
 
@@ -256,12 +262,14 @@ fn degenerate_but_valid_cases_solve_and_agree() {
 fn smallest_tangent_eigenvalues_match_spec() {
     // docs/method.md §2: K ≈ 463 N/m; with the 408 slack cables of α = 1 removed ≈ 164 N/m; α = 3
     // (846 slack) ≈ 143 N/m.
-    let s = (paper_with(&[])).structure();
-    let taut = TautStiffness::new(&s).unwrap();
-    let mut newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
+    let model = (paper_with(&[])).model();
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
+    let mut newton = Newton::new(&model, &taut, NewtonSettings::default()).unwrap();
     for (alpha, expected) in [(0.05, 463.0), (1.0, 164.0), (3.0, 143.0)] {
-        let sol = newton.solve(&load(&s, alpha), None, &mut Silent);
-        let lambda = tensolve::results::smallest_tangent_eigenvalue(&s, &sol.equilibrium, &taut);
+        let sol = newton.solve(&load(s, alpha), None, &mut Silent);
+        let lambda =
+            tensolve::results::smallest_tangent_eigenvalue(&model, &sol.equilibrium, &taut);
         println!("alpha {alpha}: smallest tangent eigenvalue {lambda:.2} N/m");
         assert!(
             (lambda - expected).abs() < 0.01 * expected,
@@ -273,8 +281,9 @@ fn smallest_tangent_eigenvalues_match_spec() {
 #[test]
 fn bilateral_cables_run_no_complementarity_iterations() {
     // Only what the case calls for: with every cable bilateral the problem is linear.
-    let s = (grid_case([4, 4], "lower-x-edges", "[cables]\nunilateral = false\n")).structure();
-    let [newton, pcg, mono, _] = solve_all(&s, 1.0, [2, 2], 1e-10);
+    let model = (grid_case([4, 4], "lower-x-edges", "[cables]\nunilateral = false\n")).model();
+    let s = &model.structure;
+    let [newton, pcg, mono, _] = solve_all(&model, 1.0, [2, 2], 1e-10);
     assert_eq!(newton.info.iterations, 1, "one linear solve");
     assert_eq!(pcg.info.iterations, 0, "no LCP unknowns");
     // Accelerated (the default), η compares s with local(s): exact after the first linear stage.

@@ -3,15 +3,15 @@
 
 mod common;
 
-use common::{max_law_violation, paper_structure, solve_both};
+use common::{max_law_violation, paper_model, solve_both};
 use tensolve::case;
 use tensolve::results::{constitutive_residual, equilibrium_residual, relative_difference};
 use tensolve::solvers::{SetupError, Solution, TautStiffness};
 use tensolve::structure::Structure;
 
 fn slack_counts(alpha: f64) -> (usize, usize) {
-    let s = paper_structure(&[]);
-    let (newton, pcg) = solve_both(&s, alpha);
+    let model = paper_model(&[]);
+    let (newton, pcg) = solve_both(&model, alpha);
     (
         newton.equilibrium.slack_count(),
         pcg.equilibrium.slack_count(),
@@ -43,10 +43,11 @@ fn assert_agree(s: &Structure, newton: &Solution, pcg: &Solution, what: &str) {
 
 #[test]
 fn solvers_agree_on_paper_case() {
-    let s = paper_structure(&[]);
+    let model = paper_model(&[]);
+    let s = &model.structure;
     for alpha in [0.5, 1.0] {
-        let (newton, pcg) = solve_both(&s, alpha);
-        assert_agree(&s, &newton, &pcg, &format!("alpha {alpha}"));
+        let (newton, pcg) = solve_both(&model, alpha);
+        assert_agree(s, &newton, &pcg, &format!("alpha {alpha}"));
     }
 }
 
@@ -77,22 +78,24 @@ fn assert_physical(s: &Structure, sol: &Solution, alpha: f64, what: &str) {
 
 #[test]
 fn solutions_satisfy_equilibrium_and_cable_law() {
-    let s = paper_structure(&[]);
+    let model = paper_model(&[]);
+    let s = &model.structure;
     for alpha in [0.05, 0.5, 1.0] {
-        let (newton, pcg) = solve_both(&s, alpha);
-        assert_physical(&s, &newton, alpha, &format!("newton alpha {alpha}"));
-        assert_physical(&s, &pcg, alpha, &format!("pcg-lcp alpha {alpha}"));
+        let (newton, pcg) = solve_both(&model, alpha);
+        assert_physical(s, &newton, alpha, &format!("newton alpha {alpha}"));
+        assert_physical(s, &pcg, alpha, &format!("pcg-lcp alpha {alpha}"));
     }
 }
 
 /// `results::constitutive_residual` itself, on solutions with and without slack cables.
 #[test]
 fn constitutive_residual_is_small_on_solutions() {
-    let s = paper_structure(&[]);
+    let model = paper_model(&[]);
+    let s = &model.structure;
     for alpha in [0.05, 0.5, 1.0] {
-        let (newton, pcg) = solve_both(&s, alpha);
+        let (newton, pcg) = solve_both(&model, alpha);
         for (name, sol) in [("newton", &newton), ("pcg-lcp", &pcg)] {
-            let r = constitutive_residual(&s, &sol.equilibrium);
+            let r = constitutive_residual(s, &sol.equilibrium);
             assert!(
                 r < 1e-8,
                 "{name} alpha {alpha}: constitutive_residual = {r:e}"
@@ -104,27 +107,29 @@ fn constitutive_residual_is_small_on_solutions() {
 /// The residual must see a violation: a taut cable whose tension is off by 1 % of p.
 #[test]
 fn constitutive_residual_detects_a_wrong_tension() {
-    let s = paper_structure(&[]);
-    let (mut newton, _) = solve_both(&s, 0.05);
+    let model = paper_model(&[]);
+    let s = &model.structure;
+    let (mut newton, _) = solve_both(&model, 0.05);
     newton.equilibrium.tensions[0] += 0.01 * common::P;
-    assert!(constitutive_residual(&s, &newton.equilibrium) > 1e-6);
-    assert!(max_law_violation(&s, &newton) > 1e-3);
+    assert!(constitutive_residual(s, &newton.equilibrium) > 1e-6);
+    assert!(max_law_violation(s, &newton) > 1e-3);
 }
 
 #[test]
 fn linear_case_has_no_slack_cable() {
-    let s = paper_structure(&[("cables", "unilateral", false.into())]);
+    let model = paper_model(&[("cables", "unilateral", false.into())]);
+    let s = &model.structure;
     assert!(s.links.iter().all(|l| !l.unilateral));
     // At α = 3 the unilateral model slackens 846 cables (docs/method.md §2): here they take compression.
     for alpha in [1.0, 3.0] {
-        let (newton, pcg) = solve_both(&s, alpha);
+        let (newton, pcg) = solve_both(&model, alpha);
         assert_eq!(newton.equilibrium.slack_count(), 0);
         assert_eq!(pcg.equilibrium.slack_count(), 0);
-        assert_agree(&s, &newton, &pcg, &format!("linear alpha {alpha}"));
-        assert_physical(&s, &newton, alpha, "linear newton");
-        assert_physical(&s, &pcg, alpha, "linear pcg-lcp");
+        assert_agree(s, &newton, &pcg, &format!("linear alpha {alpha}"));
+        assert_physical(s, &newton, alpha, "linear newton");
+        assert_physical(s, &pcg, alpha, "linear pcg-lcp");
     }
-    let (newton, _) = solve_both(&s, 3.0);
+    let (newton, _) = solve_both(&model, 3.0);
     let compressed = s
         .links
         .iter()
@@ -148,8 +153,8 @@ fn case_text(modules: [usize; 2], module: &str, clamp: &str) -> String {
 /// The zero-stiffness modes `TautStiffness::new` reports; panics if it accepts the structure.
 fn zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
     let text = case_text(modules, module, clamp);
-    let s = (case::parse(&text).expect("valid case")).structure();
-    match TautStiffness::new(&s) {
+    let model = (case::parse(&text).expect("valid case")).model();
+    match TautStiffness::new(&model) {
         Err(SetupError::Mechanism { zero_modes, .. }) => zero_modes,
         Err(other) => panic!("not refused as a mechanism: {other}"),
         Ok(_) => panic!("a mechanism was accepted:\n{text}"),
@@ -158,9 +163,10 @@ fn zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
 
 /// Nullity of K = Bᵀ k B by a dense eigen-decomposition (small grids only), with a clear gap.
 fn dense_zero_modes(modules: [usize; 2], module: &str, clamp: &str) -> usize {
-    let s = (case::parse(&case_text(modules, module, clamp)).unwrap()).structure();
+    let model = (case::parse(&case_text(modules, module, clamp)).unwrap()).model();
+    let s = &model.structure;
     let n = s.n_free;
-    let k = common::dense_stiffness(&s);
+    let k = common::dense_stiffness(s);
     let mut ev: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
     ev.sort_by(f64::total_cmp);
     let max = ev[n - 1];
@@ -187,8 +193,11 @@ fn mechanism_count_matches_dense_eigenvalues() {
         let what = format!("{modules:?} {module} clamp = {clamp}");
         if dense == 0 {
             let text = case_text(modules, module, clamp);
-            let s = (case::parse(&text).unwrap()).structure();
-            assert!(TautStiffness::new(&s).is_ok(), "{what}: regular K refused");
+            let model = (case::parse(&text).unwrap()).model();
+            assert!(
+                TautStiffness::new(&model).is_ok(),
+                "{what}: regular K refused"
+            );
         } else {
             assert_eq!(zero_modes(modules, module, clamp), dense, "{what}");
         }
@@ -216,8 +225,8 @@ fn single_module_on_its_corners_has_one_mode() {
 
 #[test]
 fn supported_paper_grid_is_not_a_mechanism() {
-    let s = paper_structure(&[]);
-    assert!(TautStiffness::new(&s).is_ok());
+    let model = paper_model(&[]);
+    assert!(TautStiffness::new(&model).is_ok());
 }
 
 /// A run that never solves with K's factor releases it (`Prepared::release_taut`); a solver

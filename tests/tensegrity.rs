@@ -8,10 +8,9 @@ mod common;
 use common::{csv_rows, manifest_path, stderr, tensolve, Temp};
 use std::path::Path;
 use std::process::Command;
+use tensolve::model::{CurrentGeometry, GeometricModel, Model};
 use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
-use tensolve::solvers::{current_unbalances, drive, Silent, Solution, Status, TautStiffness};
-use tensolve::structure::law::CurrentGeometry;
-use tensolve::structure::{GeometricModel, Structure};
+use tensolve::solvers::{drive, Silent, Solution, Status, TautStiffness};
 
 const SHIPPED: [&str; 4] = ["simplex", "prism4", "tower", "saddle-net"];
 
@@ -103,15 +102,15 @@ fn known_answers_of_the_shipped_cases() {
     assert!((deflection - 0.055611).abs() < 1e-6, "{deflection}");
 }
 
-fn structure_of(name: &str, model: GeometricModel) -> Structure {
+fn model_of(name: &str, model: GeometricModel) -> Model {
     let mut case = tensolve::case::load(&manifest_path(&format!("cases/{name}.toml"))).unwrap();
     case.model = model;
-    case.structure()
+    case.model()
 }
 
-fn solve(s: &Structure, taut: &TautStiffness, alpha: f64) -> Solution {
-    let load: Vec<f64> = s.unit_load.iter().map(|f| alpha * f).collect();
-    match s.model {
+fn solve(s: &Model, taut: &TautStiffness, alpha: f64) -> Solution {
+    let load: Vec<f64> = s.structure.unit_load.iter().map(|f| alpha * f).collect();
+    match s.geometry() {
         GeometricModel::Large => drive(
             &mut LargeNewton::new(s, taut, NewtonSettings::default()),
             &load,
@@ -134,8 +133,8 @@ fn solve(s: &Structure, taut: &TautStiffness, alpha: f64) -> Solution {
 fn prestress_and_large_agree_to_first_order() {
     for name in ["simplex", "saddle-net"] {
         let (linear, large) = (
-            structure_of(name, GeometricModel::Prestress),
-            structure_of(name, GeometricModel::Large),
+            model_of(name, GeometricModel::Prestress),
+            model_of(name, GeometricModel::Large),
         );
         let (taut_linear, taut_large) = (
             TautStiffness::new(&linear).unwrap(),
@@ -172,24 +171,25 @@ fn prestress_and_large_agree_to_first_order() {
 /// difference of `∇Π` along v, on the tower at a displaced state with slack cables.
 #[test]
 fn large_tangent_is_the_gradients_derivative() {
-    let s = structure_of("tower", GeometricModel::Large);
-    let taut = TautStiffness::new(&s).unwrap();
-    let answer = solve(&s, &taut, 1.0);
+    let model = model_of("tower", GeometricModel::Large);
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
+    let answer = solve(&model, &taut, 1.0);
     let u = answer.equilibrium.displacements;
     let load = vec![0.0; s.n_free];
     let gradient = |u: &[f64]| {
         let mut g = vec![0.0; s.n_free];
-        current_unbalances(&s, &CurrentGeometry::of(&s, u), &load, &mut g);
+        CurrentGeometry::of(s, u).unbalances(s, &load, &mut g);
         g
     };
-    let current = CurrentGeometry::of(&s, &u);
-    let trial: Vec<f64> = current.trial_tensions(&s);
+    let current = CurrentGeometry::of(s, &u);
+    let trial: Vec<f64> = current.trial_tensions(s);
     assert!(trial
         .iter()
         .zip(&s.links)
         .any(|(&t, l)| l.unilateral && t < 0.0));
     let mut hessian = vec![0.0; taut.pattern.nnz()];
-    current.assemble_tangent(&s, &trial, &taut.pattern, &mut hessian);
+    current.assemble_tangent(s, &trial, &taut.pattern, &mut hessian);
     let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
     let mut hv = vec![0.0; s.n_free];
     taut.pattern.sym_matvec(&hessian, &v, &mut hv);

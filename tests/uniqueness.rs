@@ -149,21 +149,22 @@ fn answers_held_by_their_taut_members_are_unique() {
 /// rule whichever solver left it there.
 #[test]
 fn every_answer_between_the_solvers_answers_is_an_equilibrium_of_one_energy_and_not_unique() {
+    use tensolve::model::material;
     use tensolve::results::equilibrium_residual;
     use tensolve::results::uniqueness::{uniqueness, Uniqueness};
     use tensolve::solvers::newton::{Newton, NewtonSettings};
     use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
     use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
-    use tensolve::structure::law;
 
     let case = tensolve::case::load(&manifest_path("tests/data/my-mast.toml")).unwrap();
-    let s = case.structure();
-    let taut = TautStiffness::new(&s).unwrap();
+    let model = case.model();
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
     let load: Vec<f64> = s.unit_load.iter().map(|f| 2.0 * f).collect();
-    let newton = Newton::new(&s, &taut, NewtonSettings::default())
+    let newton = Newton::new(&model, &taut, NewtonSettings::default())
         .unwrap()
         .solve(&load, None, &mut Silent);
-    let pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default()).solve(&load, None, &mut Silent);
+    let pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default()).solve(&load, None, &mut Silent);
     assert!(newton.info.status.converged() && pcg.info.status.converged());
     let (a, b) = (
         &pcg.equilibrium.displacements,
@@ -175,12 +176,14 @@ fn every_answer_between_the_solvers_answers_is_an_equilibrium_of_one_energy_and_
         let stored: f64 = s
             .links
             .iter()
-            .zip(law::trial_tensions(&s, u))
-            .map(|(l, t)| (law::tension(l, t).powi(2) - l.prestress.powi(2)) / (2.0 * l.stiffness))
+            .zip(model.trial_tensions(u))
+            .map(|(l, t)| {
+                (material::tension(l, t).powi(2) - l.prestress.powi(2)) / (2.0 * l.stiffness)
+            })
             .sum();
         stored - load.iter().zip(u).map(|(f, x)| f * x).sum::<f64>()
     };
-    let (pattern, analysed) = TautStiffness::analyse(&s);
+    let (pattern, analysed) = TautStiffness::analyse(s);
     let e0 = energy(a);
     let mut slack_counts = Vec::new();
     for step in 0..=4 {
@@ -189,18 +192,18 @@ fn every_answer_between_the_solvers_answers_is_an_equilibrium_of_one_energy_and_
         let tensions: Vec<f64> = s
             .links
             .iter()
-            .zip(law::trial_tensions(&s, &u))
-            .map(|(l, t)| law::tension(l, t))
+            .zip(model.trial_tensions(&u))
+            .map(|(l, t)| material::tension(l, t))
             .collect();
-        let eq = Equilibrium::classified(&s, u.clone(), tensions);
-        assert!(equilibrium_residual(&s, &eq, &load) < 1e-12, "at {w}");
+        let eq = Equilibrium::classified(&model, u.clone(), tensions);
+        assert!(equilibrium_residual(s, &eq, &load) < 1e-12, "at {w}");
         let e = energy(&u);
         assert!(
             (e - e0).abs() <= 1e-12 * e0.abs(),
             "at {w}: {e} against {e0}"
         );
         slack_counts.push(eq.slack_count());
-        match uniqueness(&s, &eq, &load, &pattern, &analysed) {
+        match uniqueness(&model, &eq, &load, &pattern, &analysed) {
             Uniqueness::NotUnique { nodes } => {
                 assert_eq!(nodes.len(), 1, "at {w}: {nodes:?}");
                 assert_eq!(nodes[0].0, 1, "at {w}: {nodes:?}");

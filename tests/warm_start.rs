@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{load, paper_structure};
+use common::{load, paper_model};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Equilibrium, Silent, Solution, TautStiffness};
@@ -47,8 +47,9 @@ fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
 
 #[test]
 fn warm_started_sweeps_end_where_cold_starts_end() {
-    let s = paper_structure(&[]);
-    let taut = TautStiffness::new(&s).unwrap();
+    let model = paper_model(&[]);
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
     let plain = NewtonSettings {
         reuse_factor: false,
         ..NewtonSettings::default()
@@ -59,17 +60,17 @@ fn warm_started_sweeps_end_where_cold_starts_end() {
     let cold: Vec<Solution> = alphas()
         .into_iter()
         .map(|alpha| {
-            let mut newton = Newton::new(&s, &taut, plain).unwrap();
-            let solution = newton.solve(&load(&s, alpha), None, &mut Silent);
+            let mut newton = Newton::new(&model, &taut, plain).unwrap();
+            let solution = newton.solve(&load(s, alpha), None, &mut Silent);
             cold_factorizations += newton.work().factorizations;
             cold_iterations += solution.info.iterations;
             solution
         })
         .collect();
-    let mut warm_newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
-    let warm = warm_sweep(&mut warm_newton, &s);
-    let mut warm_pcg = PcgLcp::new(&s, &taut, PcgLcpSettings::default());
-    let warm_lcp = warm_sweep(&mut warm_pcg, &s);
+    let mut warm_newton = Newton::new(&model, &taut, NewtonSettings::default()).unwrap();
+    let warm = warm_sweep(&mut warm_newton, s);
+    let mut warm_pcg = PcgLcp::new(&model, &taut, PcgLcpSettings::default());
+    let warm_lcp = warm_sweep(&mut warm_pcg, s);
     let mut warm_iterations = 0;
     for (i, alpha) in alphas().into_iter().enumerate() {
         for (name, solution) in [
@@ -118,12 +119,13 @@ fn warm_started_sweeps_end_where_cold_starts_end() {
 
 #[test]
 fn factor_reuse_changes_the_work_not_the_answer() {
-    let s = paper_structure(&[]);
-    let taut = TautStiffness::new(&s).unwrap();
+    let model = paper_model(&[]);
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
     let alpha = 1.0;
-    let mut reusing = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
+    let mut reusing = Newton::new(&model, &taut, NewtonSettings::default()).unwrap();
     let mut plain = Newton::new(
-        &s,
+        &model,
         &taut,
         NewtonSettings {
             reuse_factor: false,
@@ -133,8 +135,8 @@ fn factor_reuse_changes_the_work_not_the_answer() {
     .unwrap();
     // Two solves each: the second starts with the factor the first left behind.
     for _ in 0..2 {
-        let a = reusing.solve(&load(&s, alpha), None, &mut Silent);
-        let b = plain.solve(&load(&s, alpha), None, &mut Silent);
+        let a = reusing.solve(&load(s, alpha), None, &mut Silent);
+        let b = plain.solve(&load(s, alpha), None, &mut Silent);
         assert!(a.info.status.converged() && b.info.status.converged());
         assert_eq!(a.equilibrium.slack_count(), 408);
         assert_eq!(a.equilibrium.slack, b.equilibrium.slack);
@@ -161,10 +163,11 @@ fn factor_reuse_changes_the_work_not_the_answer() {
 /// bare factor needed a third, for the 18 cables).
 #[test]
 fn small_changes_of_the_taut_set_are_absorbed_without_refactorising() {
-    let s = paper_structure(&[]);
-    let taut = TautStiffness::new(&s).unwrap();
-    let mut newton = Newton::new(&s, &taut, NewtonSettings::default()).unwrap();
-    let solution = newton.solve(&load(&s, 1.0), None, &mut Silent);
+    let model = paper_model(&[]);
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
+    let mut newton = Newton::new(&model, &taut, NewtonSettings::default()).unwrap();
+    let solution = newton.solve(&load(s, 1.0), None, &mut Silent);
     assert!(solution.info.status.converged());
     assert!(
         solution.info.stopping_value <= 1e-10,

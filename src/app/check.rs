@@ -5,12 +5,11 @@ use super::memory::{MemoryEstimate, Workload};
 use super::setup::zero_modes_by_substructures;
 use crate::case::Case;
 use crate::host::Available;
+use crate::model::{prestress_stability, GeometricModel, Model, PrestressStability};
 use crate::output::alpha_label;
 use crate::solvers::latin::{Latin, LatinSettings, PartitionReport};
 use crate::solvers::{Method, SetupError, TautStiffness};
-use crate::structure::{
-    prestress_stability, GeometricModel, ModuleKind, PrestressStability, Structure, StructureSize,
-};
+use crate::structure::{ModuleKind, Structure, StructureSize};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -143,11 +142,12 @@ fn partition_origin(case: &Case, method: Method) -> &'static str {
 /// Check `case` (read from `path`), with `available` the memory this process could use before
 /// it built anything.
 pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckReport {
-    let s = case.structure();
+    let case_model = case.model();
+    let s = &case_model.structure;
     // The mechanism check as the run makes it: substructure by substructure when the run
     // never factorizes K whole, which then also gives the counts (m = dim ker K).
     let run = Workload::run(case, &case.solver.methods);
-    let zero_modes = zero_modes_by_substructures(case, &s, run.keeps_taut);
+    let zero_modes = zero_modes_by_substructures(case, s, run.keeps_taut);
     // The given prestress t0, without the tensions prescribed displacements impose.
     let unsettled = crate::structure::NodeFix::unsettled(&case.fixes);
     let given = Structure::new(&case.geometry, &unsettled, &Default::default());
@@ -177,8 +177,8 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         prestress_imbalance: given.prestress_imbalance(),
         free_prestress_imbalance,
         counts: match zero_modes {
-            Some(m) => EquilibriumCounts::new(&s, m),
-            None => equilibrium_counts(&s),
+            Some(m) => EquilibriumCounts::new(s, m),
+            None => equilibrium_counts(s),
         },
         prestress: s.prestress_scale,
         geometry: case.model,
@@ -190,33 +190,32 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         unstiffened_modes: Vec::new(),
         geometric_regular: None,
         mechanisms_at_least: false,
-        prestress_strain: crate::structure::unit_slip_strain(&s),
+        prestress_strain: crate::model::unit_slip_strain(s),
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
     };
     let mut model = model;
     if model.counts.mechanisms > 0 {
-        model.stability = prestress_stability(&s);
+        model.stability = prestress_stability(s);
         if let Some(st) = &model.stability {
             model.unstiffened_modes = st
                 .unstiffened()
                 .take(5)
                 .enumerate()
-                .map(|(k, mode)| mode.describe(&s, k + 1))
+                .map(|(k, mode)| mode.describe(s, k + 1))
                 .collect();
             // The dense test's m is exact; the sparse count stops at ZERO_MODES_COUNTED.
             if st.mechanisms != model.counts.mechanisms {
-                model.counts = EquilibriumCounts::new(&s, st.mechanisms);
+                model.counts = EquilibriumCounts::new(s, st.mechanisms);
             }
             // Mᵀ K_G M positive definite does not make K + K_G(t0) so (a prestress too small
             // to resolve, or one that buckles the bars): the models with geometric stiffness
             // solve only when it is.
             if st.stable() {
-                let with_geometric = s.clone().with_model(GeometricModel::Prestress);
                 model.geometric_regular = Some(
-                    TautStiffness::new(&with_geometric)
+                    TautStiffness::new(&Model::prestress(s.clone()))
                         .map(drop)
-                        .map_err(|_| crate::structure::indefinite_reason(&s, Some(st))),
+                        .map_err(|_| crate::model::indefinite_reason(s, Some(st))),
                 );
             }
         }
@@ -233,8 +232,8 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
     };
     let mut regular = match zero_modes {
         Some(0) => Ok(()),
-        Some(modes) => Err(TautStiffness::refusal(&s, modes)),
-        None => TautStiffness::new(&s).map(drop),
+        Some(modes) => Err(TautStiffness::refusal(&case_model, modes)),
+        None => TautStiffness::new(&case_model).map(drop),
     };
     // The refusal's count of K's zero modes (m: k > 0 on every member) is the sparse one,
     // capped; the dense test's is exact, and the output says one m.
@@ -259,7 +258,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         let Some(settings) = case.solver.latin_settings(method) else {
             continue;
         };
-        match Latin::new(&s, settings) {
+        match Latin::new(&case_model, settings) {
             Ok(latin) => report.latin.push(LatinReport {
                 method,
                 settings,
@@ -374,7 +373,7 @@ impl CheckReport {
             writeln!(
                 f,
                 "  warning: {}",
-                crate::structure::unit_slip_sentence(id, strain)
+                crate::model::unit_slip_sentence(id, strain)
             )?;
         }
         if m.lengths[1] > LENGTH_WARNING {
@@ -396,13 +395,7 @@ impl CheckReport {
             f,
             "model           geometry = {} ({})",
             m.geometry.name(),
-            match m.geometry {
-                GeometricModel::Linear => "equilibrium on the initial geometry",
-                GeometricModel::Prestress =>
-                    "plus the geometric stiffness of the prestress, K + K_G(t0)",
-                GeometricModel::Large =>
-                    "the exact-length law on the current geometry, newton along the load path",
-            }
+            m.geometry.description()
         )?;
         writeln!(
             f,

@@ -3,6 +3,7 @@
 
 use crate::case::{Case, SolverChoice};
 use crate::decomposition::{Exchange, Homogenised, OneProcess};
+use crate::model::Model;
 use crate::results::uniqueness;
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
 use crate::solvers::newton::{LargeNewton, Newton};
@@ -11,13 +12,13 @@ use crate::solvers::{
     check_shape, mechanism_by_substructures, AnySolver, Method, Settings, SetupError,
     SubstructuredVerdict, TautStiffness,
 };
-use crate::structure::{GeometricModel, Structure};
+use crate::structure::Structure;
 use std::time::Instant;
 
 /// The structure and its taut stiffness (the mechanism check), built once and timed.
 pub struct Prepared {
-    /// The structure of the case.
-    pub structure: Structure,
+    /// The model of the case: its structure under its geometric model.
+    pub model: Model,
     /// Its stiffness with every cable taut, factorized; `None` once released
     /// ([`Prepared::release_taut`]).
     pub taut: Option<TautStiffness>,
@@ -26,7 +27,7 @@ pub struct Prepared {
     /// Time to assemble and factorize the taut stiffness and check for a mechanism, s.
     pub taut_seconds: f64,
     /// On an MPI rank that keeps only its micro-macro substructures' links
-    /// ([`Prepared::keep_links_of`]): the rest of its share; `structure` then holds those links
+    /// ([`Prepared::keep_links_of`]): the rest of its share; `model` then holds those links
     /// alone.
     pub share: Option<LinkShare>,
 }
@@ -43,11 +44,11 @@ pub fn prepare(case: &Case) -> Result<Prepared, SetupError> {
 pub fn prepare_keeping(case: &Case, keeps_taut: bool) -> Result<Prepared, SetupError> {
     let mut prepared = Prepared::unchecked(case);
     let clock = Instant::now();
-    let structure = &prepared.structure;
-    prepared.taut = match zero_modes_by_substructures(case, structure, keeps_taut) {
+    let model = &prepared.model;
+    prepared.taut = match zero_modes_by_substructures(case, &model.structure, keeps_taut) {
         Some(0) => None,
-        Some(modes) => return Err(TautStiffness::refusal(structure, modes)),
-        None => Some(TautStiffness::new(structure)?),
+        Some(modes) => return Err(TautStiffness::refusal(model, modes)),
+        None => Some(TautStiffness::new(model)?),
     };
     prepared.taut_seconds = clock.elapsed().as_secs_f64();
     Ok(prepared)
@@ -57,7 +58,7 @@ pub fn prepare_keeping(case: &Case, keeps_taut: bool) -> Result<Prepared, SetupE
 /// linear model (K is `Bᵀ k B`) whose run does not keep K's factor
 /// ([`crate::app::memory::Workload::keeps_taut`]).
 pub fn checks_by_substructures(case: &Case, keeps_taut: bool) -> bool {
-    !keeps_taut && case.grid.is_some() && case.model == GeometricModel::Linear
+    !keeps_taut && case.grid.is_some() && !case.model.has_geometric_stiffness()
 }
 
 /// The zero-stiffness modes of K with every cable taut (rigid motions included), counted
@@ -97,7 +98,7 @@ impl AnswerChecks {
     pub fn of(case: &Case) -> AnswerChecks {
         AnswerChecks {
             eigenvalue: case.model.has_geometric_stiffness() || case.output.stability,
-            geometric_term: case.output.geometric_term && case.model != GeometricModel::Large,
+            geometric_term: case.output.geometric_term && !case.model.updates_geometry(),
         }
     }
 
@@ -120,27 +121,27 @@ impl Prepared {
         load: &[f64],
         factorizes_anyway: bool,
     ) -> Option<uniqueness::Uniqueness> {
-        let s = &self.structure;
+        let (model, n_free) = (&self.model, self.model.structure.n_free);
         match &self.taut {
             _ if self.share.is_some() => None,
-            Some(taut) if s.n_free <= uniqueness::CHECKED_UP_TO_DOFS || factorizes_anyway => Some(
-                uniqueness::uniqueness(s, eq, load, &taut.pattern, &taut.factor),
+            Some(taut) if n_free <= uniqueness::CHECKED_UP_TO_DOFS || factorizes_anyway => Some(
+                uniqueness::uniqueness(model, eq, load, &taut.pattern, &taut.factor),
             ),
-            None if s.n_free <= uniqueness::OWN_ANALYSIS_UP_TO_DOFS => {
-                let (pattern, analysed) = TautStiffness::analyse(s);
-                Some(uniqueness::uniqueness(s, eq, load, &pattern, &analysed))
+            None if n_free <= uniqueness::OWN_ANALYSIS_UP_TO_DOFS => {
+                let (pattern, analysed) = TautStiffness::analyse(&model.structure);
+                Some(uniqueness::uniqueness(model, eq, load, &pattern, &analysed))
             }
             _ => None,
         }
     }
 
-    /// The structure of `case` without its mechanism check: for an MPI rank whose run never
+    /// The model of `case` without its mechanism check: for an MPI rank whose run never
     /// solves with K's factor, which takes rank 0's check instead of factorizing K itself.
     pub fn unchecked(case: &Case) -> Prepared {
         let clock = Instant::now();
-        let structure = case.structure();
+        let model = case.model();
         Prepared {
-            structure,
+            model,
             taut: None,
             structure_seconds: clock.elapsed().as_secs_f64(),
             taut_seconds: 0.0,
@@ -150,7 +151,7 @@ impl Prepared {
 
     /// Keep only the links of the micro-macro substructures rank `rank` of `ranks` holds under
     /// `settings` (issue 25), when the solve can run on such shares
-    /// ([`LinkShare::possible`]); the whole structure is dropped. Whether it did.
+    /// ([`LinkShare::possible`]); the whole model is dropped. Whether it did.
     pub fn keep_links_of(
         &mut self,
         settings: &LatinSettings,
@@ -158,10 +159,10 @@ impl Prepared {
         ranks: usize,
     ) -> Result<bool, SetupError> {
         let clock = Instant::now();
-        let Some((kept, share)) = LinkShare::new(&self.structure, settings, rank, ranks)? else {
+        let Some((kept, share)) = LinkShare::new(&self.model, settings, rank, ranks)? else {
             return Ok(false);
         };
-        self.structure = kept;
+        self.model = kept;
         self.share = Some(share);
         self.structure_seconds += clock.elapsed().as_secs_f64();
         Ok(true)
@@ -195,7 +196,7 @@ impl HeldSolver for Latin<'_> {
     }
 }
 
-/// A solver set up for the prepared structure.
+/// A solver set up for the prepared model.
 pub struct SetUpSolver<'s> {
     /// Which solver.
     pub method: Method,
@@ -223,11 +224,11 @@ pub fn set_up_on<'s>(
     prepared: &'s Prepared,
     exchange: &'s dyn Exchange,
 ) -> Result<SetUpSolver<'s>, SetupError> {
-    let structure = &prepared.structure;
-    if !method.supports(structure.model) {
+    let model = &prepared.model;
+    if !method.supports(model.geometry()) {
         return Err(SetupError::ModelNotSupported {
             solver: method.name(),
-            model: structure.model.name(),
+            model: model.geometry().name(),
         });
     }
     let taut = || {
@@ -237,28 +238,25 @@ pub fn set_up_on<'s>(
     };
     let clock = Instant::now();
     let (solver, shared): (Box<dyn HeldSolver + 's>, f64) = match choice.settings(method) {
-        Settings::Newton(settings) if structure.model == GeometricModel::Large => (
-            Box::new(LargeNewton::new(structure, taut()?, settings)),
+        Settings::Newton(settings) if model.updates_geometry() => (
+            Box::new(LargeNewton::new(model, taut()?, settings)),
             prepared.taut_seconds,
         ),
         Settings::Newton(settings) => (
-            Box::new(Newton::new(structure, taut()?, settings)?),
+            Box::new(Newton::new(model, taut()?, settings)?),
             prepared.taut_seconds,
         ),
         Settings::PcgLcp(settings) => (
-            Box::new(PcgLcp::new(structure, taut()?, settings)),
+            Box::new(PcgLcp::new(model, taut()?, settings)),
             prepared.taut_seconds,
         ),
-        Settings::MonoLatin(settings) => (Box::new(Latin::new(structure, settings)?), 0.0),
+        Settings::MonoLatin(settings) => (Box::new(Latin::new(model, settings)?), 0.0),
         Settings::MicroMacro(settings) => match &prepared.share {
             Some(share) => (
-                Box::new(Latin::on_share(structure, share, settings, exchange)?),
+                Box::new(Latin::on_share(model, share, settings, exchange)?),
                 0.0,
             ),
-            None => (
-                Box::new(Latin::on_ranks(structure, settings, exchange)?),
-                0.0,
-            ),
+            None => (Box::new(Latin::on_ranks(model, settings, exchange)?), 0.0),
         },
     };
     Ok(SetUpSolver {

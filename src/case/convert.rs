@@ -9,7 +9,8 @@ use super::numbers::{vector, PHYSICAL_MAX};
 use super::raw::{RawCase, RawSupports};
 use super::{load, output, prestress, solver, Case, CaseError};
 use crate::host::{available, bytes_text};
-use crate::structure::{GeometricModel, Geometry, GridSpec, NodeFix, StructureSize};
+use crate::model::GeometricModel;
+use crate::structure::{Geometry, GridSpec, NodeFix, StructureSize};
 use std::collections::HashMap;
 use std::path::Path;
 

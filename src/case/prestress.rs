@@ -7,9 +7,10 @@
 use super::numbers::{bounded, number, PHYSICAL_MAX};
 use super::raw::{RawPrestress, RawPrestressSource};
 use super::CaseError;
+use crate::model::GeometricModel;
 use crate::structure::{
-    self_stress_dense, self_stress_through, DenseSelfStressRefusal, GeometricModel, Geometry,
-    NodeFix, SelfStressRefusal, Structure,
+    self_stress_dense, self_stress_through, DenseSelfStressRefusal, Geometry, NodeFix,
+    SelfStressRefusal, Structure,
 };
 
 /// Where a `[prestress]` self-stress state's scale is read from.

@@ -54,7 +54,7 @@ pub(super) struct RawCase {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawModel {
-    pub geometry: Option<crate::structure::GeometricModel>,
+    pub geometry: Option<crate::model::GeometricModel>,
 }
 
 /// `[grid]`.

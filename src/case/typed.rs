@@ -1,6 +1,7 @@
 //! The case as the program uses it: fully typed, every number validated, every default filled
 //! in from the type it configures.
 
+use crate::model::Model;
 use crate::solvers::latin::LatinSettings;
 use crate::solvers::newton::NewtonSettings;
 use crate::solvers::pcg_lcp::PcgLcpSettings;
@@ -26,10 +27,15 @@ pub struct Case {
     /// What to write, and where.
     pub output: OutputChoice,
     /// The geometric effects modelled (`model.geometry`). Default `linear`.
-    pub model: crate::structure::GeometricModel,
+    pub model: crate::model::GeometricModel,
 }
 
 impl Case {
+    /// The model the case describes: its structure under its geometric model.
+    pub fn model(&self) -> Model {
+        Model::new(self.structure(), self.model)
+    }
+
     /// The structure the case describes, under its load at α = 1.
     pub fn structure(&self) -> Structure {
         let loading = Loading {
@@ -42,7 +48,7 @@ impl Case {
             s.layout = Some(GridLayout::new(grid.modules[0], grid.modules[1]));
             s.prestress_scale = grid.prestress;
         }
-        s.with_model(self.model)
+        s
     }
 
     /// The case with the grid built of `module`s instead (the same nodes, supports and

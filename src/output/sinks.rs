@@ -23,6 +23,7 @@ use super::{
     write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow, SummaryRow,
     REACTION_TOTALS_HEADER, STABILITY_HEADER, SUMMARY_HEADER,
 };
+use crate::model::Model;
 use crate::results;
 use crate::solvers::{Equilibrium, IterationRecord, Measure, Method, Solution, TautStiffness};
 use crate::structure::Structure;
@@ -169,82 +170,84 @@ impl Sink for HistorySink {
     }
 }
 
-/// Writes one file of a solve: `(dir, solver, α, structure, equilibrium) → its path`.
-type WriteSolve = fn(&Path, &str, f64, &Structure, &Equilibrium) -> io::Result<PathBuf>;
+/// Writes one file of a solve: `(dir, solver, α, model, equilibrium) → its path`.
+type WriteSolve = fn(&Path, &str, f64, &Model, &Equilibrium) -> io::Result<PathBuf>;
 
 /// One file per solve, written when the solve ends with a finite answer:
 /// `tensions/…`, `displacements/…`, `forces/…`, `reactions/…`, `vtk/…`.
 pub struct PerSolveSink<'s> {
     root: PathBuf,
     dir: PathBuf,
-    structure: &'s Structure,
+    model: &'s Model,
     write: WriteSolve,
     /// The file a write error names, under `root`.
     error_path: fn(&Path, &str, f64) -> PathBuf,
 }
 
 impl<'s> PerSolveSink<'s> {
-    /// `tensions/{solver}_alpha{α}.csv` of `structure`, written under `dir` (the staging
-    /// directory); errors name the file under `root`.
-    pub fn tensions(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+    /// `tensions/{solver}_alpha{α}.csv` of `model`'s structure, written under `dir` (the
+    /// staging directory); errors name the file under `root`.
+    pub fn tensions(root: &Path, dir: &Path, model: &'s Model) -> Self {
         Self::new(
             root,
             dir,
-            structure,
-            write_tensions,
+            model,
+            |dir, solver, alpha, m, eq| write_tensions(dir, solver, alpha, &m.structure, eq),
             |dir, solver, alpha| result_path(dir, "tensions", solver, alpha),
         )
     }
 
-    /// `displacements/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name
-    /// the file under `root`.
-    pub fn displacements(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+    /// `displacements/{solver}_alpha{α}.csv` of `model`'s structure, written under `dir`;
+    /// errors name the file under `root`.
+    pub fn displacements(root: &Path, dir: &Path, model: &'s Model) -> Self {
         Self::new(
             root,
             dir,
-            structure,
-            write_displacements,
+            model,
+            |dir, solver, alpha, m, eq| write_displacements(dir, solver, alpha, &m.structure, eq),
             |dir, solver, alpha| result_path(dir, "displacements", solver, alpha),
         )
     }
 
-    /// `forces/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name the
-    /// file under `root`.
-    pub fn forces(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(root, dir, structure, write_forces, |dir, solver, alpha| {
+    /// `forces/{solver}_alpha{α}.csv` of `model`, written under `dir`; errors name the file
+    /// under `root`.
+    pub fn forces(root: &Path, dir: &Path, model: &'s Model) -> Self {
+        Self::new(root, dir, model, write_forces, |dir, solver, alpha| {
             result_path(dir, "forces", solver, alpha)
         })
     }
 
-    /// `reactions/{solver}_alpha{α}.csv` of `structure`, written under `dir`; errors name the
+    /// `reactions/{solver}_alpha{α}.csv` of `model`, written under `dir`; errors name the
     /// file under `root`.
-    pub fn reactions(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
+    pub fn reactions(root: &Path, dir: &Path, model: &'s Model) -> Self {
+        Self::new(root, dir, model, write_reactions, |dir, solver, alpha| {
+            result_path(dir, "reactions", solver, alpha)
+        })
+    }
+
+    /// `vtk/{solver}_alpha{α}.vtu` of `model`'s structure, written under `dir`; errors name
+    /// the file under `root`.
+    pub fn vtk(root: &Path, dir: &Path, model: &'s Model) -> Self {
         Self::new(
             root,
             dir,
-            structure,
-            write_reactions,
-            |dir, solver, alpha| result_path(dir, "reactions", solver, alpha),
+            model,
+            |dir, solver, alpha, m, eq| write_vtu(dir, solver, alpha, &m.structure, eq),
+            vtu_path,
         )
-    }
-
-    /// `vtk/{solver}_alpha{α}.vtu` of `structure`, written under `dir`; errors name the file
-    /// under `root`.
-    pub fn vtk(root: &Path, dir: &Path, structure: &'s Structure) -> Self {
-        Self::new(root, dir, structure, write_vtu, vtu_path)
     }
 
     fn new(
         root: &Path,
         dir: &Path,
-        structure: &'s Structure,
+        model: &'s Model,
         write: WriteSolve,
         error_path: fn(&Path, &str, f64) -> PathBuf,
     ) -> Self {
         PerSolveSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
-            structure,
+            model,
             write,
             error_path,
         }
@@ -260,7 +263,7 @@ impl Sink for PerSolveSink<'_> {
             &self.dir,
             key.method.name(),
             key.alpha,
-            self.structure,
+            self.model,
             &solution.equilibrium,
         )
         .map(|_| ())
@@ -374,22 +377,14 @@ impl Sink for PublishSink<'_> {
 /// solve.
 pub struct StabilitySink<'s> {
     out: &'s RefCell<OutputDir>,
-    structure: &'s Structure,
+    model: &'s Model,
     taut: &'s TautStiffness,
 }
 
 impl<'s> StabilitySink<'s> {
     /// `stability.csv` in `out`; the eigenvalues reuse the symbolic factorization of `taut`.
-    pub fn new(
-        out: &'s RefCell<OutputDir>,
-        structure: &'s Structure,
-        taut: &'s TautStiffness,
-    ) -> Self {
-        StabilitySink {
-            out,
-            structure,
-            taut,
-        }
+    pub fn new(out: &'s RefCell<OutputDir>, model: &'s Model, taut: &'s TautStiffness) -> Self {
+        StabilitySink { out, model, taut }
     }
 }
 
@@ -403,11 +398,7 @@ impl Sink for StabilitySink<'_> {
             alpha: row.alpha,
             slack_cables: row.slack_cables,
             min_tangent_eigenvalue: row.min_tangent_eigenvalue.unwrap_or_else(|| {
-                results::smallest_tangent_eigenvalue(
-                    self.structure,
-                    &solution.equilibrium,
-                    self.taut,
-                )
+                results::smallest_tangent_eigenvalue(self.model, &solution.equilibrium, self.taut)
             }),
         };
         append(
@@ -423,13 +414,13 @@ impl Sink for StabilitySink<'_> {
 /// with an answer (the reactions' own table, `reactions/…`, holds one row per held component).
 pub struct ReactionTotalsSink<'s> {
     out: &'s RefCell<OutputDir>,
-    structure: &'s Structure,
+    model: &'s Model,
 }
 
 impl<'s> ReactionTotalsSink<'s> {
-    /// `reaction_totals.csv` in `out`, of `structure`'s reactions.
-    pub fn new(out: &'s RefCell<OutputDir>, structure: &'s Structure) -> Self {
-        ReactionTotalsSink { out, structure }
+    /// `reaction_totals.csv` in `out`, of `model`'s reactions.
+    pub fn new(out: &'s RefCell<OutputDir>, model: &'s Model) -> Self {
+        ReactionTotalsSink { out, model }
     }
 }
 
@@ -439,7 +430,7 @@ impl Sink for ReactionTotalsSink<'_> {
             return Ok(());
         };
         let name = "reaction_totals.csv";
-        let totals = reaction_totals(self.structure, &solution.equilibrium, key.alpha)
+        let totals = reaction_totals(self.model, &solution.equilibrium, key.alpha)
             .map_err(|e| withdrawn(self.out, name, e))?;
         let line = reaction_totals_line(key.method.name(), key.alpha, totals);
         append(self.out, name, REACTION_TOTALS_HEADER, &line)

@@ -2,6 +2,7 @@
 //! `displacements/{solver}_alpha{α}.csv`, `forces/…`, `reactions/…`, `reaction_totals.csv`.
 
 use super::write_atomic;
+use crate::model::Model;
 use crate::results;
 use crate::solvers::{Equilibrium, Measure, Solution, Status};
 use crate::structure::Structure;
@@ -317,16 +318,17 @@ fn finite(what: &str, values: impl IntoIterator<Item = f64>) -> std::io::Result<
 
 /// Write `dir/forces/{solver}_alpha{α}.csv`: per member (bars and cables, by id), its kind,
 /// end nodes, total axial force τ (N, tension > 0), elongation and length (m) under the
-/// model ([`crate::structure::law::member_states`]); returns its path.
+/// model ([`Model::member_states`]); returns its path.
 pub fn write_forces(
     dir: &Path,
     solver: &str,
     alpha: f64,
-    s: &Structure,
+    model: &Model,
     eq: &Equilibrium,
 ) -> std::io::Result<PathBuf> {
     let path = result_path(dir, "forces", solver, alpha);
-    let states = crate::structure::law::member_states(s, &eq.displacements);
+    let s = &model.structure;
+    let states = model.member_states(&eq.displacements);
     finite("member force", eq.tensions.iter().copied())?;
     finite("member elongation", states.elongations.iter().copied())?;
     finite("member length", states.lengths.iter().copied())?;
@@ -367,12 +369,13 @@ pub fn write_reactions(
     dir: &Path,
     solver: &str,
     alpha: f64,
-    s: &Structure,
+    model: &Model,
     eq: &Equilibrium,
 ) -> std::io::Result<PathBuf> {
     let path = result_path(dir, "reactions", solver, alpha);
-    let states = crate::structure::law::member_states(s, &eq.displacements);
-    let reactions = results::reactions(s, eq, alpha, &states);
+    let s = &model.structure;
+    let states = model.member_states(&eq.displacements);
+    let reactions = results::reactions(model, eq, alpha, &states);
     finite("reaction", reactions.iter().map(|r| r.force))?;
     let rows = reactions.iter().map(|r| {
         [
@@ -392,9 +395,9 @@ pub const REACTION_TOTALS_HEADER: &str = "solver,alpha,reaction_x_N,reaction_y_N
 /// The sums of the reactions per axis at load factor `alpha` (Σ R over the held components of
 /// each axis; with the load, `Σ R + Σ F = 0` to the solve's residual). `InvalidData` when one
 /// is not finite.
-pub fn reaction_totals(s: &Structure, eq: &Equilibrium, alpha: f64) -> std::io::Result<[f64; 3]> {
-    let states = crate::structure::law::member_states(s, &eq.displacements);
-    let reactions = results::reactions(s, eq, alpha, &states);
+pub fn reaction_totals(model: &Model, eq: &Equilibrium, alpha: f64) -> std::io::Result<[f64; 3]> {
+    let states = model.member_states(&eq.displacements);
+    let reactions = results::reactions(model, eq, alpha, &states);
     finite("reaction", reactions.iter().map(|r| r.force))?;
     let mut totals = [0.0; 3];
     for r in &reactions {

@@ -11,9 +11,10 @@ use crate::linalg::{
     dot, factorize_or_find_singular_below, norm, smallest_eigenvalues, SparseCholesky, SparseRow,
     StiffnessPattern, ZERO_MODES_COUNTED,
 };
+use crate::model::material::{carries_force, gap_scale, gap_slack};
+use crate::model::{largest_moving_nodes, Model};
 use crate::solvers::Equilibrium;
-use crate::structure::law::{self, CurrentGeometry};
-use crate::structure::{largest_moving_nodes, GeometricModel, Structure};
+use crate::structure::Structure;
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// Up to this many free dofs every converged row is checked on K's analysis, where the run
@@ -96,52 +97,39 @@ impl Uniqueness {
     }
 }
 
-/// The check of the equilibrium `eq` of `s` under `load` (free dofs). `pattern` is the
+/// The check of the equilibrium `eq` of `model` under `load` (free dofs). `pattern` is the
 /// stiffness's pattern and `analysed` a factor analysed on it (only its symbolic part is used).
 pub fn uniqueness(
-    s: &Structure,
+    model: &Model,
     eq: &Equilibrium,
     load: &[f64],
     pattern: &StiffnessPattern,
     analysed: &SparseCholesky,
 ) -> Uniqueness {
+    let s = &model.structure;
     if s.n_free == 0 {
         return Uniqueness::Unique;
     }
     let u = &eq.displacements;
-    let trial = law::trial_tensions(s, u);
-    let scale = law::gap_scale(s.links.iter().zip(trial.iter().copied()));
+    let trial = model.trial_tensions(u);
+    let scale = gap_scale(s.links.iter().zip(trial.iter().copied()));
     let carrying: Vec<bool> = s
         .links
         .iter()
         .zip(&trial)
-        .map(|(l, &t)| law::carries_force(l, t, scale))
+        .map(|(l, &t)| carries_force(l, t, scale))
         .collect();
-    // With every member carrying force, K_c on the initial geometry is K with every cable taut,
-    // regular by the set-up's mechanism check: nothing to factorize.
-    if s.model == GeometricModel::Linear && carrying.iter().all(|&c| c) {
+    // With every member carrying force, K_c on the initial geometry without geometric
+    // stiffness is K with every cable taut, regular by the set-up's mechanism check: nothing
+    // to factorize.
+    if !model.has_geometric_stiffness() && carrying.iter().all(|&c| c) {
         return Uniqueness::Unique;
     }
-    // K_c: the tangent over the members that carry force.
+    // K_c: the tangent over the members that carry force (with `prestress`, plus the
+    // geometric stiffness of the answer's own tensions K_G(τ), as the stability check,
+    // `smallest_tangent_eigenvalue`, judges it: a slack cable none).
     let mut values = vec![0.0; pattern.nnz()];
-    let current = (s.model == GeometricModel::Large).then(|| CurrentGeometry::of(s, u));
-    match &current {
-        Some(current) => {
-            // A negative trial tension gives a cable neither stiffness nor force.
-            let trial_c: Vec<f64> = trial
-                .iter()
-                .zip(&carrying)
-                .map(|(&t, &c)| if c { t } else { -1.0 })
-                .collect();
-            current.assemble_tangent(s, &trial_c, pattern, &mut values);
-        }
-        // With `prestress`, the geometric stiffness of the answer's own tensions K_G(τ), as
-        // the stability check (`smallest_tangent_eigenvalue`) judges it: a slack cable none.
-        None if s.model == GeometricModel::Prestress => {
-            law::assemble_prestress_tangent(s, pattern, |i| carrying[i], &eq.tensions, &mut values)
-        }
-        None => law::assemble_tangent(s, pattern, |i| carrying[i], &mut values),
-    }
+    model.assemble_answer_tangent(u, &eq.tensions, |i| carrying[i], pattern, &mut values);
     let mut factor = analysed.share_symbolic();
     // Singular as `min_tangent_eigenvalue` calls it (below TANGENT_ZERO_RELATIVE of the mean
     // diagonal): under `prestress` and `large` a free motion's stiffness is round-off, not an
@@ -154,16 +142,12 @@ pub fn uniqueness(
     let null = null_basis(pattern, &values, &mut factor, threshold);
     // Per cable at zero tension with its gap closed: its elongation rate along a motion (the
     // rows of ∇ℓ with `large`).
-    let row = |i: usize| -> &SparseRow {
-        match &current {
-            Some(c) => &c.rows[i],
-            None => &s.link_dofs[i],
-        }
-    };
+    let rows = model.member_rows(u);
+    let row = |i: usize| -> &SparseRow { &rows[i] };
     let at_zero_cables: Vec<usize> = (0..s.links.len())
-        .filter(|&i| !carrying[i] && !law::gap_slack(&s.links[i], trial[i], scale))
+        .filter(|&i| !carrying[i] && !gap_slack(&s.links[i], trial[i], scale))
         .collect();
-    if s.model == GeometricModel::Prestress {
+    if model.prestress_stiffness().is_some() {
         if let Some(v) = loaded_motion(&null, load, &eq.tensions) {
             let held = at_zero_cables
                 .iter()

@@ -7,7 +7,7 @@
 //! The paper weighs by the LATIN search direction l; with the default `l = k` the two agree, and the
 //! stiffness makes e a property of the iterate alone, comparable across solvers and settings.
 
-use crate::structure::Structure;
+use crate::model::Model;
 
 /// A reference solution, as e needs it.
 #[derive(Debug, Clone)]
@@ -21,11 +21,11 @@ pub struct Reference {
 }
 
 impl Reference {
-    /// The reference displacements `displacements` (free dofs) of `structure`, its elongations
-    /// under the structure's model (`ℓ − L` with `large`, as its solver reports them).
-    pub fn new(structure: &Structure, displacements: &[f64]) -> Reference {
-        let elongations = crate::structure::law::elongations(structure, displacements);
-        let stiffness: Vec<f64> = structure.links.iter().map(|l| l.stiffness).collect();
+    /// The reference displacements `displacements` (free dofs) of `model`, its elongations
+    /// under that model (`ℓ − L` with `large`, as its solver reports them).
+    pub fn new(model: &Model, displacements: &[f64]) -> Reference {
+        let elongations = model.elongations(displacements);
+        let stiffness: Vec<f64> = model.structure.links.iter().map(|l| l.stiffness).collect();
         let energy = weighted_norm2(&stiffness, elongations.iter().copied());
         Reference {
             stiffness,

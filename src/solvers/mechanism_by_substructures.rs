@@ -319,7 +319,7 @@ mod tests {
 
     /// K's zero modes as the whole factorization counts them.
     fn whole(structure: &Structure) -> usize {
-        match TautStiffness::new(structure) {
+        match TautStiffness::new(&crate::model::Model::linear(structure.clone())) {
             Ok(_) => 0,
             Err(SetupError::Mechanism { zero_modes, .. }) => zero_modes,
             Err(other) => panic!("{other}"),

@@ -6,7 +6,7 @@
 use super::latin::LatinSettings;
 use super::newton::NewtonSettings;
 use super::pcg_lcp::PcgLcpSettings;
-use crate::structure::GeometricModel;
+use crate::model::GeometricModel;
 use serde::Deserialize;
 
 /// A solver the case may ask for.
@@ -47,9 +47,7 @@ impl Method {
     pub fn supports(self, model: GeometricModel) -> bool {
         match self {
             Method::Newton => true,
-            Method::PcgLcp | Method::MonoLatin | Method::MicroMacro => {
-                model != GeometricModel::Large
-            }
+            Method::PcgLcp | Method::MonoLatin | Method::MicroMacro => !model.updates_geometry(),
         }
     }
 

@@ -12,7 +12,6 @@ pub mod newton;
 mod no_equilibrium;
 mod observer;
 pub mod pcg_lcp;
-mod residual;
 mod solution;
 mod solver;
 mod status;
@@ -29,10 +28,6 @@ pub use no_equilibrium::{
     unit_direction, LinksAlong, NoEquilibrium, UnitDirection,
 };
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
-pub use residual::{
-    current_unbalances, displacement_residual, exact_and_frozen_residuals, relative_unbalance,
-    unbalances, unbalances_on, Unbalances,
-};
 pub use solution::{Equilibrium, Solution};
 pub use solver::{stop_when, Progress, Solver};
 pub use status::{LoadPathEnd, Measure, SolveInfo, Status};

@@ -5,7 +5,8 @@
 
 use super::Equilibrium;
 use crate::linalg::{dot, norm};
-use crate::structure::{largest_moving_nodes, GeometricModel, Link, LinkDofs, Structure};
+use crate::model::{largest_moving_nodes, Model};
+use crate::structure::{Link, LinkDofs, DENSE_LIMIT};
 
 /// Why an answer is no equilibrium (docs/method.md §8): a direction d that bars and bilateral
 /// cables do not stretch, that no unilateral cable lengthens, and on which the load works —
@@ -39,17 +40,18 @@ const ROUNDOFF_ELONGATION: f64 = 1e-12;
 /// the stretch energy negligible against the load's work (`RUNAWAY_ENERGY_RATIO`),
 /// and, with the prestress's geometric stiffness, `dᵀ K_G d ≤ 0`. `None` when U is not such a
 /// direction (a finite answer, however large, is judged elsewhere) or the model is `large`.
-pub fn no_equilibrium(s: &Structure, eq: &Equilibrium, load: &[f64]) -> Option<NoEquilibrium> {
-    no_equilibrium_along(s, &eq.displacements, load)
+pub fn no_equilibrium(model: &Model, eq: &Equilibrium, load: &[f64]) -> Option<NoEquilibrium> {
+    no_equilibrium_along(model, &eq.displacements, load)
 }
 
 /// [`no_equilibrium`] of a displacement (or a change of displacements) `u`.
-pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
-    let d = unit_direction(s, u)?;
+pub fn no_equilibrium_along(model: &Model, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
+    let d = unit_direction(model, u)?;
+    let s = &model.structure;
     let links = s.links.iter().zip(&s.link_dofs).enumerate();
     let part = LinksAlong::of(links.map(|(i, (l, row))| (i, l, row)), &d.direction)?;
     d.certificate(
-        s,
+        model,
         part.stretch,
         part.slack.into_iter().map(|(_, id)| id).collect(),
         load,
@@ -61,19 +63,16 @@ pub fn no_equilibrium_along(s: &Structure, u: &[f64], load: &[f64]) -> Option<No
 /// mechanisms of the links the answer keeps (bars, taut cables: the null space of their `BᵀB`,
 /// dense), tested like any direction. A solver stopped early on a runaway (pcg-lcp's
 /// proportioning steps) leaves a U that is no mechanism, though its slack set leaves one.
-/// `None` above [`crate::structure::DENSE_LIMIT`] free dofs, without slack cables, under
+/// `None` above [`DENSE_LIMIT`] free dofs, without slack cables, under
 /// `large`, or when the load does not work on those mechanisms.
 pub fn no_equilibrium_of_slack_set(
-    s: &Structure,
+    model: &Model,
     slack: &[bool],
     load: &[f64],
 ) -> Option<NoEquilibrium> {
+    let s = &model.structure;
     let n = s.n_free;
-    if n == 0
-        || n > crate::structure::DENSE_LIMIT
-        || s.model == GeometricModel::Large
-        || !slack.iter().any(|&x| x)
-    {
+    if n == 0 || n > DENSE_LIMIT || model.updates_geometry() || !slack.iter().any(|&x| x) {
         return None;
     }
     let mut btb = nalgebra::DMatrix::<f64>::zeros(n, n);
@@ -103,7 +102,7 @@ pub fn no_equilibrium_of_slack_set(
     if norm(&d) <= MECHANISM_TOLERANCE * norm(load) {
         return None;
     }
-    no_equilibrium_along(s, &d, load)
+    no_equilibrium_along(model, &d, load)
 }
 
 /// [`no_equilibrium_of_slack_set`] of an answer whose displacements are no certificate: its
@@ -111,11 +110,12 @@ pub fn no_equilibrium_of_slack_set(
 /// runaway may still hold them taut: pcg-lcp stalled at α = 1e-9 on the simplex with no
 /// equilibrium, its diagonals at 1.2e9 N).
 pub fn no_equilibrium_of_answer(
-    s: &Structure,
+    model: &Model,
     eq: &Equilibrium,
     load: &[f64],
 ) -> Option<NoEquilibrium> {
-    no_equilibrium_of_slack_set(s, &eq.slack, load).or_else(|| {
+    let s = &model.structure;
+    no_equilibrium_of_slack_set(model, &eq.slack, load).or_else(|| {
         let shortened: Vec<bool> = s
             .links
             .iter()
@@ -123,7 +123,7 @@ pub fn no_equilibrium_of_answer(
             .map(|(l, row)| l.unilateral && row.elongation(&eq.displacements) < 0.0)
             .collect();
         (shortened != eq.slack)
-            .then(|| no_equilibrium_of_slack_set(s, &shortened, load))
+            .then(|| no_equilibrium_of_slack_set(model, &shortened, load))
             .flatten()
     })
 }
@@ -138,8 +138,8 @@ pub struct UnitDirection {
 }
 
 /// The direction of `u`, when a certificate can be tested along it (see [`UnitDirection`]).
-pub fn unit_direction(s: &Structure, u: &[f64]) -> Option<UnitDirection> {
-    if s.model == GeometricModel::Large {
+pub fn unit_direction(model: &Model, u: &[f64]) -> Option<UnitDirection> {
+    if model.updates_geometry() {
         return None;
     }
     let size = norm(u);
@@ -195,10 +195,10 @@ impl LinksAlong {
 impl UnitDirection {
     /// The certificate along d once every link has passed ([`LinksAlong`]): the links'
     /// `stretch` in all and the ids of the cables that shorten (`slack_cables`), in link order.
-    /// `s` gives the nodes (and K_G(t0) where it has it).
+    /// `model` gives the nodes (and K_G(t0) where it has it).
     pub fn certificate(
         &self,
-        s: &Structure,
+        model: &Model,
         stretch: f64,
         slack_cables: Vec<u64>,
         load: &[f64],
@@ -217,16 +217,15 @@ impl UnitDirection {
         if slack_cables.is_empty() {
             return None;
         }
-        let stiffened = s
-            .geometric
-            .as_ref()
+        let stiffened = model
+            .prestress_stiffness()
             .is_some_and(|g| g.quadratic(d) > MECHANISM_TOLERANCE * norm(load));
         if work.is_nan() || work <= MECHANISM_TOLERANCE * norm(load) || stiffened {
             return None;
         }
         Some(NoEquilibrium {
             slack_cables,
-            mode_nodes: largest_moving_nodes(s, d, 3),
+            mode_nodes: largest_moving_nodes(&model.structure, d, 3),
         })
     }
 }
@@ -234,7 +233,7 @@ impl UnitDirection {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::structure::{Clamp, GridSpec, LoadPattern};
+    use crate::structure::{Clamp, GridSpec, LoadPattern, Structure};
 
     /// A direction that shortens no cable is never a certificate, however the load works on
     /// it: a free grid's rigid translation (every length change exactly 0) under a load along
@@ -253,6 +252,6 @@ mod tests {
             .map(|d| if d % 3 == 2 { -1e-9 } else { 0.0 })
             .collect();
         assert!(dot(&load, &down) > 0.0);
-        assert!(no_equilibrium_along(&s, &down, &load).is_none());
+        assert!(no_equilibrium_along(&Model::linear(s), &down, &load).is_none());
     }
 }

@@ -18,7 +18,8 @@
 
 use super::{stop_when, Equilibrium, Measure, NoEquilibrium, Progress, Solver, TautStiffness};
 use crate::linalg::{dot, norm, SparseCholesky};
-use crate::structure::law;
+use crate::model::material::trial_tension;
+use crate::model::Model;
 use crate::structure::Structure;
 
 /// Settings, each default written once, at its field.
@@ -51,6 +52,7 @@ const NULL_CURVATURE: f64 = 1e-12;
 
 /// The pcg-lcp solver, set up for one structure.
 pub struct PcgLcp<'s> {
+    model: &'s Model,
     structure: &'s Structure,
     settings: PcgLcpSettings,
     /// Factor of K, shared with the other solvers.
@@ -93,12 +95,9 @@ pub struct PcgLcpState {
 }
 
 impl<'s> PcgLcp<'s> {
-    /// Set up on a structure whose taut stiffness is already factorized.
-    pub fn new(
-        structure: &'s Structure,
-        taut: &'s TautStiffness,
-        settings: PcgLcpSettings,
-    ) -> Self {
+    /// Set up on a model whose taut stiffness is already factorized.
+    pub fn new(model: &'s Model, taut: &'s TautStiffness, settings: PcgLcpSettings) -> Self {
+        let structure = &model.structure;
         let cables: Vec<usize> = (0..structure.links.len())
             .filter(|&i| structure.links[i].unilateral)
             .collect();
@@ -111,6 +110,7 @@ impl<'s> PcgLcp<'s> {
             .map(|&i| structure.links[i].prestress)
             .collect();
         PcgLcp {
+            model,
             structure,
             settings,
             factor: &taut.factor,
@@ -196,7 +196,7 @@ impl<'s> PcgLcp<'s> {
             s.link_dofs[i].scatter(-self.sqrt_k[j] * d[j], &mut change);
         }
         self.factor.solve_in_place(&mut change);
-        super::no_equilibrium_along(s, &change, load)
+        super::no_equilibrium_along(self.model, &change, load)
     }
 
     /// Whether the step along `−direction` (a descent direction, `gᵀdirection > 0`) has no
@@ -290,8 +290,8 @@ impl Solver for PcgLcp<'_> {
         Measure::ComplementarityResidual
     }
 
-    fn structure(&self) -> &Structure {
-        self.structure
+    fn model(&self) -> &Model {
+        self.model
     }
 
     fn max_iterations(&self) -> usize {
@@ -321,7 +321,7 @@ impl Solver for PcgLcp<'_> {
             .zip(&self.sqrt_k)
             .map(|(&i, &sk)| {
                 if previous.slack[i] {
-                    let trial = law::trial_tension(
+                    let trial = trial_tension(
                         &s.links[i],
                         s.link_dofs[i].elongation(&previous.displacements),
                     );
@@ -439,9 +439,8 @@ impl Solver for PcgLcp<'_> {
     }
 
     fn iterate(&self, state: &PcgLcpState) -> Equilibrium {
-        let s = self.structure;
         let u = self.displacements(state);
-        let mut tensions = super::residual::trial_tensions(s, &u);
+        let mut tensions = self.model.trial_tensions(&u);
         for (j, &i) in self.cables.iter().enumerate() {
             // τ = t0 + k(e + λ) = 0 up to the tolerance: an open gap carries nothing, nor does
             // a cable at the switch point (λ = 0, τ = t0 + k e ≤ 0).
@@ -449,7 +448,7 @@ impl Solver for PcgLcp<'_> {
                 tensions[i] = 0.0;
             }
         }
-        Equilibrium::classified(s, u, tensions)
+        Equilibrium::classified(self.model, u, tensions)
     }
 }
 

@@ -1,8 +1,8 @@
 //! A solver's answer: an equilibrium state and the [`SolveInfo`] of how it was reached.
 
 use super::SolveInfo;
-use crate::structure::law::{self, SlackRule};
-use crate::structure::Structure;
+use crate::model::material::{slack_flags, SlackRule};
+use crate::model::Model;
 
 /// An equilibrium state (from the prestressed configuration).
 #[derive(Debug, Clone)]
@@ -19,9 +19,9 @@ impl Equilibrium {
     /// The equilibrium of `displacements` with the solver's `tensions`, its slack set by the one
     /// classification every solver shares ([`SlackRule::Gap`]); a slack cable's tension
     /// is set to exactly 0.
-    pub fn classified(s: &Structure, displacements: Vec<f64>, mut tensions: Vec<f64>) -> Self {
-        let trial = law::trial_tensions(s, &displacements);
-        let slack = law::slack_flags(s, &trial, SlackRule::Gap);
+    pub fn classified(model: &Model, displacements: Vec<f64>, mut tensions: Vec<f64>) -> Self {
+        let trial = model.trial_tensions(&displacements);
+        let slack = slack_flags(&model.structure, &trial, SlackRule::Gap);
         for (tension, &is_slack) in tensions.iter_mut().zip(&slack) {
             if is_slack {
                 *tension = 0.0;

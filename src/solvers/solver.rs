@@ -5,6 +5,7 @@
 //! ([`super::driver::drive`]) does.
 
 use super::{Equilibrium, Measure, Status};
+use crate::model::Model;
 use crate::structure::Structure;
 
 /// Where a state stands, as the solver sees it.
@@ -56,8 +57,13 @@ pub trait Solver {
     /// What [`Progress::stopping_value`] measures.
     fn measure(&self) -> Measure;
 
-    /// The structure the solver is set up for.
-    fn structure(&self) -> &Structure;
+    /// The model the solver is set up for.
+    fn model(&self) -> &Model;
+
+    /// The structure of its model.
+    fn structure(&self) -> &Structure {
+        &self.model().structure
+    }
 
     /// Iteration cap: the driver stops the solve there with [`Status::MaxIterations`].
     fn max_iterations(&self) -> usize;
@@ -101,9 +107,9 @@ pub trait Solver {
     }
 
     /// The no-equilibrium certificate along the displacements (or change of displacements)
-    /// `u` under `load` (docs/method.md §8); by default tested on [`Solver::structure`] whole. A
+    /// `u` under `load` (docs/method.md §8); by default tested on [`Solver::model`] whole. A
     /// solver whose ranks each hold a share of the links tests each share and adds the parts.
     fn no_equilibrium_along(&self, u: &[f64], load: &[f64]) -> Option<super::NoEquilibrium> {
-        super::no_equilibrium_along(self.structure(), u, load)
+        super::no_equilibrium_along(self.model(), u, load)
     }
 }

@@ -5,7 +5,8 @@ use super::SetupError;
 use crate::linalg::{
     factorize_counting_zero_modes, NodeOrdering, SparseCholesky, StiffnessPattern,
 };
-use crate::structure::{law, prestress_stability, Structure};
+use crate::model::{prestress_stability, Model, PrestressStability};
+use crate::structure::Structure;
 use faer::Par;
 
 /// From this many free nodes on, the factor's ordering is nested dissection on the nodes'
@@ -47,13 +48,13 @@ impl TautStiffness {
     /// Assemble and factorize K (with the prestress's geometric stiffness when the model has
     /// it: `K + K_G(t0)`, docs/method.md §8); refuse a structure whose K is singular, saying
     /// where its modes are and whether its prestress would stiffen them.
-    pub fn new(structure: &Structure) -> Result<TautStiffness, SetupError> {
-        let (pattern, mut factor) = Self::analyse(structure);
+    pub fn new(model: &Model) -> Result<TautStiffness, SetupError> {
+        let (pattern, mut factor) = Self::analyse(&model.structure);
         let mut values = vec![0.0; pattern.nnz()];
-        law::assemble_tangent(structure, &pattern, |_| true, &mut values);
+        model.assemble_tangent(&pattern, |_| true, &mut values);
         let zero_modes = factorize_counting_zero_modes(&pattern, &values, &mut factor);
         if zero_modes > 0 {
-            return Err(refusal(structure, zero_modes));
+            return Err(refusal(model, zero_modes));
         }
         Ok(TautStiffness {
             pattern,
@@ -64,22 +65,23 @@ impl TautStiffness {
 }
 
 impl TautStiffness {
-    /// The refusal of `structure`, whose K has `zero_modes` zero-stiffness modes, as
+    /// The refusal of `model`, whose K has `zero_modes` zero-stiffness modes, as
     /// [`TautStiffness::new`] gives it: for a check that found them without K's factor.
-    pub fn refusal(structure: &Structure, zero_modes: usize) -> SetupError {
-        refusal(structure, zero_modes)
+    pub fn refusal(model: &Model, zero_modes: usize) -> SetupError {
+        refusal(model, zero_modes)
     }
 }
 
 /// Why a singular (or, with geometric stiffness, indefinite) taut stiffness is refused: the
 /// prestress-stability test of docs/method.md §8 tells whether geometric stiffness would make it
 /// solvable, and names the nodes of the modes that stay unstiffened.
-fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
+fn refusal(model: &Model, zero_modes: usize) -> SetupError {
+    let s = &model.structure;
     // Grids are refused without the dense test (their mechanisms are too few supports).
-    let stability = (s.layout.is_none() || s.model.has_geometric_stiffness())
+    let stability = (s.layout.is_none() || model.has_geometric_stiffness())
         .then(|| prestress_stability(s))
         .flatten();
-    let unstiffened = |st: &crate::structure::PrestressStability| {
+    let unstiffened = |st: &PrestressStability| {
         let modes: Vec<String> = st
             .unstiffened()
             .take(3)
@@ -90,7 +92,7 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
     };
     // The modes behind the refusal, node by node, for mechanisms.csv: those the prestress does
     // not stiffen, or, under the linear model, every mechanism.
-    let rows = |st: &crate::structure::PrestressStability, all: bool| -> Vec<super::ModeRow> {
+    let rows = |st: &PrestressStability, all: bool| -> Vec<super::ModeRow> {
         st.modes
             .iter()
             .filter(|m| all || m.stiffness <= st.threshold)
@@ -109,13 +111,13 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
             })
             .collect()
     };
-    if s.model.has_geometric_stiffness() {
+    if model.has_geometric_stiffness() {
         let modes = stability
             .as_ref()
             .map(|st| rows(st, false))
             .unwrap_or_default();
-        let slip = crate::structure::unit_slip_strain(s)
-            .map(|(id, strain)| format!("{}; ", crate::structure::unit_slip_sentence(id, strain)))
+        let slip = crate::model::unit_slip_strain(s)
+            .map(|(id, strain)| format!("{}; ", crate::model::unit_slip_sentence(id, strain)))
             .unwrap_or_default();
         let detail = match &stability {
             Some(st) if !st.stable() => format!(
@@ -128,11 +130,11 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
             ),
             _ => format!(
                 "`K + K_G(t0)` is not positive definite: {}",
-                crate::structure::indefinite_reason(s, stability.as_ref())
+                crate::model::indefinite_reason(s, stability.as_ref())
             ),
         };
         return SetupError::NotPrestressStable {
-            model: s.model.name(),
+            model: model.geometry().name(),
             detail,
             modes,
         };
@@ -140,15 +142,11 @@ fn refusal(s: &Structure, zero_modes: usize) -> SetupError {
     let grid = s.layout.is_some();
     // Mᵀ K_G M positive definite does not make K + K_G(t0) so (a prestress too small to
     // resolve, or one that buckles the bars): "solvable" only when it is.
-    let geometric_regular = |st: &crate::structure::PrestressStability| {
-        let with_geometric = s
-            .clone()
-            .with_model(crate::structure::GeometricModel::Prestress);
-        match TautStiffness::new(&with_geometric) {
+    let geometric_regular =
+        |st: &PrestressStability| match TautStiffness::new(&Model::prestress(s.clone())) {
             Ok(_) => Ok(()),
-            Err(_) => Err(crate::structure::indefinite_reason(s, Some(st))),
-        }
-    };
+            Err(_) => Err(crate::model::indefinite_reason(s, Some(st))),
+        };
     match stability {
         Some(st) if st.mechanisms > 0 && st.stable() => match geometric_regular(&st) {
             Err(reason) => SetupError::Mechanism {

@@ -95,3 +95,54 @@ pub fn length_and_direction(xa: [f64; 3], xb: [f64; 3]) -> (f64, [f64; 3]) {
     let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     (length, [d[0] / length, d[1] / length, d[2] / length])
 }
+
+/// Two unit vectors orthogonal to the unit vector n and to each other: `I − n nᵀ = p pᵀ + q qᵀ`.
+pub fn transverse_pair(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    // Cross with the axis n is least aligned with.
+    let axis = (0..3)
+        .min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs()))
+        .unwrap_or(0);
+    let mut e = [0.0; 3];
+    e[axis] = 1.0;
+    let p = normalised(cross(n, e));
+    (p, cross(n, p))
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalised(v: [f64; 3]) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    [v[0] / n, v[1] / n, v[2] / n]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transverse_pair_completes_an_orthonormal_basis() {
+        for n in [
+            [1.0, 0.0, 0.0],
+            [0.0, 0.6, 0.8],
+            normalised([1.0, -2.0, 0.5]),
+        ] {
+            let (p, q) = transverse_pair(n);
+            let d = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+            for (a, b, want) in [
+                (p, p, 1.0),
+                (q, q, 1.0),
+                (p, q, 0.0),
+                (p, n, 0.0),
+                (q, n, 0.0),
+            ] {
+                assert!((d(a, b) - want).abs() < 1e-14, "{a:?}·{b:?}");
+            }
+        }
+    }
+}

@@ -6,25 +6,18 @@
 
 mod geometry;
 mod grid;
-pub mod law;
 mod share;
 mod spec;
-mod stability;
 mod statics;
 mod storage;
 mod supports;
 
-pub use geometry::{length_and_direction, Geometry, Loading, Member, NodeFix};
+pub use geometry::{length_and_direction, transverse_pair, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout, GridRole};
-pub use law::{GeometricModel, GeometricStiffness};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
-pub use stability::{
-    indefinite_reason, largest_moving_nodes, prestress_stability, unit_slip_sentence,
-    unit_slip_strain, Mode, PrestressStability, DENSE_LIMIT, PRESTRESS_STRAIN_WARNING,
-};
 pub use statics::{
     equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
-    DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal,
+    DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal, DENSE_LIMIT,
 };
 pub use storage::{StructureSize, BASE_BYTES, BYTES_PER_LINK};
 
@@ -96,6 +89,28 @@ impl Link {
     pub fn compatibility_row(&self, dof_of: &[usize]) -> LinkDofs {
         self.row_along(self.direction, dof_of)
     }
+
+    /// The row `v·(U_b − U_a)` on the free dofs numbered by `dof_of` (clamped components left
+    /// out, zero coefficients kept): with v the member's unit vector, its row of B.
+    pub fn row_along(&self, v: [f64; 3], dof_of: &[usize]) -> SparseRow {
+        let mut row = SparseRow {
+            len: 0,
+            dofs: [0; 6],
+            coef: [0.0; 6],
+        };
+        for (node, sign) in [(self.a, -1.0), (self.b, 1.0)] {
+            for (k, &vk) in v.iter().enumerate() {
+                let d = dof_of[3 * node + k];
+                if d != CLAMPED {
+                    let i = row.len as usize;
+                    row.dofs[i] = d as u32;
+                    row.coef[i] = sign * vk;
+                    row.len += 1;
+                }
+            }
+        }
+        row
+    }
 }
 
 /// The assembled discrete structure.
@@ -136,10 +151,6 @@ pub struct Structure {
     /// The scale of every prestress, N: the grid's lower cable prestress p, else the largest
     /// `|t0|` of a member.
     pub prestress_scale: f64,
-    /// The geometric effects modelled (`model.geometry`; [`Structure::new`] gives `linear`).
-    pub model: GeometricModel,
-    /// `K_G(t0)`, the prestress's geometric stiffness, for the models that have it.
-    pub geometric: Option<GeometricStiffness>,
 }
 
 impl Structure {
@@ -280,8 +291,6 @@ impl Structure {
             held_load,
             settlement_force,
             prestress_scale,
-            model: GeometricModel::Linear,
-            geometric: None,
         }
     }
 
@@ -327,29 +336,19 @@ impl Structure {
         [0, 1, 2].map(|c| self.dof_of[3 * node + c] == CLAMPED)
     }
 
-    /// The structure under geometric model `model`: with geometric stiffness, `K_G(t0)` is
-    /// built once here (docs/method.md §8).
-    pub fn with_model(mut self, model: GeometricModel) -> Structure {
-        self.model = model;
-        self.geometric = model
-            .has_geometric_stiffness()
-            .then(|| GeometricStiffness::of_prestress(&self));
-        self
+    /// The elongation a link's prescribed end displacements impose on the initial geometry,
+    /// `e_p = n·(Ud_b − Ud_a)`: [`Link::prestress`] holds `t0 + k e_p`.
+    pub fn imposed_elongation(&self, l: &Link) -> f64 {
+        (0..3)
+            .map(|k| l.direction[k] * (self.prescribed[3 * l.b + k] - self.prescribed[3 * l.a + k]))
+            .sum()
     }
 
-    /// The load the solvers take at α, on the free dofs: `α F`, less with `prestress` the
-    /// geometric force of the prescribed displacements, `K_G,fd(t0) U_d` (docs/method.md §8:
-    /// the linearisation `(K + K_G) U = F` on the whole U, settlement included, moves the
-    /// held columns to the right-hand side; their axial part `K_fd U_d` is the links'
-    /// effective prestress). Prescribed displacements are never scaled by α.
-    pub fn load(&self, alpha: f64) -> Vec<f64> {
-        let mut load: Vec<f64> = self.unit_load.iter().map(|f| alpha * f).collect();
-        if self.model == GeometricModel::Prestress {
-            if let Some(g) = &self.geometric {
-                g.add_settlement_force(self, -1.0, &mut load);
-            }
-        }
-        load
+    /// The given prestress t0 of a link, without the `k e_p` its prescribed end displacements
+    /// impose ([`Link::prestress`] holds `t0 + k e_p`).
+    #[inline]
+    pub fn given_prestress(&self, l: &Link) -> f64 {
+        l.prestress - l.stiffness * self.imposed_elongation(l)
     }
 
     /// The nodes' bounding box, m: `[min, max]` per axis (infinite bounds without nodes).

@@ -6,6 +6,10 @@ use super::Structure;
 use crate::linalg::{factorize_counting_zero_modes, SparseCholesky, StiffnessPattern};
 use faer::Par;
 
+/// The most free dofs a dense test takes (an eigen-decomposition of `BᵀB` or `B Bᵀ`, n × n:
+/// the self-stress states here, prestress stability in `crate::model`).
+pub const DENSE_LIMIT: usize = 1500;
+
 /// The Pellegrino–Calladine counts of the equilibrium matrix `A = Bᵀ` (docs/method.md §7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EquilibriumCounts {
@@ -155,7 +159,7 @@ pub fn self_stress_dense(
         .filter(|&i| structure.link_dofs[i].len > 0)
         .collect();
     let m = kept.len();
-    if m > DENSE_MEMBERS || structure.n_free > super::DENSE_LIMIT {
+    if m > DENSE_MEMBERS || structure.n_free > DENSE_LIMIT {
         return Err(DenseSelfStressRefusal::TooLarge);
     }
     // B Bᵀ over the kept members: its null space is the self-stress states.

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use tensolve::case::{self, Case};
+use tensolve::model::Model;
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Silent, Solution, TautStiffness};
@@ -46,15 +47,20 @@ pub fn paper_structure(overrides: &[(&str, &str, toml::Value)]) -> Structure {
     (paper_with(overrides)).structure()
 }
 
+/// The model of the paper case with some keys replaced (its structure under its geometric model).
+pub fn paper_model(overrides: &[(&str, &str, toml::Value)]) -> Model {
+    (paper_with(overrides)).model()
+}
+
 /// The load `alpha · unit_load` on the free dofs.
 pub fn load(s: &Structure, alpha: f64) -> Vec<f64> {
     s.unit_load.iter().map(|f| alpha * f).collect()
 }
 
 /// Solve with newton (from U = 0) and pcg-lcp, default settings; both must converge.
-pub fn solve_both(s: &Structure, alpha: f64) -> (Solution, Solution) {
+pub fn solve_both(s: &Model, alpha: f64) -> (Solution, Solution) {
     let taut = TautStiffness::new(s).expect("taut stiffness is regular");
-    let f = load(s, alpha);
+    let f = load(&s.structure, alpha);
     let newton = Newton::new(s, &taut, NewtonSettings::default())
         .expect("newton set-up")
         .solve(&f, None, &mut Silent);

@@ -118,7 +118,7 @@ pub enum Progress<'a> {
 /// As `run` judges it: an answer on the initial geometry moving a node by more than the
 /// structure's size is beyond the model, converged or not (review turn 4, R9).
 fn mark_beyond_model(prepared: &Prepared, solution: &mut crate::solvers::Solution) {
-    if crate::results::beyond_model(&prepared.structure, &solution.equilibrium) {
+    if crate::results::beyond_model(&prepared.model, &solution.equilibrium) {
         solution.info.status = Status::BeyondModel;
     }
 }
@@ -152,7 +152,7 @@ fn reference(
         });
     }
     Ok((
-        Reference::new(&prepared.structure, &solution.equilibrium.displacements),
+        Reference::new(&prepared.model, &solution.equilibrium.displacements),
         solution.equilibrium,
     ))
 }
@@ -176,7 +176,7 @@ pub fn measure(
     let reference_method = reference_method(case)?;
     let mut series = Vec::new();
     for &alpha in &case.load.alphas {
-        let load = prepared.structure.load(alpha);
+        let load = prepared.model.load(alpha);
         on_progress(Progress::Reference {
             method: reference_method,
             alpha,
@@ -229,7 +229,7 @@ fn measure_series(
     let final_error = match samples.last() {
         Some(s) if s.iteration == last => s.error,
         _ => {
-            let s = &prepared.structure;
+            let s = &prepared.model.structure;
             let mut elongations = vec![0.0; s.links.len()];
             s.elongations(&solution.equilibrium.displacements, &mut elongations);
             reference.error(&elongations)

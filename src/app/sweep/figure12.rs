@@ -54,14 +54,14 @@ fn write_module_comparison(
                 solvers.push(set_up);
             }
         }
-        let structure = &prepared.structure;
-        let load = structure.load(alpha);
+        let model = &prepared.model;
+        let load = model.load(alpha);
         let mut reference = ReferenceSource::new(&grid_case, &solvers, &prepared)?;
         let cold = vec![None; solvers.len()];
         let reference_solution = reference.solve(&load, &mut solvers, &cold);
         let errors = reference_solution
             .as_ref()
-            .map(|r| Reference::new(structure, &r.equilibrium.displacements));
+            .map(|r| Reference::new(model, &r.equilibrium.displacements));
         for set_up in &mut solvers {
             let mut recorder = Recorder::default();
             set_up.solver.solve(&load, errors.as_ref(), &mut recorder);

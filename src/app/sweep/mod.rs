@@ -172,11 +172,11 @@ pub fn run_on(
     };
     on_every_rank(exchange, kept)?;
     events(RunEvent::LinksKept {
-        kept: prepared.structure.links.len(),
+        kept: prepared.model.structure.links.len(),
         whole: prepared
             .share
             .as_ref()
-            .map_or(prepared.structure.links.len(), |s| s.world_links()),
+            .map_or(prepared.model.structure.links.len(), |s| s.world_links()),
     });
     let prepared = prepared;
     // 2. Every solver asked for, set up once.
@@ -465,8 +465,8 @@ impl<'s> Sweep<'s> {
         alpha: f64,
         events: &mut dyn FnMut(RunEvent<'_>),
     ) -> Result<(), RunError> {
-        let structure = &self.prepared.structure;
-        let load = structure.load(alpha);
+        let model = &self.prepared.model;
+        let load = model.load(alpha);
         if self.reference.needed() {
             events(RunEvent::Stage(&format!(
                 "reference solve at alpha = {}",
@@ -478,7 +478,7 @@ impl<'s> Sweep<'s> {
             .solve(&load, &mut self.solvers, &self.previous);
         let reference_errors = reference_solution
             .as_ref()
-            .map(|r| Reference::new(structure, &r.equilibrium.displacements));
+            .map(|r| Reference::new(model, &r.equilibrium.displacements));
         for index in 0..self.solvers.len() {
             let set_up = &mut self.solvers[index];
             let key = SolveKey {
@@ -536,7 +536,7 @@ impl<'s> Sweep<'s> {
             Some(_) => return Ok(()),
             None => None,
         };
-        let (structure, alpha) = (&self.prepared.structure, key.alpha);
+        let (model, alpha) = (&self.prepared.model, key.alpha);
         // 6b. Where the solve's load path started and how far it went, before the verdict
         //     below may judge the answer otherwise (the solver's path moved on all the same).
         let path = self.paths[index].follow(alpha, &solution);
@@ -550,8 +550,8 @@ impl<'s> Sweep<'s> {
             load,
             |eq| match together {
                 Some(_) => solver.no_equilibrium_along(&eq.displacements, load),
-                None => crate::solvers::no_equilibrium(structure, eq, load)
-                    .or_else(|| crate::solvers::no_equilibrium_of_answer(structure, eq, load)),
+                None => crate::solvers::no_equilibrium(model, eq, load)
+                    .or_else(|| crate::solvers::no_equilibrium_of_answer(model, eq, load)),
             },
         );
         self.previous[index] = (solution.info.status.converged() && results::is_finite(&solution))
@@ -562,14 +562,14 @@ impl<'s> Sweep<'s> {
             let eq = &solution.equilibrium;
             let measures = match together {
                 Some(share) => AnswerMeasures::over_shares(
-                    structure,
+                    &model.structure,
                     &share.kept_world_links(),
                     share.world_cables(),
                     eq,
                     load,
                     self.exchange,
                 ),
-                None => AnswerMeasures::of(structure, eq, load),
+                None => AnswerMeasures::of(model, eq, load),
             };
             let mut row = SummaryRow::new(
                 key.method.name(),
@@ -724,7 +724,8 @@ fn sinks<'s>(
     };
     let staging = output.borrow().staging().to_path_buf();
     let dir = staging.as_path();
-    let (structure, taut) = (&prepared.structure, prepared.taut.as_ref());
+    let (model, taut) = (&prepared.model, prepared.taut.as_ref());
+    let structure = &model.structure;
     let out = &case.output;
     let has_history = solvers
         .iter()
@@ -740,14 +741,14 @@ fn sinks<'s>(
                 .map_or(structure.n_cables(), |share| share.world_cables()),
         ),
     );
-    sinks.add(out.tensions, PerSolveSink::tensions(root, dir, structure));
+    sinks.add(out.tensions, PerSolveSink::tensions(root, dir, model));
     sinks.add(
         out.displacements,
-        PerSolveSink::displacements(root, dir, structure),
+        PerSolveSink::displacements(root, dir, model),
     );
-    sinks.add(out.forces, PerSolveSink::forces(root, dir, structure));
-    sinks.add(out.reactions, PerSolveSink::reactions(root, dir, structure));
-    sinks.add(out.vtk, PerSolveSink::vtk(root, dir, structure));
+    sinks.add(out.forces, PerSolveSink::forces(root, dir, model));
+    sinks.add(out.reactions, PerSolveSink::reactions(root, dir, model));
+    sinks.add(out.vtk, PerSolveSink::vtk(root, dir, model));
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {
             amplification: out.amplification,
@@ -760,9 +761,9 @@ fn sinks<'s>(
     }
     sinks.add(true, PublishSink::new(output));
     if let Some(taut) = taut {
-        sinks.add(out.stability, StabilitySink::new(output, structure, taut));
+        sinks.add(out.stability, StabilitySink::new(output, model, taut));
     }
-    sinks.add(out.reactions, ReactionTotalsSink::new(output, structure));
+    sinks.add(out.reactions, ReactionTotalsSink::new(output, model));
     sinks.add(out.summary, SummarySink::new(output));
     sinks
 }

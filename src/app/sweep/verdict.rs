@@ -41,12 +41,12 @@ pub(super) struct Advice {
 
 impl Advice {
     fn of(prepared: &Prepared) -> Advice {
-        let s = &prepared.structure;
+        let (model, s) = (&prepared.model, &prepared.model.structure);
         Advice {
             self_stress_states: None,
-            geometric: s.model.has_geometric_stiffness(),
-            unit_slip: crate::structure::unit_slip_strain(s)
-                .map(|(id, strain)| crate::structure::unit_slip_sentence(id, strain)),
+            geometric: model.has_geometric_stiffness(),
+            unit_slip: crate::model::unit_slip_strain(s)
+                .map(|(id, strain)| crate::model::unit_slip_sentence(id, strain)),
             size: s.size(),
             stopped: None,
         }
@@ -67,14 +67,14 @@ pub(super) fn assess(
     load: &[f64],
     certificate: impl FnOnce(&Equilibrium) -> Option<NoEquilibrium>,
 ) -> Verdict {
-    let s = &prepared.structure;
+    let model = &prepared.model;
     let mut advice = Advice::of(prepared);
     // The solver's own certificate holds whatever its last iterate (issue 42, D2); a
     // non-finite answer has no direction to test, and nothing else to judge.
     let finite = results::is_finite(solution);
     // A converged answer is an equilibrium (r(U) within its tolerance): only the others, and
     // an answer beyond the model (a runaway its solver stopped on), are asked for a runaway.
-    let beyond = finite && results::beyond_model(s, &solution.equilibrium);
+    let beyond = finite && results::beyond_model(model, &solution.equilibrium);
     let found = solution.info.no_equilibrium.clone().or_else(|| {
         (finite && (!solution.info.status.converged() || beyond))
             .then(|| certificate(&solution.equilibrium))
@@ -83,7 +83,7 @@ pub(super) fn assess(
     if let Some(none) = found {
         solution.info.status = Status::NoEquilibrium;
         advice.self_stress_states =
-            Some(crate::structure::equilibrium_counts(s).self_stress_states);
+            Some(crate::structure::equilibrium_counts(&model.structure).self_stress_states);
         return Verdict {
             min_tangent_eigenvalue: None,
             geometric_term: None,
@@ -105,7 +105,7 @@ pub(super) fn assess(
     let taut = prepared.taut.as_ref();
     let min_tangent_eigenvalue = taut
         .filter(|_| checks.eigenvalue && !solution.info.status.no_answer())
-        .map(|taut| results::smallest_tangent_eigenvalue(s, &solution.equilibrium, taut));
+        .map(|taut| results::smallest_tangent_eigenvalue(model, &solution.equilibrium, taut));
     if solution.info.status.converged() && min_tangent_eigenvalue.is_some_and(|v| v < 0.0) {
         solution.info.status = Status::Unstable;
     }
@@ -130,7 +130,7 @@ pub(super) fn assess(
         min_tangent_eigenvalue,
         geometric_term: taut
             .filter(|_| checks.geometric_term)
-            .and_then(|taut| results::geometric_term(s, &solution.equilibrium, taut)),
+            .and_then(|taut| results::geometric_term(model, &solution.equilibrium, taut)),
         no_equilibrium: None,
         advice,
         uniqueness,
@@ -346,7 +346,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/simplex.toml");
         let case = crate::case::load_with(&path, &[]).unwrap();
         let prepared = crate::app::setup::prepare(&case).unwrap();
-        let s = &prepared.structure;
+        let s = &prepared.model.structure;
         let none = NoEquilibrium {
             slack_cables: vec![90],
             mode_nodes: vec![(3, [1.0, 0.0, 0.0])],

@@ -276,7 +276,7 @@ impl Latin<'_> {
         if !self.exchange.all(failed.is_none()) {
             return Err(SetupError::SingularSubstructure {
                 index: failed.unwrap_or(0),
-                prestress: structure.geometric.is_some(),
+                prestress: self.model.prestress_stiffness().is_some(),
             });
         }
         share_homogenised(

@@ -2,8 +2,7 @@
 //! ŝ that fed it, and what the state reports after each linear stage.
 
 use super::local_stage::link_local_stage;
-use super::{displacement_residual, Latin, LatinState, SubState};
-use crate::solvers::exact_and_frozen_residuals;
+use super::{Latin, LatinState, SubState};
 use rayon::prelude::*;
 
 /// Δη below this fraction of the prestress scale is round-off (a load-induced Δη on the
@@ -81,14 +80,14 @@ impl Latin<'_> {
     /// with inexact Newton status steps the residual under the law linearised at `law_slack`.
     /// It reads only U, so it may run beside the local stage.
     pub(super) fn residuals(&self, u: &[f64], load: &[f64], law_slack: &[bool]) -> Residuals {
-        if self.structure.geometric.is_none() {
+        if self.model.prestress_stiffness().is_none() {
             let (exact, frozen) = self.residuals_by_substructure(u, load, law_slack);
             (exact, self.newton_steps().then_some(frozen))
         } else if self.newton_steps() {
-            let (exact, frozen) = exact_and_frozen_residuals(self.structure, u, load, law_slack);
+            let (exact, frozen) = self.model.exact_and_frozen_residuals(u, load, law_slack);
             (exact, Some(frozen))
         } else {
-            (displacement_residual(self.structure, u, load), None)
+            (self.model.residual(u, load), None)
         }
     }
 

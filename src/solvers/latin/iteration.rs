@@ -8,11 +8,11 @@ use super::indicator::Residuals;
 use super::local_stage::LocalLaw;
 use super::state::{LatinState, SubState};
 use super::{Latin, SearchPolicy, StopOn};
+use crate::model::material;
+use crate::model::Model;
 use crate::solvers::{
     unit_direction, Equilibrium, LinksAlong, Measure, NoEquilibrium, Progress, Solver, Status,
 };
-use crate::structure::law;
-use crate::structure::Structure;
 use rayon::prelude::*;
 
 /// A LATIN answer whose η meets the tolerance is converged only with r(U) at most this many
@@ -229,8 +229,8 @@ impl Solver for Latin<'_> {
         Measure::Indicator
     }
 
-    fn structure(&self) -> &Structure {
-        self.structure
+    fn model(&self) -> &Model {
+        self.model
     }
 
     fn max_iterations(&self) -> usize {
@@ -404,8 +404,8 @@ impl Solver for Latin<'_> {
 impl Latin<'_> {
     /// The answer of displacements `u` with the held links' tensions `mine` (in the held
     /// substructures' order), classified by the rule every solver shares
-    /// ([`law::SlackRule::Gap`]): a cable is slack where its trial tension `t0 + k B U` lies
-    /// below [`law::SLACK_GAP_TOLERANCE`] of the cables' force scale, the largest over every
+    /// ([`material::SlackRule::Gap`]): a cable is slack where its trial tension `t0 + k B U` lies
+    /// below [`material::SLACK_GAP_TOLERANCE`] of the cables' force scale, the largest over every
     /// rank; a slack cable's tension is exactly 0. Tensions and slack flags are gathered whole.
     fn classified(&self, u: Vec<f64>, mut mine: Vec<f64>) -> Equilibrium {
         let s = self.structure;
@@ -415,9 +415,9 @@ impl Latin<'_> {
                 .flat_map(|sub| &sub.links)
         };
         let trial: Vec<f64> = held_links()
-            .map(|&i| law::trial_tension(&s.links[i], s.link_dofs[i].elongation(&u)))
+            .map(|&i| material::trial_tension(&s.links[i], s.link_dofs[i].elongation(&u)))
             .collect();
-        let scale = law::gap_scale(
+        let scale = material::gap_scale(
             held_links()
                 .map(|&i| &s.links[i])
                 .zip(trial.iter().copied()),
@@ -434,7 +434,7 @@ impl Latin<'_> {
             .zip(&trial)
             .zip(&mut mine)
             .map(|((&i, &t), tension)| {
-                let is_slack = law::gap_slack(&s.links[i], t, scale);
+                let is_slack = material::gap_slack(&s.links[i], t, scale);
                 if is_slack {
                     *tension = 0.0;
                 }
@@ -455,7 +455,7 @@ impl Latin<'_> {
     pub(super) fn certificate_along(&self, u: &[f64], load: &[f64]) -> Option<NoEquilibrium> {
         let s = self.structure;
         // The same on every rank: u is whole.
-        let d = unit_direction(s, u)?;
+        let d = unit_direction(self.model, u)?;
         let held = self.held.clone();
         let parts: Vec<Option<LinksAlong>> = held
             .clone()
@@ -494,7 +494,7 @@ impl Latin<'_> {
             .collect();
         slack.sort_unstable();
         d.certificate(
-            s,
+            self.model,
             stretch,
             slack.into_iter().map(|(_, id)| id).collect(),
             load,

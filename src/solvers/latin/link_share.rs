@@ -1,13 +1,14 @@
 //! A rank's share of the links (issue 25): a micro-macro solve on P ranks where each rank keeps
 //! only the links of its own substructures. What the solver needs of the whole structure (its
 //! counts, the default d_m, the prestress scale) is worked out once from it at set-up, with the
-//! partition; the rank then keeps a structure of its links alone ([`Structure::keeping_links`])
+//! partition; the rank then keeps a model of its links alone ([`Model::keeping_links`])
 //! and, per substructure, where its links' values go in the world's link order (the answer is
 //! gathered whole, link by link).
 
 use super::{auto_dm, LatinSettings, Partition, SearchDirection, SearchPolicy};
+use crate::model::{GeometricModel, Model};
 use crate::solvers::SetupError;
-use crate::structure::{GeometricModel, Structure};
+use crate::structure::Structure;
 
 /// What the LATIN solver needs of the whole structure, whichever share of it a rank keeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,23 +89,23 @@ impl LinkShare {
         settings.policy != SearchPolicy::Status && !model.has_geometric_stiffness()
     }
 
-    /// The share rank `rank` of `ranks` keeps of `whole` under `settings`: the structure of
-    /// its substructures' links ([`super::block`]) alone, and the rest of its share; `None`
+    /// The share rank `rank` of `ranks` keeps of the model `whole` under `settings`: the model
+    /// of its substructures' links ([`super::block`]) alone, and the rest of its share; `None`
     /// when the solve cannot run on shares ([`LinkShare::possible`]). Settings `whole` cannot
     /// take are refused first.
     pub fn new(
-        whole: &Structure,
+        whole: &Model,
         settings: &LatinSettings,
         rank: usize,
         ranks: usize,
-    ) -> Result<Option<(Structure, LinkShare)>, SetupError> {
-        settings.validate(whole)?;
-        if !Self::possible(whole.model, settings) || whole.geometric.is_some() {
+    ) -> Result<Option<(Model, LinkShare)>, SetupError> {
+        settings.validate(&whole.structure)?;
+        if !Self::possible(whole.geometry(), settings) {
             return Ok(None);
         }
-        let mut partition = Partition::new(whole, settings.subdomains, settings.weak);
+        let mut partition = Partition::new(&whole.structure, settings.subdomains, settings.weak);
         let n_subs = partition.substructures.len();
-        let world = WorldFacts::of(whole, settings, n_subs);
+        let world = WorldFacts::of(&whole.structure, settings, n_subs);
         let held = super::block(rank, ranks, n_subs);
         let mut kept = Vec::new();
         let mut world_links = Vec::with_capacity(n_subs);
@@ -116,9 +117,9 @@ impl LinkShare {
             }
             world_links.push(links);
         }
-        let structure = whole
+        let model = whole
             .keeping_links(&kept)
-            .expect("a structure without K_G(t0) keeps any links");
+            .expect("a model without K_G(t0) keeps any links");
         let share = LinkShare {
             partition,
             world_links,
@@ -126,9 +127,9 @@ impl LinkShare {
             settings: *settings,
             ranks,
             held,
-            cables: whole.n_cables(),
+            cables: whole.structure.n_cables(),
         };
-        Ok(Some((structure, share)))
+        Ok(Some((model, share)))
     }
 
     /// Links of the whole structure.

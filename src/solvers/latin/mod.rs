@@ -57,7 +57,8 @@ pub use state::LatinState;
 pub(crate) use state::{SideState, SubState};
 pub(crate) use substructure::{OperatorStorage, Substructure};
 
-use super::{displacement_residual, SetupError};
+use super::SetupError;
+use crate::model::Model;
 use crate::structure::Structure;
 use macro_problem::MacroProblem;
 
@@ -95,6 +96,7 @@ pub struct PartitionReport {
 
 /// The LATIN solver, set up for one structure and one partition.
 pub struct Latin<'s> {
+    model: &'s Model,
     structure: &'s Structure,
     settings: LatinSettings,
     /// d_m as used: `settings.dm`, or [`auto_dm`] for this structure and partition.
@@ -260,30 +262,31 @@ impl<'s> Latin<'s> {
     /// Set up: partition, interfaces, substructure operators (in parallel) and the macro
     /// problem; settings the structure cannot take are refused first
     /// ([`LatinSettings::validate`]).
-    pub fn new(structure: &'s Structure, settings: LatinSettings) -> Result<Self, SetupError> {
-        Self::on_ranks(structure, settings, &OneProcess)
+    pub fn new(model: &'s Model, settings: LatinSettings) -> Result<Self, SetupError> {
+        Self::on_ranks(model, settings, &OneProcess)
     }
 
     /// Set up on the processes of `exchange` (every one calls it alike): each builds the
     /// operators of its block of substructures ([`block`]), L_E and Q_E of the others are
     /// gathered, the macro problem is factorised on every rank (see [`Exchange`]). Every rank
-    /// holds `structure` whole.
+    /// holds `model` whole.
     pub fn on_ranks(
-        structure: &'s Structure,
+        model: &'s Model,
         settings: LatinSettings,
         exchange: &'s dyn Exchange,
     ) -> Result<Self, SetupError> {
+        let structure = &model.structure;
         settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
         let world = WorldFacts::of(structure, &settings, partition.substructures.len());
-        Self::set_up(structure, &partition, world, None, settings, exchange)
+        Self::set_up(model, &partition, world, None, settings, exchange)
     }
 
-    /// [`Latin::on_ranks`] on a rank that keeps only its substructures' links: `structure`
+    /// [`Latin::on_ranks`] on a rank that keeps only its substructures' links: `model`
     /// and `share` as [`LinkShare::new`] made them, with these settings and as many ranks as
     /// `exchange` has.
     pub fn on_share(
-        structure: &'s Structure,
+        model: &'s Model,
         share: &'s LinkShare,
         settings: LatinSettings,
         exchange: &'s dyn Exchange,
@@ -293,7 +296,7 @@ impl<'s> Latin<'s> {
             "a share of the links is used with the settings and ranks it was made for"
         );
         Self::set_up(
-            structure,
+            model,
             &share.partition,
             share.world,
             Some(&share.world_links),
@@ -302,16 +305,17 @@ impl<'s> Latin<'s> {
         )
     }
 
-    /// Set up for `partition` of `structure` (whole, or with the held substructures' links
+    /// Set up for `partition` of `model` (whole, or with the held substructures' links
     /// alone and `world_links` saying where they lie in the whole).
     fn set_up(
-        structure: &'s Structure,
+        model: &'s Model,
         partition: &Partition,
         mut world: WorldFacts,
         world_links: Option<&'s [Vec<usize>]>,
         settings: LatinSettings,
         exchange: &'s dyn Exchange,
     ) -> Result<Self, SetupError> {
+        let structure = &model.structure;
         let mut interfaces =
             Interfaces::new(structure, partition, settings.weak, world.macro_degree);
         let base_search: Vec<f64> = structure
@@ -343,7 +347,7 @@ impl<'s> Latin<'s> {
         };
         let build = |interfaces: &Interfaces, dm: f64| {
             operators::build(
-                structure,
+                model,
                 partition,
                 &interfaces.list,
                 &holders,
@@ -394,6 +398,7 @@ impl<'s> Latin<'s> {
         let dm = world.dm;
         let dof_ownership = dof_ownership::DofOwnership::of(&substructures, structure.n_free);
         let mut latin = Latin {
+            model,
             structure,
             settings,
             dm,
@@ -457,7 +462,7 @@ impl<'s> Latin<'s> {
     /// cable) and r(U) with the prestress's geometric stiffness (one pass over the whole
     /// structure).
     fn reads_whole_state(&self) -> bool {
-        self.settings.policy == SearchPolicy::Status || self.structure.geometric.is_some()
+        self.settings.policy == SearchPolicy::Status || self.model.prestress_stiffness().is_some()
     }
 
     /// U of the linear stage on the free dofs, interface nodes averaged over the

@@ -7,8 +7,9 @@ use super::shapes::Shapes;
 use super::substructure::OperatorStorage;
 use super::{Interface, Partition, Substructure};
 use crate::decomposition::Exchange;
+use crate::model::Model;
 use crate::solvers::SetupError;
-use crate::structure::{Structure, CLAMPED};
+use crate::structure::CLAMPED;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -17,7 +18,7 @@ use rayon::prelude::*;
 /// gathered from the processes of `exchange` that hold them; and the macro problem they make.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build(
-    structure: &Structure,
+    model: &Model,
     partition: &Partition,
     interfaces: &[Interface],
     holders: &[u8],
@@ -32,16 +33,16 @@ pub(super) fn build(
     let built: Vec<Result<Substructure, usize>> = (0..partition.substructures.len())
         .into_par_iter()
         .map_init(
-            || vec![CLAMPED; 3 * structure.n_nodes()],
+            || vec![CLAMPED; 3 * model.structure.n_nodes()],
             |scratch, e| {
                 let topo = &partition.substructures[e];
                 if !held.contains(&e) {
                     return Ok(Substructure::remote(
-                        e, topo, structure, interfaces, holders, scratch,
+                        e, topo, model, interfaces, holders, scratch,
                     ));
                 }
                 Substructure::new(
-                    e, topo, structure, interfaces, holders, search, dm, storage, &shapes, scratch,
+                    e, topo, model, interfaces, holders, search, dm, storage, &shapes, scratch,
                 )
                 .map_err(|_| e)
             },
@@ -57,7 +58,7 @@ pub(super) fn build(
             .fold(f64::INFINITY, f64::min);
         return Err(SetupError::SingularSubstructure {
             index: first as usize,
-            prestress: structure.geometric.is_some(),
+            prestress: model.prestress_stiffness().is_some(),
         });
     }
     let mut substructures: Vec<Substructure> = built.into_iter().flatten().collect();

@@ -10,7 +10,7 @@ use super::dof_ownership::NOT_SHARED;
 use super::neighbours::PIECES_PER_DOF;
 use super::{Latin, Substructure};
 use crate::linalg::norm;
-use crate::structure::law;
+use crate::model::material;
 use crate::structure::Structure;
 use rayon::prelude::*;
 
@@ -39,8 +39,8 @@ impl Substructure {
             let link = &structure.links[i];
             // e = B U on the initial geometry, with U read through E's dof map.
             let e: f64 = row.iter().map(|(d, c)| c * u[self.dof_global[d]]).sum();
-            let trial = law::trial_tension(link, e);
-            let t = law::tension(link, trial);
+            let trial = material::trial_tension(link, e);
+            let t = material::tension(link, trial);
             let frozen = if slack[i] { 0.0 } else { trial };
             for (d, c) in row.iter() {
                 out.exact[d] += c * t;

@@ -4,7 +4,7 @@
 
 use super::operators::share_homogenised;
 use super::{Latin, LatinState, SubState, SLACK_SEARCH_FACTOR, STATUS_BAND, STATUS_PERSISTENCE};
-use crate::structure::law;
+use crate::model::material;
 use rayon::prelude::*;
 
 impl Latin<'_> {
@@ -63,7 +63,7 @@ impl Latin<'_> {
         let mut trial = vec![0.0; links.len()];
         for (sub, st) in self.substructures.iter().zip(subs) {
             for (j, &i) in sub.links.iter().enumerate() {
-                trial[i] = law::trial_tension(&links[i], st.e[j]);
+                trial[i] = material::trial_tension(&links[i], st.e[j]);
             }
         }
         let (sum2, cables) = links

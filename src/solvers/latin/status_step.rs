@@ -13,8 +13,8 @@
 
 use super::{Latin, LatinState, SubState};
 use crate::linalg::dot;
+use crate::model::material;
 use crate::solvers::newton::{exact_line_search, EnergyAlongStep};
-use crate::structure::law;
 use rayon::prelude::*;
 
 /// An inner run that has not reached its forcing tolerance after this many iterations takes
@@ -128,7 +128,7 @@ impl Latin<'_> {
         let near = state.residual <= 100.0 * self.settings.residual_tolerance();
         let theta = if near && state.residual < start.residual {
             1.0
-        } else if self.structure.geometric.is_some() {
+        } else if self.model.prestress_stiffness().is_some() {
             self.line_search(&start.displacements, &step, &state.load)
         } else {
             self.line_search_by_substructure(&start.displacements, &step, sums.load_work)
@@ -161,7 +161,7 @@ impl Latin<'_> {
         {
             for (&i, &e) in sub.links.iter().zip(&st.e) {
                 let (l, was) = (&links[i], state.law_slack[i]);
-                let tau = law::trial_tension(l, e);
+                let tau = material::trial_tension(l, e);
                 slack[i] = l.unilateral && if was { tau <= band } else { tau < -band };
                 law_changed |= slack[i] != was;
                 disagree += usize::from(slack[i] != self.search_slack[i]);
@@ -259,7 +259,7 @@ impl Latin<'_> {
                     .zip(&st.e)
                     .filter(|(&i, _)| links[i].unilateral);
                 cables
-                    .map(|(&i, &e)| law::trial_tension(&links[i], e).powi(2))
+                    .map(|(&i, &e)| material::trial_tension(&links[i], e).powi(2))
                     .sum::<f64>()
             })
             .collect();
@@ -284,7 +284,11 @@ impl Latin<'_> {
                 };
                 EnergyAlongStep::of_links(sub.links.iter().zip(&sub.link_dofs).map(|(&i, row)| {
                     let link = &s.links[i];
-                    (link, law::trial_tension(link, at(u0, row)), at(step, row))
+                    (
+                        link,
+                        material::trial_tension(link, at(u0, row)),
+                        at(step, row),
+                    )
                 }))
             })
             .collect();
@@ -333,12 +337,10 @@ impl Latin<'_> {
     /// structure (such a solve holds the whole state on every process).
     fn line_search(&self, u0: &[f64], step: &[f64], load: &[f64]) -> f64 {
         let s = self.structure;
-        let trial = law::trial_tensions(s, u0);
+        let trial = self.model.trial_tensions(u0);
         let step_elongation: Vec<f64> = s.link_dofs.iter().map(|r| r.elongation(step)).collect();
         // (ΔUᵀ K_G U0, ΔUᵀ K_G ΔU) with the prestress's geometric stiffness.
-        let geometric = s.geometric.as_ref().map_or((0.0, 0.0), |g| {
-            (dot(step, &g.product(u0)), g.quadratic(step))
-        });
+        let geometric = self.model.prestress_energy_along(u0, step);
         exact_line_search(
             &s.links,
             &trial,

@@ -8,8 +8,8 @@ use super::Interface;
 use crate::decomposition::kernel::{substructure_kernel, InterfaceTrace};
 use crate::decomposition::partition::SubstructureTopology;
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
-use crate::structure::law::{given_prestress, transverse_pair};
-use crate::structure::{LinkDofs, Structure, CLAMPED};
+use crate::model::Model;
+use crate::structure::{transverse_pair, LinkDofs, Structure, CLAMPED};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
@@ -113,7 +113,7 @@ impl Substructure {
     pub(super) fn new(
         index: usize,
         topology: &SubstructureTopology,
-        structure: &Structure,
+        model: &Model,
         interfaces: &[Interface],
         holders: &[u8],
         search: &[f64],
@@ -124,7 +124,7 @@ impl Substructure {
     ) -> Result<Substructure, SingularSubstructure> {
         // 1.–3. E's local dofs, B_E and its share of K_G(t0), C_E and R_E.
         let (mut sub, geometric) =
-            Self::indexed(index, topology, structure, interfaces, holders, local_dof);
+            Self::indexed(index, topology, model, interfaces, holders, local_dof);
         // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
         let pattern = StiffnessPattern::new(sub.n_dofs(), &sub.link_dofs);
         let values = stiffness(
@@ -142,7 +142,7 @@ impl Substructure {
         // 5. Z_E = K_E⁻¹ C_Eᵀ R_E and K*_E = d_m I − d_m² R_Eᵀ C_E Z_E.
         let (z, k_star) = sub.condense_operators(&factor, dm);
         // 6. Q_E: the rigid motions with no micro trace, completed by the null space of K*_E.
-        let rigid = rigid_kernel(&sub.sides, topology, structure, interfaces);
+        let rigid = rigid_kernel(&sub.sides, topology, &model.structure, interfaces);
         sub.kernel = complete_kernel(&k_star, rigid, dm).ok_or(SingularSubstructure)?;
         // 7. K⁺_E = (K*_E + Q_E Q_Eᵀ)⁻¹ − Q_E Q_Eᵀ and L_E = K⁺_E − I/d_m.
         let (k_plus, flexibility) = invert(&k_star, &sub.kernel, dm)?;
@@ -163,12 +163,12 @@ impl Substructure {
     pub fn remote(
         index: usize,
         topology: &SubstructureTopology,
-        structure: &Structure,
+        model: &Model,
         interfaces: &[Interface],
         holders: &[u8],
         local_dof: &mut [usize],
     ) -> Substructure {
-        Self::indexed(index, topology, structure, interfaces, holders, local_dof).0
+        Self::indexed(index, topology, model, interfaces, holders, local_dof).0
     }
 
     /// Steps 1–3 of [`Self::new`]: E with its indexing and no operators, and its share of
@@ -176,16 +176,17 @@ impl Substructure {
     fn indexed(
         index: usize,
         topology: &SubstructureTopology,
-        structure: &Structure,
+        model: &Model,
         interfaces: &[Interface],
         holders: &[u8],
         local_dof: &mut [usize],
     ) -> (Substructure, Vec<(usize, LinkDofs, f64)>) {
+        let structure = &model.structure;
         // 1. E's local dofs, numbered in `local_dof` until step 3 is done.
         let (dof_global, load_share) = number_local_dofs(topology, structure, holders, local_dof);
         // 2. B_E, one row `e = n·(U_b − U_a)` per link on E's dofs, and E's share of K_G(t0).
         let link_dofs = compatibility_rows(topology, structure, local_dof);
-        let geometric = geometric_rows(topology, structure, local_dof);
+        let geometric = geometric_rows(topology, model, local_dof);
         // 3. C_E and R_E: E's interfaces, their rows in U_EΓ and their columns in u_E.
         let (sides, gamma_dofs, n_macro) = interface_sides(index, interfaces, local_dof);
         clear_local_dofs(topology, local_dof);
@@ -446,12 +447,13 @@ fn compatibility_rows(
 /// out. Empty without it.
 fn geometric_rows(
     topology: &SubstructureTopology,
-    structure: &Structure,
+    model: &Model,
     local_dof: &[usize],
 ) -> Vec<(usize, LinkDofs, f64)> {
-    if structure.geometric.is_none() {
+    if model.prestress_stiffness().is_none() {
         return Vec::new();
     }
+    let structure = &model.structure;
     topology
         .links
         .iter()
@@ -459,7 +461,7 @@ fn geometric_rows(
         .flat_map(|(j, &i)| {
             let l = &structure.links[i];
             let (p, q) = transverse_pair(l.direction);
-            let w = given_prestress(structure, l) / l.length;
+            let w = structure.given_prestress(l) / l.length;
             [
                 (j, l.row_along(p, local_dof), w),
                 (j, l.row_along(q, local_dof), w),

@@ -27,10 +27,9 @@
 
 use super::NewtonSettings;
 use crate::linalg::{dot, norm, SparseCholesky, StiffnessPattern};
-use crate::solvers::{
-    current_unbalances, Equilibrium, LoadPathEnd, Measure, Progress, Solver, Status, TautStiffness,
-};
-use crate::structure::law::{self, CurrentGeometry, SlackRule};
+use crate::model::material::{self, SlackRule};
+use crate::model::{CurrentGeometry, Model};
+use crate::solvers::{Equilibrium, LoadPathEnd, Measure, Progress, Solver, Status, TautStiffness};
 use crate::structure::Structure;
 
 /// Newton steps one load increment may take before it is halved (fewer when
@@ -80,6 +79,7 @@ pub struct LargeWork {
 
 /// newton on the exact-length law, set up for one structure.
 pub struct LargeNewton<'s> {
+    model: &'s Model,
     structure: &'s Structure,
     pattern: &'s StiffnessPattern,
     chol: SparseCholesky,
@@ -140,12 +140,10 @@ pub struct LargeState {
 impl<'s> LargeNewton<'s> {
     /// Set up on a structure whose `K + K_G(t0)` (the tangent at the prestressed state) is
     /// known to be positive definite: its pattern and symbolic analysis serve every tangent.
-    pub fn new(
-        structure: &'s Structure,
-        taut: &'s TautStiffness,
-        settings: NewtonSettings,
-    ) -> Self {
+    pub fn new(model: &'s Model, taut: &'s TautStiffness, settings: NewtonSettings) -> Self {
+        let structure = &model.structure;
         LargeNewton {
+            model,
             structure,
             pattern: &taut.pattern,
             chol: taut.factor.share_symbolic(),
@@ -170,7 +168,7 @@ impl<'s> LargeNewton<'s> {
         let current = CurrentGeometry::of(s, u);
         let mut gradient = vec![0.0; s.n_free];
         // ∇Π = Σ τ ∇ℓ − F.
-        let (trial, sizes) = current_unbalances(s, &current, load, &mut gradient);
+        let (trial, sizes) = current.unbalances(s, load, &mut gradient);
         let finite = gradient.iter().all(|g| g.is_finite());
         Evaluation {
             current,
@@ -217,7 +215,7 @@ impl<'s> LargeNewton<'s> {
                 .zip(&d)
                 .map(|(v, d)| v + fraction * d)
                 .collect();
-            law::internal_slope(self.structure, &u, &d) - load_work
+            self.model.internal_slope(&u, &d) - load_work
         };
         let mut previous = slope_at(0.0);
         // Round-off of ψ: each end is an equilibrium to the tolerance only (|∇Π| up to
@@ -374,7 +372,7 @@ impl<'s> LargeNewton<'s> {
             // Cables that went slack on the way of an increment that found no equilibrium (one
             // that found it on another branch says so itself).
             if !state.jumped {
-                let done = law::slack_flags(s, &state.eval.trial, SlackRule::Gap);
+                let done = material::slack_flags(s, &state.eval.trial, SlackRule::Gap);
                 state.slackened = s
                     .links
                     .iter()
@@ -501,8 +499,8 @@ impl Solver for LargeNewton<'_> {
         Measure::EquilibriumResidual
     }
 
-    fn structure(&self) -> &Structure {
-        self.structure
+    fn model(&self) -> &Model {
+        self.model
     }
 
     /// The path's own limits end every solve first (at most [`INCREMENT_MAX_STEPS`] steps
@@ -590,7 +588,8 @@ impl Solver for LargeNewton<'_> {
                 }
                 state.eval = eval;
                 // Slack with its gap open: a cable at τ = 0 with a closed gap is not.
-                let slack = law::slack_flags(self.structure, &state.eval.trial, SlackRule::Gap);
+                let slack =
+                    material::slack_flags(self.structure, &state.eval.trial, SlackRule::Gap);
                 state
                     .slack_on_the_way
                     .iter_mut()
@@ -628,10 +627,14 @@ impl Solver for LargeNewton<'_> {
             stopping_value: state.eval.residual,
             equilibrium_residual: Some(state.eval.residual),
             rebuilds: 0,
-            slack_cables: law::slack_flags(self.structure, &state.eval.trial, SlackRule::Clipped)
-                .iter()
-                .filter(|&&x| x)
-                .count(),
+            slack_cables: material::slack_flags(
+                self.structure,
+                &state.eval.trial,
+                SlackRule::Clipped,
+            )
+            .iter()
+            .filter(|&&x| x)
+            .count(),
             at_roundoff: false,
             stop: state.stop,
         }
@@ -660,8 +663,8 @@ impl Solver for LargeNewton<'_> {
             .links
             .iter()
             .zip(&state.eval.trial)
-            .map(|(l, &t)| law::tension(l, t))
+            .map(|(l, &t)| material::tension(l, t))
             .collect();
-        Equilibrium::classified(self.structure, state.u.clone(), tensions)
+        Equilibrium::classified(self.model, state.u.clone(), tensions)
     }
 }

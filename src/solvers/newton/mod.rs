@@ -22,13 +22,12 @@ mod line_search;
 
 pub use large::{LargeNewton, LargeWork, INCREMENT_MAX_STEPS, MIN_INCREMENT};
 
-use super::{
-    stop_when, unbalances_on, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness,
-};
+use super::{stop_when, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
 use crate::linalg::{
     dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern,
 };
-use crate::structure::law::{self, SlackRule};
+use crate::model::material::{self, SlackRule};
+use crate::model::{unbalances_on, Model};
 use crate::structure::Structure;
 pub(crate) use line_search::{exact_line_search, EnergyAlongStep};
 
@@ -126,6 +125,7 @@ const STALL_ITERATIONS: usize = 10;
 
 /// The newton solver, set up for one structure.
 pub struct Newton<'s> {
+    model: &'s Model,
     structure: &'s Structure,
     taut: &'s TautStiffness,
     settings: NewtonSettings,
@@ -163,13 +163,15 @@ pub struct NewtonState {
 }
 
 impl<'s> Newton<'s> {
-    /// Set up on a structure whose taut stiffness is already known to be regular.
+    /// Set up on a model whose taut stiffness is already known to be regular.
     pub fn new(
-        structure: &'s Structure,
+        model: &'s Model,
         taut: &'s TautStiffness,
         settings: NewtonSettings,
     ) -> Result<Self, SetupError> {
+        let structure = &model.structure;
         Ok(Newton {
+            model,
             structure,
             taut,
             settings,
@@ -192,11 +194,11 @@ impl<'s> Newton<'s> {
     fn evaluate(&self, state: &mut NewtonState) {
         let s = self.structure;
         for (i, (l, ld)) in s.links.iter().zip(&s.link_dofs).enumerate() {
-            let trial = law::trial_tension(l, ld.elongation(&state.u));
+            let trial = material::trial_tension(l, ld.elongation(&state.u));
             state.trial[i] = trial;
-            state.tensions[i] = law::tension(l, trial);
+            state.tensions[i] = material::tension(l, trial);
         }
-        let geometric_force = s.geometric.as_ref().map(|g| g.product(&state.u));
+        let geometric_force = self.model.prestress_force(&state.u);
         let sizes = unbalances_on(
             s,
             &s.link_dofs,
@@ -221,7 +223,7 @@ impl<'s> Newton<'s> {
             .links
             .iter()
             .zip(&state.trial)
-            .map(|(l, &trial)| law::is_taut(l, trial))
+            .map(|(l, &trial)| material::is_taut(l, trial))
             .collect();
         if taut_links.iter().all(|&t| t) {
             self.work.taut_steps += 1;
@@ -235,7 +237,7 @@ impl<'s> Newton<'s> {
         {
             return;
         }
-        assemble_hessian(s, pattern, &taut_links, mu, &mut self.hessian);
+        assemble_hessian(self.model, pattern, &taut_links, mu, &mut self.hessian);
         let mut added = mu;
         loop {
             self.work.factorizations += 1;
@@ -267,7 +269,7 @@ impl<'s> Newton<'s> {
         step: &mut [f64],
         residual: f64,
     ) -> bool {
-        let s = self.structure;
+        let (model, s) = (self.model, self.structure);
         let changed = |other: &[bool]| -> usize {
             other.iter().zip(taut_links).filter(|(a, b)| a != b).count()
         };
@@ -306,7 +308,7 @@ impl<'s> Newton<'s> {
         let rhs = step.to_vec();
         let mut solution = vec![0.0; rhs.len()];
         let outcome = preconditioned_cg(
-            |v, out| law::tangent_product(s, taut_links, mu, v, out),
+            |v, out| model.tangent_product(taut_links, mu, v, out),
             |z| correction.solve_in_place(factor, z),
             &rhs,
             &mut solution,
@@ -352,8 +354,8 @@ impl Solver for Newton<'_> {
         Measure::EquilibriumResidual
     }
 
-    fn structure(&self) -> &Structure {
-        self.structure
+    fn model(&self) -> &Model {
+        self.model
     }
 
     fn max_iterations(&self) -> usize {
@@ -389,9 +391,7 @@ impl Solver for Newton<'_> {
         let load_work = dot(&state.load, &step);
         // φ(s) = Π(U + sΔU) gains ½ s² ΔUᵀK_GΔU + s ΔUᵀK_G U with the prestress's geometric
         // stiffness (docs/method.md §8).
-        let geometric = s.geometric.as_ref().map_or((0.0, 0.0), |g| {
-            (dot(&g.product(&state.u), &step), g.quadratic(&step))
-        });
+        let geometric = self.model.prestress_energy_along(&state.u, &step);
         let Some(length) = exact_line_search(
             &s.links,
             &state.trial,
@@ -434,7 +434,7 @@ impl Solver for Newton<'_> {
             // newton's own measure is r(U).
             equilibrium_residual: Some(state.residual),
             rebuilds: 0,
-            slack_cables: law::slack_flags(self.structure, &state.trial, SlackRule::Clipped)
+            slack_cables: material::slack_flags(self.structure, &state.trial, SlackRule::Clipped)
                 .iter()
                 .filter(|&&x| x)
                 .count(),
@@ -450,20 +450,20 @@ impl Solver for Newton<'_> {
     }
 
     fn iterate(&self, state: &NewtonState) -> Equilibrium {
-        Equilibrium::classified(self.structure, state.u.clone(), state.tensions.clone())
+        Equilibrium::classified(self.model, state.u.clone(), state.tensions.clone())
     }
 }
 
 /// `values = H = Σ_taut k Bᵢᵀ Bᵢ + K_G + μ I` (docs/method.md §3, §8), lower triangle on
 /// `pattern`.
 fn assemble_hessian(
-    s: &Structure,
+    model: &Model,
     pattern: &StiffnessPattern,
     taut_links: &[bool],
     mu: f64,
     values: &mut [f64],
 ) {
-    law::assemble_tangent(s, pattern, |i| taut_links[i], values);
+    model.assemble_tangent(pattern, |i| taut_links[i], values);
     for &d in &pattern.diag_slot {
         values[d] += mu;
     }
@@ -483,8 +483,9 @@ mod tests {
             modules: [3, 2],
             ..GridSpec::default()
         };
-        let s = Structure::grid(&spec, &LoadPattern::default());
-        let taut = TautStiffness::new(&s).expect("regular");
+        let model = Model::linear(Structure::grid(&spec, &LoadPattern::default()));
+        let s = &model.structure;
+        let taut = TautStiffness::new(&model).expect("regular");
         let taut_links: Vec<bool> = s
             .links
             .iter()
@@ -494,11 +495,11 @@ mod tests {
         assert!(taut_links.iter().any(|t| !t), "some cables slack");
         let mu = 1e-3 * taut.pattern.mean_diagonal(&taut.values);
         let mut assembled = vec![0.0; taut.values.len()];
-        assemble_hessian(&s, &taut.pattern, &taut_links, mu, &mut assembled);
+        assemble_hessian(&model, &taut.pattern, &taut_links, mu, &mut assembled);
         let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
         let (mut expected, mut product) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
         taut.pattern.sym_matvec(&assembled, &v, &mut expected);
-        law::tangent_product(&s, &taut_links, mu, &v, &mut product);
+        model.tangent_product(&taut_links, mu, &v, &mut product);
         let scale = norm(&expected);
         for (p, e) in product.iter().zip(&expected) {
             assert!((p - e).abs() <= 1e-12 * scale, "{p} against {e}");
@@ -507,7 +508,7 @@ mod tests {
         let flipped = one_more_taut.iter().position(|t| !t).expect("a slack link");
         one_more_taut[flipped] = true;
         let mut changed = vec![0.0; s.n_free];
-        law::tangent_product(&s, &one_more_taut, mu, &v, &mut changed);
+        model.tangent_product(&one_more_taut, mu, &v, &mut changed);
         assert!(changed
             .iter()
             .zip(&product)

@@ -1,6 +1,7 @@
 //! A solve shared by ranks exchanging with their neighbours point to point, on threads standing in for MPI ranks.
 
 use super::*;
+use crate::model::Model;
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare, RankLayout, SearchPolicy};
 use crate::solvers::Solver;
 use crate::structure::{GridSpec, LoadPattern, Structure};
@@ -65,19 +66,19 @@ impl Exchange for ThreadRank<'_> {
     }
 }
 
-fn grid(n: usize) -> Structure {
+fn grid(n: usize) -> Model {
     let spec = GridSpec {
         modules: [n, n],
         ..GridSpec::default()
     };
-    Structure::grid(&spec, &LoadPattern::default())
+    Model::linear(Structure::grid(&spec, &LoadPattern::default()))
 }
 
 /// The iteration count, the rebuilds, the status and the iterate's displacements and
 /// tensions of a
 /// solve at `alpha` on `ranks` thread-ranks (rank 0's view: every rank's must agree).
 fn solve_on(
-    s: &Structure,
+    s: &Model,
     settings: &LatinSettings,
     alpha: f64,
     ranks: usize,
@@ -90,7 +91,7 @@ fn solve_on(
 /// rank kept.
 #[allow(clippy::type_complexity)]
 fn solve_sharing(
-    s: &Structure,
+    s: &Model,
     settings: &LatinSettings,
     alpha: f64,
     ranks: usize,
@@ -100,7 +101,7 @@ fn solve_sharing(
     Vec<bool>,
     Vec<usize>,
 ) {
-    let load: Vec<f64> = s.unit_load.iter().map(|f| alpha * f).collect();
+    let load: Vec<f64> = s.structure.unit_load.iter().map(|f| alpha * f).collect();
     let hub = Hub {
         size: ranks,
         barrier: Barrier::new(ranks),
@@ -212,10 +213,10 @@ fn ranks_keeping_their_links_alone_solve_as_one_process() {
                 shared == one && shared_slack == one_slack,
                 "{subdomains:?} on {ranks} ranks: the answers differ"
             );
-            assert_eq!(kept.iter().sum::<usize>(), s.links.len());
+            assert_eq!(kept.iter().sum::<usize>(), s.structure.links.len());
             assert!(kept
                 .iter()
-                .all(|&k| k < s.links.len() / ranks + s.links.len() / 10));
+                .all(|&k| k < s.structure.links.len() / ranks + s.structure.links.len() / 10));
         }
     }
     // Status-following l reads every cable at each iteration: no share is made.
@@ -247,7 +248,7 @@ fn ranks_exchanging_point_to_point_solve_as_one_process() {
         assert_eq!(one.2, "Converged", "{subdomains:?} {policy:?}");
         // The status matters: over a tenth of the cables slack (820 of 3072), and the
         // operators are rebuilt for it (each rank its own substructures').
-        let slack = one.4.iter().zip(&s.links);
+        let slack = one.4.iter().zip(&s.structure.links);
         let slack = slack.filter(|(t, l)| l.unilateral && **t == 0.0);
         assert!(slack.count() > 307, "{subdomains:?} {policy:?}");
         assert!(one.1 > 0, "{subdomains:?} {policy:?}: no rebuild");
@@ -372,7 +373,7 @@ fn each_pair_of_ranks_agrees_on_what_passes_and_it_covers_the_shared_dofs() {
             // `check`'s layout counts them and what passes from the partition alone.
             let ranks_of = plan.ranks();
             assert!(ranks_of.windows(2).all(|w| w[0] < w[1]) && !ranks_of.contains(&p));
-            let layout = RankLayout::new(&s, &latin.settings, ranks);
+            let layout = RankLayout::new(&s.structure, &latin.settings, ranks);
             assert_eq!(
                 layout.ranks[p].neighbours, ranks_of,
                 "{subdomains:?} rank {p}"

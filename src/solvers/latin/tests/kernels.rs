@@ -1,6 +1,7 @@
 //! The partition report, and the kernels of K*_E checked against a first-principles computation.
 
 use super::*;
+use crate::model::Model;
 
 /// Dimension of the null space of K*_E computed from first principles (docs/method.md §4): K*_E u = 0
 /// exactly when some U on E's free dofs has `B_E U = 0` and `C_E U = R_E u`, so
@@ -153,14 +154,15 @@ pub(super) fn check_kernels(latin: &Latin<'_>, what: &str) -> (usize, f64, f64) 
 
 #[test]
 fn partition_report_and_kernels_of_paper_case() {
-    let s = paper_structure();
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
     let mut kernel_columns = Vec::new();
     for (weak, interfaces, strong, weak_count, dropped, macro_dofs) in [
         (WeakInterfaces::Macro, 42, 24, 18, 0, 270),
         (WeakInterfaces::Micro, 42, 24, 18, 0, 216),
         (WeakInterfaces::Drop, 24, 24, 0, 18, 216),
     ] {
-        let latin = Latin::new(&s, settings([4, 4], weak)).unwrap();
+        let latin = Latin::new(&model, settings([4, 4], weak)).unwrap();
         let r = latin.report();
         println!("{weak:?}: {r:?}");
         assert_eq!(r.substructures, 16, "{weak:?}");
@@ -175,7 +177,7 @@ fn partition_report_and_kernels_of_paper_case() {
         let (total, gap, worst_null) = check_kernels(&latin, &format!("{weak:?}"));
         assert_eq!(total, r.kernel_columns, "{weak:?}");
         // The same dimensions from B_E and the bases alone.
-        let independent = independent_kernel_dimension(&s, [4, 4], weak);
+        let independent = independent_kernel_dimension(s, [4, 4], weak);
         for (e, (sub, (dim, kept, null))) in
             latin.substructures.iter().zip(&independent).enumerate()
         {

@@ -2,6 +2,7 @@
 
 use super::kernels::{check_kernels, independent_kernel_dimension};
 use super::*;
+use crate::model::Model;
 
 /// `Rᵀ v` for an interface field v (3·nodes rows).
 fn macro_part(r: &DMatrix<f64>, v: &[f64]) -> Vec<f64> {
@@ -126,15 +127,16 @@ fn check_linear_stage(
 
 #[test]
 fn linear_stage_invariants() {
-    let s = paper_structure();
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
     let alpha = 1.0;
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
-    let mut state = latin.init(&load(&s, alpha));
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(s, alpha));
     for stop in [0, 5, 40] {
         while state.iteration < stop {
             latin.next_iter(&mut state);
         }
-        let [du, df, eq] = check_linear_stage(&s, &latin, &state, alpha);
+        let [du, df, eq] = check_linear_stage(s, &latin, &state, alpha);
         println!(
             "iteration {stop}: macro jump {du:.1e} |U|, macro force imbalance {df:.1e} |F|, \
              equilibrium {eq:.1e}"
@@ -162,18 +164,19 @@ fn linear_stage_invariants() {
 /// Same invariants on an uneven partition with a supported substructure row.
 #[test]
 fn linear_stage_invariants_uneven_partition() {
-    let s = paper_structure();
-    let mut latin = Latin::new(&s, settings([3, 5], WeakInterfaces::Macro)).unwrap();
-    let mut state = latin.init(&load(&s, 0.5));
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
+    let mut latin = Latin::new(&model, settings([3, 5], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(s, 0.5));
     for _ in 0..5 {
         latin.next_iter(&mut state);
     }
-    let [du, df, eq] = check_linear_stage(&s, &latin, &state, 0.5);
+    let [du, df, eq] = check_linear_stage(s, &latin, &state, 0.5);
     println!("3x5 iteration 5: {du:.1e} {df:.1e} {eq:.1e}");
     assert!(du < 1e-9 && df < 1e-9 && eq < 1e-8, "{du:e} {df:e} {eq:e}");
     // Its kernels, against K*_E and against B_E.
     let (total, _, _) = check_kernels(&latin, "3x5");
-    let independent = independent_kernel_dimension(&s, [3, 5], WeakInterfaces::Macro);
+    let independent = independent_kernel_dimension(s, [3, 5], WeakInterfaces::Macro);
     let dims: Vec<usize> = independent.iter().map(|d| d.0).collect();
     let cols: Vec<usize> = latin
         .substructures
@@ -188,28 +191,29 @@ fn linear_stage_invariants_uneven_partition() {
 /// 3 (and the default, 2), the macro jump measured on every column of R.
 #[test]
 fn linear_stage_invariants_with_a_higher_degree() {
-    let s = paper_structure();
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
     let first_order = LatinSettings {
         macro_degree: Some(1),
         ..settings([2, 2], WeakInterfaces::Macro)
     };
-    let first_order_dofs = Latin::new(&s, first_order).unwrap().report().macro_dofs;
+    let first_order_dofs = Latin::new(&model, first_order).unwrap().report().macro_dofs;
     for degree in [None, Some(3)] {
         let settings = LatinSettings {
             macro_degree: degree,
             ..settings([2, 2], WeakInterfaces::Macro)
         };
-        let mut latin = Latin::new(&s, settings).unwrap();
+        let mut latin = Latin::new(&model, settings).unwrap();
         let report = latin.report();
         assert_eq!(report.macro_degree, degree.unwrap_or(2));
         // Three more fields per degree on each of the four strong interfaces.
         let extra = 4 * 3 * (report.macro_degree - 1);
         assert_eq!(report.macro_dofs, first_order_dofs + extra);
-        let mut state = latin.init(&load(&s, 1.0));
+        let mut state = latin.init(&load(s, 1.0));
         for _ in 0..5 {
             latin.next_iter(&mut state);
         }
-        let [du, df, eq] = check_linear_stage(&s, &latin, &state, 1.0);
+        let [du, df, eq] = check_linear_stage(s, &latin, &state, 1.0);
         println!(
             "2x2 degree {}: {du:.1e} {df:.1e} {eq:.1e}",
             report.macro_degree

@@ -1,13 +1,15 @@
 //! The local stage's law on both search directions.
 
 use super::*;
+use crate::model::Model;
 
 #[test]
 fn local_stage_law() {
-    let s = paper_structure();
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
     // The plain method: with relaxation, s is not on the search direction through ŝ.
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro).plain()).unwrap();
-    let mut state = latin.init(&load(&s, 1.0));
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro).plain()).unwrap();
+    let mut state = latin.init(&load(s, 1.0));
     let (mut slack, mut taut, mut bars) = (0, 0, 0);
     let mut worst_product: f64 = 0.0;
     for _ in 0..5 {
@@ -97,8 +99,11 @@ fn local_stage_law() {
     // shared classification of U (a slack cable carries exactly 0; a cable at τ = 0 whose gap
     // is closed is taut at rest).
     let eq = latin.iterate(&state);
-    let shared =
-        crate::solvers::Equilibrium::classified(&s, eq.displacements.clone(), eq.tensions.clone());
+    let shared = crate::solvers::Equilibrium::classified(
+        &model,
+        eq.displacements.clone(),
+        eq.tensions.clone(),
+    );
     assert_eq!(eq.slack, shared.slack);
     for (i, link) in s.links.iter().enumerate() {
         assert!(!eq.slack[i] || eq.tensions[i] == 0.0, "link {i}");

@@ -1,6 +1,7 @@
 //! The operators: rebuilds, the macro problem's accuracy, shapes, r(U) by substructure, Z_E, the macro solve's refinement, kernels of thin substructures, the stop on η.
 
 use super::*;
+use crate::model::Model;
 
 /// Every substructure's operators that a test compares: L_E, and on its own dofs Z_E and K⁺_E.
 fn operator_bits(latin: &Latin<'_>) -> Vec<Vec<u64>> {
@@ -24,10 +25,11 @@ fn operator_bits(latin: &Latin<'_>) -> Vec<Vec<u64>> {
 /// slack operators differ from the taut ones (the rebuild did rebuild).
 #[test]
 fn a_rebuild_and_its_undo_give_the_set_up_operators_bit_for_bit() {
-    let s = paper_structure();
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro)).unwrap();
     let set_up = operator_bits(&latin);
-    let slack = slack_every(&s, 3);
+    let slack = slack_every(s, 3);
     assert!(latin.set_search(slack));
     let rebuilt = operator_bits(&latin);
     let differing = set_up.iter().zip(&rebuilt).filter(|(a, b)| a != b).count();
@@ -51,10 +53,11 @@ fn a_rebuild_and_its_undo_give_the_set_up_operators_bit_for_bit() {
 /// stalled at 9e-7 for 1000 iterations).
 #[test]
 fn the_macro_problems_accuracy_does_not_depend_on_the_status() {
-    let s = grid_structure(64);
-    let mut latin = Latin::new(&s, settings([16, 16], WeakInterfaces::Macro)).unwrap();
+    let model = Model::linear(grid_structure(64));
+    let s = &model.structure;
+    let mut latin = Latin::new(&model, settings([16, 16], WeakInterfaces::Macro)).unwrap();
     let taut = latin.macro_problem.forward_error();
-    let slack = slack_every(&s, 2);
+    let slack = slack_every(s, 2);
     assert!(latin.set_search(slack));
     let slack = latin.macro_problem.forward_error();
     println!("macro forward error: taut {taut:.1e}, half the cables slack {slack:.1e}");
@@ -67,8 +70,8 @@ fn the_macro_problems_accuracy_does_not_depend_on_the_status() {
 /// lower x edges has its substructures along those edges and the rest).
 #[test]
 fn substructures_of_one_shape_share_their_pattern() {
-    let s = grid_structure(64);
-    let latin = Latin::new(&s, settings([16, 16], WeakInterfaces::Macro)).unwrap();
+    let model = Model::linear(grid_structure(64));
+    let latin = Latin::new(&model, settings([16, 16], WeakInterfaces::Macro)).unwrap();
     let patterns: Vec<&std::sync::Arc<crate::linalg::StiffnessPattern>> = latin
         .substructures
         .iter()
@@ -91,17 +94,19 @@ fn substructures_of_one_shape_share_their_pattern() {
 /// leaves about half the cables slack.
 #[test]
 fn r_u_by_substructure_is_the_global_r_u() {
-    let s = paper_structure();
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
     let wavy: Vec<f64> = (0..s.n_free).map(|d| (0.37 * d as f64).sin()).collect();
     // Scaled so that k e is ten times the prestress on average: many cables pulled slack.
-    let trial = crate::structure::law::trial_tensions(&s, &wavy);
+    let trial = model.trial_tensions(&wavy);
     let kinds = s.links.iter().zip(&trial);
     let pull: f64 = kinds.map(|(l, t)| (t - l.prestress).abs()).sum::<f64>() / trial.len() as f64;
     let u: Vec<f64> = wavy
         .iter()
         .map(|x| 10.0 * x * s.prestress_scale / pull)
         .collect();
-    let slack_now = crate::structure::law::trial_tensions(&s, &u)
+    let slack_now = model
+        .trial_tensions(&u)
         .iter()
         .zip(&s.links)
         .filter(|(t, l)| l.unilateral && **t < 0.0)
@@ -111,12 +116,12 @@ fn r_u_by_substructure_is_the_global_r_u() {
         slack_now > cables / 10 && slack_now < 9 * cables / 10,
         "{slack_now}/{cables}"
     );
-    let law_slack = slack_every(&s, 3);
-    let f = load(&s, 1.0);
-    let (exact, frozen) = crate::solvers::exact_and_frozen_residuals(&s, &u, &f, &law_slack);
+    let law_slack = slack_every(s, 3);
+    let f = load(s, 1.0);
+    let (exact, frozen) = model.exact_and_frozen_residuals(&u, &f, &law_slack);
     assert!((exact - frozen).abs() > 1e-3 * exact, "{exact} {frozen}");
     for subdomains in [[4, 4], [3, 5], [1, 1]] {
-        let latin = Latin::new(&s, settings(subdomains, WeakInterfaces::Macro)).unwrap();
+        let latin = Latin::new(&model, settings(subdomains, WeakInterfaces::Macro)).unwrap();
         let (by_sub, frozen_by_sub) = latin.residuals_by_substructure(&u, &f, &law_slack);
         assert!(
             (by_sub - exact).abs() <= 1e-13 * exact,
@@ -135,11 +140,12 @@ fn r_u_by_substructure_is_the_global_r_u() {
 /// agree within 1e-9 of the largest (measured 1.2e-13 when written).
 #[test]
 fn a_solve_without_z_e_is_the_solve_with_it() {
-    let s = paper_structure();
-    let f = load(&s, 1.0);
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
+    let f = load(s, 1.0);
     let solve = |keep_z: bool| {
         let mut latin = Latin::new(
-            &s,
+            &model,
             LatinSettings {
                 keep_z,
                 ..settings([4, 4], WeakInterfaces::Macro)
@@ -179,9 +185,10 @@ fn a_solve_without_z_e_is_the_solve_with_it() {
 /// status step): switching back changed the map under Anderson's history at every crossing.
 #[test]
 fn the_macro_solve_stays_refined_to_the_end_once_r_u_is_near_its_tolerance() {
-    let s = paper_structure();
-    let mut latin = Latin::new(&s, settings([4, 4], WeakInterfaces::Macro)).unwrap();
-    let mut state = latin.init(&load(&s, 1.0));
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
+    let mut latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let mut state = latin.init(&load(s, 1.0));
     let latin = latin;
     let near = 100.0 * latin.settings.residual_tolerance();
     let mut accuracy = |residual: f64| {
@@ -204,12 +211,12 @@ fn a_strip_one_module_wide_has_one_kernel_column_per_null_mode() {
         modules: [2, 10],
         ..GridSpec::default()
     };
-    let s = Structure::grid(&spec, &LoadPattern::default());
+    let model = Model::linear(Structure::grid(&spec, &LoadPattern::default()));
     let strips = LatinSettings {
         subdomains: [2, 1],
         ..LatinSettings::default()
     };
-    let latin = Latin::new(&s, strips).unwrap();
+    let latin = Latin::new(&model, strips).unwrap();
     let columns: Vec<usize> = latin
         .substructures
         .iter()
@@ -222,13 +229,14 @@ fn a_strip_one_module_wide_has_one_kernel_column_per_null_mode() {
 /// the equilibrium: stalled, never converged (issue 42, T5); with r(U) near η, converged.
 #[test]
 fn an_eta_met_off_the_equilibrium_is_never_converged() {
-    let s = grid_structure(4);
+    let model = Model::linear(grid_structure(4));
+    let s = &model.structure;
     let eta_only = LatinSettings {
         stop_on: crate::solvers::latin::StopOn::Eta,
         ..settings([2, 2], WeakInterfaces::Macro)
     };
-    let mut latin = Latin::new(&s, eta_only).unwrap();
-    let mut state = latin.init(&load(&s, 1.0));
+    let mut latin = Latin::new(&model, eta_only).unwrap();
+    let mut state = latin.init(&load(s, 1.0));
     state.eta = 1e-2 * eta_only.tolerance;
     state.residual = 1e4 * eta_only.tolerance;
     assert_eq!(

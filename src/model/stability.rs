@@ -4,11 +4,8 @@
 //! [`DENSE_LIMIT`] free dofs (real tensegrities are small; a grid's mechanisms are refused
 //! without it).
 
-use super::Structure;
+use crate::structure::{Structure, CLAMPED, DENSE_LIMIT};
 use nalgebra::{DMatrix, SymmetricEigen};
-
-/// The most free dofs the dense test takes (an eigen-decomposition of `BᵀB`, n × n).
-pub const DENSE_LIMIT: usize = 1500;
 
 /// Eigenvalues of `BᵀB` (unit member stiffness) below this fraction of the largest span the
 /// mechanisms.
@@ -85,7 +82,7 @@ impl PrestressStability {
     }
 }
 
-/// The test for `s` (whose [`Structure::geometric`] need not be set: `K_G(t0)` is taken from
+/// The test for `s` under any model (`K_G(t0)` is taken from
 /// its links), or `None` above [`DENSE_LIMIT`] free dofs.
 pub fn prestress_stability(s: &Structure) -> Option<PrestressStability> {
     let n = s.n_free;
@@ -167,7 +164,7 @@ fn rigid_rotation(s: &Structure, mode: &[f64]) -> Option<([f64; 3], [f64; 3])> {
     let full: Vec<f64> = s
         .dof_of
         .iter()
-        .map(|&d| if d == super::CLAMPED { 0.0 } else { mode[d] })
+        .map(|&d| if d == CLAMPED { 0.0 } else { mode[d] })
         .collect();
     let size = full.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     if size == 0.0 || n < 2 {
@@ -269,7 +266,7 @@ pub fn unit_slip_strain(s: &Structure) -> Option<(u64, f64)> {
     s.links
         .iter()
         .map(|l| {
-            let strain = super::law::given_prestress(s, l).abs() / (l.stiffness * l.length);
+            let strain = s.given_prestress(l).abs() / (l.stiffness * l.length);
             (l.id, if strain.is_nan() { 0.0 } else { strain })
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
@@ -293,7 +290,7 @@ fn buckling_bar(s: &Structure) -> Option<(u64, f64)> {
         .iter()
         .filter(|l| !l.kind.is_cable())
         .map(|l| {
-            let t0 = super::law::given_prestress(s, l);
+            let t0 = s.given_prestress(l);
             (l.id, -t0 / (l.length * l.stiffness))
         })
         .filter(|&(_, r)| r >= 1e-2)
