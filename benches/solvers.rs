@@ -18,7 +18,7 @@ use tensolve::linalg::PROBE_ITERATIONS;
 use tensolve::model::{GeometricModel, Model};
 use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use tensolve::solvers::{AnySolver, Equilibrium, Silent, TautStiffness};
+use tensolve::solvers::{AnySolver, Equilibrium, LoadPath, Silent, TautStiffness};
 
 /// Sets a solver up on a model and its taut stiffness (both borrowed).
 type Build = for<'a> fn(&'a Model, &'a TautStiffness) -> Box<dyn AnySolver + 'a>;
@@ -300,9 +300,11 @@ fn sweep(c: &mut Criterion) {
         let taut = taut_stiffness(&model);
         let solve = |model: &Model, taut: &TautStiffness| -> (usize, String) {
             if geometry == GeometricModel::Large {
-                let mut large = LargeNewton::new(model, taut, NewtonSettings::default());
+                let newton = LargeNewton::new(model, taut, NewtonSettings::default());
+                let mut large = LoadPath::new(newton);
                 let iterations = run_sweep(&mut large, model, &alphas, true);
-                (iterations, format!("{:?}", large.work()))
+                let work = (large.work(), large.solver().work());
+                (iterations, format!("{work:?}"))
             } else {
                 let mut newton =
                     Newton::new(model, taut, NewtonSettings::default()).expect("set-up");

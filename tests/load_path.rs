@@ -298,7 +298,7 @@ fn bracket_loss_of_equilibrium_is_a_limit_point_naming_the_cables() {
 fn internal_slope_is_the_gradient_along_d() {
     use tensolve::model::{CurrentGeometry, GeometricModel};
     use tensolve::solvers::newton::{LargeNewton, NewtonSettings};
-    use tensolve::solvers::{drive, Silent, TautStiffness};
+    use tensolve::solvers::{drive, LoadPath, Silent, TautStiffness};
     let mut case = tensolve::case::load(&manifest_path("cases/tower.toml")).unwrap();
     case.model = GeometricModel::Large;
     let model = case.model();
@@ -306,7 +306,7 @@ fn internal_slope_is_the_gradient_along_d() {
     let taut = TautStiffness::new(&model).unwrap();
     let load: Vec<f64> = s.unit_load.clone();
     let answer = drive(
-        &mut LargeNewton::new(&model, &taut, NewtonSettings::default()),
+        &mut LoadPath::new(LargeNewton::new(&model, &taut, NewtonSettings::default())),
         &load,
         None,
         &mut Silent,

@@ -10,7 +10,7 @@ use std::path::Path;
 use std::process::Command;
 use tensolve::model::{CurrentGeometry, GeometricModel, Model};
 use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
-use tensolve::solvers::{drive, Silent, Solution, Status, TautStiffness};
+use tensolve::solvers::{drive, LoadPath, Silent, Solution, Status, TautStiffness};
 
 const SHIPPED: [&str; 4] = ["simplex", "prism4", "tower", "saddle-net"];
 
@@ -112,7 +112,7 @@ fn solve(s: &Model, taut: &TautStiffness, alpha: f64) -> Solution {
     let load: Vec<f64> = s.structure.unit_load.iter().map(|f| alpha * f).collect();
     match s.geometry() {
         GeometricModel::Large => drive(
-            &mut LargeNewton::new(s, taut, NewtonSettings::default()),
+            &mut LoadPath::new(LargeNewton::new(s, taut, NewtonSettings::default())),
             &load,
             None,
             &mut Silent,

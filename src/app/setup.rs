@@ -9,8 +9,8 @@ use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
 use crate::solvers::newton::{LargeNewton, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{
-    check_shape, mechanism_by_substructures, AnySolver, Method, Settings, SetupError,
-    SubstructuredVerdict, TautStiffness,
+    check_shape, mechanism_by_substructures, AnySolver, LoadPath, Method, PathSolver, Settings,
+    SetupError, SubstructuredVerdict, TautStiffness,
 };
 use crate::structure::Structure;
 use std::time::Instant;
@@ -187,7 +187,7 @@ pub trait HeldSolver: AnySolver {
 }
 
 impl HeldSolver for Newton<'_> {}
-impl HeldSolver for LargeNewton<'_> {}
+impl<S: PathSolver> HeldSolver for LoadPath<S> {}
 impl HeldSolver for PcgLcp<'_> {}
 
 impl HeldSolver for Latin<'_> {
@@ -239,7 +239,7 @@ pub fn set_up_on<'s>(
     let clock = Instant::now();
     let (solver, shared): (Box<dyn HeldSolver + 's>, f64) = match choice.settings(method) {
         Settings::Newton(settings) if model.updates_geometry() => (
-            Box::new(LargeNewton::new(model, taut()?, settings)),
+            Box::new(LoadPath::new(LargeNewton::new(model, taut()?, settings))),
             prepared.taut_seconds,
         ),
         Settings::Newton(settings) => (

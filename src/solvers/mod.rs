@@ -6,6 +6,7 @@
 mod driver;
 mod energy_error;
 pub mod latin;
+mod load_path;
 mod mechanism_by_substructures;
 mod method;
 pub mod newton;
@@ -19,6 +20,9 @@ mod taut;
 
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
+pub use load_path::{
+    LoadPath, PathPoint, PathSolver, PathState, PathWork, INCREMENT_MAX_STEPS, MIN_INCREMENT,
+};
 pub use mechanism_by_substructures::{
     check_shape, mechanism_by_substructures, SubstructuredVerdict, CHECK_MODULES,
 };

@@ -16,7 +16,7 @@ pub struct Progress {
     /// The stopping measure of this state (see [`Solver::measure`]).
     pub stopping_value: f64,
     /// r(U), the equilibrium residual of the state's displacements under the exact law
-    /// ([`super::displacement_residual`]), when the solver has it at no extra cost.
+    /// ([`crate::model::Model::residual`]), when the solver has it at no extra cost.
     pub equilibrium_residual: Option<f64>,
     /// Operator rebuilds so far in this solve (status-following LATIN; 0 for the others).
     pub rebuilds: usize,

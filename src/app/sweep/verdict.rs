@@ -153,17 +153,15 @@ fn limit_point_reason(row: &SummaryRow, solution: &Solution) -> String {
     };
     reason.push_str(&format!(
         " (increments halved below {} of the path",
-        crate::solvers::newton::MIN_INCREMENT
+        crate::solvers::MIN_INCREMENT
     ));
     // A cap below the default makes increments fail that more steps would converge.
     match path.map(|p| p.increment_steps) {
-        Some(steps) if steps < crate::solvers::newton::INCREMENT_MAX_STEPS => {
-            reason.push_str(&format!(
-                ", each given {steps} Newton step(s) by solver.max_iterations: raise it to \
+        Some(steps) if steps < crate::solvers::INCREMENT_MAX_STEPS => reason.push_str(&format!(
+            ", each given {steps} Newton step(s) by solver.max_iterations: raise it to \
                  {} before reading this as a limit point)",
-                crate::solvers::newton::INCREMENT_MAX_STEPS
-            ))
-        }
+            crate::solvers::INCREMENT_MAX_STEPS
+        )),
         _ => reason.push(')'),
     }
     if let Some(path) = path {

@@ -1,5 +1,7 @@
 //! newton on the exact-length law (docs/method.md §8, `model.geometry = "large"`): large
-//! displacements under dead loads, along the load path.
+//! displacements under dead loads. It solves one load from given displacements; `large`
+//! drives it along the load path ([`crate::solvers::LoadPath`], which says where each solve
+//! starts, and halves the increments that do not converge).
 //!
 //! Minimises `Π(U) = Σ_bars (t0 e + ½ k e²) + Σ_cables ½ k ⟨e + t0/k⟩₊² − Fᵀ U` with
 //! `e = ℓ(U) − L` on the current geometry. A Newton step solves `H ΔU = −∇Π` with the Hessian
@@ -9,41 +11,18 @@
 //! line search follows the sign of `Π'(s) = ∇Π(U + sΔU)·ΔU` (a search on Π's value stalls at
 //! r ≈ 4e-8: Π is dominated by the prestress energy).
 //!
-//! The load path: a solve starts from the last equilibrium this solver reached (the prestressed
-//! state, U = 0 under no load, at first) and walks to its load in increments, first the whole
-//! way; an increment that does not converge within [`INCREMENT_MAX_STEPS`] steps is halved and
-//! retried from the last equilibrium, down to [`MIN_INCREMENT`] of the path, below which the
-//! solve ends at a limit point ([`Status::LimitPoint`]), never as converged. A retry
-//! assembles and factorizes its Hessian afresh: the failed attempt's factor (nearly singular
-//! near a limit point) is no chord for it. An increment's equilibrium is accepted only when
-//! it lies on the path: the energy at the increment's load is convex along the segment from
-//! the last equilibrium to it (`LargeNewton::on_the_path`); one reached across a region where it is not
-//! (past a limit point, on a snapped-through branch) is rejected and the increment halved, so
-//! that a solve's verdict depends on its load alone, not on the α before it. Loads beyond a
-//! limit point of the path end `LimitPoint`, whatever the α list.
-//!
 //! Stopping measure: [`Measure::EquilibriumResidual`] with the current unit vectors, the
 //! stricter load-relative form ≤ tolerance, as for the linear newton.
 
 use super::NewtonSettings;
-use crate::linalg::{dot, norm, SparseCholesky, StiffnessPattern};
+use crate::linalg::{dot, SparseCholesky, StiffnessPattern};
 use crate::model::material::{self, SlackRule};
 use crate::model::{CurrentGeometry, Model};
-use crate::solvers::{Equilibrium, LoadPathEnd, Measure, Progress, Solver, Status, TautStiffness};
+use crate::solvers::{
+    stop_when, Equilibrium, Measure, PathPoint, PathSolver, Progress, Solver, TautStiffness,
+};
 use crate::structure::Structure;
 
-/// Newton steps one load increment may take before it is halved (fewer when
-/// `solver.max_iterations` is smaller: under `large` the cap is per increment).
-pub const INCREMENT_MAX_STEPS: usize = 30;
-/// Points (besides the last equilibrium) at which the slope of the energy along an
-/// increment's segment is sampled for `LargeNewton::on_the_path`.
-const SEGMENT_SAMPLES: usize = 4;
-/// An increment whose r(U) is at or below this after [`INCREMENT_MAX_STEPS`] steps without
-/// meeting the tolerance sits at round-off: the solve ends `Stalled` rather than halving.
-const ROUNDOFF_RESIDUAL: f64 = 1e-12;
-/// The smallest load increment tried, as a fraction of the path from the last equilibrium to
-/// the solve's load: below it the solve stops at a limit point.
-pub const MIN_INCREMENT: f64 = 1.0 / 1024.0;
 /// The first shift σ of a Hessian that is not positive definite (× its diagonal), raised ×10
 /// until the factorisation succeeds, up to [`MAX_SHIFT`].
 const FIRST_SHIFT: f64 = 1e-8;
@@ -58,7 +37,7 @@ const LINE_SEARCH_BISECTIONS: usize = 40;
 /// at every step: 241 ms.
 const CHORD_CONTRACTION: f64 = 0.03;
 
-/// What the large-displacement solver's work cost, over its solves.
+/// What the large-displacement solver's steps cost, over its solves.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LargeWork {
     /// Newton steps.
@@ -69,15 +48,9 @@ pub struct LargeWork {
     pub factorizations: usize,
     /// Chord steps: solved with an earlier step's factor, the Hessian not assembled.
     pub reused_steps: usize,
-    /// Load increments halved.
-    pub halvings: usize,
-    /// Solves started from the prediction extrapolated from the last equilibria.
-    pub predicted_starts: usize,
-    /// Increments whose equilibrium lay on another branch (rejected, the increment halved).
-    pub branch_jumps: usize,
 }
 
-/// newton on the exact-length law, set up for one structure.
+/// newton on the exact-length law, set up for one model.
 pub struct LargeNewton<'s> {
     model: &'s Model,
     structure: &'s Structure,
@@ -91,11 +64,6 @@ pub struct LargeNewton<'s> {
     chord: bool,
     /// The last step was a chord step.
     last_was_chord: bool,
-    /// The last equilibrium reached (its load and displacements): where a solve's path starts.
-    reached: (Vec<f64>, Vec<f64>),
-    /// The equilibria reached before it (the latest last, at most two), for the predictor of
-    /// the next solve.
-    before: Vec<(Vec<f64>, Vec<f64>)>,
     work: LargeWork,
 }
 
@@ -110,41 +78,24 @@ struct Evaluation {
     scale: f64,
 }
 
-/// The iterate of a solve along its load path.
+/// The iterate of a solve for one load.
 pub struct LargeState {
-    /// The path: from `start` (the last equilibrium's load) to `target`.
-    start: Vec<f64>,
-    target: Vec<f64>,
-    /// Fraction of the path at which an equilibrium was reached, and its displacements.
-    done: f64,
-    u_done: Vec<f64>,
-    /// The increment being solved: the path fraction `done + increment`.
-    increment: f64,
     load: Vec<f64>,
     u: Vec<f64>,
     eval: Evaluation,
     iteration: usize,
-    increment_steps: usize,
-    stop: Option<Status>,
-    /// Increments of this solve whose equilibrium lay on another branch.
-    branch_jumps: usize,
-    /// At a limit point: the cables taut at the last equilibrium that went slack in the last
-    /// increment tried, when it did not converge (ids).
-    slackened: Vec<u64>,
-    /// The cables slack at some iterate of the increment being tried.
-    slack_on_the_way: Vec<bool>,
-    /// The last increment halved was halved for an equilibrium on another branch.
-    jumped: bool,
+    /// The last step was no descent, or no shift made its Hessian factorisable: the state is
+    /// the one before it.
+    failed: bool,
 }
 
 impl<'s> LargeNewton<'s> {
-    /// Set up on a structure whose `K + K_G(t0)` (the tangent at the prestressed state) is
+    /// Set up on a model whose `K + K_G(t0)` (the tangent at the prestressed state) is
     /// known to be positive definite: its pattern and symbolic analysis serve every tangent.
     pub fn new(model: &'s Model, taut: &'s TautStiffness, settings: NewtonSettings) -> Self {
-        let structure = &model.structure;
         LargeNewton {
             model,
-            structure,
+            structure: &model.structure,
             pattern: &taut.pattern,
             chol: taut.factor.share_symbolic(),
             settings,
@@ -152,13 +103,11 @@ impl<'s> LargeNewton<'s> {
             factored: false,
             chord: false,
             last_was_chord: false,
-            reached: (vec![0.0; structure.n_free], vec![0.0; structure.n_free]),
-            before: Vec::new(),
             work: LargeWork::default(),
         }
     }
 
-    /// What the work cost so far.
+    /// What the steps cost so far.
     pub fn work(&self) -> LargeWork {
         self.work
     }
@@ -186,58 +135,6 @@ impl<'s> LargeNewton<'s> {
             },
             scale: sizes.scale,
         }
-    }
-
-    /// Whether the equilibrium `state.u` at the increment's load lies on the path from the
-    /// last one, `state.u_done`: the energy Π at that load is convex along the segment
-    /// between them, its slope `ψ(s) = ∇Π(U_done + s d)·d` (`d = U − U_done`) never
-    /// decreasing, sampled at [`SEGMENT_SAMPLES`] points. An equilibrium reached across a
-    /// region where Π is concave along d (a snap-through past a limit point: a von Mises arch
-    /// passing flat) is not on the path. Near an equilibrium of the path Π is convex (its
-    /// tangent is positive definite), so a short enough increment along the path passes.
-    fn on_the_path(&self, state: &LargeState) -> bool {
-        let d: Vec<f64> = state
-            .u
-            .iter()
-            .zip(&state.u_done)
-            .map(|(u, v)| u - v)
-            .collect();
-        let size = norm(&d);
-        if size == 0.0 || !size.is_finite() {
-            return size == 0.0;
-        }
-        let load_work = dot(&state.load, &d);
-        // ψ(s) = Σ τ ∇ℓ·d − F·d at U_done + s d.
-        let slope_at = |fraction: f64| {
-            let u: Vec<f64> = state
-                .u_done
-                .iter()
-                .zip(&d)
-                .map(|(v, d)| v + fraction * d)
-                .collect();
-            self.model.internal_slope(&u, &d) - load_work
-        };
-        let mut previous = slope_at(0.0);
-        // Round-off of ψ: each end is an equilibrium to the tolerance only (|∇Π| up to
-        // tolerance × scale there), and ψ(0) is −ΔF·d up to that.
-        let noise = 10.0 * (self.settings.tolerance + 1e-12) * state.eval.scale * size
-            + 1e-6 * previous.abs();
-        for k in 1..=SEGMENT_SAMPLES {
-            let slope = match k {
-                SEGMENT_SAMPLES => dot(&state.eval.gradient, &d),
-                _ => slope_at(k as f64 / SEGMENT_SAMPLES as f64),
-            };
-            if !slope.is_finite() || slope < previous - noise {
-                return false;
-            }
-            previous = slope;
-        }
-        true
-    }
-
-    /// The Newton steps one increment may take: [`INCREMENT_MAX_STEPS`], or the cap when lower.
-    fn increment_max_steps(&self) -> usize {
-        INCREMENT_MAX_STEPS.min(self.settings.max_iterations).max(1)
     }
 
     /// `ΔU = −H⁻¹ ∇Π`: a chord step with the last factor while chord steps contract the
@@ -345,150 +242,12 @@ impl<'s> LargeNewton<'s> {
         best
     }
 
-    /// Go on from the equilibrium reached on the path: the next increment, the same size (or
-    /// what is left of the path).
-    fn advance(&self, state: &mut LargeState) {
-        state.done = (state.done + state.increment).min(1.0);
-        state.u_done = state.u.clone();
-        state.increment = state.increment.min(1.0 - state.done);
-        self.begin_increment(state);
-    }
-
-    /// Halve the increment and retry it from the last equilibrium, or stop at a limit point.
-    fn halve(&mut self, state: &mut LargeState) {
-        self.work.halvings += 1;
-        // The retry assembles its Hessian: the failed attempt's factor, nearly singular near a
-        // limit point, would steer every retry off the path as a chord.
-        self.chord = false;
-        state.increment *= 0.5;
-        if state.increment < MIN_INCREMENT {
-            state.stop = Some(Status::LimitPoint);
-            let s = self.structure;
-            state.u = state.u_done.clone();
-            // The answer is the last equilibrium; its stopping value is measured at the
-            // solve's load, the α of its row, not at the load where it is an equilibrium.
-            state.load = state.target.clone();
-            state.eval = self.evaluate(&state.load, &state.u);
-            // Cables that went slack on the way of an increment that found no equilibrium (one
-            // that found it on another branch says so itself).
-            if !state.jumped {
-                let done = material::slack_flags(s, &state.eval.trial, SlackRule::Gap);
-                state.slackened = s
-                    .links
-                    .iter()
-                    .zip(state.slack_on_the_way.iter().zip(&done))
-                    .filter(|(_, (&tried, &done))| tried && !done)
-                    .map(|(link, _)| link.id)
-                    .collect();
-            }
-            return;
-        }
-        state.u = state.u_done.clone();
-        self.begin_increment(state);
-    }
-
-    /// The load of `done + increment`, evaluated at the current displacements.
-    fn begin_increment(&self, state: &mut LargeState) {
-        state.increment_steps = 0;
-        state.slack_on_the_way.iter_mut().for_each(|x| *x = false);
-        state.load = path_load(&state.start, &state.target, state.done + state.increment);
-        state.eval = self.evaluate(&state.load, &state.u);
-    }
-
-    /// The prediction of the answer at `load` by extrapolating the last equilibria along the
-    /// load path (Lagrange, through the last three when there are three, else the secant of the
-    /// last two), when their loads and `load` are collinear and `load` lies ahead by at most
-    /// four of the last steps.
-    fn predict(&self, load: &[f64]) -> Option<Vec<f64>> {
-        let (l2, u2) = &self.reached;
-        let (l1, u1) = self.before.last()?;
-        let step: Vec<f64> = l2.iter().zip(l1).map(|(a, b)| a - b).collect();
-        let squared = dot(&step, &step);
-        if squared.is_nan() || squared <= 0.0 {
-            return None;
-        }
-        // The path parameter of a load: 0 at the last equilibrium, −1 at the one before.
-        let parameter = |l: &[f64]| -> Option<f64> {
-            let ahead: Vec<f64> = l.iter().zip(l2).map(|(a, b)| a - b).collect();
-            let t = dot(&ahead, &step) / squared;
-            let off: f64 = ahead
-                .iter()
-                .zip(&step)
-                .map(|(a, b)| (a - t * b).powi(2))
-                .sum();
-            (off <= 1e-12 * dot(&ahead, &ahead).max(squared)).then_some(t)
-        };
-        let t = parameter(load).filter(|&t| t > 0.0 && t <= 4.0)?;
-        let mut points: Vec<(f64, &Vec<f64>)> = vec![(-1.0, u1), (0.0, u2)];
-        if self.before.len() == 2 {
-            let (l0, u0) = &self.before[0];
-            if let Some(t0) = parameter(l0).filter(|&t0| t0 < -1.0) {
-                points.insert(0, (t0, u0));
-            }
-        }
-        // Lagrange weights at t.
-        let weights: Vec<f64> = (0..points.len())
-            .map(|i| {
-                (0..points.len())
-                    .filter(|&j| j != i)
-                    .map(|j| (t - points[j].0) / (points[i].0 - points[j].0))
-                    .product()
-            })
-            .collect();
-        Some(
-            (0..u2.len())
-                .map(|k| {
-                    points
-                        .iter()
-                        .zip(&weights)
-                        .map(|((_, u), w)| w * u[k])
-                        .sum()
-                })
-                .collect(),
-        )
-    }
-
     /// r(U) and its load-relative form both at or below the tolerance (with every cable slack
     /// the load-relative scale holds the released prestress and alone could pass a state far
     /// from equilibrium).
     fn converged(&self, eval: &Evaluation) -> bool {
         eval.load_residual.max(eval.residual) <= self.settings.tolerance
     }
-
-    /// After a step or a new increment: an equilibrium at the increment's load either ends the
-    /// solve (at the target) or moves the path on.
-    fn settle(&mut self, state: &mut LargeState) {
-        while state.stop.is_none() && self.converged(&state.eval) {
-            if !self.on_the_path(state) {
-                // An equilibrium on another branch: the path is not followed across.
-                state.branch_jumps += 1;
-                self.work.branch_jumps += 1;
-                state.jumped = true;
-                self.halve(state);
-                continue;
-            }
-            if state.done + state.increment >= 1.0 {
-                state.stop = Some(Status::Converged);
-                let reached = (state.target.clone(), state.u.clone());
-                let previous = std::mem::replace(&mut self.reached, reached);
-                if self.before.len() == 2 {
-                    self.before.remove(0);
-                }
-                self.before.push(previous);
-            } else {
-                self.advance(state);
-            }
-        }
-    }
-}
-
-/// The load at fraction θ of the path from `start` to `target`.
-fn path_load(start: &[f64], target: &[f64], theta: f64) -> Vec<f64> {
-    start
-        .iter()
-        .zip(target)
-        .map(|(a, b)| a + theta * (b - a))
-        .collect()
 }
 
 impl Solver for LargeNewton<'_> {
@@ -503,122 +262,45 @@ impl Solver for LargeNewton<'_> {
         self.model
     }
 
-    /// The path's own limits end every solve first (at most [`INCREMENT_MAX_STEPS`] steps
-    /// for each of at most `1 / MIN_INCREMENT` increments and their halvings): the cap
-    /// `solver.max_iterations` bounds each increment instead
-    /// (`LargeNewton::increment_max_steps`), so a limit point is never reported as a cap.
+    /// `solver.max_iterations` (per increment along the load path).
     fn max_iterations(&self) -> usize {
-        let halvings = MIN_INCREMENT.recip().log2() as usize + 1;
-        (MIN_INCREMENT.recip() as usize + halvings + 1) * INCREMENT_MAX_STEPS
+        self.settings.max_iterations
     }
 
-    /// From the last equilibrium reached, the whole path in one increment first, started from
-    /// the extrapolation of the last equilibria (`LargeNewton::predict`; paper case, 41-α
-    /// sweep with Newton steps: 2.63 steps per α with the secant instead of 3.39 from the last
-    /// answer, though the secant's residual is often the larger; with chord steps, 3.41 steps
-    /// per α through three points against 3.95 with the secant).
+    /// U = 0, the prestressed state.
     fn init(&mut self, load: &[f64]) -> LargeState {
-        let (start, u_done) = self.reached.clone();
-        // The prediction when it evaluates to finite numbers, else the last equilibrium.
-        let predicted = self
-            .predict(load)
-            .map(|u| {
-                let eval = self.evaluate(load, &u);
-                (u, eval)
-            })
-            .filter(|(_, eval)| eval.load_residual.is_finite());
-        let (u, eval) = match predicted {
-            Some(start) => {
-                self.work.predicted_starts += 1;
-                start
-            }
-            None => {
-                let eval = self.evaluate(load, &u_done);
-                (u_done.clone(), eval)
-            }
-        };
-        let mut state = LargeState {
-            start,
-            target: load.to_vec(),
-            done: 0.0,
-            u_done,
-            increment: 1.0,
-            load: load.to_vec(),
-            u,
-            eval,
-            iteration: 0,
-            increment_steps: 0,
-            stop: None,
-            branch_jumps: 0,
-            slackened: Vec::new(),
-            slack_on_the_way: vec![false; self.structure.links.len()],
-            jumped: false,
-        };
-        self.settle(&mut state);
-        state
+        self.state_at(load, vec![0.0; self.structure.n_free])
     }
 
-    /// The path always starts from this solver's own last equilibrium (the previous α's answer
-    /// when the sweep's α increase): `previous` is not needed.
-    fn warm_init(&mut self, load: &[f64], _previous: &Equilibrium) -> LargeState {
-        self.init(load)
+    /// U = the previous answer's displacements.
+    fn warm_init(&mut self, load: &[f64], previous: &Equilibrium) -> LargeState {
+        self.state_at(load, previous.displacements.clone())
     }
 
-    /// One Newton step at the increment's load; an increment that does not converge within
-    /// [`INCREMENT_MAX_STEPS`] steps (or whose step is no descent) is halved.
+    /// One Newton step with its line search; a step that is no descent (or whose Hessian no
+    /// shift makes factorisable) fails, the state unchanged.
     fn next_iter(&mut self, state: &mut LargeState) {
         state.iteration += 1;
-        state.increment_steps += 1;
         let stepped = self
             .newton_step(state)
             .and_then(|step| self.line_search(state, &step).map(|found| (step, found)));
-        match stepped {
-            Some((step, (length, eval))) => {
-                state
-                    .u
-                    .iter_mut()
-                    .zip(&step)
-                    .for_each(|(u, d)| *u += length * d);
-                // A chord step that contracted the residual by less than CHORD_CONTRACTION:
-                // the next step refactorizes.
-                if self.last_was_chord
-                    && eval.load_residual > CHORD_CONTRACTION * state.eval.load_residual
-                {
-                    self.chord = false;
-                }
-                state.eval = eval;
-                // Slack with its gap open: a cable at τ = 0 with a closed gap is not.
-                let slack =
-                    material::slack_flags(self.structure, &state.eval.trial, SlackRule::Gap);
-                state
-                    .slack_on_the_way
-                    .iter_mut()
-                    .zip(slack)
-                    .for_each(|(seen, now)| *seen |= now);
-                self.settle(state);
-                if state.stop.is_none() && state.increment_steps >= self.increment_max_steps() {
-                    if state.eval.residual <= ROUNDOFF_RESIDUAL {
-                        // At round-off (a load tiny against the prestress, or a tolerance f64
-                        // does not resolve): no smaller increment would do better. On the way,
-                        // the path goes on from here; at the load, the solve has stalled.
-                        if state.done + state.increment >= 1.0 {
-                            state.stop = Some(Status::Stalled);
-                        } else {
-                            self.advance(state);
-                        }
-                    } else {
-                        state.jumped = false;
-                        self.halve(state);
-                        self.settle(state);
-                    }
-                }
-            }
-            None => {
-                state.jumped = false;
-                self.halve(state);
-                self.settle(state);
-            }
+        let Some((step, (length, eval))) = stepped else {
+            state.failed = true;
+            return;
+        };
+        state.failed = false;
+        state
+            .u
+            .iter_mut()
+            .zip(&step)
+            .for_each(|(u, d)| *u += length * d);
+        // A chord step that contracted the residual by less than CHORD_CONTRACTION: the next
+        // step refactorizes.
+        if self.last_was_chord && eval.load_residual > CHORD_CONTRACTION * state.eval.load_residual
+        {
+            self.chord = false;
         }
+        state.eval = eval;
     }
 
     fn progress(&self, state: &LargeState) -> Progress {
@@ -636,20 +318,8 @@ impl Solver for LargeNewton<'_> {
             .filter(|&&x| x)
             .count(),
             at_roundoff: false,
-            stop: state.stop,
+            stop: stop_when(self.converged(&state.eval), state.failed),
         }
-    }
-
-    fn load_path(&self, state: &LargeState) -> Option<LoadPathEnd> {
-        Some(LoadPathEnd {
-            reached: match state.stop {
-                Some(Status::Converged) => 1.0,
-                _ => state.done,
-            },
-            branch_jumps: state.branch_jumps,
-            slackened: state.slackened.clone(),
-            increment_steps: self.increment_max_steps(),
-        })
     }
 
     /// `e = ℓ(U) − L`.
@@ -666,5 +336,39 @@ impl Solver for LargeNewton<'_> {
             .map(|(l, &t)| material::tension(l, t))
             .collect();
         Equilibrium::classified(self.model, state.u.clone(), tensions)
+    }
+}
+
+impl PathSolver for LargeNewton<'_> {
+    fn state_at(&mut self, load: &[f64], u: Vec<f64>) -> LargeState {
+        let eval = self.evaluate(load, &u);
+        LargeState {
+            load: load.to_vec(),
+            u,
+            eval,
+            iteration: 0,
+            failed: false,
+        }
+    }
+
+    /// The next step assembles and factorizes its Hessian.
+    fn forget_tangent(&mut self) {
+        self.chord = false;
+    }
+
+    fn tolerance(&self) -> f64 {
+        self.settings.tolerance
+    }
+
+    fn point<'a>(&self, state: &'a LargeState) -> PathPoint<'a> {
+        PathPoint {
+            displacements: &state.u,
+            gradient: &state.eval.gradient,
+            trial: &state.eval.trial,
+            residual: state.eval.residual,
+            scale: state.eval.scale,
+            converged: self.converged(&state.eval),
+            failed: state.failed,
+        }
     }
 }

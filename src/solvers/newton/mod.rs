@@ -20,7 +20,7 @@
 mod large;
 mod line_search;
 
-pub use large::{LargeNewton, LargeWork, INCREMENT_MAX_STEPS, MIN_INCREMENT};
+pub use large::{LargeNewton, LargeWork};
 
 use super::{stop_when, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
 use crate::linalg::{
