@@ -81,64 +81,11 @@ fn refusal(model: &Model, zero_modes: usize) -> SetupError {
     let stability = (s.layout.is_none() || model.has_geometric_stiffness())
         .then(|| prestress_stability(s))
         .flatten();
-    let unstiffened = |st: &PrestressStability| {
-        let modes: Vec<String> = st
-            .unstiffened()
-            .take(3)
-            .enumerate()
-            .map(|(k, m)| m.describe(s, k + 1))
-            .collect();
-        modes.join("; ")
-    };
-    // The modes behind the refusal, node by node, for mechanisms.csv: those the prestress does
-    // not stiffen, or, under the linear model, every mechanism.
-    let rows = |st: &PrestressStability, all: bool| -> Vec<super::ModeRow> {
-        st.modes
-            .iter()
-            .filter(|m| all || m.stiffness <= st.threshold)
-            .enumerate()
-            .flat_map(|(k, m)| {
-                let full = s.full_displacements(&m.displacement);
-                (0..s.nodes.len())
-                    .map(move |v| {
-                        (
-                            s.node_ids[v],
-                            k + 1,
-                            [full[3 * v], full[3 * v + 1], full[3 * v + 2]],
-                        )
-                    })
-                    .collect::<Vec<_>>()
-            })
-            .collect()
-    };
     if model.has_geometric_stiffness() {
-        let modes = stability
-            .as_ref()
-            .map(|st| rows(st, false))
-            .unwrap_or_default();
-        let slip = crate::model::unit_slip_strain(s)
-            .map(|(id, strain)| format!("{}; ", crate::model::unit_slip_sentence(id, strain)))
-            .unwrap_or_default();
-        let detail = match &stability {
-            Some(st) if !st.stable() => format!(
-                "{slip}{} of its {} mechanism(s) not stiffened: {} (every node's motion in \
-                 mechanisms.csv of the output directory, written by `run`); add members or \
-                 supports, or change the prestress",
-                st.unstiffened().count(),
-                st.mechanisms,
-                unstiffened(st)
-            ),
-            _ => format!(
-                "`K + K_G(t0)` is not positive definite: {}",
-                crate::model::indefinite_reason(s, stability.as_ref())
-            ),
-        };
-        return SetupError::NotPrestressStable {
-            model: model.geometry().name(),
-            detail,
-            modes,
-        };
+        return not_prestress_stable(model, stability.as_ref());
     }
+    let unstiffened = |st: &PrestressStability| unstiffened_modes(s, st);
+    let rows = |st: &PrestressStability, all: bool| mode_rows(s, st, all);
     let grid = s.layout.is_some();
     // Mᵀ K_G M positive definite does not make K + K_G(t0) so (a prestress too small to
     // resolve, or one that buckles the bars): "solvable" only when it is.
@@ -204,4 +151,68 @@ fn refusal(model: &Model, zero_modes: usize) -> SetupError {
             },
         },
     }
+}
+
+/// With geometric stiffness, `K + K_G(t0)` not positive definite: the modes the prestress does
+/// not stiffen (with their nodes), or why it is indefinite though it stiffens them all.
+fn not_prestress_stable(model: &Model, stability: Option<&PrestressStability>) -> SetupError {
+    let s = &model.structure;
+    let modes = stability
+        .map(|st| mode_rows(s, st, false))
+        .unwrap_or_default();
+    let slip = crate::model::unit_slip_strain(s)
+        .map(|(id, strain)| format!("{}; ", crate::model::unit_slip_sentence(id, strain)))
+        .unwrap_or_default();
+    let detail = match stability {
+        Some(st) if !st.stable() => format!(
+            "{slip}{} of its {} mechanism(s) not stiffened: {} (every node's motion in \
+             mechanisms.csv of the output directory, written by `run`); add members or \
+             supports, or change the prestress",
+            st.unstiffened().count(),
+            st.mechanisms,
+            unstiffened_modes(s, st)
+        ),
+        _ => format!(
+            "`K + K_G(t0)` is not positive definite: {}",
+            crate::model::indefinite_reason(s, stability)
+        ),
+    };
+    SetupError::NotPrestressStable {
+        model: model.geometry().name(),
+        detail,
+        modes,
+    }
+}
+
+/// The first three modes the prestress does not stiffen, each with the nodes it moves most.
+fn unstiffened_modes(s: &Structure, st: &PrestressStability) -> String {
+    let modes: Vec<String> = st
+        .unstiffened()
+        .take(3)
+        .enumerate()
+        .map(|(k, m)| m.describe(s, k + 1))
+        .collect();
+    modes.join("; ")
+}
+
+/// The modes behind a refusal, node by node, for mechanisms.csv: those the prestress does not
+/// stiffen, or (`all`) every mechanism.
+fn mode_rows(s: &Structure, st: &PrestressStability, all: bool) -> Vec<super::ModeRow> {
+    st.modes
+        .iter()
+        .filter(|m| all || m.stiffness <= st.threshold)
+        .enumerate()
+        .flat_map(|(k, m)| {
+            let full = s.full_displacements(&m.displacement);
+            (0..s.nodes.len())
+                .map(move |v| {
+                    (
+                        s.node_ids[v],
+                        k + 1,
+                        [full[3 * v], full[3 * v + 1], full[3 * v + 2]],
+                    )
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
 }

@@ -4,31 +4,28 @@
 
 mod error;
 mod figure12;
+mod files;
+mod path;
+mod sharing;
 mod verdict;
 
 use error::on_every_rank;
 pub use error::RunError;
+use files::{open_output, sinks, write_homogenised, write_mechanisms};
+use path::PathStart;
+pub use sharing::Sharing;
 
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
 use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolver};
-use crate::case::{Case, ReferenceChoice};
+use crate::case::Case;
 use crate::decomposition::{Exchange, OneProcess};
-use crate::output::{
-    self, alpha_label,
-    sinks::{
-        HistorySink, PerSolveSink, PlotsSink, PublishSink, ReactionTotalsSink, StabilitySink,
-        SummarySink,
-    },
-    FigureSettings, OutputDir, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError,
-};
+use crate::output::{alpha_label, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError};
 use crate::results::{self, AnswerMeasures};
-use crate::solvers::latin::LinkShare;
 use crate::solvers::{
     Equilibrium, IterationRecord, Measure, Method, Observer, Reference, Solution, Tee,
 };
 use crate::structure::StructureSize;
-use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use verdict::{assess, not_converged_message};
 
@@ -223,106 +220,6 @@ pub fn run_on(
     }
 }
 
-/// Which MPI ranks of a run keep only their micro-macro substructures' links
-/// ([`Prepared::keep_links_of`]), the others keeping the whole structure. A rank keeps a share
-/// only when micro-macro is the run's one solver, with no reference solve and without K's
-/// factor, and when the solve can run on shares ([`LinkShare::possible`]: not with
-/// status-following l nor with the prestress's geometric stiffness).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Sharing {
-    /// Every rank keeps the whole structure (one process, or another solver, a reference
-    /// solve or K's factor needs it).
-    Whole,
-    /// Ranks 1 … P − 1 keep their links alone; rank 0 keeps the whole structure for the
-    /// files that read every link (tensions, forces, reactions, VTK, figures, stability,
-    /// homogenised operators) and judges every answer alone.
-    AllButRank0,
-    /// Every rank keeps its links alone (the files asked for read no link: summary, history,
-    /// displacements); the ranks judge and measure every answer together.
-    EveryRank,
-}
-
-impl Sharing {
-    /// Which runs share out their links, as `check` and `run` say it.
-    pub const WHEN_SHARED: &'static str = "only a run of micro-macro alone with reference = \
-         \"none\", output.geometric_term = false and the default search policy shares out its \
-         links";
-
-    /// The sharing of a run of `case` by `methods` on `ranks` ranks that keeps K's factor or
-    /// not (`keeps_taut`).
-    pub fn of(case: &Case, methods: &[Method], keeps_taut: bool, ranks: usize) -> Sharing {
-        let possible = case
-            .solver
-            .latin_settings(Method::MicroMacro)
-            .is_some_and(|settings| LinkShare::possible(case.model, &settings));
-        let shares = ranks > 1
-            && methods == [Method::MicroMacro]
-            && case.solver.reference == ReferenceChoice::None
-            && !keeps_taut
-            && possible;
-        let o = &case.output;
-        let reads_links = o.tensions
-            || o.forces
-            || o.reactions
-            || o.vtk
-            || o.plots
-            || o.stability
-            || o.homogenised;
-        match (shares, reads_links) {
-            (false, _) => Sharing::Whole,
-            (true, true) => Sharing::AllButRank0,
-            (true, false) => Sharing::EveryRank,
-        }
-    }
-
-    /// The sharing of `tensolve run` on `case` (its own solvers) on `ranks` ranks.
-    pub fn of_run(case: &Case, ranks: usize) -> Sharing {
-        let methods = &case.solver.methods;
-        Sharing::of(
-            case,
-            methods,
-            Workload::run(case, methods).keeps_taut,
-            ranks,
-        )
-    }
-
-    /// What `check` says of it.
-    pub fn describe(self) -> String {
-        match self {
-            Sharing::Whole => {
-                format!(
-                    "every rank keeps the whole structure ({})",
-                    Self::WHEN_SHARED
-                )
-            }
-            Sharing::AllButRank0 => {
-                "ranks 1 and up keep only their substructures' links; rank 0 keeps the whole \
-                 structure for the files that read every link (tensions, forces, reactions, vtk, \
-                 plots, stability, homogenised: turn them off and every rank keeps its share)"
-                    .to_string()
-            }
-            Sharing::EveryRank => {
-                "every rank keeps only its substructures' links (nodes, supports and loads \
-                 whole); the ranks judge and measure each answer together"
-                    .to_string()
-            }
-        }
-    }
-}
-
-/// The output directory `dir`, locked for this run with a private staging directory, when
-/// this process `writes` and the case asks for files.
-fn open_output(
-    case: &Case,
-    dir: &Path,
-    writes: bool,
-) -> Result<Option<RefCell<OutputDir>>, RunError> {
-    (writes && writes_files(case))
-        .then(|| OutputDir::open(dir).map(RefCell::new))
-        .transpose()
-        .map_err(RunError::from)
-}
-
 /// The solvers of the run: `--solver`, else `solver.methods`, each named once.
 fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
     let methods = options
@@ -386,27 +283,6 @@ fn prepare_or_locate_mechanisms(
         }
         Err(refused.into())
     })
-}
-
-/// Every LATIN solver's homogenised substructure operators under `homogenised/`, committed
-/// to the output directory `out` (`root`: its path, for errors).
-fn write_homogenised(
-    root: &Path,
-    out: &RefCell<OutputDir>,
-    solvers: &mut [SetUpSolver<'_>],
-    events: &mut dyn FnMut(RunEvent<'_>),
-) -> Result<(), RunError> {
-    events(RunEvent::Stage("writing the homogenised operators"));
-    for set_up in solvers {
-        let operators = set_up.solver.homogenised();
-        let staging = out.borrow().staging().to_path_buf();
-        output::write_homogenised(&staging, &operators).map_err(|source| WriteError {
-            path: root.join("homogenised"),
-            source,
-        })?;
-        out.borrow_mut().commit()?;
-    }
-    Ok(())
 }
 
 /// The sweep over α: the solvers, where their e is measured from, the sinks, and what the
@@ -622,183 +498,5 @@ impl<'s> Sweep<'s> {
     fn close(mut self) -> Result<(Vec<SummaryRow>, Vec<String>), RunError> {
         self.sinks.close()?;
         Ok((self.rows, self.failures))
-    }
-}
-
-/// Where a solver's load path stands in the sweep (`large`, whose solves each start from the
-/// solver's last equilibrium).
-#[derive(Debug, Clone, Copy, Default)]
-struct PathStart {
-    /// The α of the solver's last equilibrium reached at a row's load (0: the prestressed
-    /// state).
-    alpha: f64,
-    /// The α of the solver's previous row, when there was one.
-    previous_row: Option<f64>,
-}
-
-/// A solve's load path in the sweep: where it started, how far it went, and whether it
-/// started elsewhere than at the solver's previous row.
-#[derive(Debug, Clone, Copy)]
-struct FollowedPath {
-    from: f64,
-    reached: f64,
-    restarted: bool,
-}
-
-impl PathStart {
-    /// The path of `solution`, the solve at `alpha`, and the start of the next one; `None`
-    /// for a solver that follows no load path.
-    fn follow(&mut self, alpha: f64, solution: &Solution) -> Option<FollowedPath> {
-        let end = solution.info.load_path.as_ref()?;
-        let from = self.alpha;
-        let followed = FollowedPath {
-            from,
-            // The α at fraction `reached` of the path from `from` to `alpha`.
-            reached: from + end.reached * (alpha - from),
-            restarted: self.previous_row.is_some_and(|row| row != from),
-        };
-        if solution.info.status.converged() {
-            self.alpha = alpha;
-        }
-        self.previous_row = Some(alpha);
-        Some(followed)
-    }
-}
-
-impl SummaryRow {
-    /// The row with its load path's columns.
-    fn on_path(mut self, path: Option<&FollowedPath>) -> SummaryRow {
-        if let Some(path) = path {
-            self.path_from = Some(path.from);
-            self.path_reached = Some(path.reached);
-            self.path_restarted = path.restarted;
-        }
-        self
-    }
-}
-
-/// `mechanisms.csv` (`node,mode,ux,uy,uz`) in the output directory, through its lock and
-/// staging like every result.
-fn write_mechanisms(dir: &Path, modes: &[crate::solvers::ModeRow]) -> Result<(), RunError> {
-    let mut out = OutputDir::open(dir)?;
-    let staging = out.staging().to_path_buf();
-    output::write_mechanisms(&staging, modes).map_err(|source| WriteError {
-        path: dir.join("mechanisms.csv"),
-        source,
-    })?;
-    out.commit()?;
-    out.finish().map_err(|source| WriteError {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    Ok(())
-}
-
-/// Whether `case` asks for any file.
-fn writes_files(case: &Case) -> bool {
-    let o = &case.output;
-    o.history
-        || o.tensions
-        || o.displacements
-        || o.forces
-        || o.reactions
-        || o.vtk
-        || o.plots
-        || o.stability
-        || o.summary
-        || o.homogenised
-}
-
-/// The sinks of the files `case` asks for, in the order they write: the per-solve files into
-/// the staging directory of `output`, published together, then the rows of the ledgers.
-fn sinks<'s>(
-    case: &Case,
-    root: &Path,
-    output: Option<&'s RefCell<OutputDir>>,
-    prepared: &'s Prepared,
-    solvers: &[SetUpSolver<'_>],
-) -> Sinks<'s> {
-    let mut sinks = Sinks::default();
-    let Some(output) = output else {
-        return sinks;
-    };
-    let staging = output.borrow().staging().to_path_buf();
-    let dir = staging.as_path();
-    let (model, taut) = (&prepared.model, prepared.taut.as_ref());
-    let structure = &model.structure;
-    let out = &case.output;
-    let has_history = solvers
-        .iter()
-        .any(|s| output::history_column(s.solver.stopping_measure()).is_some());
-    sinks.add(
-        out.history && has_history,
-        HistorySink::new(
-            root,
-            dir,
-            prepared
-                .share
-                .as_ref()
-                .map_or(structure.n_cables(), |share| share.world_cables()),
-        ),
-    );
-    sinks.add(out.tensions, PerSolveSink::tensions(root, dir, model));
-    sinks.add(
-        out.displacements,
-        PerSolveSink::displacements(root, dir, model),
-    );
-    sinks.add(out.forces, PerSolveSink::forces(root, dir, model));
-    sinks.add(out.reactions, PerSolveSink::reactions(root, dir, model));
-    sinks.add(out.vtk, PerSolveSink::vtk(root, dir, model));
-    if let Some(first) = solvers.first().filter(|_| out.plots) {
-        let settings = FigureSettings {
-            amplification: out.amplification,
-            max_plot_iterations: out.max_plot_iterations,
-        };
-        sinks.add(
-            true,
-            PlotsSink::new(root, dir, structure, first.method, settings),
-        );
-    }
-    sinks.add(true, PublishSink::new(output));
-    if let Some(taut) = taut {
-        sinks.add(out.stability, StabilitySink::new(output, model, taut));
-    }
-    sinks.add(out.reactions, ReactionTotalsSink::new(output, model));
-    sinks.add(out.summary, SummarySink::new(output));
-    sinks
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::solvers::latin::SearchPolicy;
-
-    /// The ranks keep shares of the links only for micro-macro alone with no reference and
-    /// without K's factor, on several ranks, every rank when no file reads a link.
-    #[test]
-    fn links_are_shared_only_where_nothing_needs_the_whole_structure() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/paper.toml");
-        let alone = [
-            "solver.reference=\"none\"".to_string(),
-            "output.geometric_term=false".to_string(),
-        ];
-        let mut case = crate::case::load_with(&path, &alone).unwrap();
-        let mm = [Method::MicroMacro];
-        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::AllButRank0);
-        assert_eq!(Sharing::of(&case, &mm, false, 1), Sharing::Whole);
-        assert_eq!(Sharing::of(&case, &mm, true, 4), Sharing::Whole);
-        let both = [Method::MicroMacro, Method::MonoLatin];
-        assert_eq!(Sharing::of(&case, &both, false, 4), Sharing::Whole);
-        let o = &mut case.output;
-        (o.tensions, o.forces, o.reactions, o.plots) = (false, false, false, false);
-        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::EveryRank);
-        case.output.vtk = true;
-        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::AllButRank0);
-        case.solver.latin.policy = SearchPolicy::Status;
-        assert_eq!(Sharing::of(&case, &mm, false, 2), Sharing::Whole);
-        let with_reference = crate::case::load_with(&path, &alone[1..]).unwrap();
-        assert_eq!(Sharing::of(&with_reference, &mm, false, 2), Sharing::Whole);
-        // The run's own solvers (the paper's four) keep the whole structure.
-        assert_eq!(Sharing::of_run(&case, 2), Sharing::Whole);
     }
 }
