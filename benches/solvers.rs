@@ -299,7 +299,7 @@ fn sweep(c: &mut Criterion) {
         let model = Model::new(paper_model().structure, geometry);
         let taut = taut_stiffness(&model);
         let solve = |model: &Model, taut: &TautStiffness| -> (usize, String) {
-            if geometry == GeometricModel::Large {
+            if model.updates_geometry() {
                 let newton = LargeNewton::new(model, taut, NewtonSettings::default());
                 let mut large = LoadPath::new(newton);
                 let iterations = run_sweep(&mut large, model, &alphas, true);

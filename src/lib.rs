@@ -9,15 +9,14 @@
 //! ```
 //!
 //! [`host`] reads what the machine lets this process use (its memory); [`linalg`] is sparse
-//! linear algebra knowing nothing of the domain; [`structure`] builds
-//! nodes, links and supports from a plain [`structure::GridSpec`]; [`model`] is a structure
-//! with the kinematics its members move by (the member law, `K_G`, the current geometry);
+//! linear algebra knowing nothing of the domain; [`structure`] builds nodes, links, supports
+//! and loads from a plain [`structure::GridSpec`]; [`model`] is a structure with the
+//! kinematics its members move by (the member law, `K_G`, the current geometry);
 //! [`decomposition`] cuts it into substructures and interfaces (and says what processes
-//! sharing them exchange);
-//! [`solvers`] holds the four
-//! solvers behind one [`solvers::Solver`] trait and one [`solvers::drive`]r; [`results`]
-//! checks and derives quantities from an answer; [`output`] writes files through one sink per
-//! file family; [`case`] turns a TOML file into those specs and settings; [`app`] runs a case.
+//! sharing them exchange); [`solvers`] holds the four solvers behind one [`solvers::Solver`]
+//! trait and one [`solvers::drive`]r; [`results`] checks and derives quantities from an
+//! answer; [`output`] writes files through one sink per file family; [`case`] turns a TOML file
+//! into those specs and settings; [`app`] runs a case.
 
 #![warn(missing_docs)]
 

@@ -110,19 +110,20 @@ fn model_of(name: &str, model: GeometricModel) -> Model {
 
 fn solve(s: &Model, taut: &TautStiffness, alpha: f64) -> Solution {
     let load: Vec<f64> = s.structure.unit_load.iter().map(|f| alpha * f).collect();
-    match s.geometry() {
-        GeometricModel::Large => drive(
+    if s.updates_geometry() {
+        drive(
             &mut LoadPath::new(LargeNewton::new(s, taut, NewtonSettings::default())),
             &load,
             None,
             &mut Silent,
-        ),
-        _ => drive(
+        )
+    } else {
+        drive(
             &mut Newton::new(s, taut, NewtonSettings::default()).unwrap(),
             &load,
             None,
             &mut Silent,
-        ),
+        )
     }
 }
 

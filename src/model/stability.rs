@@ -82,8 +82,8 @@ impl PrestressStability {
     }
 }
 
-/// The test for `s` under any model (`K_G(t0)` is taken from
-/// its links), or `None` above [`DENSE_LIMIT`] free dofs.
+/// The test for `s`, whatever its model (`K_G(t0)` is taken from its links), or `None` above
+/// [`DENSE_LIMIT`] free dofs.
 pub fn prestress_stability(s: &Structure) -> Option<PrestressStability> {
     let n = s.n_free;
     if n == 0 || n > DENSE_LIMIT {
