@@ -37,6 +37,7 @@ mod operators;
 mod ranks;
 mod residual;
 mod search;
+mod set_up;
 mod settings;
 mod shapes;
 mod state;
@@ -47,8 +48,8 @@ mod tests;
 
 #[cfg(test)]
 use crate::decomposition::macro_basis::macro_basis;
-use crate::decomposition::{block, Exchange, Homogenised, MacroDof, OneProcess, WeakInterfaces};
-use crate::decomposition::{Interface, Interfaces, Partition};
+use crate::decomposition::{block, Exchange, Homogenised, MacroDof};
+use crate::decomposition::{Interface, Partition};
 pub use link_share::LinkShare;
 use link_share::WorldFacts;
 pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW, VALUES_PER_SHARED_DOF};
@@ -57,7 +58,6 @@ pub use state::LatinState;
 pub(crate) use state::{SideState, SubState};
 pub(crate) use substructure::{OperatorStorage, Substructure};
 
-use super::SetupError;
 use crate::model::Model;
 use crate::structure::Structure;
 use macro_problem::MacroProblem;
@@ -227,236 +227,7 @@ pub fn auto_dm(structure: &Structure, substructures: usize, degree: usize) -> f6
     DM_FACTOR * degree.max(1) as f64 / compliance / h.sqrt()
 }
 
-/// What to change when the macro problem of `settings` is singular with macro bases of
-/// `degree`; `takes`: the largest lower degree with which it sets up, if any.
-fn singular_macro_advice(settings: &LatinSettings, degree: usize, takes: Option<usize>) -> String {
-    let asked = match settings.macro_degree {
-        Some(_) => format!("`solver.macro_degree` = {degree}"),
-        None => format!("the default macro degree here, {degree}"),
-    };
-    if let Some(largest) = takes {
-        return format!(
-            "{asked} is more than this partition's interfaces take (degrees 1 to 16 are valid, \
-             but on small substructures a high degree leaves the macro problem singular); the \
-             largest degree this partition takes is {largest}: set `solver.macro_degree` to at \
-             most {largest}"
-        );
-    }
-    let mut advice =
-        vec!["try another `solver.subdomains` (fewer, larger substructures)".to_string()];
-    if settings.weak != WeakInterfaces::Macro {
-        advice.push("`solver.weak_interfaces = \"macro\"`".to_string());
-    }
-    let advice = advice.join("; or ");
-    match degree > 1 {
-        true => format!("{advice} (degree 1 is singular too: {asked} is not the cause)"),
-        false => advice,
-    }
-}
-
-/// Memory all dense substructure inverses together may take (see
-/// [`crate::linalg::SpdSolver::new`]).
-const DENSE_BUDGET_BYTES: usize = 16 << 20;
-
 impl<'s> Latin<'s> {
-    /// Set up: partition, interfaces, substructure operators (in parallel) and the macro
-    /// problem; settings the structure cannot take are refused first
-    /// ([`LatinSettings::validate`]).
-    pub fn new(model: &'s Model, settings: LatinSettings) -> Result<Self, SetupError> {
-        Self::on_ranks(model, settings, &OneProcess)
-    }
-
-    /// Set up on the processes of `exchange` (every one calls it alike): each builds the
-    /// operators of its block of substructures ([`block`]), L_E and Q_E of the others are
-    /// gathered, the macro problem is factorised on every rank (see [`Exchange`]). Every rank
-    /// holds `model` whole.
-    pub fn on_ranks(
-        model: &'s Model,
-        settings: LatinSettings,
-        exchange: &'s dyn Exchange,
-    ) -> Result<Self, SetupError> {
-        let structure = &model.structure;
-        settings.validate(structure)?;
-        let partition = Partition::new(structure, settings.subdomains, settings.weak);
-        let world = WorldFacts::of(structure, &settings, partition.substructures.len());
-        Self::set_up(model, &partition, world, None, settings, exchange)
-    }
-
-    /// [`Latin::on_ranks`] on a rank that keeps only its substructures' links: `model`
-    /// and `share` as [`LinkShare::new`] made them, with these settings and as many ranks as
-    /// `exchange` has.
-    pub fn on_share(
-        model: &'s Model,
-        share: &'s LinkShare,
-        settings: LatinSettings,
-        exchange: &'s dyn Exchange,
-    ) -> Result<Self, SetupError> {
-        assert!(
-            share.settings == settings && share.ranks == exchange.size(),
-            "a share of the links is used with the settings and ranks it was made for"
-        );
-        Self::set_up(
-            model,
-            &share.partition,
-            share.world,
-            Some(&share.world_links),
-            settings,
-            exchange,
-        )
-    }
-
-    /// Set up for `partition` of `model` (whole, or with the held substructures' links
-    /// alone and `world_links` saying where they lie in the whole).
-    fn set_up(
-        model: &'s Model,
-        partition: &Partition,
-        mut world: WorldFacts,
-        world_links: Option<&'s [Vec<usize>]>,
-        settings: LatinSettings,
-        exchange: &'s dyn Exchange,
-    ) -> Result<Self, SetupError> {
-        let structure = &model.structure;
-        let mut interfaces =
-            Interfaces::new(structure, partition, settings.weak, world.macro_degree);
-        let base_search: Vec<f64> = structure
-            .links
-            .iter()
-            .map(|l| link_share::base_search(&settings, l.stiffness))
-            .collect();
-        let mut holders = vec![0u8; structure.n_nodes()];
-        for topo in &partition.substructures {
-            for &n in &topo.nodes {
-                holders[n] += 1;
-            }
-        }
-        // Dense inverses while all of them fit in a cache-sized budget (every iteration reads
-        // them whole): 16 × 195² doubles on the paper's case (4.9 MB), not 256 of them (78 MB).
-        let dense_bytes: usize = partition
-            .substructures
-            .iter()
-            .map(|t| 8 * t.free_dofs(structure).pow(2))
-            .sum();
-        let held = block(
-            exchange.rank(),
-            exchange.size(),
-            partition.substructures.len(),
-        );
-        let storage = OperatorStorage {
-            dense: dense_bytes <= DENSE_BUDGET_BYTES,
-            keep_z: settings.keep_z,
-        };
-        let build = |interfaces: &Interfaces, dm: f64| {
-            operators::build(
-                model,
-                partition,
-                &interfaces.list,
-                &holders,
-                &base_search,
-                dm,
-                storage,
-                (exchange, held.clone()),
-            )
-        };
-        // d_m at the degree p: the default `c p k̄ / √H` is linear in p (`auto_dm`).
-        let dm_at = |degree: usize| match settings.dm {
-            Some(dm) => dm,
-            None => world.dm * degree.max(1) as f64 / world.macro_degree.max(1) as f64,
-        };
-        let (substructures, macro_problem) = match build(&interfaces, world.dm) {
-            Err(SetupError::SingularMacroProblem { .. }) => {
-                // The largest degree below the one asked for that sets up, if any: tried
-                // downwards, so the degree named is the largest that does (issue 42, T4).
-                let takes = (1..world.macro_degree).rev().find_map(|degree| {
-                    let lower = Interfaces::new(structure, partition, settings.weak, degree);
-                    build(&lower, dm_at(degree))
-                        .ok()
-                        .map(|built| (degree, lower, built))
-                });
-                match (settings.macro_degree, takes) {
-                    // The default degree is a guess from the substructures' size: where the
-                    // partition takes less, the largest it takes is the default (and d_m with
-                    // it); `check` prints both.
-                    (None, Some((degree, lower, built))) => {
-                        world.dm = dm_at(degree);
-                        world.macro_degree = degree;
-                        interfaces = lower;
-                        built
-                    }
-                    (_, takes) => {
-                        return Err(SetupError::SingularMacroProblem {
-                            advice: singular_macro_advice(
-                                &settings,
-                                world.macro_degree,
-                                takes.map(|t| t.0),
-                            ),
-                        })
-                    }
-                }
-            }
-            built => built?,
-        };
-        let dm = world.dm;
-        let dof_ownership = dof_ownership::DofOwnership::of(&substructures, structure.n_free);
-        let mut latin = Latin {
-            model,
-            structure,
-            settings,
-            dm,
-            storage,
-            search: base_search.clone(),
-            search_slack: vec![false; structure.links.len()],
-            operators_lost: false,
-            base_search,
-            interfaces: interfaces.list,
-            substructures,
-            macro_problem,
-            side_slots: Vec::new(),
-            dropped_interfaces: interfaces.dropped,
-            redundant_nodes: interfaces.redundant_nodes,
-            prestress_scale: world.prestress_scale,
-            chunk: if structure.n_free < PARALLEL_MIN_DOFS {
-                usize::MAX
-            } else {
-                1
-            },
-            exchange,
-            held,
-            dof_ownership,
-            neighbours: None,
-            world,
-            world_links,
-            soft_modes: None,
-        };
-        let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
-        for sub in &latin.substructures {
-            for (slot, side) in sub.sides.iter().enumerate() {
-                side_slots[side.interface][side.which] = slot;
-            }
-        }
-        latin.side_slots = side_slots;
-        if let (Some(theta), false) = (latin.settings.soft_modes, latin.interfaces.is_empty()) {
-            latin.soft_modes = Some(enrichment::SoftModes::new(
-                theta,
-                partition.clone(),
-                &latin.interfaces,
-                latin.structure.links.len(),
-            ));
-            let all: Vec<usize> = (0..latin.substructures.len()).collect();
-            let search = latin.search.clone();
-            latin.enrich(&all, &search)?;
-        }
-        if exchange.size() > 1 && !latin.reads_whole_state() {
-            latin.neighbours = Some(neighbours::NeighbourPlan::new(
-                &latin.substructures,
-                &latin.interfaces,
-                &latin.dof_ownership,
-                exchange.rank(),
-                exchange.size(),
-            ));
-        }
-        Ok(latin)
-    }
-
     /// Whether every iteration reads the whole state, not only the held substructures' and
     /// what neighbouring ranks send: status-following l (each iteration classifies every
     /// cable) and r(U) with the prestress's geometric stiffness (one pass over the whole

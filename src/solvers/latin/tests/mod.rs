@@ -7,7 +7,8 @@
 //! Figures measured when these tests were written are quoted next to each bound; run with
 //! `--nocapture` to see the current ones.
 
-use super::{macro_basis, Latin, LatinSettings, LatinState, Partition, WeakInterfaces, PAPER_DM};
+use super::{macro_basis, Latin, LatinSettings, LatinState, Partition, PAPER_DM};
+use crate::decomposition::WeakInterfaces;
 use crate::solvers::Solver;
 use crate::structure::{GridSpec, LoadPattern, Structure};
 use nalgebra::DMatrix;
