@@ -3,13 +3,14 @@
 //! Data flows one way, and each module only uses those before it:
 //!
 //! ```text
-//! host, linalg → structure → decomposition → solvers → results → output
-//!                       ↘                      ↓                  ↓
-//!                         case ──────────────────────────────→  app (sweep, bench, check)
+//! host, linalg, labels → structure → decomposition → solvers → results → output
+//!                               ↘                      ↓                  ↓
+//!                                 case ──────────────────────────────→  app (sweep, bench, check)
 //! ```
 //!
 //! [`host`] reads what the machine lets this process use (its memory); [`linalg`] is sparse
-//! linear algebra knowing nothing of the domain; [`structure`] builds
+//! linear algebra knowing nothing of the domain; [`labels`] how numbers read where several
+//! layers write them (α in file names and messages); [`structure`] builds
 //! nodes, links and supports from a plain [`structure::GridSpec`]; [`decomposition`] cuts it
 //! into substructures and interfaces (and says what processes sharing them exchange);
 //! [`solvers`] holds the four
@@ -23,6 +24,7 @@ pub mod app;
 pub mod case;
 pub mod decomposition;
 pub mod host;
+pub mod labels;
 pub mod linalg;
 pub mod output;
 pub mod results;

@@ -141,12 +141,12 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
     // Two load factors with one label would write to the same files and repeat a row.
     let mut labels = std::collections::HashMap::new();
     for (i, &a) in alphas.iter().enumerate() {
-        if let Some(j) = labels.insert(crate::output::alpha_label(a), i) {
+        if let Some(j) = labels.insert(crate::labels::alpha_label(a), i) {
             return Err(CaseError::invalid(
                 KEY,
                 format!(
                     "a list whose values {j} and {i} are both {}",
-                    crate::output::alpha_label(a)
+                    crate::labels::alpha_label(a)
                 ),
                 "give distinct load factors (a range needs `to` - `from` large enough for its \
                  steps to differ in 12 significant digits)",
