@@ -10,6 +10,9 @@ use std::collections::HashMap;
 /// Largest load factor accepted.
 const ALPHA_MAX: f64 = 1e6;
 
+/// `load.self_weight.gravity` when `[load.self_weight]` leaves it out, m/s².
+const STANDARD_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
 /// `[load]` of a structure of `geometry` (`grid`: a module grid, whose nodal load defaults to
 /// the paper's; a general structure's to none).
 pub(super) fn load(
@@ -46,7 +49,7 @@ pub(super) fn load(
         None => None,
         Some(w) => Some(vector(
             "load.self_weight.gravity",
-            w.gravity.unwrap_or([0.0, 0.0, -9.81]),
+            w.gravity.unwrap_or(STANDARD_GRAVITY),
             1e6,
             "each gravity component in m/s²",
         )?),

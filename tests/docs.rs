@@ -1,0 +1,293 @@
+//! The documents kept true by the code: the README's table of case keys lists exactly the keys
+//! the case loader reads, with their defaults. Each failure says what to add or remove, and where.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// The text of `path`, relative to the repository.
+fn read(path: &str) -> String {
+    let full = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+    std::fs::read_to_string(&full).unwrap_or_else(|e| panic!("{}: {e}", full.display()))
+}
+
+/// The lines of `text` from the heading `heading` (a whole line) to the next heading of its
+/// level or above.
+fn section<'t>(text: &'t str, heading: &str) -> Vec<&'t str> {
+    let level = heading.chars().take_while(|&c| c == '#').count();
+    let mut lines = text.lines().skip_while(|l| *l != heading);
+    let first = lines
+        .next()
+        .unwrap_or_else(|| panic!("no heading `{heading}`"));
+    std::iter::once(first)
+        .chain(lines.take_while(|l| {
+            let hashes = l.chars().take_while(|&c| c == '#').count();
+            !(hashes > 0 && hashes <= level && l[hashes..].starts_with(' '))
+        }))
+        .collect()
+}
+
+/// The spans of `text` between backticks.
+fn code_spans(text: &str) -> Vec<&str> {
+    text.split('`').skip(1).step_by(2).collect()
+}
+
+// The README's table of case keys.
+
+/// The smallest valid case: every key the probes below do not set is at its default.
+const BASE: &str = "[grid]\nmodules = [2, 2]\n[load]\nalpha = [1.0]\n";
+
+/// What a key of the case file holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Holds {
+    /// A value.
+    Value,
+    /// A table of keys (`[solver]`, `box = { … }`).
+    Table,
+    /// An array of tables (`[[supports.fix]]`).
+    Tables,
+}
+
+/// The `--set` that puts `{ zzz = 1 }` at `path` (tables and arrays of tables from the top), a
+/// key no table has.
+fn unknown_key_at(path: &[(String, Holds)]) -> String {
+    fn inline(path: &[(String, Holds)]) -> String {
+        match path.split_first() {
+            None => "{ zzz = 1 }".into(),
+            Some(((name, Holds::Tables), rest)) => format!("{{ {name} = [{}] }}", inline(rest)),
+            Some(((name, _), rest)) => format!("{{ {name} = {} }}", inline(rest)),
+        }
+    }
+    let names =
+        |p: &[(String, Holds)]| -> Vec<String> { p.iter().map(|(n, _)| n.clone()).collect() };
+    match path.iter().position(|(_, h)| *h == Holds::Tables) {
+        None => [names(path), vec!["zzz".into()]].concat().join(".") + "=1",
+        Some(i) => format!(
+            "{}=[{}]",
+            names(&path[..=i]).join("."),
+            inline(&path[i + 1..])
+        ),
+    }
+}
+
+/// The keys of the table at `path` as the loader reads them: the list serde gives when it
+/// refuses an unknown key there. `None` when `path` is not a table.
+fn keys_of_table(path: &[(String, Holds)]) -> Option<Vec<String>> {
+    let set = unknown_key_at(path);
+    let message = tensolve::case::parse_with(BASE, &[set]).err()?.to_string();
+    let (_, list) = message.split_once("unknown field `zzz`, expected ")?;
+    let list = list.lines().next().unwrap_or("");
+    Some(code_spans(list).into_iter().map(String::from).collect())
+}
+
+/// A key as the README's table writes it: `supports.fix[i].dofs`.
+fn dotted(path: &[(String, Holds)]) -> String {
+    let mut parts = Vec::new();
+    for (i, (name, holds)) in path.iter().enumerate() {
+        let element = *holds == Holds::Tables && i + 1 < path.len();
+        parts.push(if element {
+            format!("{name}[i]")
+        } else {
+            name.clone()
+        });
+    }
+    parts.join(".")
+}
+
+/// Every key the loader reads under `path`, found by asking each key whether it is a table or
+/// an array of tables: dotted, with what it holds and, for tables, its own keys.
+fn case_keys(path: &mut Vec<(String, Holds)>, out: &mut Vec<(String, Holds, Vec<String>)>) {
+    let keys = keys_of_table(path).expect("the case file is a table");
+    for key in keys {
+        let holds = [Holds::Table, Holds::Tables]
+            .into_iter()
+            .find(|&holds| {
+                path.push((key.clone(), holds));
+                let table = keys_of_table(path).is_some();
+                path.pop();
+                table
+            })
+            .unwrap_or(Holds::Value);
+        path.push((key, holds));
+        let own = match holds {
+            Holds::Value => Vec::new(),
+            _ => keys_of_table(path).unwrap_or_default(),
+        };
+        out.push((dotted(path), holds, own));
+        if holds != Holds::Value {
+            case_keys(path, out);
+        }
+        path.pop();
+    }
+}
+
+/// Tables documented by one row of the key table, which names each of their keys.
+const ONE_ROW: &[&str] = &["load.point", "supports.fix[i].box"];
+
+/// Tables documented in a section of their own (whose TOML example names each key), not in
+/// the key table.
+const OWN_SECTION: &[(&str, &str)] = &[("structure", "### General structures: `[structure]`")];
+
+/// Keys whose default the table describes in words (required, none, a formula, per solver),
+/// not as a TOML value.
+const DEFAULTS_IN_WORDS: &[&str] = &[
+    "grid.modules",
+    "prestress.from",
+    "prestress.member",
+    "prestress.force",
+    "supports.fix",
+    "supports.fix[i].nodes",
+    "supports.fix[i].box",
+    "load.point",
+    "load.alpha",
+    "solver.tolerance",
+    "solver.max_iterations",
+    "solver.subdomains",
+    "solver.dm",
+    "solver.macro_degree",
+    "solver.residual_tolerance",
+    "output.dir",
+];
+
+/// An element of each array of tables that the defaults of its keys are checked on.
+const ELEMENTS: &[(&str, &str)] = &[("supports.fix", "nodes = [0]")];
+
+/// The rows of the README's key table: (key, default cell, whole row).
+fn readme_key_rows(readme: &str) -> Vec<(String, String, String)> {
+    let lines = section(readme, "## Case files");
+    let start = lines
+        .iter()
+        .position(|l| l.starts_with("| key | unit | default | allowed |"))
+        .expect("the README's key table");
+    lines[start + 2..]
+        .iter()
+        .take_while(|l| l.starts_with('|'))
+        .map(|row| {
+            let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+            let key = cells[1].trim_matches('`').to_string();
+            (key, cells[3].to_string(), row.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn readme_key_table_lists_exactly_the_keys_the_loader_reads() {
+    let readme = read("README.md");
+    let mut keys = Vec::new();
+    case_keys(&mut Vec::new(), &mut keys);
+    let rows = readme_key_rows(&readme);
+    let row_of = |key: &str| rows.iter().find(|(k, _, _)| k == key);
+    let mut expected = BTreeSet::new();
+    let mut problems = Vec::new();
+    for (key, holds, own) in &keys {
+        let inside = |outer: &str| {
+            key.starts_with(&format!("{outer}.")) || key.starts_with(&format!("{outer}[i]."))
+        };
+        if ONE_ROW
+            .iter()
+            .chain(OWN_SECTION.iter().map(|(k, _)| k))
+            .any(|k| inside(k))
+        {
+            continue;
+        }
+        if let Some((_, heading)) = OWN_SECTION.iter().find(|(k, _)| k == key) {
+            let text = section(&readme, heading).join("\n");
+            for k in own {
+                if !text.contains(&format!("\n{k} = ")) {
+                    problems.push(format!(
+                        "README's `{heading}` does not show `{k} = …` of [{key}]"
+                    ));
+                }
+            }
+            continue;
+        }
+        if ONE_ROW.contains(&key.as_str()) {
+            if let Some((_, _, row)) = row_of(key) {
+                for k in own.iter().filter(|k| !row.contains(k.as_str())) {
+                    problems.push(format!(
+                        "the README's row of `{key}` does not name its key `{k}`"
+                    ));
+                }
+            }
+            expected.insert(key.clone());
+        } else if *holds != Holds::Table {
+            expected.insert(key.clone());
+        }
+    }
+    let listed: BTreeSet<String> = rows.iter().map(|(k, _, _)| k.clone()).collect();
+    for key in expected.difference(&listed) {
+        problems.push(format!(
+            "the loader reads `{key}`: add a row for it to the README's key table"
+        ));
+    }
+    for key in listed.difference(&expected) {
+        problems.push(format!(
+            "the README's key table has `{key}`, which the loader does not read: remove its row"
+        ));
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert!(listed.len() > 50, "found only {} keys", listed.len());
+}
+
+/// The TOML value of `text`, if it is one.
+fn toml_value(text: &str) -> Option<toml::Value> {
+    toml::from_str::<toml::Table>(&format!("v = {text}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+}
+
+#[test]
+fn readme_key_table_gives_the_defaults_the_loader_takes() {
+    let readme = read("README.md");
+    let case = |sets: &[String]| {
+        tensolve::case::parse_with(BASE, sets).unwrap_or_else(|e| panic!("{sets:?}: {e}"))
+    };
+    let mut problems = Vec::new();
+    let mut checked = 0;
+    for (key, default, _) in readme_key_rows(&readme) {
+        let literal = code_spans(&default)
+            .first()
+            .copied()
+            .filter(|s| toml_value(s).is_some());
+        let in_words = DEFAULTS_IN_WORDS.contains(&key.as_str());
+        let Some(literal) = literal.filter(|_| !in_words) else {
+            if !in_words {
+                problems.push(format!(
+                    "`{key}`: its default `{default}` is not a TOML value; give one, or add the key to DEFAULTS_IN_WORDS in tests/docs.rs"
+                ));
+            }
+            continue;
+        };
+        // The case without the key, and with it set to the README's default (in an element
+        // of its array, or in its table created empty in both).
+        let (without, with) = match key.split_once("[i].") {
+            Some((array, inner)) => {
+                let element = ELEMENTS
+                    .iter()
+                    .find(|(a, _)| *a == array)
+                    .unwrap_or_else(|| panic!("no element of `{array}` in ELEMENTS"))
+                    .1;
+                (
+                    vec![format!("{array}=[{{ {element} }}]")],
+                    vec![format!("{array}=[{{ {element}, {inner} = {literal} }}]")],
+                )
+            }
+            None => {
+                let parent: Vec<String> = match key.rsplit_once('.') {
+                    Some((table, _)) if table.contains('.') => vec![format!("{table}={{}}")],
+                    _ => Vec::new(),
+                };
+                let mut with = parent.clone();
+                with.push(format!("{key}={literal}"));
+                (parent, with)
+            }
+        };
+        if case(&without) != case(&with) {
+            problems.push(format!(
+                "`{key}`: the README gives the default `{literal}`, but setting it changes the case"
+            ));
+        }
+        checked += 1;
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert!(checked > 30, "checked only {checked} defaults");
+}
