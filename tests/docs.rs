@@ -1,5 +1,7 @@
 //! The documents kept true by the code: the README's table of case keys lists exactly the keys
-//! the case loader reads, with their defaults. Each failure says what to add or remove, and where.
+//! the case loader reads, with their defaults; docs/performance.md's contents list every section,
+//! and every link into it names one of its headings. Each failure says what to add or remove,
+//! and where.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -290,4 +292,100 @@ fn readme_key_table_gives_the_defaults_the_loader_takes() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
     assert!(checked > 30, "checked only {checked} defaults");
+}
+
+// docs/performance.md's contents and the links into it.
+
+/// The anchor GitHub gives a heading: lower case, spaces to hyphens, punctuation dropped.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            '-' | '_' => Some(c),
+            // Combining marks (k̄) stay, as letters do.
+            c if c.is_alphanumeric() || ('\u{300}'..='\u{36f}').contains(&c) => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The anchors of the `##` and `###` headings of `text`, outside code blocks.
+fn heading_anchors(text: &str) -> Vec<(String, String)> {
+    let mut fenced = false;
+    let mut out = Vec::new();
+    for line in text.lines() {
+        if line.starts_with("```") {
+            fenced = !fenced;
+        }
+        if fenced {
+            continue;
+        }
+        if let Some(h) = line
+            .strip_prefix("## ")
+            .or_else(|| line.strip_prefix("### "))
+        {
+            out.push((h.to_string(), anchor(h)));
+        }
+    }
+    out
+}
+
+/// The targets of the links `](#…)` in `text` (`prefix`: `](performance.md#` and the like).
+fn link_targets<'t>(text: &'t str, prefix: &str) -> Vec<&'t str> {
+    text.split(prefix)
+        .skip(1)
+        .filter_map(|rest| rest.split(')').next())
+        .collect()
+}
+
+#[test]
+fn performance_contents_list_every_section() {
+    let text = read("docs/performance.md");
+    let contents: String = text
+        .lines()
+        .take_while(|l| !l.starts_with("## "))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let listed: BTreeSet<&str> = link_targets(&contents, "](#").into_iter().collect();
+    let headings = heading_anchors(&text);
+    let mut problems = Vec::new();
+    for (heading, a) in &headings {
+        if !listed.contains(a.as_str()) {
+            problems.push(format!(
+                "docs/performance.md's contents do not list `{heading}`: add [{heading}](#{a})"
+            ));
+        }
+    }
+    for a in &listed {
+        if !headings.iter().any(|(_, h)| h == a) {
+            problems.push(format!(
+                "docs/performance.md's contents link #{a}, which no heading has"
+            ));
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn links_into_performance_name_its_headings() {
+    let headings = heading_anchors(&read("docs/performance.md"));
+    let mut problems = Vec::new();
+    for (file, prefix) in [
+        ("README.md", "](docs/performance.md#"),
+        ("docs/guide.md", "](performance.md#"),
+        ("docs/method.md", "](performance.md#"),
+        ("docs/performance.md", "](#"),
+    ] {
+        for a in link_targets(&read(file), prefix) {
+            if !headings.iter().any(|(_, h)| h == a) {
+                problems.push(format!(
+                    "{file} links performance.md#{a}, which no heading has"
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
