@@ -1,7 +1,7 @@
 //! The documents kept true by the code: the README's table of case keys lists exactly the keys
-//! the case loader reads, with their defaults; docs/performance.md's contents list every section,
-//! and every link into it names one of its headings. Each failure says what to add or remove,
-//! and where.
+//! the case loader reads, with their defaults; docs/guide.md's source layout names every file of
+//! `src/` and no file that is gone; docs/performance.md's contents list every section, and every
+//! link into it names one of its headings. Each failure says what to add or remove, and where.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -292,6 +292,130 @@ fn readme_key_table_gives_the_defaults_the_loader_takes() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
     assert!(checked > 30, "checked only {checked} defaults");
+}
+
+// docs/guide.md's source layout.
+
+/// A bullet of the source layout: its folder (the path its files are named from) and its own
+/// text, without its nested bullets.
+struct Bullet {
+    folder: String,
+    text: String,
+}
+
+/// The bullets of the guide's source layout. A bullet that opens with a folder (`` `src/linalg/` ``,
+/// nested: `` `latin/` ``, from its parent's) names its files from that folder; any other names
+/// them from its parent's (the top: the repository).
+fn layout_bullets(guide: &str) -> Vec<Bullet> {
+    let mut bullets: Vec<Bullet> = Vec::new();
+    let mut parents: Vec<(usize, String)> = Vec::new(); // (indent, folder)
+    for line in section(guide, "## Source layout") {
+        let indent = line.len() - line.trim_start().len();
+        let Some(text) = line.trim_start().strip_prefix("* ") else {
+            if let Some(b) = bullets.last_mut() {
+                b.text.push(' ');
+                b.text.push_str(line.trim());
+            }
+            continue;
+        };
+        while parents.last().is_some_and(|(i, _)| *i >= indent) {
+            parents.pop();
+        }
+        let parent = parents.last().map_or(String::new(), |(_, f)| f.clone());
+        let folder = match text.strip_prefix('`').and_then(|t| t.split('`').next()) {
+            Some(first) if first.ends_with('/') => format!("{parent}{first}"),
+            _ => parent,
+        };
+        parents.push((indent, folder.clone()));
+        bullets.push(Bullet {
+            folder,
+            text: text.to_string(),
+        });
+    }
+    bullets
+}
+
+/// Whether `text` names `path` as a whole word (not as the end of a longer path).
+fn names(text: &str, path: &str) -> bool {
+    let word = |c: char| c.is_alphanumeric() || c == '_' || c == '/';
+    text.match_indices(path).any(|(at, _)| {
+        !text[..at].chars().next_back().is_some_and(word)
+            && !text[at + path.len()..]
+                .chars()
+                .next()
+                .is_some_and(|c| c.is_alphanumeric() || c == '_')
+    })
+}
+
+/// Every `.rs` file under `dir`, by its path from the repository.
+fn rust_files(root: &Path, dir: &str, out: &mut Vec<String>) {
+    for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+        let entry = entry.unwrap();
+        let path = format!("{dir}/{}", entry.file_name().to_string_lossy());
+        if entry.file_type().unwrap().is_dir() {
+            rust_files(root, &path, out);
+        } else if path.ends_with(".rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// When files move, this test names each one to add to (or remove from) the guide's "Source
+/// layout": a file goes in the bullet of its folder, by its path from that folder
+/// (`src/solvers/` names `newton/mod.rs`); a file whose folder has no bullet goes anywhere in
+/// the layout by its whole path.
+#[test]
+fn guide_source_layout_names_every_source_file() {
+    let guide = read("docs/guide.md");
+    let whole = section(&guide, "## Source layout").join("\n");
+    let bullets = layout_bullets(&guide);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(root, "src", &mut files);
+    files.sort();
+    let mut problems = Vec::new();
+    for file in &files {
+        let bullet = bullets
+            .iter()
+            .filter(|b| !b.folder.is_empty() && file.starts_with(&b.folder))
+            .max_by_key(|b| b.folder.len());
+        let named = match bullet {
+            Some(b) => names(&b.text, &file[b.folder.len()..]),
+            None => names(&whole, file),
+        };
+        if !named {
+            problems.push(match bullet {
+                Some(b) => format!(
+                    "{file}: not named in docs/guide.md's Source layout; add `{}` to the bullet of `{}`",
+                    &file[b.folder.len()..],
+                    b.folder
+                ),
+                None => format!("{file}: not named in docs/guide.md's Source layout; add it by its whole path"),
+            });
+        }
+    }
+    // The other way: every file a bullet names is there.
+    for b in &bullets {
+        let words = b
+            .text
+            .split(|c: char| !(c.is_alphanumeric() || "_./".contains(c)));
+        for word in words.filter(|w| w.ends_with(".rs")) {
+            let there = [
+                format!("{}{word}", b.folder),
+                word.to_string(),
+                format!("src/{word}"),
+            ]
+            .iter()
+            .any(|p| root.join(p).is_file());
+            if !there {
+                problems.push(format!(
+                    "docs/guide.md's Source layout names `{word}` (bullet of `{}`), which is not there: remove or rename it",
+                    b.folder
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
 // docs/performance.md's contents and the links into it.
