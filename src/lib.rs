@@ -3,14 +3,15 @@
 //! Data flows one way, and each module only uses those before it:
 //!
 //! ```text
-//! host, linalg → structure → model → decomposition → solvers → results → output
-//!                                ↘                       ↓                  ↓
-//!                                  case ────────────────────────────────→  app (sweep, bench, check)
+//! host, linalg, labels → structure → model → decomposition → solvers → results → output
+//!                                         ↘                       ↓                  ↓
+//!                                           case ────────────────────────────────→  app (sweep, bench, check)
 //! ```
 //!
 //! [`host`] reads what the machine lets this process use (its memory); [`linalg`] is sparse
-//! linear algebra knowing nothing of the domain; [`structure`] builds nodes, links, supports
-//! and loads from a plain [`structure::GridSpec`]; [`model`] is a structure with the
+//! linear algebra knowing nothing of the domain; [`labels`] how numbers read where several
+//! layers write them (α in file names and messages); [`structure`] builds nodes, links,
+//! supports and loads from a plain [`structure::GridSpec`]; [`model`] is a structure with the
 //! kinematics its members move by (the member law, `K_G`, the current geometry);
 //! [`decomposition`] cuts it into substructures and interfaces (and says what processes
 //! sharing them exchange); [`solvers`] holds the four solvers behind one [`solvers::Solver`]
@@ -24,6 +25,7 @@ pub mod app;
 pub mod case;
 pub mod decomposition;
 pub mod host;
+pub mod labels;
 pub mod linalg;
 pub mod model;
 pub mod output;

@@ -69,7 +69,8 @@ fn stated(case: &Case, solver: &str) -> (Option<f64>, Option<f64>) {
 
 /// Checks every converged row of `dir` (the run of `case`) and returns how many there were.
 /// `loaded(alpha)`: whether the case puts any force or settlement on the structure at α (at
-/// no load LATIN's η is a ratio of round-off, and it stops on Δη at round-off: docs/guide.md).
+/// no load LATIN's η is a ratio of round-off, and it stops on Δη at round-off:
+/// docs/performance.md, "LATIN solvers: what to expect").
 fn check_converged_rows(
     case: &Case,
     dir: &Path,

@@ -86,7 +86,8 @@ proptest! {
         for (k, sol) in solutions.iter().enumerate() {
             // micro-macro's η can stall above the tolerance while its answer has converged:
             // interface forces at nodes held by several substructures are determined only in
-            // sum (README, "LATIN solvers: what to expect"). Its answer is checked below.
+            // sum (docs/performance.md, "LATIN solvers: what to expect"). Its answer is
+            // checked below.
             prop_assert!(sol.info.status.converged() || k == 3, "solver {k}: {:?}", sol.info);
             let eq = &sol.equilibrium;
             prop_assert!(eq.displacements.iter().chain(&eq.tensions).all(|x| x.is_finite()));

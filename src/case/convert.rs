@@ -89,12 +89,7 @@ fn structure(
                 "prestress.lower_cable",
                 raw.prestress.lower_cable.map(|v| v.to_string()),
             )?;
-            if raw
-                .output
-                .compare_modules
-                .as_ref()
-                .is_some_and(|kinds| !kinds.is_empty())
-            {
+            if !raw.output.compare_modules.is_empty() {
                 return Err(CaseError::invalid(
                     "output.compare_modules".to_string(),
                     "given",

@@ -10,6 +10,9 @@ use std::collections::HashMap;
 /// Largest load factor accepted.
 const ALPHA_MAX: f64 = 1e6;
 
+/// `load.self_weight.gravity` when `[load.self_weight]` leaves it out, m/s².
+const STANDARD_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
 /// `[load]` of a structure of `geometry` (`grid`: a module grid, whose nodal load defaults to
 /// the paper's; a general structure's to none).
 pub(super) fn load(
@@ -46,7 +49,7 @@ pub(super) fn load(
         None => None,
         Some(w) => Some(vector(
             "load.self_weight.gravity",
-            w.gravity.unwrap_or([0.0, 0.0, -9.81]),
+            w.gravity.unwrap_or(STANDARD_GRAVITY),
             1e6,
             "each gravity component in m/s²",
         )?),
@@ -141,12 +144,12 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
     // Two load factors with one label would write to the same files and repeat a row.
     let mut labels = std::collections::HashMap::new();
     for (i, &a) in alphas.iter().enumerate() {
-        if let Some(j) = labels.insert(crate::output::alpha_label(a), i) {
+        if let Some(j) = labels.insert(crate::labels::alpha_label(a), i) {
             return Err(CaseError::invalid(
                 KEY,
                 format!(
                     "a list whose values {j} and {i} are both {}",
-                    crate::output::alpha_label(a)
+                    crate::labels::alpha_label(a)
                 ),
                 "give distinct load factors (a range needs `to` - `from` large enough for its \
                  steps to differ in 12 significant digits)",

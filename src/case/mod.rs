@@ -3,7 +3,8 @@
 //! into a fully typed `Case` (`convert`) whose numbers are known to be finite and physical;
 //! every other module receives that.
 //!
-//! Inside, one way only: `numbers` (the checks of a number) and `raw` under everything;
+//! Inside, one way only: `numbers` (the checks of a number), `typed` (the case as the program
+//! uses it, whose `OutputChoice` `raw` reads as it is) and `raw` under everything;
 //! `tables`, `nodes`, `grid`, `prestress`, `load`, `solver` and `output` each
 //! convert one part of the file; `convert` calls them in file order. Every file is read
 //! through `read_text`, whose bytes `sources` can record (MPI rank 0) or replay (the others).

@@ -1,7 +1,7 @@
 //! The case file as written: serde structs mirroring its sections, every key optional but
 //! `load.alpha` and one of `[grid]` / `[structure]`, unknown keys rejected by name (`deny_unknown_fields`).
 //! Nothing here has a default value: [`super::convert`] takes each default from the type it
-//! configures.
+//! configures. `[output]` is read straight into [`OutputChoice`], whose defaults are its own.
 
 use crate::decomposition::WeakInterfaces;
 use crate::solvers::latin::{SearchPolicy, StopOn};
@@ -10,7 +10,7 @@ use crate::structure::{Clamp, ModuleKind};
 use serde::Deserialize;
 use std::path::PathBuf;
 
-use super::ReferenceChoice;
+use super::{OutputChoice, ReferenceChoice};
 
 /// A list of exactly `N` values: TOML arrays of any other length are refused (serde's own
 /// arrays accept and drop extra elements).
@@ -45,7 +45,7 @@ pub(super) struct RawCase {
     #[serde(default)]
     pub solver: RawSolver,
     #[serde(default)]
-    pub output: RawOutput,
+    pub output: OutputChoice,
     #[serde(default)]
     pub model: RawModel,
 }
@@ -196,25 +196,4 @@ pub(super) struct RawSolver {
     pub soft_modes: Option<f64>,
     pub macro_degree: Option<usize>,
     pub reference: Option<ReferenceChoice>,
-}
-
-/// `[output]`.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawOutput {
-    pub dir: Option<PathBuf>,
-    pub summary: Option<bool>,
-    pub tensions: Option<bool>,
-    pub displacements: Option<bool>,
-    pub forces: Option<bool>,
-    pub reactions: Option<bool>,
-    pub history: Option<bool>,
-    pub plots: Option<bool>,
-    pub vtk: Option<bool>,
-    pub stability: Option<bool>,
-    pub geometric_term: Option<bool>,
-    pub homogenised: Option<bool>,
-    pub amplification: Option<f64>,
-    pub max_plot_iterations: Option<usize>,
-    pub compare_modules: Option<Vec<crate::structure::ModuleKind>>,
 }

@@ -170,8 +170,13 @@ impl SolverChoice {
     }
 }
 
-/// `[output]`: which files to write, and where. Each default written once, at its field.
-#[derive(Debug, Clone, PartialEq)]
+/// `[output]`: which files to write, and where. Read from the case file as it is (serde's
+/// defaults are [`OutputChoice::default`], unknown keys refused), then checked; each key and its
+/// default written once.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+// What a type error says it expected (`--set output=5`: "expected struct RawOutput"): the
+// message as it was before this struct was read directly.
+#[serde(default, deny_unknown_fields, expecting = "struct RawOutput")]
 pub struct OutputChoice {
     /// Output directory. Default `out/<case file stem>`; `--out` overrides it.
     pub dir: Option<PathBuf>,

@@ -12,6 +12,7 @@ pub mod sinks;
 mod tables;
 mod vtk;
 
+pub use crate::labels::alpha_label;
 pub use atomic::{ensure_writable, write_atomic};
 pub use history::{history_column, history_header, HistoryWriter};
 pub use homogenised::{homogenised_path, write_homogenised};
@@ -19,7 +20,7 @@ pub use plots::{FigureData, FigureSettings};
 pub use publish::{lock_directory, OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
-    alpha_label, reaction_totals, reaction_totals_line, result_path, stability_line, summary_line,
+    reaction_totals, reaction_totals_line, result_path, stability_line, summary_line,
     write_displacements, write_forces, write_mechanisms, write_reactions, write_tensions,
     StabilityRow, SummaryRow, REACTION_TOTALS_HEADER, STABILITY_HEADER, SUMMARY_HEADER,
 };

@@ -2,26 +2,12 @@
 //! `displacements/{solver}_alpha{α}.csv`, `forces/…`, `reactions/…`, `reaction_totals.csv`.
 
 use super::write_atomic;
+use crate::labels::alpha_label;
 use crate::model::Model;
 use crate::results;
 use crate::solvers::{Equilibrium, Measure, Solution, Status};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
-
-/// Longest α label written out in full; a longer one (1e-250 is 252 characters in full, too
-/// long for a file name) is written in exponent form.
-const ALPHA_LABEL_MAX: usize = 24;
-
-/// α as it appears in file names: Rust's `{}` for f64 (1 → `1`, 0.05 → `0.05`), or its
-/// exponent form (`1e-250`) when that would be longer than 24 characters.
-pub fn alpha_label(alpha: f64) -> String {
-    let full = format!("{alpha}");
-    if full.len() > ALPHA_LABEL_MAX {
-        format!("{alpha:e}")
-    } else {
-        full
-    }
-}
 
 /// One row of `summary.csv` (the README describes each column).
 #[derive(Debug, Clone)]

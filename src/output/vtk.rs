@@ -7,8 +7,8 @@
 //! N), `kind` (Int32, see [`kind_code`]) and `slack` (UInt8: 1 for a slack cable, else 0).
 //! Field data `alpha` holds the load factor. A non-finite value is an error, never a file.
 
-use super::tables::alpha_label;
 use super::write_atomic;
+use crate::labels::alpha_label;
 use crate::solvers::Equilibrium;
 use crate::structure::{GridRole, LinkKind, Structure};
 use std::io::{self, Write};

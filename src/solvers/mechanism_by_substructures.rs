@@ -46,7 +46,7 @@ pub enum SubstructuredVerdict {
     Regular,
     /// K is singular, with this many zero-stiffness modes (counted as K's own are).
     Mechanism(usize),
-    /// Substructure E (its index in the partition) has more than [`KERNEL_COLUMNS`] kernel
+    /// Substructure E (its index in the partition) has more than `KERNEL_COLUMNS` kernel
     /// vectors, or more mechanisms of its own than are counted: the check does not decide,
     /// and K must be factorized whole.
     Undecided(usize),

@@ -79,7 +79,7 @@ fn z_columns([sx, sy]: [usize; 2], degree: f64) -> f64 {
 }
 
 /// Bytes of micro-macro's own memory beside the structure on a structure of `size` with
-/// `settings`: the substructure factors ([`substructure_entries_per_dof`], 10 bytes an entry
+/// `settings`: the substructure factors (`substructure_entries_per_dof`, 10 bytes an entry
 /// as K's), Z_E unless `keep_z` is false, Anderson's history (two vectors of about 1.25 values
 /// per link per depth) and the macro factor (three times a stiffness factor of its dofs: its
 /// blocks are denser). Measured against peak RSS of whole runs (2026-11-27, reference none,

@@ -2,7 +2,7 @@
 //! axis), the scale a log axis is drawn in below f64's epsilon, and the series fitted to them
 //! (a start beyond the y axis clipped to its edge, long series thinned).
 
-use super::chart::{Frame, Scale, Series};
+use super::series::{Frame, Scale, Series};
 use super::tick_label;
 use std::ops::Range;
 

@@ -7,9 +7,8 @@ use super::axes::{
 };
 use super::legend::{draw_line_legend, LegendEntry, TEXT_SIZE};
 use super::marker::Marker;
-use super::palette::solver_colour;
-use super::{alpha_text, log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
-use crate::solvers::Method;
+use super::series::{Frame, Scale, Series};
+use super::{log_tick_label, plot_error, tick_label, SERIES_STROKE_WIDTH};
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -28,45 +27,6 @@ const LEGEND_LABEL_LEFT: u32 = 44;
 const LEGEND_RIGHT_MARGIN: u32 = 12;
 /// A series is drawn with at most this many points (the plot is ~700 px wide).
 const MAX_POINTS: usize = 1400;
-
-/// How an axis maps its values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scale {
-    /// Linear, over the span of the values (from 0 on the y axis when they are positive).
-    Linear,
-    /// Logarithmic over whole decades, labelled 10ⁿ: points with a value ≤ 0 on this axis are
-    /// left out.
-    Log,
-}
-
-/// One curve of a [`LineChart`].
-#[derive(Debug, Clone)]
-pub struct Series {
-    /// What the legend calls it.
-    pub label: String,
-    /// Its line (and markers, and legend sample).
-    pub colour: RGBColor,
-    /// Its points in drawing order; non-finite ones are left out.
-    pub points: Vec<(f64, f64)>,
-}
-
-impl Series {
-    /// One solver's curve in the solver's colour (the same in every figure), labelled with
-    /// the solver's name, followed by ` (α = a)` when `alpha` is given (figures with several
-    /// load factors).
-    pub fn of_solver(solver: Method, alpha: Option<f64>, points: Vec<(f64, f64)>) -> Series {
-        let name = solver.name();
-        let label = match alpha {
-            Some(alpha) => format!("{name} (α = {})", alpha_text(alpha)),
-            None => name.to_string(),
-        };
-        Series {
-            label,
-            colour: solver_colour(solver),
-            points,
-        }
-    }
-}
 
 /// A line chart: its series as lines over a linear or log x axis and a linear or log y axis,
 /// with a legend in a column right of the plot (widened when a label would not fit).
@@ -89,18 +49,6 @@ pub struct LineChart {
     pub markers: bool,
     /// The curves, drawn in this order and listed so in the legend.
     pub series: Vec<Series>,
-}
-
-/// Which part of the data a [`LineChart`] shows (by default, all of it).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Frame {
-    /// Points with a larger x are left out (the convergence figures stop at
-    /// `output.max_plot_iterations`).
-    pub x_max: Option<f64>,
-    /// The y axis spans only the points with at least this x (the convergence figures leave
-    /// iteration 0 out, whose start value may lie decades above the rest); a series starting
-    /// beyond that span is drawn from where its first segment crosses the axis' edge.
-    pub y_from_x: Option<f64>,
 }
 
 impl LineChart {
@@ -291,6 +239,7 @@ fn text_width(text: &str, size: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solvers::Method;
 
     #[test]
     fn thin_keeps_ends_and_extremes() {

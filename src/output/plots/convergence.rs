@@ -9,8 +9,9 @@
 //! (the direct mono-latin of a linear case, α = 0) is a dot, on the axis' edge when beyond it,
 //! whose value a note under the legend gives; it does not stretch the axis.
 
-use super::chart::{Frame, LineChart, Scale, Series};
+use super::chart::LineChart;
 use super::palette::{ordered_colour, solver_colour};
+use super::series::{Frame, Scale, Series};
 use super::{alpha_text, FigureSettings, History};
 use crate::solvers::{IterationRecord, Method};
 use std::io;

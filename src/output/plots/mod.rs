@@ -21,10 +21,12 @@ mod deformed;
 mod legend;
 mod marker;
 mod palette;
+mod series;
 mod slack;
 mod tensions;
 
-pub use chart::{Frame, LineChart, Scale, Series};
+pub use chart::LineChart;
+pub use series::{Frame, Scale, Series};
 
 use super::{alpha_label, write_atomic};
 use crate::solvers::{Equilibrium, IterationRecord, Method};

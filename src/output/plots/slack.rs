@@ -1,8 +1,9 @@
 //! `slack_fraction.svg` (paper Figure 7): the fraction of slack cables against α, one series
 //! per solver.
 
-use super::chart::{LineChart, Scale, Series};
+use super::chart::LineChart;
 use super::palette::solver_colour;
+use super::series::{Scale, Series};
 use crate::solvers::Method;
 
 /// `per_solver`: (solver, [(α, slack fraction)]).

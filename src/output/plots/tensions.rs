@@ -5,8 +5,9 @@
 //! settlement.
 
 use super::alpha_text;
-use super::chart::{LineChart, Scale, Series};
+use super::chart::LineChart;
 use super::palette::ordered_colour;
+use super::series::{Scale, Series};
 use crate::structure::Structure;
 
 /// The cable tensions at α = 0 when u = 0 is the answer there: the prestress balances at the

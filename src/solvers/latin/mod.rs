@@ -170,7 +170,7 @@ const STATUS_BAND: f64 = 1e-3;
 const STATUS_PERSISTENCE: u8 = 2;
 
 /// Modules of a substructure's side per degree of its interfaces' macro basis: the default
-/// degree is `p = round(H / MODULES_PER_MACRO_DEGREE)`, 1 to 16 ([`auto_macro_degree`]), so
+/// degree is `p = round(H / MODULES_PER_MACRO_DEGREE)`, 1 to 16 (`auto_macro_degree`), so
 /// that the micro part of an interface, what the macro problem leaves to the search direction
 /// d_m, varies over about this many modules whatever the substructures' size. Why 4:
 /// docs/method.md, "Tuning log".
@@ -199,7 +199,7 @@ pub const MAX_MACRO_DEGREE: usize = 16;
 /// The default d_m, N/m: `d_m = DM_FACTOR p k̄ / √H` for a macro basis of degree p. k̄ is the
 /// stiffness of a median cable and a median bar in series, `k̄ = (1/k_c + 1/k_b)⁻¹` (the softer
 /// of the two governs how a load passes through a module). H is the side of a substructure in
-/// modules ([`substructure_side`]). With p = 1 this is the optimised-Schwarz scaling
+/// modules (`substructure_side`). With p = 1 this is the optimised-Schwarz scaling
 /// `d_m ∝ 1/√(hH)` at fixed module size h; a richer macro basis leaves the search direction
 /// only the interface's shorter waves, which a stiffer d_m suits (measured: docs/method.md,
 /// "Tuning log"). The paper's 3.92e6 ([`PAPER_DM`]) suits only the smallest substructures.

@@ -102,7 +102,7 @@ pub struct LatinSettings {
     /// Degree p of the strong interfaces' macro bases: the paper's nine first-order fields, and
     /// for p > 1 the translations times the Legendre polynomials of degree 2 … p along the
     /// interface. Default `None`: `round(H / 4)`, 1 to 16, for substructures of side H modules
-    /// ([`super::auto_macro_degree`]).
+    /// (`auto_macro_degree`).
     pub macro_degree: Option<usize>,
     /// Iteration cap. Default 1000.
     pub max_iterations: usize,
@@ -182,7 +182,7 @@ impl LatinSettings {
     }
 
     /// The degree of the macro bases on `substructures` substructures of a structure of
-    /// `links` links: `macro_degree`, or [`super::auto_macro_degree`].
+    /// `links` links: `macro_degree`, or `auto_macro_degree`.
     pub fn macro_degree_on(&self, links: usize, substructures: usize) -> usize {
         self.macro_degree.unwrap_or_else(|| {
             super::auto_macro_degree(super::substructure_side(links, substructures))
