@@ -152,6 +152,23 @@ fn latin_settings(
     if let Some(keep) = raw.keep_z {
         latin.keep_z = keep;
     }
+    macro_basis_settings(raw, latin)?;
+    if let Some(tol) = raw.residual_tolerance {
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(CaseError::invalid(
+                "solver.residual_tolerance",
+                number(tol),
+                "give the LATIN equilibrium-residual tolerance between 0 and 1 (exclusive), e.g. 1e-8",
+            ));
+        }
+        latin.residual_tolerance = Some(tol);
+    }
+    Ok(())
+}
+
+/// The keys of `[solver]` that shape micro-macro's macro basis, set in `latin`: its degree
+/// and the soft interface modes.
+fn macro_basis_settings(raw: &RawSolver, latin: &mut LatinSettings) -> Result<(), CaseError> {
     if let Some(degree) = raw.macro_degree {
         if !(1..=MAX_MACRO_DEGREE).contains(&degree) {
             return Err(CaseError::invalid(
@@ -171,16 +188,6 @@ fn latin_settings(
             ));
         }
         latin.soft_modes = (theta > 0.0).then_some(theta);
-    }
-    if let Some(tol) = raw.residual_tolerance {
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(CaseError::invalid(
-                "solver.residual_tolerance",
-                number(tol),
-                "give the LATIN equilibrium-residual tolerance between 0 and 1 (exclusive), e.g. 1e-8",
-            ));
-        }
-        latin.residual_tolerance = Some(tol);
     }
     Ok(())
 }

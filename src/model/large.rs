@@ -3,7 +3,7 @@
 //! vectors, whose energy's Hessian is the tangent.
 
 use super::material::{tangent_weight, tension};
-use super::residual::{unbalances_on, Unbalances};
+use super::unbalance::{unbalances_on, Unbalances};
 use crate::linalg::{SparseRow, StiffnessPattern};
 use crate::structure::{Link, Structure, CLAMPED};
 

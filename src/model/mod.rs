@@ -15,6 +15,7 @@
 //! | `members` | the members at displacements U: trial tensions, elongations, states |
 //! | `tangent` | the tangent stiffness: assembly and product |
 //! | `residual` | the relative equilibrium residual r(U) |
+//! | `unbalance` | `Bᵀτ − F` and its relative sizes |
 //! | `energy` | the energy's slope along a direction, and its geometric terms |
 
 mod energy;
@@ -25,15 +26,16 @@ mod prestress;
 mod residual;
 mod stability;
 mod tangent;
+mod unbalance;
 
 pub use large::{internal_slope, CurrentGeometry};
 pub use members::MemberStates;
 pub use prestress::{geometric_force, geometric_force_on, GeometricStiffness};
-pub use residual::{relative_unbalance, unbalances, unbalances_on, Unbalances};
 pub use stability::{
     indefinite_reason, largest_moving_nodes, prestress_stability, unit_slip_sentence,
     unit_slip_strain, Mode, PrestressStability, PRESTRESS_STRAIN_WARNING,
 };
+pub use unbalance::{relative_unbalance, unbalances, unbalances_on, Unbalances};
 
 use crate::structure::Structure;
 use serde::Deserialize;
