@@ -109,11 +109,11 @@ impl Latin<'_> {
         // iteration measured it beside its local stage.
         let residuals = measured.unwrap_or_else(|| {
             let u = self.displacements(&state.subs);
-            self.residuals(&u, &state.load, &state.law_slack)
+            self.residuals(&u, &state.load, &state.steps.law_slack)
         });
         state.residual = residuals.0;
         if let Some(frozen) = residuals.1 {
-            state.frozen_residual = frozen;
+            state.steps.frozen_residual = frozen;
         }
 
         // The slack cables of ŝ, counted per held substructure and gathered from every rank.

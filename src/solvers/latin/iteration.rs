@@ -6,7 +6,7 @@
 use super::anderson::{Anderson, Pieces};
 use super::indicator::Residuals;
 use super::local_stage::LocalLaw;
-use super::state::{LatinState, SubState};
+use super::state::{Acceleration, Following, LatinState, StatusSteps, SubState};
 use super::{Latin, SearchPolicy, StopOn};
 use crate::model::material;
 use crate::model::Model;
@@ -56,7 +56,7 @@ impl Latin<'_> {
         let updated = self.settings.policy == SearchPolicy::Status && self.follow_status(state);
         if updated {
             state.rebuilds += 1;
-            state.relax = false;
+            state.acceleration.relax = false;
         }
         updated
     }
@@ -67,10 +67,10 @@ impl Latin<'_> {
         self.local_stage(&mut state.subs, LocalLaw::Exact);
         self.update_search(state);
         let mu = self.settings.relaxation;
-        let relaxation = (state.relax && mu < 1.0).then_some(mu);
+        let relaxation = (state.acceleration.relax && mu < 1.0).then_some(mu);
         let accuracy = self.macro_accuracy(state);
         self.linear_stage(&state.load, &mut state.subs, relaxation, accuracy);
-        state.relax = true;
+        state.acceleration.relax = true;
     }
 
     /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; new
@@ -84,16 +84,18 @@ impl Latin<'_> {
     ) -> Residuals {
         let restarted = self.update_search(state) || restart;
         let g = self.linear_stage_input(&state.subs);
-        let next =
-            state
-                .anderson
-                .step(&state.input, &g, restarted, &self.input_pieces(&state.subs));
+        let next = state.acceleration.anderson.step(
+            &state.acceleration.input,
+            &g,
+            restarted,
+            &self.input_pieces(&state.subs),
+        );
         self.set_linear_stage_input(&mut state.subs, &next);
-        state.input = next;
+        state.acceleration.input = next;
         let accuracy = self.macro_accuracy(state);
         self.linear_stage(&state.load, &mut state.subs, None, accuracy);
         let residuals = self.local_stage_measuring(state);
-        state.relax = true;
+        state.acceleration.relax = true;
         residuals
     }
 
@@ -102,8 +104,8 @@ impl Latin<'_> {
     /// U, for [`Latin::measure_state`]: the same numbers as one after the other.
     pub(super) fn local_stage_measuring(&self, state: &mut LatinState) -> Residuals {
         let u = self.displacements(&state.subs);
-        let law = self.local_law(&state.law_slack);
-        let (subs, load, law_slack) = (&mut state.subs, &state.load, &state.law_slack);
+        let law = self.local_law(&state.steps.law_slack);
+        let (subs, load, law_slack) = (&mut state.subs, &state.load, &state.steps.law_slack);
         let ((), residuals) = rayon::join(
             || self.local_stage(subs, law),
             || self.residuals(&u, load, law_slack),
@@ -264,30 +266,36 @@ impl Solver for Latin<'_> {
             residual: f64::INFINITY,
             slack_cables: 0,
             rebuilds: 0,
-            relax: false,
             at_roundoff: false,
             macro_to_the_end: false,
             unloaded: load.iter().all(|&f| f == 0.0)
                 && self.structure.prescribed.iter().all(|&d| d == 0.0),
-            frozen_residual: f64::INFINITY,
-            law_slack: vec![false; self.structure.links.len()],
-            runaway: None,
-            step: None,
             load: load.to_vec(),
-            input: Vec::new(),
-            anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
-            status_streak: vec![0; self.structure.links.len()],
+            acceleration: Acceleration {
+                relax: false,
+                input: Vec::new(),
+                anderson: Anderson::new(self.settings.anderson, self.settings.relaxation),
+            },
+            following: Following {
+                status_streak: vec![0; self.structure.links.len()],
+            },
+            steps: StatusSteps {
+                frozen_residual: f64::INFINITY,
+                law_slack: vec![false; self.structure.links.len()],
+                runaway: None,
+                start: None,
+            },
         };
         self.linear_stage(&state.load, &mut state.subs, None, 1e-9);
         let mut measured = None;
         if self.accelerated() {
-            state.input = self.linear_stage_input(&state.subs);
+            state.acceleration.input = self.linear_stage_input(&state.subs);
             measured = Some(self.local_stage_measuring(&mut state));
         }
-        state.relax = true;
+        state.acceleration.relax = true;
         self.measure_state(&mut state, measured);
         if self.newton_steps() {
-            state.step = Some(self.step_start(&state));
+            state.steps.start = Some(self.step_start(&state));
         }
         state
     }
@@ -310,7 +318,7 @@ impl Solver for Latin<'_> {
         state.iteration += 1;
         self.measure_state(state, measured);
         if stepped {
-            state.step = Some(self.step_start(state));
+            state.steps.start = Some(self.step_start(state));
         }
     }
 
@@ -361,7 +369,7 @@ impl Solver for Latin<'_> {
     }
 
     fn runaway(&self, state: &LatinState) -> Option<NoEquilibrium> {
-        state.runaway.clone()
+        state.steps.runaway.clone()
     }
 
     /// U of the linear stage (interface nodes averaged over the substructures holding them),

@@ -54,7 +54,7 @@ pub use link_share::LinkShare;
 use link_share::WorldFacts;
 pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW, VALUES_PER_SHARED_DOF};
 pub use settings::{LatinSettings, SearchDirection, SearchPolicy, StopOn, PAPER_DM};
-pub use state::LatinState;
+pub use state::{LatinState, StatusSteps};
 pub(crate) use state::{SideState, SubState};
 pub(crate) use substructure::{OperatorStorage, Substructure};
 

@@ -26,7 +26,7 @@ impl Latin<'_> {
         for (i, (l, &tau)) in links.iter().zip(&trial).enumerate() {
             let was_slack = self.search_slack[i];
             let is_slack = l.unilateral && if was_slack { tau <= band } else { tau < -band };
-            let streak = &mut state.status_streak[i];
+            let streak = &mut state.following.status_streak[i];
             *streak = if is_slack == was_slack {
                 0
             } else {
@@ -47,7 +47,7 @@ impl Latin<'_> {
         let rebuilt = self.set_search(slack);
         if rebuilt {
             // The cables whose l just changed start counting afresh.
-            for streak in &mut state.status_streak {
+            for streak in &mut state.following.status_streak {
                 if *streak >= STATUS_PERSISTENCE {
                     *streak = 0;
                 }

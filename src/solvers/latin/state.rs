@@ -103,27 +103,12 @@ pub struct LatinState {
     pub slack_cables: usize,
     /// Operator rebuilds (status-following l) so far in this solve.
     pub rebuilds: usize,
-    /// Whether s was computed with the current operators, so that the next linear stage may
-    /// be relaxed (or extrapolated) against it: not after a re-set-up.
-    pub(super) relax: bool,
-    /// With Anderson acceleration: the linear stage's input that gave s (see
-    /// [`super::anderson`]), and the history it extrapolates from.
-    pub(super) input: Vec<f64>,
-    pub(super) anderson: Anderson,
-    /// Per link: for how many linear stages in a row its status has differed from the one its
-    /// search direction was built for (status-following l).
-    pub(super) status_streak: Vec<u8>,
-
-    /// With inexact Newton status steps: r(U) under the law linearised at the status.
-    pub frozen_residual: f64,
-    /// With inexact Newton status steps: the slack status the local stage's law is linearised
-    /// at (per link).
-    pub law_slack: Vec<bool>,
-    /// With inexact Newton status steps: a step along which the exact energy decreases
-    /// without bound, as its certificate (docs/method.md §8).
-    pub(super) runaway: Option<crate::solvers::NoEquilibrium>,
-    /// With inexact Newton status steps: where the current step started.
-    pub(super) step: Option<super::status_step::StepStart>,
+    /// The relaxed or Anderson-accelerated fixed point's state (every iteration order).
+    pub(super) acceleration: Acceleration,
+    /// Status-following l's state (`solver.policy = "status"`).
+    pub(super) following: Following,
+    /// Inexact Newton status steps' state (`solver.policy = "newton"`, the default).
+    pub steps: StatusSteps,
 
     /// Δη is at round-off level against the prestress: nothing is left to iterate on.
     pub at_roundoff: bool,
@@ -135,4 +120,38 @@ pub struct LatinState {
     pub(super) unloaded: bool,
     /// The load on the free dofs, N.
     pub(super) load: Vec<f64>,
+}
+
+/// What the next linear stage is relaxed against or extrapolated from.
+#[derive(Debug, Clone)]
+pub(crate) struct Acceleration {
+    /// Whether s was computed with the current operators, so that the next linear stage may
+    /// be relaxed (or extrapolated) against it: not after a re-set-up.
+    pub(super) relax: bool,
+    /// With Anderson acceleration: the linear stage's input that gave s (see
+    /// [`super::anderson`]), and the history it extrapolates from.
+    pub(super) input: Vec<f64>,
+    pub(super) anderson: Anderson,
+}
+
+/// What status-following l counts between rebuilds.
+#[derive(Debug, Clone)]
+pub(crate) struct Following {
+    /// Per link: for how many linear stages in a row its status has differed from the one its
+    /// search direction was built for.
+    pub(super) status_streak: Vec<u8>,
+}
+
+/// What inexact Newton status steps keep between iterations.
+#[derive(Debug, Clone)]
+pub struct StatusSteps {
+    /// r(U) under the law linearised at the status.
+    pub frozen_residual: f64,
+    /// The slack status the local stage's law is linearised at (per link).
+    pub law_slack: Vec<bool>,
+    /// A step along which the exact energy decreases without bound, as its certificate
+    /// (docs/method.md §8).
+    pub(super) runaway: Option<crate::solvers::NoEquilibrium>,
+    /// Where the current step started.
+    pub(super) start: Option<super::status_step::StepStart>,
 }

@@ -73,7 +73,7 @@ impl Latin<'_> {
     pub(super) fn step_start(&self, state: &LatinState) -> StepStart {
         StepStart {
             subs: state.subs.clone(),
-            input: state.input.clone(),
+            input: state.acceleration.input.clone(),
             displacements: self.displacements(&state.subs),
             residual: state.residual,
             iteration: state.iteration,
@@ -83,10 +83,10 @@ impl Latin<'_> {
     /// Whether the inner run has done its work: the linearised residual is below
     /// `forcing × r(U)` at the step's start (or the run reached [`INNER_MAX_ITERATIONS`]).
     pub(super) fn inner_run_done(&self, state: &LatinState) -> bool {
-        let Some(start) = &state.step else {
+        let Some(start) = &state.steps.start else {
             return false;
         };
-        state.frozen_residual <= self.settings.forcing * start.residual
+        state.steps.frozen_residual <= self.settings.forcing * start.residual
             || state.iteration - start.iteration >= INNER_MAX_ITERATIONS
     }
 
@@ -94,7 +94,7 @@ impl Latin<'_> {
     /// step's start and `state`, `state ← start + θ (state − start)`, the blend's status, new
     /// operators if it changed, and ŝ of the blend on the law linearised at that status.
     pub(super) fn status_step(&mut self, state: &mut LatinState) -> StatusStep {
-        let start = state.step.take().expect("a status step has a start");
+        let start = state.steps.start.take().expect("a status step has a start");
         let end = self.displacements(&state.subs);
         // An inner run on a law whose status leaves a mechanism runs away along it, driven by
         // the load or by the prestress the slack cables released: the step or its opposite
@@ -111,7 +111,7 @@ impl Latin<'_> {
         // certificate's energy test compares the stretch, quadratic in the step, with the
         // load's work, linear in it: any small enough step passes it).
         let runs_away = sums.step_squared >= sums.start_squared;
-        state.runaway = runs_away
+        state.steps.runaway = runs_away
             .then(|| {
                 let step = self.whole_step(step.clone());
                 self.certificate_along(&step, &state.load).or_else(|| {
@@ -137,7 +137,7 @@ impl Latin<'_> {
             for (st, st0) in state.subs.iter_mut().zip(&start.subs) {
                 st.blend_from(st0, theta);
             }
-            blend(&mut state.input, &start.input, theta);
+            blend(&mut state.acceleration.input, &start.input, theta);
         }
         // The blend's status: slack where τ = t0 + k e ≤ 0, a cable keeping its status while
         // |τ| is within a band far below what r(U) is stopped on (a cable at zero tension in
@@ -153,14 +153,14 @@ impl Latin<'_> {
             true => 0..self.substructures.len(),
             false => self.held.clone(),
         };
-        let mut slack = state.law_slack.clone();
+        let mut slack = state.steps.law_slack.clone();
         let (mut law_changed, mut disagree) = (false, 0usize);
         for (sub, st) in self.substructures[classified.clone()]
             .iter()
             .zip(&state.subs[classified])
         {
             for (&i, &e) in sub.links.iter().zip(&st.e) {
-                let (l, was) = (&links[i], state.law_slack[i]);
+                let (l, was) = (&links[i], state.steps.law_slack[i]);
                 let tau = material::trial_tension(l, e);
                 slack[i] = l.unilateral && if was { tau <= band } else { tau < -band };
                 law_changed |= slack[i] != was;
@@ -180,8 +180,8 @@ impl Latin<'_> {
         if rebuilt {
             state.rebuilds += 1;
         }
-        state.law_slack = slack;
-        self.local_stage(&mut state.subs, self.local_law(&state.law_slack));
+        state.steps.law_slack = slack;
+        self.local_stage(&mut state.subs, self.local_law(&state.steps.law_slack));
         StatusStep {
             map_changed: rebuilt || law_changed,
         }
