@@ -196,12 +196,7 @@ fn table(args: &[String]) {
             };
             let case = tensolve::case::parse(&grid_case(n, alpha, extra)).expect("case");
             let model = case.model();
-            let load: Vec<f64> = model
-                .structure
-                .unit_load
-                .iter()
-                .map(|f| alpha * f)
-                .collect();
+            let load = model.load(alpha);
             let taut = TautStiffness::new(&model).expect("regular");
             let clock = std::time::Instant::now();
             let newton = Newton::new(&model, &taut, NewtonSettings::default())
@@ -328,12 +323,7 @@ fn atscale(args: &[String]) {
             .latin_settings(tensolve::solvers::Method::MicroMacro)
             .expect("micro-macro settings");
         let model = case.model();
-        let load: Vec<f64> = model
-            .structure
-            .unit_load
-            .iter()
-            .map(|f| alpha * f)
-            .collect();
+        let load = model.load(alpha);
         let row = scale_row(&model, settings, &load);
         let (newton, error) = if n <= 512 {
             let clock = std::time::Instant::now();

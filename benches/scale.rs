@@ -22,12 +22,7 @@ fn bench_case(c: &mut Criterion, id: &str, file: &str) {
     let setup_and_solve = || {
         let model = case.model();
         let taut = TautStiffness::new(&model).expect("taut stiffness is regular");
-        let load: Vec<f64> = model
-            .structure
-            .unit_load
-            .iter()
-            .map(|f| alpha * f)
-            .collect();
+        let load = model.load(alpha);
         let mut newton =
             Newton::new(&model, &taut, NewtonSettings::default()).expect("newton set-up");
         newton.solve(&load, None, &mut Silent).info

@@ -76,12 +76,7 @@ fn bench_case(
     let mut case = tensolve::case::load(Path::new(path)).expect("case loads");
     case.load.alphas = vec![alpha];
     let model = case.model();
-    let load: Vec<f64> = model
-        .structure
-        .unit_load
-        .iter()
-        .map(|f| alpha * f)
-        .collect();
+    let load = model.load(alpha);
     let mut group = c.benchmark_group(id);
     configure(&mut group);
     group.bench_function("shared-setup", |b| {
@@ -213,12 +208,7 @@ fn run_sweep(solver: &mut dyn AnySolver, model: &Model, alphas: &[f64], warm: bo
     let mut previous: Option<Equilibrium> = None;
     let mut iterations = 0;
     for &alpha in alphas {
-        let load: Vec<f64> = model
-            .structure
-            .unit_load
-            .iter()
-            .map(|f| alpha * f)
-            .collect();
+        let load = model.load(alpha);
         let start = if warm { previous.as_ref() } else { None };
         let solution = solver.solve_from(&load, start, None, &mut Silent);
         assert!(
