@@ -61,7 +61,9 @@ impl Basis {
             }
             pattern.sym_matvec(m, &x, &mut mx);
             let norm = dot(&x, &mx).max(0.0).sqrt();
-            if !(norm > 1e-10 * before) || before == 0.0 {
+            // A NaN norm is dropped too.
+            let kept = norm > 1e-10 * before && before > 0.0;
+            if !kept {
                 continue;
             }
             x.iter_mut().for_each(|xi| *xi /= norm);
