@@ -7,6 +7,7 @@
 mod cholesky;
 mod dense;
 mod low_rank;
+mod modal;
 mod nested_dissection;
 mod ordering;
 mod parallel;
@@ -19,6 +20,7 @@ mod spectrum;
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
 pub use low_rank::LowRankUpdate;
+pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes};
 pub use nested_dissection::nested_dissection;
 pub use ordering::NodeOrdering;
 pub use parallel::{par_dot, par_update, par_zip_map, CHUNK};

@@ -14,12 +14,14 @@
 //! | `large` | the current geometry of the `large` model |
 //! | `members` | the members at displacements U: trial tensions, elongations, states |
 //! | `tangent` | the tangent stiffness: assembly and product |
+//! | `mass` | the members' mass matrix, consistent or lumped (the natural modes) |
 //! | `residual` | the relative equilibrium residual r(U) |
 //! | `unbalance` | `Bᵀτ − F` and its relative sizes |
 //! | `energy` | the energy's slope along a direction, and its geometric terms |
 
 mod energy;
 mod large;
+mod mass;
 pub mod material;
 mod members;
 mod prestress;
@@ -29,6 +31,7 @@ mod tangent;
 mod unbalance;
 
 pub use large::{internal_slope, CurrentGeometry};
+pub use mass::MassKind;
 pub use members::MemberStates;
 pub use prestress::{geometric_force, geometric_force_on, GeometricStiffness};
 pub use stability::{

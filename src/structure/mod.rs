@@ -81,6 +81,8 @@ pub struct Link {
     pub prestress: f64,
     /// Tension-only: complementarity `0 ≤ τ ⊥ λ ≥ 0` instead of a linear law.
     pub unilateral: bool,
+    /// Mass ρ·S·ℓ, kg (0 without a density): the natural modes' mass matrix.
+    pub mass: f64,
 }
 
 impl Link {
@@ -227,6 +229,7 @@ impl Structure {
                     stiffness,
                     prestress: m.prestress + stiffness * imposed,
                     unilateral: m.kind.is_cable() && geometry.unilateral,
+                    mass: m.density * m.section * length,
                 }
             })
             .collect();

@@ -178,6 +178,7 @@ mod tests {
             stiffness: k,
             prestress: t0,
             unilateral,
+            mass: 0.0,
         }
     }
 

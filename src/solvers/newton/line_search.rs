@@ -175,6 +175,7 @@ mod tests {
             stiffness,
             prestress: 0.0,
             unilateral,
+            mass: 0.0,
         }
     }
 
