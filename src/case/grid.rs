@@ -78,11 +78,18 @@ pub(super) fn grid_spec(raw: &RawCase, g: &RawGrid) -> Result<GridSpec, CaseErro
 
 /// The member checks of a grid (`bars.strength`, `bars.inertia`, `cables.strength`), when any
 /// is given, for the materials of `spec`; each a physical quantity (> 0).
-pub(super) fn grid_checks(raw: &RawCase, spec: &GridSpec) -> Result<Option<MemberChecks>, CaseError> {
+pub(super) fn grid_checks(
+    raw: &RawCase,
+    spec: &GridSpec,
+) -> Result<Option<MemberChecks>, CaseError> {
     let given = |key: &str, value: Option<f64>, what: &str| -> Result<Option<f64>, CaseError> {
         value.map(|v| positive(key, v, what).map(|_| v)).transpose()
     };
-    let bar_strength = given("bars.strength", raw.bars.strength, "the bars' design strength in Pa")?;
+    let bar_strength = given(
+        "bars.strength",
+        raw.bars.strength,
+        "the bars' design strength in Pa",
+    )?;
     let inertia = given(
         "bars.inertia",
         raw.bars.inertia,

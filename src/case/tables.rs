@@ -358,14 +358,18 @@ impl Table<'_> {
         let inertia = match cell(9) {
             Some(text) => Some(self.limit(line, id, "inertia", text, bar, |v| {
                 if !(v >= 0.0) {
-                    Some("must be ≥ 0 (m⁴): give the section's second moment of area about its \
+                    Some(
+                        "must be ≥ 0 (m⁴): give the section's second moment of area about its \
                           weaker axis, or leave the cell empty to leave its buckling unchecked"
-                        .to_string())
+                            .to_string(),
+                    )
                 } else if bar && v == 0.0 {
-                    Some("must be > 0 on a bar (m⁴): a bar without bending stiffness buckles \
+                    Some(
+                        "must be > 0 on a bar (m⁴): a bar without bending stiffness buckles \
                           under any compression; give the section's second moment of area about \
                           its weaker axis, or leave the cell empty to leave its buckling unchecked"
-                        .to_string())
+                            .to_string(),
+                    )
                 } else {
                     None
                 }
@@ -388,12 +392,7 @@ impl Table<'_> {
         refuse: impl Fn(f64) -> Option<String>,
     ) -> Result<f64, CaseError> {
         if let Some(why) = text.parse::<f64>().ok().and_then(&refuse) {
-            return Err(self.error(
-                line,
-                column,
-                text,
-                format!("member {id}: `{column}` {why}"),
-            ));
+            return Err(self.error(line, column, text, format!("member {id}: `{column}` {why}")));
         }
         self.number(line, column, text, positive)
     }

@@ -50,7 +50,9 @@ impl MemberChecks {
     pub fn keeping(&self, links: &[usize]) -> MemberChecks {
         match self {
             MemberChecks::Kinds { .. } => self.clone(),
-            MemberChecks::Each(each) => MemberChecks::Each(links.iter().map(|&i| each[i]).collect()),
+            MemberChecks::Each(each) => {
+                MemberChecks::Each(links.iter().map(|&i| each[i]).collect())
+            }
         }
     }
 }
