@@ -346,7 +346,7 @@ impl Table<'_> {
         };
         let strength = match cell(8) {
             Some(text) => Some(self.limit(line, id, "strength", text, true, |v| {
-                (!(v > 0.0)).then(|| {
+                (v.is_nan() || v <= 0.0).then(|| {
                     "must be > 0 (Pa): give the member's design strength, or leave the cell \
                      empty to leave its stress unchecked"
                         .to_string()
@@ -357,7 +357,7 @@ impl Table<'_> {
         let bar = kind == LinkKind::Bar;
         let inertia = match cell(9) {
             Some(text) => Some(self.limit(line, id, "inertia", text, bar, |v| {
-                if !(v >= 0.0) {
+                if v.is_nan() || v < 0.0 {
                     Some(
                         "must be ≥ 0 (m⁴): give the section's second moment of area about its \
                           weaker axis, or leave the cell empty to leave its buckling unchecked"
