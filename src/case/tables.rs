@@ -45,11 +45,14 @@ impl Table<'_> {
         // whole).
         let expected = || {
             let mut text = format!("`{}`", required.join(","));
-            if !optional.is_empty() {
-                text.push_str(&format!(
-                    ", optionally followed by `,{}`",
-                    optional.join(",")
-                ));
+            // Each optional column in turn: `,density`, then `,strength`, then `,inertia`.
+            for (k, column) in optional.iter().enumerate() {
+                let lead = if k == 0 {
+                    ", optionally followed by"
+                } else {
+                    ", then"
+                };
+                text.push_str(&format!("{lead} `,{column}`"));
             }
             text
         };
