@@ -1,6 +1,7 @@
 //! Quantities derived from an equilibrium, computed independently of the solver that produced
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
+pub mod checks;
 pub mod modes;
 pub mod uniqueness;
 

@@ -134,6 +134,9 @@ const OWN_SECTION: &[(&str, &str)] = &[("structure", "### General structures: `[
 const DEFAULTS_IN_WORDS: &[&str] = &[
     "grid.modules",
     "prestress.from",
+    "bars.strength",
+    "bars.inertia",
+    "cables.strength",
     "prestress.member",
     "prestress.force",
     "supports.fix",

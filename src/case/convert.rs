@@ -66,7 +66,9 @@ fn structure(
         (Some(g), None) => {
             let spec = grid_spec(raw, g)?;
             ensure_structure_fits(StructureSize::of_grid(&spec))?;
-            let (geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
+            let checks = super::grid::grid_checks(raw, &spec)?;
+            let (mut geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
+            geometry.checks = checks;
             (Some(spec), geometry, fixes)
         }
         (None, Some(st)) => {
@@ -85,6 +87,14 @@ fn structure(
             general_only("cables.section", raw.cables.section.map(|v| v.to_string()))?;
             general_only("bars.young", raw.bars.young.map(|v| v.to_string()))?;
             general_only("bars.section", raw.bars.section.map(|v| v.to_string()))?;
+            // The checks' keys too: a members table gives `strength` and `inertia` per member.
+            for (key, value) in [
+                ("bars.strength", raw.bars.strength),
+                ("bars.inertia", raw.bars.inertia),
+                ("cables.strength", raw.cables.strength),
+            ] {
+                general_only(key, value.map(|v| v.to_string()))?;
+            }
             general_only(
                 "prestress.lower_cable",
                 raw.prestress.lower_cable.map(|v| v.to_string()),

@@ -4,7 +4,7 @@
 use super::numbers::{number, positive, PHYSICAL_MAX};
 use super::raw::{RawCase, RawGrid};
 use super::CaseError;
-use crate::structure::{CableSpec, GridSpec, Material};
+use crate::structure::{CableSpec, CheckedMember, GridSpec, Material, MemberChecks};
 
 /// `[grid]` of a raw case: the grid's description, checked.
 pub(super) fn grid_spec(raw: &RawCase, g: &RawGrid) -> Result<GridSpec, CaseError> {
@@ -74,4 +74,47 @@ pub(super) fn grid_spec(raw: &RawCase, g: &RawGrid) -> Result<GridSpec, CaseErro
         prestress: p,
         clamp: raw.supports.clamp.unwrap_or(paper.clamp),
     })
+}
+
+/// The member checks of a grid (`bars.strength`, `bars.inertia`, `cables.strength`), when any
+/// is given, for the materials of `spec`; each a physical quantity (> 0).
+pub(super) fn grid_checks(
+    raw: &RawCase,
+    spec: &GridSpec,
+) -> Result<Option<MemberChecks>, CaseError> {
+    let given = |key: &str, value: Option<f64>, what: &str| -> Result<Option<f64>, CaseError> {
+        value.map(|v| positive(key, v, what).map(|_| v)).transpose()
+    };
+    let bar_strength = given(
+        "bars.strength",
+        raw.bars.strength,
+        "the bars' design strength in Pa",
+    )?;
+    let inertia = given(
+        "bars.inertia",
+        raw.bars.inertia,
+        "the bars' second moment of area in m⁴ (about the weaker axis)",
+    )?;
+    let cable_strength = given(
+        "cables.strength",
+        raw.cables.strength,
+        "the cables' design strength in Pa",
+    )?;
+    if bar_strength.is_none() && inertia.is_none() && cable_strength.is_none() {
+        return Ok(None);
+    }
+    Ok(Some(MemberChecks::Kinds {
+        bars: CheckedMember {
+            young: spec.bars.young,
+            section: spec.bars.section,
+            strength: bar_strength,
+            inertia,
+        },
+        cables: CheckedMember {
+            young: spec.cables.material.young,
+            section: spec.cables.material.section,
+            strength: cable_strength,
+            inertia: None,
+        },
+    }))
 }

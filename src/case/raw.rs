@@ -127,6 +127,7 @@ pub(super) struct RawCables {
     pub young: Option<f64>,
     pub section: Option<f64>,
     pub unilateral: Option<bool>,
+    pub strength: Option<f64>,
 }
 
 /// `[bars]`.
@@ -135,6 +136,8 @@ pub(super) struct RawCables {
 pub(super) struct RawBars {
     pub young: Option<f64>,
     pub section: Option<f64>,
+    pub strength: Option<f64>,
+    pub inertia: Option<f64>,
 }
 
 /// `[prestress]`.

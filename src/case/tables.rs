@@ -1,10 +1,12 @@
 //! The `[structure]` tables: `nodes.csv` (`node,x,y,z`) and `members.csv`
-//! (`member,a,b,kind,young,section,prestress[,density]`). Every row is checked and an error
+//! (`member,a,b,kind,young,section,prestress[,density[,strength[,inertia]]]`). Every row is checked and an error
 //! names the file, the line, the column, the value and the fix.
 
 use super::numbers::{PHYSICAL_MAX, PHYSICAL_MIN};
 use super::CaseError;
-use crate::structure::{length_and_direction, Geometry, LinkKind, Member};
+use crate::structure::{
+    length_and_direction, CheckedMember, Geometry, LinkKind, Member, MemberChecks,
+};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -43,11 +45,14 @@ impl Table<'_> {
         // whole).
         let expected = || {
             let mut text = format!("`{}`", required.join(","));
-            if !optional.is_empty() {
-                text.push_str(&format!(
-                    ", optionally followed by `,{}`",
-                    optional.join(",")
-                ));
+            // Each optional column in turn: `,density`, then `,strength`, then `,inertia`.
+            for (k, column) in optional.iter().enumerate() {
+                let lead = if k == 0 {
+                    ", optionally followed by"
+                } else {
+                    ", then"
+                };
+                text.push_str(&format!("{lead} `,{column}`"));
             }
             text
         };
@@ -175,13 +180,15 @@ pub fn read_geometry(
     unilateral: bool,
 ) -> Result<Geometry, CaseError> {
     let (node_ids, nodes, index_of) = read_nodes(nodes_name, nodes_text)?;
-    let members = read_members(members_name, members_text, nodes_name, &nodes, &index_of)?;
+    let (members, checks) =
+        read_members(members_name, members_text, nodes_name, &nodes, &index_of)?;
     Ok(Geometry {
         node_ids,
         nodes,
         members,
         unilateral,
         grid_roles: None,
+        checks,
     })
 }
 
@@ -223,19 +230,22 @@ fn read_nodes(nodes_name: &str, nodes_text: &str) -> Result<Nodes, CaseError> {
 
 /// The members table `members_text` (file `members_name`) between the nodes of `nodes` (ids
 /// in `index_of`, from the file `nodes_name`): every id unique, both ends defined and apart,
-/// a known kind, physical properties.
+/// a known kind, physical properties; with the member checks' data when a row gives a
+/// `strength` or an `inertia`.
 fn read_members(
     members_name: &str,
     members_text: &str,
     nodes_name: &str,
     nodes: &[[f64; 3]],
     index_of: &HashMap<u64, (usize, u64)>,
-) -> Result<Vec<Member>, CaseError> {
+) -> Result<(Vec<Member>, Option<MemberChecks>), CaseError> {
     let table = Table { file: members_name };
     let mut members = Vec::new();
+    let mut checks = Vec::new();
     let mut seen: HashMap<u64, u64> = HashMap::new();
     let columns = ["member", "a", "b", "kind", "young", "section", "prestress"];
-    for (line, row) in table.rows(members_text, &columns, &["density"])? {
+    let optional = ["density", "strength", "inertia"];
+    for (line, row) in table.rows(members_text, &columns, &optional)? {
         let id = table.id(line, "member", &row[0])?;
         if let Some(first) = seen.insert(id, line) {
             return Err(table.error(
@@ -270,21 +280,7 @@ fn read_members(
         let young = table.number(line, "young", &row[4], true)?;
         let section = table.number(line, "section", &row[5], true)?;
         let prestress = table.number(line, "prestress", &row[6], false)?;
-        let density = match row.get(7) {
-            Some(text) if !text.is_empty() => {
-                let d = table.number(line, "density", text, false)?;
-                if d < 0.0 {
-                    return Err(table.error(
-                        line,
-                        "density",
-                        text,
-                        "`density` must be ≥ 0 (kg/m³)",
-                    ));
-                }
-                d
-            }
-            _ => 0.0,
-        };
+        let (density, strength, inertia) = table.optional_cells(line, id, kind, &row)?;
         let (length, _) = length_and_direction(nodes[a], nodes[b]);
         let scale = nodes[a]
             .iter()
@@ -313,11 +309,96 @@ fn read_members(
             density,
             module: 0,
         });
+        checks.push(CheckedMember {
+            young,
+            section,
+            strength,
+            inertia,
+        });
     }
     if members.is_empty() {
         return Err(table.error(1, "member", "", "give at least one member, one row each"));
     }
-    Ok(members)
+    let checked = checks
+        .iter()
+        .any(|c| c.strength.is_some() || c.inertia.is_some());
+    Ok((members, checked.then_some(MemberChecks::Each(checks))))
+}
+
+impl Table<'_> {
+    /// The optional cells of member `id`'s row (a `kind`): `density` (kg/m³, ≥ 0; empty or
+    /// absent: 0), `strength` (Pa, > 0) and `inertia` (m⁴, ≥ 0 on a cable, > 0 on a bar; empty
+    /// or absent: not checked).
+    fn optional_cells(
+        &self,
+        line: u64,
+        id: u64,
+        kind: LinkKind,
+        row: &[String],
+    ) -> Result<(f64, Option<f64>, Option<f64>), CaseError> {
+        let cell = |k: usize| row.get(k).filter(|text| !text.is_empty());
+        let density = match cell(7) {
+            Some(text) => {
+                let d = self.number(line, "density", text, false)?;
+                if d < 0.0 {
+                    return Err(self.error(line, "density", text, "`density` must be ≥ 0 (kg/m³)"));
+                }
+                d
+            }
+            None => 0.0,
+        };
+        let strength = match cell(8) {
+            Some(text) => Some(self.limit(line, id, "strength", text, true, |v| {
+                (v.is_nan() || v <= 0.0).then(|| {
+                    "must be > 0 (Pa): give the member's design strength, or leave the cell \
+                     empty to leave its stress unchecked"
+                        .to_string()
+                })
+            })?),
+            None => None,
+        };
+        let bar = kind == LinkKind::Bar;
+        let inertia = match cell(9) {
+            Some(text) => Some(self.limit(line, id, "inertia", text, bar, |v| {
+                if v.is_nan() || v < 0.0 {
+                    Some(
+                        "must be ≥ 0 (m⁴): give the section's second moment of area about its \
+                          weaker axis, or leave the cell empty to leave its buckling unchecked"
+                            .to_string(),
+                    )
+                } else if bar && v == 0.0 {
+                    Some(
+                        "must be > 0 on a bar (m⁴): a bar without bending stiffness buckles \
+                          under any compression; give the section's second moment of area about \
+                          its weaker axis, or leave the cell empty to leave its buckling unchecked"
+                            .to_string(),
+                    )
+                } else {
+                    None
+                }
+            })?),
+            None => None,
+        };
+        Ok((density, strength, inertia))
+    }
+
+    /// Member `id`'s `column` of `text`: a number that `refuse` finds nothing wrong with (it
+    /// says what is, with the fix), else an error naming the member, the column and the value;
+    /// then bounded as every physical number (`positive`: at least the smallest one).
+    fn limit(
+        &self,
+        line: u64,
+        id: u64,
+        column: &str,
+        text: &str,
+        positive: bool,
+        refuse: impl Fn(f64) -> Option<String>,
+    ) -> Result<f64, CaseError> {
+        if let Some(why) = text.parse::<f64>().ok().and_then(&refuse) {
+            return Err(self.error(line, column, text, format!("member {id}: `{column}` {why}")));
+        }
+        self.number(line, column, text, positive)
+    }
 }
 
 /// Read the two tables from files (paths as given, already resolved against the case file).

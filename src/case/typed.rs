@@ -57,7 +57,9 @@ impl Case {
     pub fn with_module(&self, module: crate::structure::ModuleKind) -> Option<Case> {
         let mut grid = self.grid.clone()?;
         grid.module = module;
-        let (geometry, _, _) = Structure::grid_parts(&grid);
+        let (mut geometry, _, _) = Structure::grid_parts(&grid);
+        // The checks of a grid are per member kind: the same on every module kind.
+        geometry.checks = self.geometry.checks.clone();
         Some(Case {
             grid: Some(grid),
             geometry,

@@ -255,6 +255,25 @@ fn format_row(r: &SummaryRow) -> String {
             100.0 * tensolve::results::SMALL_DISPLACEMENT_LIMIT
         ));
     }
+    if let Some(g) = r.governing.filter(|g| g.utilisation > 1.0) {
+        let others = match g.over {
+            0 | 1 => String::new(),
+            n => format!(" ({} other member(s) above 1 too)", n - 1),
+        };
+        line.push_str(&format!(
+            "\n  warning: {} at alpha = {}: member {} is at {:.3} of its {}{others}: a \
+             utilisation above 1 (summary.csv: max_utilisation; forces/: every member's). A \
+             larger section, a stronger member or less load",
+            r.solver,
+            alpha_label(r.alpha),
+            g.member,
+            g.utilisation,
+            match g.buckling {
+                true => "Euler load (buckling)",
+                false => "design strength",
+            },
+        ));
+    }
     if let Some(not_unique) = r
         .uniqueness
         .as_ref()

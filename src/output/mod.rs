@@ -20,8 +20,9 @@ pub use plots::{FigureData, FigureSettings};
 pub use publish::{lock_directory, OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
-    reaction_totals, reaction_totals_line, result_path, stability_line, summary_line,
-    write_displacements, write_forces, write_mechanisms, write_reactions, write_tensions,
-    StabilityRow, SummaryRow, REACTION_TOTALS_HEADER, STABILITY_HEADER, SUMMARY_HEADER,
+    reaction_totals, reaction_totals_line, result_path, stability_line, summary_check_cells,
+    summary_line, write_displacements, write_forces, write_mechanisms, write_reactions,
+    write_tensions, StabilityRow, SummaryRow, CHECK_COLUMNS, REACTION_TOTALS_HEADER,
+    STABILITY_HEADER, SUMMARY_CHECK_COLUMNS, SUMMARY_HEADER,
 };
 pub use vtk::{kind_code, link_code, vtu_path, write_vtu, VTK_LINE};

@@ -19,9 +19,10 @@
 
 use super::{
     history_column, reaction_totals, reaction_totals_line, result_path, stability_line,
-    summary_line, vtu_path, write_displacements, write_forces, write_reactions, write_tensions,
-    write_vtu, FigureData, FigureSettings, HistoryWriter, OutputDir, StabilityRow, SummaryRow,
-    REACTION_TOTALS_HEADER, STABILITY_HEADER, SUMMARY_HEADER,
+    summary_check_cells, summary_line, vtu_path, write_displacements, write_forces,
+    write_reactions, write_tensions, write_vtu, FigureData, FigureSettings, HistoryWriter,
+    OutputDir, StabilityRow, SummaryRow, REACTION_TOTALS_HEADER, STABILITY_HEADER,
+    SUMMARY_CHECK_COLUMNS, SUMMARY_HEADER,
 };
 use crate::model::Model;
 use crate::results;
@@ -441,12 +442,14 @@ impl Sink for ReactionTotalsSink<'_> {
 /// says the solve is complete. A row is one write, so the file always ends with a whole row.
 pub struct SummarySink<'s> {
     out: &'s RefCell<OutputDir>,
+    /// The case checks members: the rows end with [`SUMMARY_CHECK_COLUMNS`].
+    checks: bool,
 }
 
 impl<'s> SummarySink<'s> {
-    /// `summary.csv` in `out`.
-    pub fn new(out: &'s RefCell<OutputDir>) -> Self {
-        SummarySink { out }
+    /// `summary.csv` in `out`, with the member checks' columns when `checks`.
+    pub fn new(out: &'s RefCell<OutputDir>, checks: bool) -> Self {
+        SummarySink { out, checks }
     }
 }
 
@@ -455,7 +458,15 @@ impl Sink for SummarySink<'_> {
         let (SolveEnd::Solved { row, .. } | SolveEnd::NoAnswer { row }) = end else {
             return Ok(());
         };
-        append(self.out, "summary.csv", SUMMARY_HEADER, &summary_line(row))
+        match self.checks {
+            false => append(self.out, "summary.csv", SUMMARY_HEADER, &summary_line(row)),
+            true => append(
+                self.out,
+                "summary.csv",
+                &format!("{SUMMARY_HEADER}{SUMMARY_CHECK_COLUMNS}"),
+                &format!("{}{}", summary_line(row), summary_check_cells(row)),
+            ),
+        }
     }
 }
 

@@ -69,6 +69,9 @@ pub struct SummaryRow {
     /// The path did not start at this solver's previous row: the rows since did not reach
     /// their α (a limit point), so this one was solved from the last equilibrium before them.
     pub path_restarted: bool,
+    /// The largest member utilisation and its member, when the case checks members and the
+    /// row has an answer (columns `max_utilisation`, `max_utilisation_member`).
+    pub governing: Option<results::checks::Governing>,
 }
 
 impl SummaryRow {
@@ -110,6 +113,7 @@ impl SummaryRow {
             path_from: None,
             path_reached: None,
             path_restarted: false,
+            governing: None,
         }
     }
 }
@@ -143,6 +147,7 @@ impl SummaryRow {
             self.max_member_rotation,
             self.min_tangent_eigenvalue.unwrap_or(0.0),
             self.geometric_term.unwrap_or(0.0),
+            self.governing.map_or(0.0, |g| g.utilisation),
         ]
         .iter()
         .all(|x| x.is_finite())
@@ -151,6 +156,18 @@ impl SummaryRow {
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
 pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique";
+
+/// The columns `summary.csv` gains when the case checks members (a strength or an inertia).
+pub const SUMMARY_CHECK_COLUMNS: &str = ",max_utilisation,max_utilisation_member";
+
+/// The cells of [`SUMMARY_CHECK_COLUMNS`] of `r`, each after a comma: empty without an answer
+/// or a checked member.
+pub fn summary_check_cells(r: &SummaryRow) -> String {
+    match r.governing.filter(|_| !r.status.no_answer()) {
+        Some(g) => format!(",{},{}", g.utilisation, g.member),
+        None => ",,".to_string(),
+    }
+}
 
 /// A CSV writer's error as an I/O error of the same kind (a full disk stays `StorageFull`).
 fn csv_io(e: csv::Error) -> std::io::Error {
@@ -302,9 +319,36 @@ fn finite(what: &str, values: impl IntoIterator<Item = f64>) -> std::io::Result<
     }
 }
 
+/// The member checks' columns of `forces/` ([`results::checks::MemberCheck`]).
+pub const CHECK_COLUMNS: [&str; 5] = [
+    "stress_Pa",
+    "utilisation",
+    "euler_load_N",
+    "buckling_utilisation",
+    "slack_margin",
+];
+
+/// The cells of `c` under [`CHECK_COLUMNS`]: empty where the member is not so checked; a
+/// non-finite value is left empty too (it cannot be: sections and inertias are > 0).
+fn check_cells(c: &results::checks::MemberCheck) -> [String; 5] {
+    let cell = |v: Option<f64>| {
+        v.filter(|v| v.is_finite())
+            .map(|v| v.to_string())
+            .unwrap_or_default()
+    };
+    [
+        cell(Some(c.stress)),
+        cell(c.utilisation),
+        cell(c.euler_load),
+        cell(c.buckling_utilisation),
+        cell(c.slack_margin),
+    ]
+}
+
 /// Write `dir/forces/{solver}_alpha{α}.csv`: per member (bars and cables, by id), its kind,
 /// end nodes, total axial force τ (N, tension > 0), elongation and length (m) under the
-/// model ([`Model::member_states`]); returns its path.
+/// model ([`Model::member_states`]), and the member checks' [`CHECK_COLUMNS`] when the case
+/// gives a strength or an inertia; returns its path.
 pub fn write_forces(
     dir: &Path,
     solver: &str,
@@ -329,19 +373,29 @@ pub fn write_forces(
             states.lengths[i].to_string(),
         ]
     });
-    write_rows(
-        &path,
-        [
-            "member",
-            "kind",
-            "node_a",
-            "node_b",
-            "force_N",
-            "elongation_m",
-            "current_length_m",
-        ],
-        rows,
-    )?;
+    let header = [
+        "member",
+        "kind",
+        "node_a",
+        "node_b",
+        "force_N",
+        "elongation_m",
+        "current_length_m",
+    ];
+    // The member checks' columns only when the case gives a strength or an inertia.
+    match results::checks::member_checks(model, eq) {
+        None => write_rows(&path, header, rows)?,
+        Some(checks) => {
+            let cells = checks.iter().map(check_cells).collect::<Vec<_>>();
+            let mut header = header.iter().chain(&CHECK_COLUMNS);
+            let header: [&str; 12] = std::array::from_fn(|_| *header.next().unwrap());
+            let rows = rows.zip(cells).map(|(base, checks)| {
+                let mut cells = base.into_iter().chain(checks);
+                std::array::from_fn::<String, 12, _>(|_| cells.next().unwrap_or_default())
+            });
+            write_rows(&path, header, rows)?
+        }
+    }
     Ok(path)
 }
 

@@ -41,6 +41,9 @@ pub struct Geometry {
     /// Per member, its role in its module when the geometry is a generated module grid
     /// ([`super::Structure::grid_parts`]); `None` for tables.
     pub grid_roles: Option<Vec<GridRole>>,
+    /// The members' data for the member checks, when the case gives a strength or an inertia
+    /// (kept after [`Geometry::release_members`]: a grid's is two entries).
+    pub checks: Option<super::MemberChecks>,
 }
 
 impl Geometry {

@@ -199,6 +199,7 @@ pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
         members,
         unilateral: spec.cables.unilateral,
         grid_roles: Some(roles),
+        checks: None,
     };
     (geometry, layout)
 }

@@ -4,6 +4,7 @@
 //! Invariants: `dof_of[3·node + c]` is the free-dof index of that displacement component or
 //! [`CLAMPED`]; free dofs are numbered node by node; `Bᵀ t0 = 0` to round-off.
 
+mod checks;
 mod geometry;
 mod grid;
 mod share;
@@ -12,6 +13,7 @@ mod statics;
 mod storage;
 mod supports;
 
+pub use checks::{CheckedMember, MemberChecks};
 pub use geometry::{length_and_direction, transverse_pair, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout, GridRole};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
@@ -153,6 +155,9 @@ pub struct Structure {
     /// The scale of every prestress, N: the grid's lower cable prestress p, else the largest
     /// `|t0|` of a member.
     pub prestress_scale: f64,
+    /// The members' data for the member checks (strength, buckling), when the case gives any
+    /// ([`Geometry::checks`]); `None`: no check, and no column of them in the output.
+    pub checks: Option<MemberChecks>,
 }
 
 impl Structure {
@@ -294,6 +299,7 @@ impl Structure {
             held_load,
             settlement_force,
             prestress_scale,
+            checks: geometry.checks.clone(),
         }
     }
 

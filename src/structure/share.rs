@@ -27,6 +27,7 @@ impl Structure {
             held_load: self.held_load.clone(),
             settlement_force: self.settlement_force.clone(),
             prestress_scale: self.prestress_scale,
+            checks: self.checks.as_ref().map(|c| c.keeping(links)),
         }
     }
 }

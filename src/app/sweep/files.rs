@@ -139,6 +139,7 @@ pub(super) fn sinks<'s>(
         sinks.add(out.stability, StabilitySink::new(output, model, taut));
     }
     sinks.add(out.reactions, ReactionTotalsSink::new(output, model));
-    sinks.add(out.summary, SummarySink::new(output));
+    let checks = model.structure.checks.is_some();
+    sinks.add(out.summary, SummarySink::new(output, checks));
     sinks
 }

@@ -457,6 +457,10 @@ impl<'s> Sweep<'s> {
             )
             .on_path(path);
             row.uniqueness = verdict.uniqueness.clone();
+            // The member checks, on the answer of a row that has one (rank 0 holds every link).
+            row.governing = (together.is_none() && !row.status.no_answer())
+                .then(|| results::checks::governing(model, eq))
+                .flatten();
             row
         });
         let Some(row) = row.filter(SummaryRow::is_finite) else {

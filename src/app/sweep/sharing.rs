@@ -18,7 +18,8 @@ pub enum Sharing {
     Whole,
     /// Ranks 1 … P − 1 keep their links alone; rank 0 keeps the whole structure for the
     /// files that read every link (tensions, forces, reactions, VTK, figures, stability,
-    /// homogenised operators) and judges every answer alone.
+    /// homogenised operators; the member checks read every link too) and judges every answer
+    /// alone.
     AllButRank0,
     /// Every rank keeps its links alone (the files asked for read no link: summary, history,
     /// displacements); the ranks judge and measure every answer together.
@@ -50,7 +51,8 @@ impl Sharing {
             || o.vtk
             || o.plots
             || o.stability
-            || o.homogenised;
+            || o.homogenised
+            || case.geometry.checks.is_some();
         match (shares, reads_links) {
             (false, _) => Sharing::Whole,
             (true, true) => Sharing::AllButRank0,
