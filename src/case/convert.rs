@@ -37,6 +37,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     )?;
     // 6. The files to write.
     let output = output::output_choice(raw.output)?;
+    output::check_modes_have_mass(&output, &geometry)?;
     // 7. `large` follows the load path: its α in increasing order (docs/method.md §8).
     if model == GeometricModel::Large {
         load.alphas.sort_by(f64::total_cmp);
@@ -49,6 +50,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         solver,
         output,
         model,
+        modal_mass: raw.modal.mass.unwrap_or_default(),
     })
 }
 

@@ -53,3 +53,19 @@ pub(super) fn output_choice(output: OutputChoice) -> Result<OutputChoice, CaseEr
     }
     Ok(output)
 }
+
+/// `output.modes > 0` needs mass: some member of `geometry` with a `density`.
+pub(super) fn check_modes_have_mass(
+    output: &OutputChoice,
+    geometry: &crate::structure::Geometry,
+) -> Result<(), CaseError> {
+    if output.modes > 0 && geometry.members.iter().all(|m| m.density <= 0.0) {
+        return Err(CaseError::invalid(
+            "output.modes",
+            output.modes.to_string(),
+            "the natural modes need the members' mass, and no member has a density: give the \
+             members table a `density` column (kg/m³, after `prestress`), or set `modes = 0`",
+        ));
+    }
+    Ok(())
+}

@@ -48,6 +48,15 @@ pub(super) struct RawCase {
     pub output: OutputChoice,
     #[serde(default)]
     pub model: RawModel,
+    #[serde(default)]
+    pub modal: RawModal,
+}
+
+/// `[modal]`: the natural modes' settings (`output.modes` asks for them).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawModal {
+    pub mass: Option<crate::model::MassKind>,
 }
 
 /// `[model]`: the effects modelled.

@@ -28,6 +28,9 @@ pub struct Case {
     pub output: OutputChoice,
     /// The geometric effects modelled (`model.geometry`). Default `linear`.
     pub model: crate::model::GeometricModel,
+    /// How the natural modes spread a member's mass on its ends (`modal.mass`). Default
+    /// `consistent`.
+    pub modal_mass: crate::model::MassKind,
 }
 
 impl Case {
@@ -222,6 +225,10 @@ pub struct OutputChoice {
     /// case's LATIN solvers at its largest α on the same grid of each kind. Default none
     /// (no figure); drawn only with `plots = true`.
     pub compare_modules: Vec<crate::structure::ModuleKind>,
+    /// How many of the lowest natural modes to write at every answer,
+    /// `modes/{solver}_alpha{α}.csv` and `…_shapes.csv`; the members need a `density`.
+    /// Default 0 (none).
+    pub modes: usize,
 }
 
 impl Default for OutputChoice {
@@ -242,6 +249,7 @@ impl Default for OutputChoice {
             amplification: 10.0,
             max_plot_iterations: 100,
             compare_modules: Vec::new(),
+            modes: 0,
         }
     }
 }

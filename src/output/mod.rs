@@ -6,6 +6,7 @@
 mod atomic;
 mod history;
 mod homogenised;
+pub mod modes;
 pub mod plots;
 pub mod publish;
 pub mod sinks;
@@ -16,6 +17,7 @@ pub use crate::labels::alpha_label;
 pub use atomic::{ensure_writable, write_atomic};
 pub use history::{history_column, history_header, HistoryWriter};
 pub use homogenised::{homogenised_path, write_homogenised};
+pub use modes::ModesSink;
 pub use plots::{FigureData, FigureSettings};
 pub use publish::{lock_directory, OpenError, OutputDir};
 pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};

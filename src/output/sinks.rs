@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`HistorySink`] | `history/{solver}_alpha{α}.csv`, as the iterations go |
 //! | [`PerSolveSink`] | `tensions/{solver}_alpha{α}.csv`, `displacements/…`, `forces/…`, `reactions/…`, `vtk/…vtu` |
+//! | [`super::ModesSink`] | `modes/{solver}_alpha{α}.csv`, `modes/…_shapes.csv` (`output.modes`) |
 //! | [`PlotsSink`] | `plots/*.svg`, at the end of the sweep |
 //! | [`PublishSink`] | publishes what the sinks above staged: the solve's commit point |
 //! | [`StabilitySink`] | `stability.csv`, one row appended after every solve |

@@ -10,7 +10,7 @@ use crate::output::{
         HistorySink, PerSolveSink, PlotsSink, PublishSink, ReactionTotalsSink, StabilitySink,
         SummarySink,
     },
-    FigureSettings, OutputDir, Sinks, WriteError,
+    FigureSettings, ModesSink, OutputDir, Sinks, WriteError,
 };
 use std::cell::RefCell;
 use std::path::Path;
@@ -82,6 +82,7 @@ fn writes_files(case: &Case) -> bool {
         || o.stability
         || o.summary
         || o.homogenised
+        || o.modes > 0
 }
 
 /// The sinks of the files `case` asks for, in the order they write: the per-solve files into
@@ -124,6 +125,10 @@ pub(super) fn sinks<'s>(
     sinks.add(out.forces, PerSolveSink::forces(root, dir, model));
     sinks.add(out.reactions, PerSolveSink::reactions(root, dir, model));
     sinks.add(out.vtk, PerSolveSink::vtk(root, dir, model));
+    sinks.add(
+        out.modes > 0,
+        ModesSink::new(root, dir, model, out.modes, case.modal_mass),
+    );
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {
             amplification: out.amplification,

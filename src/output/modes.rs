@@ -1,0 +1,115 @@
+//! `modes/{solver}_alpha{α}.csv` and `modes/{solver}_alpha{α}_shapes.csv`: the lowest natural
+//! modes at every answer (`output.modes`, issue 45 item 1), computed by
+//! [`crate::results::modes::natural_modes`] and written atomically into the staging directory,
+//! like the other per-solve files.
+
+use super::sinks::{Sink, SolveEnd, SolveKey, WriteError};
+use super::write_atomic;
+use crate::labels::alpha_label;
+use crate::linalg::{SparseCholesky, StiffnessPattern};
+use crate::model::{MassKind, Model};
+use crate::results::modes::{natural_modes, NaturalMode};
+use crate::solvers::{Equilibrium, TautStiffness};
+use crate::structure::CLAMPED;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// `modes/{solver}_alpha{α}.csv` under `dir`.
+pub fn modes_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
+    dir.join("modes")
+        .join(format!("{solver}_alpha{}.csv", alpha_label(alpha)))
+}
+
+/// `modes/{solver}_alpha{α}_shapes.csv` under `dir`.
+pub fn shapes_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
+    dir.join("modes")
+        .join(format!("{solver}_alpha{}_shapes.csv", alpha_label(alpha)))
+}
+
+/// The natural modes of every solve with a finite answer (converged or not, as the other
+/// per-solve files), `count` of them under `mass`.
+pub struct ModesSink<'s> {
+    root: PathBuf,
+    dir: PathBuf,
+    model: &'s Model,
+    count: usize,
+    mass: MassKind,
+    /// The stiffness's pattern and its symbolic analysis, made at the first answer.
+    analysed: Option<(StiffnessPattern, SparseCholesky)>,
+}
+
+impl<'s> ModesSink<'s> {
+    /// `count` modes of `model` under `mass`, written under `dir/modes` (the staging
+    /// directory); errors name the files under `root`.
+    pub fn new(root: &Path, dir: &Path, model: &'s Model, count: usize, mass: MassKind) -> Self {
+        ModesSink {
+            root: root.to_path_buf(),
+            dir: dir.to_path_buf(),
+            model,
+            count,
+            mass,
+            analysed: None,
+        }
+    }
+
+    /// The modes at `eq`: none when `K_T − σM` factorizes for no shift tried.
+    fn modes(&mut self, eq: &Equilibrium) -> Vec<NaturalMode> {
+        let structure = &self.model.structure;
+        let (pattern, analysed) = self
+            .analysed
+            .get_or_insert_with(|| TautStiffness::analyse(structure));
+        let carrying: Vec<bool> = eq.slack.iter().map(|&s| !s).collect();
+        let at = (&eq.displacements[..], &eq.tensions[..], &carrying[..]);
+        natural_modes(self.model, at, pattern, analysed, self.count, self.mass).unwrap_or_default()
+    }
+}
+
+impl Sink for ModesSink<'_> {
+    fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
+        let SolveEnd::Solved { solution, .. } = end else {
+            return Ok(());
+        };
+        let modes = self.modes(&solution.equilibrium);
+        let solver = key.method.name();
+        write_atomic(&modes_path(&self.dir, solver, key.alpha), |w| {
+            write_frequencies(w, &modes)
+        })
+        .map_err(WriteError::at(modes_path(&self.root, solver, key.alpha)))?;
+        write_atomic(&shapes_path(&self.dir, solver, key.alpha), |w| {
+            write_shapes(w, self.model, &modes)
+        })
+        .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))
+    }
+}
+
+/// `mode,frequency_Hz,period_s,prestress_governed`, modes numbered from 1.
+fn write_frequencies(w: &mut dyn Write, modes: &[NaturalMode]) -> io::Result<()> {
+    writeln!(w, "mode,frequency_Hz,period_s,prestress_governed")?;
+    for (i, mode) in modes.iter().enumerate() {
+        writeln!(
+            w,
+            "{},{},{},{}",
+            i + 1,
+            mode.frequency_hz,
+            mode.period_s(),
+            mode.prestress_governed()
+        )?;
+    }
+    Ok(())
+}
+
+/// `mode,node,ux,uy,uz`: each mode's shape on every node (node ids; held components 0).
+fn write_shapes(w: &mut dyn Write, model: &Model, modes: &[NaturalMode]) -> io::Result<()> {
+    let s = &model.structure;
+    writeln!(w, "mode,node,ux,uy,uz")?;
+    for (i, mode) in modes.iter().enumerate() {
+        for (node, id) in s.node_ids.iter().enumerate() {
+            let u = |c: usize| match s.dof_of[3 * node + c] {
+                CLAMPED => 0.0,
+                d => mode.shape[d],
+            };
+            writeln!(w, "{},{id},{},{},{}", i + 1, u(0), u(1), u(2))?;
+        }
+    }
+    Ok(())
+}
