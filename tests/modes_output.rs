@@ -1,0 +1,118 @@
+//! `output.modes` through the command line (issue 45 item 1): the shipped simplex, its members
+//! given a density in a copy of its directory, writes `modes/{solver}_alpha{α}.csv` and the
+//! shapes at every α; its mechanism's mode is flagged prestress-governed at the prestressed
+//! state; without any density the key is refused, exit 2, by name.
+
+mod common;
+
+use common::manifest_path;
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// `tensolve run` of `case` into `out` with `sets` (`--set` each).
+fn run(case: &Path, out: &Path, sets: &[&str]) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_tensolve"));
+    command.arg("run").arg(case).arg("--out").arg(out);
+    for set in sets {
+        command.arg("--set").arg(set);
+    }
+    command.output().unwrap()
+}
+
+/// A copy of the shipped simplex under `dir`, its members of steel (a `density` column of
+/// 7850 kg/m³); the case file's path.
+fn steel_simplex(dir: &Path) -> std::path::PathBuf {
+    std::fs::create_dir(dir.join("simplex")).unwrap();
+    std::fs::copy(
+        manifest_path("cases/simplex/nodes.csv"),
+        dir.join("simplex/nodes.csv"),
+    )
+    .unwrap();
+    let members = std::fs::read_to_string(manifest_path("cases/simplex/members.csv")).unwrap();
+    let mut lines = members.lines();
+    let header = lines.next().unwrap();
+    let mut table = format!("{header},density\n");
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        table.push_str(&format!("{line},7850\n"));
+    }
+    std::fs::write(dir.join("simplex/members.csv"), table).unwrap();
+    let case = dir.join("simplex.toml");
+    std::fs::copy(manifest_path("cases/simplex.toml"), &case).unwrap();
+    case
+}
+
+/// The rows of a modes file: (frequency, period, prestress-governed).
+fn modes(path: &Path) -> Vec<(f64, f64, bool)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("mode,frequency_Hz,period_s,prestress_governed")
+    );
+    lines
+        .enumerate()
+        .map(|(i, line)| {
+            let cells: Vec<&str> = line.split(',').collect();
+            assert_eq!(cells.len(), 4, "{line}");
+            assert_eq!(cells[0], (i + 1).to_string());
+            (
+                cells[1].parse().unwrap(),
+                cells[2].parse().unwrap(),
+                cells[3].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_simplex_writes_its_lowest_modes_at_every_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = steel_simplex(dir.path());
+    let out = dir.path().join("out");
+    // The shipped α, and 0: the prestressed state, where the mechanism is held by the prestress
+    // alone (under load the case's `large` model stiffens it by the geometry as it opens).
+    let o = run(
+        &case,
+        &out,
+        &["output.modes=3", "load.alpha=[0.0, 0.25, 0.5, 1.0]"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for alpha in ["0", "0.25", "0.5", "1"] {
+        let rows = modes(&out.join(format!("modes/newton_alpha{alpha}.csv")));
+        assert_eq!(rows.len(), 3, "α = {alpha}");
+        assert!(rows[0].0 > 0.0, "α = {alpha}: {rows:?}");
+        assert!(
+            rows.windows(2).all(|w| w[0].0 <= w[1].0),
+            "α = {alpha}: {rows:?}"
+        );
+        for (f, period, _) in &rows {
+            assert!((f * period - 1.0).abs() < 1e-12, "α = {alpha}: {rows:?}");
+        }
+        // Every node of every mode, held ones at 0.
+        let shapes =
+            std::fs::read_to_string(out.join(format!("modes/newton_alpha{alpha}_shapes.csv")))
+                .unwrap();
+        assert!(shapes.starts_with("mode,node,ux,uy,uz\n"));
+        assert_eq!(shapes.lines().count(), 1 + 3 * 6);
+        assert!(shapes.contains("\n1,0,0,0,0\n"), "{shapes}");
+    }
+    let at_rest = modes(&out.join("modes/newton_alpha0.csv"));
+    assert!(at_rest[0].2, "{at_rest:?}");
+    assert!(!at_rest[1].2 && !at_rest[2].2, "{at_rest:?}");
+}
+
+#[test]
+fn modes_without_a_density_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = run(
+        &manifest_path("cases/simplex.toml"),
+        &out,
+        &["output.modes=2"],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("output.modes"), "{stderr}");
+    assert!(stderr.contains("density"), "{stderr}");
+    assert!(!out.join("modes").exists());
+}
