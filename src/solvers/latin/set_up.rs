@@ -126,6 +126,7 @@ impl<'s> Latin<'s> {
             storage,
             exchange,
             held: held.clone(),
+            holders: holders(partition, structure.n_nodes()),
         };
         let (interfaces, (substructures, macro_problem)) = built.at_a_degree(&mut world)?;
         let dm = world.dm;
@@ -215,6 +216,8 @@ struct Built<'a> {
     storage: OperatorStorage,
     exchange: &'a dyn Exchange,
     held: std::ops::Range<usize>,
+    /// Per node, how many substructures hold it.
+    holders: Vec<u8>,
 }
 
 impl Built<'_> {
@@ -224,17 +227,11 @@ impl Built<'_> {
         interfaces: &Interfaces,
         dm: f64,
     ) -> Result<(Vec<Substructure>, MacroProblem), SetupError> {
-        let mut holders = vec![0u8; self.model.structure.n_nodes()];
-        for topo in &self.partition.substructures {
-            for &n in &topo.nodes {
-                holders[n] += 1;
-            }
-        }
         operators::build(
             self.model,
             self.partition,
             &interfaces.list,
-            &holders,
+            &self.holders,
             self.search,
             dm,
             self.storage,
@@ -280,4 +277,15 @@ impl Built<'_> {
             }),
         }
     }
+}
+
+/// Per node, how many of the partition's substructures hold it.
+fn holders(partition: &Partition, nodes: usize) -> Vec<u8> {
+    let mut holders = vec![0u8; nodes];
+    for topo in &partition.substructures {
+        for &n in &topo.nodes {
+            holders[n] += 1;
+        }
+    }
+    holders
 }
