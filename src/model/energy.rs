@@ -38,7 +38,8 @@ impl Model {
                         tension(l, trial_tension(l, row.elongation(u))) * row.elongation(d)
                     })
                     .sum();
-                members + self.prestress_energy_along(u, d).0
+                // + dᵀ K_G(t0) U with the prestress's geometric stiffness.
+                members + self.prestress_force(u).map_or(0.0, |f| dot(&f, d))
             }
         }
     }

@@ -35,60 +35,53 @@ fn current_trial_tension(s: &Structure, l: &Link, elongation: f64) -> f64 {
 /// `∇Π(U)·d` is less the load's `F·d`, without assembling the gradient. d moves free dofs
 /// alone (held components do not change).
 pub fn internal_slope(s: &Structure, u: &[f64], d: &[f64]) -> f64 {
-    let component = |v: &[f64], node: usize, k: usize, held: f64| {
-        let dof = s.dof_of[3 * node + k];
-        if dof == CLAMPED {
-            held
-        } else {
-            v[dof]
-        }
-    };
     let mut slope = 0.0;
     for l in &s.links {
-        let d0: [f64; 3] = std::array::from_fn(|k| s.nodes[l.b][k] - s.nodes[l.a][k]);
-        let du: [f64; 3] = std::array::from_fn(|k| {
-            component(u, l.b, k, s.prescribed[3 * l.b + k])
-                - component(u, l.a, k, s.prescribed[3 * l.a + k])
-        });
+        let (v, len, elongation) = member_vector(s, l, u);
+        let trial = current_trial_tension(s, l, elongation);
         let dd: [f64; 3] =
-            std::array::from_fn(|k| component(d, l.b, k, 0.0) - component(d, l.a, k, 0.0));
-        let v: [f64; 3] = std::array::from_fn(|k| d0[k] + du[k]);
-        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        // ℓ − L = (2 d0·Δu + Δu·Δu) / (ℓ + L), as in `CurrentGeometry::of`.
-        let squares: f64 = (0..3).map(|k| 2.0 * d0[k] * du[k] + du[k] * du[k]).sum();
-        let trial = current_trial_tension(s, l, squares / (len + l.length));
+            std::array::from_fn(|k| component(s, d, l.b, k, 0.0) - component(s, d, l.a, k, 0.0));
         // τ ∇ℓ·d = τ n·(d_b − d_a).
         slope += tension(l, trial) * (v[0] * dd[0] + v[1] * dd[1] + v[2] * dd[2]) / len;
     }
     slope
 }
 
+/// Component k of node's value in `v` (free dofs), or `held` where the component is held.
+#[inline]
+fn component(s: &Structure, v: &[f64], node: usize, k: usize, held: f64) -> f64 {
+    match s.dof_of[3 * node + k] {
+        CLAMPED => held,
+        dof => v[dof],
+    }
+}
+
+/// A member at displacements U (held components at their prescribed value): its current
+/// vector `X_b + U_b − X_a − U_a`, its length ℓ, and its elongation ℓ − L.
+#[inline]
+fn member_vector(s: &Structure, l: &Link, u: &[f64]) -> ([f64; 3], f64, f64) {
+    let at = |node: usize, k: usize| component(s, u, node, k, s.prescribed[3 * node + k]);
+    let d0: [f64; 3] = std::array::from_fn(|k| s.nodes[l.b][k] - s.nodes[l.a][k]);
+    let du: [f64; 3] = std::array::from_fn(|k| at(l.b, k) - at(l.a, k));
+    let v: [f64; 3] = std::array::from_fn(|k| d0[k] + du[k]);
+    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    // ℓ² − L² = 2 d0·Δu + Δu·Δu, so ℓ − L = (ℓ² − L²) / (ℓ + L).
+    let squares: f64 = (0..3).map(|k| 2.0 * d0[k] * du[k] + du[k] * du[k]).sum();
+    (v, len, squares / (len + l.length))
+}
+
 impl CurrentGeometry {
     /// The geometry at displacements U (free dofs; held components at their prescribed value).
     pub fn of(s: &Structure, u: &[f64]) -> CurrentGeometry {
-        // U of a component: the free dof's value, or the held component's prescribed one.
-        let displacement = |node: usize, k: usize| {
-            let d = s.dof_of[3 * node + k];
-            if d == CLAMPED {
-                s.prescribed[3 * node + k]
-            } else {
-                u[d]
-            }
-        };
         let mut lengths = Vec::with_capacity(s.links.len());
         let mut elongations = Vec::with_capacity(s.links.len());
         let mut directions = Vec::with_capacity(s.links.len());
         let mut rows = Vec::with_capacity(s.links.len());
         for l in &s.links {
-            let d0: [f64; 3] = std::array::from_fn(|k| s.nodes[l.b][k] - s.nodes[l.a][k]);
-            let du: [f64; 3] = std::array::from_fn(|k| displacement(l.b, k) - displacement(l.a, k));
-            let d: [f64; 3] = std::array::from_fn(|k| d0[k] + du[k]);
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            // ℓ² − L² = 2 d0·Δu + Δu·Δu, so ℓ − L = (ℓ² − L²) / (ℓ + L).
-            let squares: f64 = (0..3).map(|k| 2.0 * d0[k] * du[k] + du[k] * du[k]).sum();
+            let (d, len, elongation) = member_vector(s, l, u);
             let n = [d[0] / len, d[1] / len, d[2] / len];
             lengths.push(len);
-            elongations.push(squares / (len + l.length));
+            elongations.push(elongation);
             directions.push(n);
             rows.push(l.row_along(n, &s.dof_of));
         }

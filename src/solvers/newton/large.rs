@@ -58,9 +58,8 @@ pub struct LargeNewton<'s> {
     chol: SparseCholesky,
     settings: NewtonSettings,
     hessian: Vec<f64>,
-    /// `chol` holds the factor of an earlier Hessian.
-    factored: bool,
-    /// Chord steps with that factor still contract the residual enough.
+    /// `chol` holds the factor of an earlier Hessian, and chord steps with it still contract
+    /// the residual enough.
     chord: bool,
     /// The last step was a chord step.
     last_was_chord: bool,
@@ -100,7 +99,6 @@ impl<'s> LargeNewton<'s> {
             chol: taut.factor.share_symbolic(),
             settings,
             hessian: vec![0.0; taut.values.len()],
-            factored: false,
             chord: false,
             last_was_chord: false,
             work: LargeWork::default(),
@@ -144,7 +142,7 @@ impl<'s> LargeNewton<'s> {
         let s = self.structure;
         self.work.steps += 1;
         let rhs: Vec<f64> = state.eval.gradient.iter().map(|g| -g).collect();
-        if self.factored && self.chord {
+        if self.chord {
             // A chord step: the last factor's Hessian for this one.
             let mut step = rhs;
             self.chol.solve_in_place(&mut step);
@@ -169,7 +167,6 @@ impl<'s> LargeNewton<'s> {
             if self.chol.factorize(self.pattern, &self.hessian).is_ok() {
                 break;
             }
-            self.factored = false;
             // H + σ D, σ raised tenfold: D = |diag H|.
             let next = if shift == 0.0 {
                 FIRST_SHIFT
@@ -184,7 +181,6 @@ impl<'s> LargeNewton<'s> {
             }
             shift = next;
         }
-        self.factored = true;
         self.chord = true;
         if shift > 0.0 {
             self.work.shifted_steps += 1;
