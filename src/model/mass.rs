@@ -19,11 +19,6 @@ pub enum MassKind {
 }
 
 impl Model {
-    /// Whether any member has mass (a `density` given).
-    pub fn has_mass(&self) -> bool {
-        self.structure.links.iter().any(|l| l.mass > 0.0)
-    }
-
     /// `values = M`, the members' mass on the free dofs (lower triangle on `pattern`, the
     /// stiffness's: a member couples only the same component of its two ends). A coupling the
     /// pattern lacks is lumped onto the two diagonals, so no mass is lost.

@@ -4,7 +4,7 @@
 //! like the other per-solve files.
 
 use super::sinks::{Sink, SolveEnd, SolveKey, WriteError};
-use super::write_atomic;
+use super::{result_path, write_atomic};
 use crate::labels::alpha_label;
 use crate::linalg::{SparseCholesky, StiffnessPattern};
 use crate::model::{MassKind, Model};
@@ -13,12 +13,6 @@ use crate::solvers::{Equilibrium, TautStiffness};
 use crate::structure::CLAMPED;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
-
-/// `modes/{solver}_alpha{α}.csv` under `dir`.
-pub fn modes_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
-    dir.join("modes")
-        .join(format!("{solver}_alpha{}.csv", alpha_label(alpha)))
-}
 
 /// `modes/{solver}_alpha{α}_shapes.csv` under `dir`.
 pub fn shapes_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
@@ -71,10 +65,12 @@ impl Sink for ModesSink<'_> {
         };
         let modes = self.modes(&solution.equilibrium);
         let solver = key.method.name();
-        write_atomic(&modes_path(&self.dir, solver, key.alpha), |w| {
+        write_atomic(&result_path(&self.dir, "modes", solver, key.alpha), |w| {
             write_frequencies(w, &modes)
         })
-        .map_err(WriteError::at(modes_path(&self.root, solver, key.alpha)))?;
+        .map_err(WriteError::at(result_path(
+            &self.root, "modes", solver, key.alpha,
+        )))?;
         write_atomic(&shapes_path(&self.dir, solver, key.alpha), |w| {
             write_shapes(w, self.model, &modes)
         })
