@@ -21,15 +21,15 @@
 //! the same partition; newton's iterations and seconds and e of micro-macro against newton
 //! (up to 512 × 512). Run it with `RAYON_NUM_THREADS` set to compare thread counts.
 //!
-//! `cargo bench --bench latin -- factor` times K's factor on 256 × 256 modules (590 k free
-//! dofs; AMD order) with faer's parallelism `Par::rayon(t)`, t = 1, 2, 4 … threads: the
-//! numeric factorization, a solve of one right-hand side and of a block of 16 (medians of 3).
-//! It is why K's factor stays sequential (docs/performance.md, "newton on several threads").
+//! `cargo bench --bench latin -- factor [SIDE]` times K's factor on SIDE × SIDE modules (256:
+//! 590 k free dofs), in newton's own order, with faer's parallelism `Par::rayon(t)`, t = 1, 2,
+//! 4 … threads: the numeric factorization, a solve of one right-hand side and of a block of 16
+//! (medians of 3). It is why K's factor stays sequential (docs/performance.md, "newton's
+//! factor on several threads").
 
 use criterion::{criterion_group, Criterion};
 use std::path::Path;
 use std::time::Duration;
-use tensolve::linalg::SparseCholesky;
 use tensolve::solvers::latin::{Latin, LatinSettings, SearchPolicy};
 use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::{AnySolver, Reference, Silent, Solver, TautStiffness};
@@ -377,15 +377,17 @@ fn median3(mut f: impl FnMut()) -> f64 {
     t[1]
 }
 
-fn factor_table() {
-    let case = tensolve::case::parse(
-        "[grid]\nmodules = [256, 256]\n[supports]\nclamp = \"lower-all-edges\"\n\
-         [load]\nalpha = [0.01]\n[solver]\nmethods = [\"newton\"]\n",
-    )
+fn factor_table(args: &[String]) {
+    let side: usize = args.iter().find_map(|a| a.parse().ok()).unwrap_or(256);
+    let case = tensolve::case::parse(&format!(
+        "[grid]\nmodules = [{side}, {side}]\n[supports]\nclamp = \"lower-all-edges\"\n\
+         [load]\nalpha = [0.01]\n[solver]\nmethods = [\"newton\"]\n"
+    ))
     .expect("case");
     let model = case.model();
     let taut = TautStiffness::new(&model).expect("regular");
     let n = model.structure.n_free;
+    println!("{side} x {side} modules, {n} free dofs, newton's own ordering");
     println!("| threads | factorize s | solve 1 column s | solve 16 columns s |");
     println!("|---|---|---|---|");
     let most = rayon::current_num_threads();
@@ -400,7 +402,7 @@ fn factor_table() {
                 1 => faer::Par::Seq,
                 _ => faer::Par::rayon(threads),
             };
-            let mut factor = SparseCholesky::analyse(&taut.pattern, par);
+            let mut factor = taut.factor.share_symbolic_with(par);
             let pattern = &taut.pattern;
             let factorize = median3(|| factor.factorize(pattern, &taut.values).expect("spd"));
             let rhs: Vec<f64> = (0..n).map(|k| ((k * 7919) % 1013) as f64).collect();
@@ -433,7 +435,7 @@ fn main() {
         return;
     }
     if args.iter().any(|a| a == "factor") {
-        factor_table();
+        factor_table(&args);
         return;
     }
     if args.iter().any(|a| a == "atscale") {

@@ -177,7 +177,12 @@ impl SparseCholesky {
     /// A second factorization workspace on the same symbolic analysis (no new analysis); it
     /// holds no numeric factor until [`SparseCholesky::factorize`].
     pub fn share_symbolic(&self) -> SparseCholesky {
-        Self::with_analysis(Arc::clone(&self.analysis), self.par)
+        self.share_symbolic_with(self.par)
+    }
+
+    /// [`SparseCholesky::share_symbolic`] with faer's parallelism `par` for its numeric work.
+    pub fn share_symbolic_with(&self, par: Par) -> SparseCholesky {
+        Self::with_analysis(Arc::clone(&self.analysis), par)
     }
 
     /// Numeric factorization of `values` on the analysed pattern.
