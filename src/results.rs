@@ -2,12 +2,15 @@
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
 pub mod checks;
+mod geometric_term;
 pub mod modes;
 pub mod uniqueness;
 
+pub use geometric_term::geometric_term;
+
 use crate::linalg::{norm, smallest_eigenvalues};
 use crate::model::material::{tension, trial_tension};
-use crate::model::{geometric_force, geometric_force_on, relative_unbalance, MemberStates, Model};
+use crate::model::{geometric_force_on, relative_unbalance, MemberStates, Model};
 use crate::solvers::{Equilibrium, Solution, TautStiffness};
 use crate::structure::{GridRole, Structure};
 
@@ -198,27 +201,6 @@ impl AnswerMeasures {
             updates_geometry: false,
         }
     }
-}
-
-/// The geometric term a model on the initial geometry leaves out (docs/method.md §8), as the
-/// relative change of the answer it would make: `‖K⁻¹ g‖ / ‖U‖` on the free dofs, with g the
-/// first-order force of the members' rotation under the tension the model leaves out,
-/// `g = K_G(τ) U` for `linear`, `K_G(τ − t0) U` for `prestress` (whose K_G(t0) is in), and K
-/// the model's stiffness with every cable taut (its factor is at hand). `None` for `large`
-/// (nothing is left out) and without displacements.
-pub fn geometric_term(model: &Model, eq: &Equilibrium, taut: &TautStiffness) -> Option<f64> {
-    let size = norm(&eq.displacements);
-    if model.updates_geometry() || size.is_nan() || size <= 0.0 {
-        return None;
-    }
-    let s = &model.structure;
-    let mut force = geometric_force(
-        s,
-        |i| model.tension_left_out(i, eq.tensions[i]) / s.links[i].length,
-        &eq.displacements,
-    );
-    taut.factor.solve_in_place(&mut force);
-    Some(norm(&force) / size)
 }
 
 /// Per component `3·node + c` of every node, held ones included, the nodal forces of the

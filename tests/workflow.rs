@@ -172,7 +172,7 @@ fn large_displacements_are_flagged() {
     // α = 0.05 the geometric term the linear model leaves out changes its answer by ≈ 10 %
     // (the large-displacement answer is 65.8 mm against 56.7 mm): both rows are flagged, and one
     // warning recommends `model.geometry = "large"`. The paper's case is within 1 % at
-    // α = 0.05 only (0.75 %; large 6.84 mm against 6.77 mm), beyond from α = 0.25 (4.7 %).
+    // α = 0.05 only (0.995 %; large 6.84 mm against 6.77 mm), beyond from α = 0.25 (6.0 %).
     let flagged = Temp::file(
         "large-displacement",
         "[grid]\nmodules = [24, 10]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\n\

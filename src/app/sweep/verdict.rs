@@ -130,7 +130,7 @@ pub(super) fn assess(
         min_tangent_eigenvalue,
         geometric_term: taut
             .filter(|_| checks.geometric_term)
-            .and_then(|taut| results::geometric_term(model, &solution.equilibrium, taut)),
+            .and_then(|taut| results::geometric_term(model, &solution.equilibrium, load, taut)),
         no_equilibrium: None,
         advice,
         uniqueness,
