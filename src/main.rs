@@ -4,6 +4,7 @@
 
 /// The command line's own modules.
 mod cli {
+    pub mod model_warning;
     pub mod progress;
 }
 
@@ -11,6 +12,7 @@ use clap::{Parser, Subcommand};
 use cli::progress::{report_bench, Reporter};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use tensolve::app::against_large::large_answer;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
@@ -263,6 +265,7 @@ fn run_command(
     set: &[String],
 ) -> Result<(), RunError> {
     let case = load_case(ranks, &path, set)?;
+    let tolerance = case.model_tolerance;
     let quiet = quiet || !ranks.is_root();
     let options = RunOptions {
         out_dir: out,
@@ -324,14 +327,16 @@ fn run_command(
         ));
     }
     reporter.finish();
-    if let (count, Some((largest, at))) = &reporter.geometric {
-        reporter.line(&format!(
-            "warning: {count} row(s) leave out a geometric term (the members' rotation under \
-             their tension) that changes the answer by more than {:.0} % (up to {:.1} %: {at}): \
-             `model.geometry = \"large\"` computes the large-displacement answer (summary.csv: \
-             geometric_term, small_displacement_ok = false)",
-            100.0 * tensolve::results::GEOMETRIC_TERM_LIMIT,
-            100.0 * largest
+    if let (count, Some(worst)) = &reporter.geometric {
+        // What the model is off by at its worst row, measured: that α solved with `large`
+        // (structures up to MEASURED_UP_TO_DOFS free dofs; the case is read again, the run
+        // having released its own).
+        let measured = (ranks.size() == 1)
+            .then(|| load_case(ranks, &path, set).ok())
+            .flatten()
+            .and_then(|case| large_answer(&case, worst.alpha));
+        reporter.line(&cli::model_warning::off_by_warning(
+            *count, worst, tolerance, measured,
         ));
     }
     if !matches!(

@@ -265,9 +265,9 @@ pub fn reactions(
         .collect()
 }
 
-/// A geometric term above this (1 % of the answer) is worth modelling: `model.geometry =
-/// "large"` is recommended.
-pub const GEOMETRIC_TERM_LIMIT: f64 = 0.01;
+/// `model.tolerance`'s default: a geometric term above 1 % of the answer is worth modelling
+/// (`model.geometry = "large"` is recommended).
+pub const DEFAULT_MODEL_TOLERANCE: f64 = 0.01;
 
 /// Slack cables per family, in the order of [`SLACK_FAMILIES`].
 pub fn slack_by_kind(s: &Structure, eq: &Equilibrium) -> [usize; SLACK_FAMILIES.len()] {

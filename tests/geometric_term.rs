@@ -103,3 +103,79 @@ fn the_geometric_term_is_the_measured_difference_where_small_and_flags_it_where_
         }
     }
 }
+
+#[test]
+fn a_pinned_prestress_on_the_prism_warns_with_the_measured_difference_to_large() {
+    let case = manifest_path("cases/prism4.toml");
+    let (pinned, large) = (Temp::dir("prism-pinned"), Temp::dir("prism-large"));
+    let run = |geometry: &str, tolerance: &str, out: &Temp| {
+        tensolve(&[
+            "run",
+            case.to_str().unwrap(),
+            "--set",
+            &format!("model.geometry=\"{geometry}\""),
+            "--set",
+            &format!("model.tolerance={tolerance}"),
+            "--out",
+            out.arg(),
+        ])
+    };
+    let o = run("prestress", "0.01", &pinned);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(run("large", "0.01", &large).status.code(), Some(0));
+    let at_one = |dir: &Temp| {
+        csv_rows(&dir.0.join("summary.csv"))
+            .into_iter()
+            .find(|r| r["alpha"] == "1")
+            .unwrap()
+    };
+    let (p, l) = (at_one(&pinned), at_one(&large));
+    let err = stderr(&o);
+    // All three rows are off by more than 1 %; the worst is α = 1, measured there.
+    let expected = format!(
+        "3 row(s) leave out a geometric term (the members' rotation under their tension) that \
+         changes the answer by more than model.tolerance = 1 % (estimated up to {:.1} %: \
+         newton, alpha 1; measured there, `large` gives a largest deflection of {:.4e} m \
+         against {:.4e} m",
+        100.0 * number(&p, "geometric_term"),
+        number(&l, "max_deflection"),
+        number(&p, "max_deflection"),
+    );
+    assert!(err.contains(&expected), "{err}\nexpected: {expected}");
+    let tension = format!(
+        "a largest cable tension of {:.4e} N against {:.4e} N",
+        number(&l, "max_tension"),
+        number(&p, "max_tension")
+    );
+    assert!(err.contains(&tension), "{err}");
+    // A tolerance of 50 % flags no row: no warning, and the rows are within it.
+    let loose = Temp::dir("prism-loose");
+    let o = run("prestress", "0.5", &loose);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("leave out a geometric term"), "{}", stderr(&o));
+    let flags: Vec<String> = csv_rows(&loose.0.join("summary.csv"))
+        .iter()
+        .map(|r| r["small_displacement_ok"].clone())
+        .collect();
+    assert_eq!(flags, ["true", "true", "true"]);
+}
+
+#[test]
+fn a_model_tolerance_outside_zero_to_one_exits_2_naming_the_key() {
+    let case = manifest_path("cases/prism4.toml");
+    for bad in ["0", "1", "-0.01", "1.5", "nan"] {
+        let out = Temp::dir("prism-bad-tolerance");
+        let o = tensolve(&[
+            "run",
+            case.to_str().unwrap(),
+            "--set",
+            &format!("model.tolerance={bad}"),
+            "--out",
+            out.arg(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains("`model.tolerance`") && err.contains("between 0 and 1"), "{err}");
+        assert!(!out.0.join("summary.csv").exists());
+    }
+}

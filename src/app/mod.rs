@@ -3,6 +3,7 @@
 //! report what a case describes ([`check`]), each after estimating the memory it needs
 //! ([`memory`]).
 
+pub mod against_large;
 pub mod allocator;
 pub mod bench;
 pub mod check;

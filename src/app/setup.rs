@@ -91,6 +91,8 @@ pub struct AnswerChecks {
     /// The geometric term a model on the initial geometry leaves out (`output.geometric_term`;
     /// none with `large`, which leaves nothing out).
     pub geometric_term: bool,
+    /// Above this geometric term the model is off (`model.tolerance`).
+    pub model_tolerance: f64,
 }
 
 impl AnswerChecks {
@@ -99,6 +101,7 @@ impl AnswerChecks {
         AnswerChecks {
             eigenvalue: case.model.has_geometric_stiffness() || case.output.stability,
             geometric_term: case.output.geometric_term && !case.model.updates_geometry(),
+            model_tolerance: case.model_tolerance,
         }
     }
 

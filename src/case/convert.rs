@@ -18,6 +18,7 @@ use std::path::Path;
 /// relative to `base`.
 pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     let model = raw.model.geometry.unwrap_or_default();
+    let model_tolerance = model_tolerance(raw.model.tolerance)?;
     // 1. The structure: a [grid]'s generated geometry and clamps, or a [structure]'s tables.
     let (grid, mut geometry, mut fixes) = structure(&raw, base)?;
     let index_of = index_of(&geometry);
@@ -50,8 +51,24 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         solver,
         output,
         model,
+        model_tolerance,
         modal_mass: raw.modal.mass.unwrap_or_default(),
     })
+}
+
+/// `model.tolerance`: a fraction in (0, 1); default [`crate::results::DEFAULT_MODEL_TOLERANCE`].
+fn model_tolerance(given: Option<f64>) -> Result<f64, CaseError> {
+    match given {
+        None => Ok(crate::results::DEFAULT_MODEL_TOLERANCE),
+        Some(t) if t > 0.0 && t < 1.0 => Ok(t),
+        Some(t) => Err(CaseError::invalid(
+            "model.tolerance",
+            super::numbers::number(t),
+            "give the relative difference to the large-displacement answer that a model on the \
+             initial geometry may make, as a fraction between 0 and 1 (exclusive), e.g. 0.01 \
+             for 1 %",
+        )),
+    }
 }
 
 /// The structure of a raw case: a `[grid]`'s spec, generated geometry and clamps, or a

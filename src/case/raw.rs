@@ -64,6 +64,7 @@ pub(super) struct RawModal {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawModel {
     pub geometry: Option<crate::model::GeometricModel>,
+    pub tolerance: Option<f64>,
 }
 
 /// `[grid]`.

@@ -28,6 +28,10 @@ pub struct Case {
     pub output: OutputChoice,
     /// The geometric effects modelled (`model.geometry`). Default `linear`.
     pub model: crate::model::GeometricModel,
+    /// How far from the large-displacement answer a model on the initial geometry may be, as
+    /// a fraction of the largest deflection and of the largest member force
+    /// (`model.tolerance`; default [`crate::results::DEFAULT_MODEL_TOLERANCE`]).
+    pub model_tolerance: f64,
     /// How the natural modes spread a member's mass on its ends (`modal.mass`). Default
     /// `consistent`.
     pub modal_mass: crate::model::MassKind,

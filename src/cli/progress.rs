@@ -35,9 +35,9 @@ pub struct Reporter {
     shown: Instant,
     /// The last e reported in the solve in progress (LATIN against its reference).
     last_error: Option<f64>,
-    /// Rows whose left-out geometric term is above its limit: how many, and the largest (value,
-    /// solver and α).
-    pub geometric: (usize, Option<(f64, String)>),
+    /// Rows whose left-out geometric term is above `model.tolerance`: how many, and the row
+    /// of the largest.
+    pub geometric: (usize, Option<SummaryRow>),
     /// The links this process kept of the structure's, when set-up said
     /// ([`RunEvent::LinksKept`]).
     pub links_kept: Option<(usize, usize)>,
@@ -155,9 +155,9 @@ impl Reporter {
                 if row.needs_large() && row.converged {
                     let value = row.geometric_term.unwrap_or(0.0);
                     self.geometric.0 += 1;
-                    if self.geometric.1.as_ref().is_none_or(|(v, _)| value > *v) {
-                        let at = format!("{}, alpha {}", row.solver, alpha_label(row.alpha));
-                        self.geometric.1 = Some((value, at));
+                    let largest = |r: &SummaryRow| r.geometric_term.unwrap_or(0.0);
+                    if self.geometric.1.as_ref().is_none_or(|r| value > largest(r)) {
+                        self.geometric.1 = Some(row.clone());
                     }
                 }
                 let mut text = format_row(row);

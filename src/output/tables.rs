@@ -50,6 +50,8 @@ pub struct SummaryRow {
     /// The relative change of the answer the geometric term the model leaves out would make
     /// ([`results::geometric_term`]); `None` for `large` and without displacements.
     pub geometric_term: Option<f64>,
+    /// The case's `model.tolerance`: a geometric term above it says the model is off.
+    pub model_tolerance: f64,
     /// Whether a converged answer is the only equilibrium, when checked (column `unique`; the
     /// run warns of the free motion of one that is not).
     pub uniqueness: Option<results::uniqueness::Uniqueness>,
@@ -106,6 +108,7 @@ impl SummaryRow {
             max_member_rotation: measures.max_member_rotation,
             updates_geometry: measures.updates_geometry,
             geometric_term,
+            model_tolerance: results::DEFAULT_MODEL_TOLERANCE,
             uniqueness: None,
             setup_seconds,
             solve_seconds: solution.info.solve_seconds,
@@ -122,7 +125,7 @@ impl SummaryRow {
     /// Whether the small-perturbation model holds for this answer: no member's ends moved
     /// apart by more than [`results::SMALL_DISPLACEMENT_LIMIT`] of its length, and the geometric
     /// term the model leaves out changes the answer by at most
-    /// [`results::GEOMETRIC_TERM_LIMIT`] ([`SummaryRow::needs_large`]). `None` for the `large`
+    /// the case's `model.tolerance` ([`SummaryRow::needs_large`]). `None` for the `large`
     /// model, which updates the geometry.
     pub fn small_displacement_ok(&self) -> Option<bool> {
         (!self.updates_geometry).then(|| {
@@ -130,11 +133,11 @@ impl SummaryRow {
         })
     }
 
-    /// Whether the geometric term the model leaves out is above
-    /// [`results::GEOMETRIC_TERM_LIMIT`] of the load: `model.geometry = "large"` would differ.
+    /// Whether the geometric term the model leaves out is above the case's `model.tolerance`:
+    /// `model.geometry = "large"` would differ by more.
     pub fn needs_large(&self) -> bool {
         self.geometric_term
-            .is_some_and(|g| g > results::GEOMETRIC_TERM_LIMIT)
+            .is_some_and(|g| g > self.model_tolerance)
     }
 
     /// Whether every number of the row is finite (a row with inf or NaN is never written).

@@ -456,6 +456,7 @@ impl<'s> Sweep<'s> {
                 self.solvers[index].setup_seconds,
             )
             .on_path(path);
+            row.model_tolerance = self.checks.model_tolerance;
             row.uniqueness = verdict.uniqueness.clone();
             // The member checks, on the answer of a row that has one (rank 0 holds every link).
             row.governing = (together.is_none() && !row.status.no_answer())

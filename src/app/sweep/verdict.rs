@@ -370,6 +370,7 @@ mod tests {
         let checks = AnswerChecks {
             eigenvalue: false,
             geometric_term: false,
+            model_tolerance: crate::results::DEFAULT_MODEL_TOLERANCE,
         };
         let load = vec![0.0; s.n_free];
         let verdict = assess(&mut solution, &prepared, checks, &load, |_| None);
