@@ -1,6 +1,7 @@
 //! What the deformed-structure figure marks on each view besides the members: supports (a
-//! filled black triangle under each held node), load arrows (green, their length proportional
-//! to the force, the largest [`ARROW`] px; a load along the line of sight a green ring) and, on
+//! filled black triangle under each held node), on general structures load arrows (green, their
+//! length proportional to the force, the largest [`ARROW`] px; a load along the line of sight a
+//! green ring) and, on
 //! structures under [`LABEL_LIMIT`] members, node labels `n{id}` in every view and member labels
 //! `m{id}` in the oblique one (in all three they hid the tower's members), with the ids of the
 //! case's tables.
@@ -28,9 +29,13 @@ const LOAD_WIDTH: u32 = 3;
 pub const NODE_LABEL: RGBColor = RGBColor(0, 50, 130);
 pub const MEMBER_LABEL: RGBColor = RGBColor(120, 40, 120);
 
-/// The load on every loaded node at `alpha` (`α F`, held components' share included), when at
-/// most [`MAX_LOAD_ARROWS`] nodes are loaded; none otherwise.
+/// The load on every loaded node at `alpha` (`α F`, held components' share included) of a
+/// general structure with at most [`MAX_LOAD_ARROWS`] loaded nodes; none otherwise (a grid's
+/// load pattern, on every upper node, would hide the grid under its arrows).
 pub fn nodal_loads(s: &Structure, alpha: f64) -> Vec<(usize, [f64; 3])> {
+    if s.layout.is_some() {
+        return Vec::new();
+    }
     let mut force = vec![[0.0; 3]; s.n_nodes()];
     for (g, &d) in s.dof_of.iter().enumerate() {
         if d != CLAMPED {

@@ -164,7 +164,10 @@ pub fn to_svg(
             (left, View::Plan, &layout.plan),
             (right, View::Elevation, &layout.elevation),
         ] {
-            let (area, _) = area.split_horizontally(Layout::axes_view(placed).0);
+            // Exactly the view's size: a chart fills its area, and both axes keep one scale.
+            let (width, height) = Layout::axes_view(placed);
+            let (area, _) = area.split_horizontally(width);
+            let (area, _) = area.split_vertically(height);
             draw_axes_view(&area, &scene, view, placed).map_err(plot_error)?;
         }
         root.present().map_err(plot_error)?;
