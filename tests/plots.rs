@@ -533,7 +533,10 @@ fn figure_8_of_a_general_structure_says_supports_and_draws_the_undeformed_struct
         );
     }
     assert!(bars[2] < undeformed[members], "one view after the other");
-    assert!(bars[5] < undeformed[2 * members], "one view after the other");
+    assert!(
+        bars[5] < undeformed[2 * members],
+        "one view after the other"
+    );
 }
 
 /// `n3`, `m12`: a node or member label of Figure 8.
@@ -596,7 +599,10 @@ fn automatic_amplification_is_a_tenth_of_the_size_over_the_largest_displacement(
         .map(|r| (r["ux"].powi(2) + r["uy"].powi(2) + r["uz"].powi(2)).sqrt())
         .fold(0.0, f64::max);
     // The case's comment: the top moves 41.7 mm at α = 1.
-    assert!((largest - 0.0417).abs() < 5e-4, "largest displacement {largest}");
+    assert!(
+        (largest - 0.0417).abs() < 5e-4,
+        "largest displacement {largest}"
+    );
     let exact = 0.1 * size / largest;
     let unit = 10f64.powf(exact.log10().floor() - 1.0);
     let expected = (exact / unit).round() * unit;
@@ -612,8 +618,9 @@ fn automatic_amplification_is_a_tenth_of_the_size_over_the_largest_displacement(
         "stated × {stated}, 10 % of {size} m over {largest} m is × {exact}"
     );
     assert!(
-        svg.texts.iter().any(|t| t.contains("drawn as 10 % of the structure's size")
-            && t.contains("41.7 mm")),
+        svg.texts
+            .iter()
+            .any(|t| t.contains("drawn as 10 % of the structure's size") && t.contains("41.7 mm")),
         "{:?}",
         svg.texts
     );
@@ -635,8 +642,15 @@ fn figure_8_of_a_small_structure_has_an_elevation_supports_loads_and_labels() {
     let run = run_shipped("simplex", &[]);
     let path = run.0.join("plots/deformed_alpha1.svg");
     let svg = read_svg(&path);
-    assert_texts(&svg, "simplex", &["x (m)", "y (m)", "z (m)", "load (max 1.04 kN)"]);
-    assert!(svg.texts.iter().any(|t| t.starts_with("elevation, front view")));
+    assert_texts(
+        &svg,
+        "simplex",
+        &["x (m)", "y (m)", "z (m)", "load (max 1.04 kN)"],
+    );
+    assert!(svg
+        .texts
+        .iter()
+        .any(|t| t.starts_with("elevation, front view")));
     for node in 0..6 {
         let label = format!("n{node}");
         let count = svg.texts.iter().filter(|t| **t == label).count();
@@ -655,7 +669,11 @@ fn figure_8_of_a_small_structure_has_an_elevation_supports_loads_and_labels() {
         .count();
     assert_eq!(supports, 3 * 3, "3 supports in 3 views");
     let arrows = svg.polylines.iter().filter(|(s, _, _)| s == LOAD).count();
-    assert_eq!(arrows, 3 * 3 * 2, "3 loads in 3 views, a shaft and a head each");
+    assert_eq!(
+        arrows,
+        3 * 3 * 2,
+        "3 loads in 3 views, a shaft and a head each"
+    );
 }
 
 /// Issue 45: `output.figure_alpha` picks the α of Figure 8 and of the member-force chart; one
@@ -664,10 +682,20 @@ fn figure_8_of_a_small_structure_has_an_elevation_supports_loads_and_labels() {
 fn figure_alpha_picks_the_load_factor_drawn() {
     let run = run_shipped("simplex", &["output.figure_alpha=0.5"]);
     let names = file_names(&run.0.join("plots"));
-    assert!(names.contains(&"deformed_alpha0.5.svg".to_string()), "{names:?}");
-    assert!(!names.contains(&"deformed_alpha1.svg".to_string()), "{names:?}");
+    assert!(
+        names.contains(&"deformed_alpha0.5.svg".to_string()),
+        "{names:?}"
+    );
+    assert!(
+        !names.contains(&"deformed_alpha1.svg".to_string()),
+        "{names:?}"
+    );
     let forces = read_svg(&run.0.join("plots/member_forces.svg"));
-    assert_texts(&forces, "member forces", &["Member forces at α = 0.5 (newton)"]);
+    assert_texts(
+        &forces,
+        "member forces",
+        &["Member forces at α = 0.5 (newton)"],
+    );
 
     let case = common::manifest_path("cases/simplex.toml");
     let out = temp_path("figure-alpha-bad");
@@ -732,7 +760,9 @@ fn near_uniform_tensions_span_the_whole_colour_scale() {
     let _ = std::fs::remove_dir_all(&dir);
     let (lo, hi) = tensions
         .iter()
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), &t| (lo.min(t), hi.max(t)));
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), &t| {
+            (lo.min(t), hi.max(t))
+        });
     assert!(lo > 990.0 && hi < 1010.0 && hi - lo > 1.0, "{tensions:?}");
     let cable_colours: Vec<&str> = svg
         .polylines
@@ -758,7 +788,10 @@ fn near_uniform_tensions_span_the_whole_colour_scale() {
 fn member_force_chart_has_one_labelled_bar_per_member() {
     let run = run_shipped("tower", &[]);
     let names = file_names(&run.0.join("plots"));
-    assert!(names.contains(&"member_forces.svg".to_string()), "{names:?}");
+    assert!(
+        names.contains(&"member_forces.svg".to_string()),
+        "{names:?}"
+    );
     assert!(!names.contains(&"tensions.svg".to_string()), "{names:?}");
     let forces = common::csv_rows(&run.0.join("forces/newton_alpha1.csv"));
     assert_eq!(forces.len(), 45);
@@ -792,10 +825,13 @@ fn member_force_chart_has_one_labelled_bar_per_member() {
         .filter(|(_, &s)| !s)
         .map(|(r, _)| r)
         .collect();
-    assert_eq!(bars.len(), drawn.len(), "one bar per member that is not slack");
-    let magnitude = |r: &std::collections::HashMap<String, String>| {
-        r["force_N"].parse::<f64>().unwrap().abs()
-    };
+    assert_eq!(
+        bars.len(),
+        drawn.len(),
+        "one bar per member that is not slack"
+    );
+    let magnitude =
+        |r: &std::collections::HashMap<String, String>| r["force_N"].parse::<f64>().unwrap().abs();
     let largest = drawn.iter().map(|r| magnitude(r)).fold(0.0, f64::max);
     let longest = bars.iter().map(|(w, _)| *w).fold(0.0, f64::max);
     for ((width, fill), row) in bars.iter().zip(&drawn) {
@@ -805,6 +841,11 @@ fn member_force_chart_has_one_labelled_bar_per_member() {
             "m{}: {width} px, {expected:.1} expected",
             row["member"]
         );
-        assert_eq!(fill == BAR, row["kind"] == "bar", "m{}: {fill}", row["member"]);
+        assert_eq!(
+            fill == BAR,
+            row["kind"] == "bar",
+            "m{}: {fill}",
+            row["member"]
+        );
     }
 }

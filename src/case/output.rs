@@ -75,7 +75,10 @@ pub(super) fn check_modes_have_mass(
 
 /// `output.figure_alpha`, when given, is one of the load factors solved (`alphas`), to 1e-9
 /// relative (0.1 matches a range's 0.09999999999999999), and is set to that α exactly.
-pub(super) fn match_figure_alpha(output: &mut OutputChoice, alphas: &[f64]) -> Result<(), CaseError> {
+pub(super) fn match_figure_alpha(
+    output: &mut OutputChoice,
+    alphas: &[f64],
+) -> Result<(), CaseError> {
     let Some(wanted) = output.figure_alpha else {
         return Ok(());
     };

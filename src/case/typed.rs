@@ -215,9 +215,9 @@ pub struct OutputChoice {
     /// `homogenised/substructure_{E}.csv`: micro-macro's homogenised flexibility of every
     /// substructure and its macro basis. Default false.
     pub homogenised: bool,
-    /// Factor the displacements are multiplied by in `plots/deformed_alpha{α}.svg` (Figure 8),
-    /// > 0. Default none: automatic, the largest displacement drawn as a fixed fraction of the
-    /// structure's size (`output::plots` says which, and its bounds).
+    /// Factor (positive) the displacements are multiplied by in `plots/deformed_alpha{α}.svg`
+    /// (Figure 8). Default none: automatic, the largest displacement drawn as a fixed fraction
+    /// of the structure's size (`output::plots` says which, and its bounds).
     pub amplification: Option<f64>,
     /// The load factor the deformed-structure figure (and a general structure's member-force
     /// chart) shows: one of `load.alpha`. Default none: the largest.

@@ -50,10 +50,7 @@ pub fn to_svg(solver: &str, alpha: f64, s: &Structure, eq: &Equilibrium) -> io::
         let root = SVGBackend::with_string(&mut svg, (WIDTH, height)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;
         let font = |size: u32| ("sans-serif", size).into_font().color(&BLACK);
-        let title = format!(
-            "Member forces at α = {} ({solver})",
-            alpha_text(alpha)
-        );
+        let title = format!("Member forces at α = {} ({solver})", alpha_text(alpha));
         let note = "bar: axial force at α, tension > 0; black tick: prestress t0 (zero load); \
                     cables coloured as in the deformed figure";
         root.draw_text(&title, &font(19), (MARGIN as i32, 10))
@@ -95,7 +92,10 @@ pub fn to_svg(solver: &str, alpha: f64, s: &Structure, eq: &Equilibrium) -> io::
                 chart.draw_series([bar]).map_err(plot_error)?;
             }
             let t0 = s.given_prestress(link);
-            let tick = PathElement::new(vec![(t0, y + 0.05), (t0, y + 0.95)], PRESTRESS.stroke_width(2));
+            let tick = PathElement::new(
+                vec![(t0, y + 0.05), (t0, y + 0.95)],
+                PRESTRESS.stroke_width(2),
+            );
             chart.draw_series([tick]).map_err(plot_error)?;
         }
         let plot = chart.plotting_area();

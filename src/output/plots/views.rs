@@ -71,7 +71,9 @@ impl View {
             }
             (View::Oblique, false) => "oblique view (undeformed outline in light grey)",
             (View::Plan, true) => "plan, top view (undeformed in light grey)",
-            (View::Plan, false) => "plan, top view (links drawn shrunk toward their module's centre)",
+            (View::Plan, false) => {
+                "plan, top view (links drawn shrunk toward their module's centre)"
+            }
             (View::Elevation, true) => "elevation, front view (undeformed in light grey)",
             (View::Elevation, false) => "elevation, front view",
         }
@@ -188,7 +190,8 @@ fn drawing_order(scene: &Scene, view: View) -> Vec<usize> {
         order.sort_by_key(|&i| links[i].kind.is_cable());
         return order;
     }
-    let depth = |l: &Link| view.project(scene.deformed[l.a]).2 + view.project(scene.deformed[l.b]).2;
+    let depth =
+        |l: &Link| view.project(scene.deformed[l.a]).2 + view.project(scene.deformed[l.b]).2;
     order.sort_by(|&i, &j| depth(&links[j]).total_cmp(&depth(&links[i])));
     order
 }
