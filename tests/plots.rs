@@ -308,7 +308,8 @@ fn figure_8_draws_every_bar_and_cable_in_every_view_and_amplifies_the_displaceme
         (run, svg)
     };
     let (_ten, ten) = at(10.0);
-    // Every bar in each of the three views, as a straight segment heavier than the cables.
+    // Every bar in each of the three views, as a straight segment heavier than the cables
+    // (3 px in a grid).
     let bars = bar_lines(&ten);
     assert_eq!(bars.len(), 3 * BARS, "bar segments");
     assert!(bars.iter().all(|points| points.len() == 2));
@@ -316,7 +317,7 @@ fn figure_8_draws_every_bar_and_cable_in_every_view_and_amplifies_the_displaceme
         .polylines
         .iter()
         .filter(|(stroke, _, _)| stroke == BAR)
-        .all(|(_, width, _)| width == "4"));
+        .all(|(_, width, _)| width == "3"));
     // Every taut cable in each view, in colour (stroke width 2); the 40 slack ones dashed.
     let taut = ten
         .polylines
@@ -526,6 +527,10 @@ fn figure_8_of_a_general_structure_says_supports_and_draws_the_undeformed_struct
         .filter(|&i| svg.polylines[i].0 == BAR)
         .collect();
     assert_eq!(bars.len(), 3 * 3, "the simplex's three struts in each view");
+    assert!(
+        bars.iter().all(|&i| svg.polylines[i].1 == "4"),
+        "struts 4 px"
+    );
     for view in 0..3 {
         assert!(
             undeformed[(view + 1) * members - 1] < bars[3 * view],

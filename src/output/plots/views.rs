@@ -4,7 +4,7 @@
 //! depth; members are drawn far ones first, so that near ones lie over them (in the plan,
 //! bars first, cables over them).
 //!
-//! Struts are drawn heavier than cables (near black, 4 px against 2); cables are coloured by
+//! Struts are drawn heavier than cables (near black, 4 px, 3 in a grid, against 2); cables are coloured by
 //! their tension on the figure's [`TensionScale`]; slack cables are thin dashed grey lines.
 //! A grid's plan draws each link shrunk toward its module's centre (lower cables by 10 %,
 //! bracing cables by 25 %) so that none hides another; a general structure's views draw every
@@ -22,9 +22,11 @@ use std::ops::Range;
 const AZIMUTH: f64 = -30.0;
 const ELEVATION: f64 = 35.0;
 
-/// Struts: near black and heavier than the cables (whose colours carry the tensions).
+/// Struts: near black and heavier than the cables (whose colours carry the tensions); 3 px in
+/// a grid, where at 4 its dense struts hid the cables.
 pub const BAR: RGBColor = RGBColor(25, 25, 25);
-pub const BAR_WIDTH: u32 = 4;
+const BAR_WIDTH: u32 = 4;
+const GRID_BAR_WIDTH: u32 = 3;
 pub const CABLE_WIDTH: u32 = 2;
 /// Slack cables: thin dashed grey.
 pub const SLACK: RGBColor = RGBColor(120, 120, 120);
@@ -243,14 +245,18 @@ fn plan_ends(s: &Structure, deformed: &[[f64; 3]], i: usize) -> [(f64, f64); 2] 
 /// How one link is drawn.
 #[derive(Clone, Copy)]
 enum Stroke {
-    Bar,
+    Bar(u32),
     Cable(RGBColor),
     Slack,
 }
 
 fn stroke(link: &Link, index: usize, scene: &Scene) -> Stroke {
     if !link.kind.is_cable() {
-        Stroke::Bar
+        Stroke::Bar(if scene.general() {
+            BAR_WIDTH
+        } else {
+            GRID_BAR_WIDTH
+        })
     } else if scene.eq.slack[index] {
         Stroke::Slack
     } else {
@@ -267,9 +273,9 @@ fn draw_link<DB: DrawingBackend>(
     stroke: Stroke,
 ) -> DrawResult<DB> {
     match stroke {
-        Stroke::Bar => area.draw(&PathElement::new(
+        Stroke::Bar(width) => area.draw(&PathElement::new(
             vec![px(a), px(b)],
-            BAR.stroke_width(BAR_WIDTH),
+            BAR.stroke_width(width),
         )),
         Stroke::Cable(colour) => area.draw(&PathElement::new(
             vec![px(a), px(b)],
