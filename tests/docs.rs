@@ -151,6 +151,8 @@ const DEFAULTS_IN_WORDS: &[&str] = &[
     "solver.macro_degree",
     "solver.residual_tolerance",
     "output.dir",
+    "output.amplification",
+    "output.figure_alpha",
 ];
 
 /// An element of each array of tables that the defaults of its keys are checked on.

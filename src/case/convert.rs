@@ -37,8 +37,9 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         &geometry.nodes,
     )?;
     // 6. The files to write.
-    let output = output::output_choice(raw.output)?;
+    let mut output = output::output_choice(raw.output)?;
     output::check_modes_have_mass(&output, &geometry)?;
+    output::match_figure_alpha(&mut output, &load.alphas)?;
     // 7. `large` follows the load path: its α in increasing order (docs/method.md §8).
     if model == GeometricModel::Large {
         load.alphas.sort_by(f64::total_cmp);

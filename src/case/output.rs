@@ -1,6 +1,6 @@
 //! `[output]`: which files to write, and where, checked.
 
-use super::numbers::positive;
+use super::numbers::{number, positive};
 use super::{CaseError, OutputChoice};
 
 /// `[output]` as read (each key absent taking [`OutputChoice::default`]'s value), checked.
@@ -16,11 +16,14 @@ pub(super) fn output_choice(output: OutputChoice) -> Result<OutputChoice, CaseEr
             "give a directory (\".\" for the current one), or remove the key for out/<case file name>",
         ));
     }
-    positive(
-        "output.amplification",
-        output.amplification,
-        "the factor the displacements are drawn multiplied by (the paper's is 10)",
-    )?;
+    if let Some(amplification) = output.amplification {
+        positive(
+            "output.amplification",
+            amplification,
+            "the factor the displacements are drawn multiplied by (the paper's is 10), or remove \
+             the key for an automatic one",
+        )?;
+    }
     let kinds = &output.compare_modules;
     if let Some(twice) = kinds
         .iter()
@@ -68,4 +71,30 @@ pub(super) fn check_modes_have_mass(
         ));
     }
     Ok(())
+}
+
+/// `output.figure_alpha`, when given, is one of the load factors solved (`alphas`), to 1e-9
+/// relative (0.1 matches a range's 0.09999999999999999), and is set to that α exactly.
+pub(super) fn match_figure_alpha(
+    output: &mut OutputChoice,
+    alphas: &[f64],
+) -> Result<(), CaseError> {
+    let Some(wanted) = output.figure_alpha else {
+        return Ok(());
+    };
+    let same = |a: f64| a == wanted || (a - wanted).abs() <= 1e-9 * a.abs().max(wanted.abs());
+    if let Some(&alpha) = alphas.iter().find(|&&a| same(a)) {
+        output.figure_alpha = Some(alpha);
+        return Ok(());
+    }
+    let available: Vec<String> = alphas.iter().map(|&a| number(a)).collect();
+    Err(CaseError::invalid(
+        "output.figure_alpha",
+        number(wanted),
+        format!(
+            "give one of the load factors solved (load.alpha): {}; or remove the key for the \
+             largest",
+            available.join(", ")
+        ),
+    ))
 }

@@ -219,9 +219,13 @@ pub struct OutputChoice {
     /// `homogenised/substructure_{E}.csv`: micro-macro's homogenised flexibility of every
     /// substructure and its macro basis. Default false.
     pub homogenised: bool,
-    /// Factor the displacements are multiplied by in `plots/deformed_alpha{α}.svg` (Figure 8).
-    /// Default 10, as in the paper; > 0.
-    pub amplification: f64,
+    /// Factor (positive) the displacements are multiplied by in `plots/deformed_alpha{α}.svg`
+    /// (Figure 8). Default none: automatic, the largest displacement drawn as a fixed fraction
+    /// of the structure's size (`output::plots` says which, and its bounds).
+    pub amplification: Option<f64>,
+    /// The load factor the deformed-structure figure (and a general structure's member-force
+    /// chart) shows: one of `load.alpha`. Default none: the largest.
+    pub figure_alpha: Option<f64>,
     /// Last iteration the convergence figures (`plots/error_*.svg`, `plots/eta_*.svg`) show.
     /// Default 100, as in the paper's Figures 9–11; ≥ 1.
     pub max_plot_iterations: usize,
@@ -250,7 +254,8 @@ impl Default for OutputChoice {
             stability: false,
             geometric_term: true,
             homogenised: false,
-            amplification: 10.0,
+            amplification: None,
+            figure_alpha: None,
             max_plot_iterations: 100,
             compare_modules: Vec::new(),
             modes: 0,

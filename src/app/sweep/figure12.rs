@@ -77,6 +77,7 @@ fn write_module_comparison(
     }
     let settings = FigureSettings {
         amplification: case.output.amplification,
+        figure_alpha: case.output.figure_alpha,
         max_plot_iterations: case.output.max_plot_iterations,
     };
     let path = staging.join("plots").join("error_modules.svg");

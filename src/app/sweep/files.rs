@@ -132,6 +132,7 @@ pub(super) fn sinks<'s>(
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {
             amplification: out.amplification,
+            figure_alpha: out.figure_alpha,
             max_plot_iterations: out.max_plot_iterations,
         };
         sinks.add(

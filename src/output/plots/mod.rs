@@ -4,9 +4,10 @@
 //!
 //! | file | figure |
 //! |---|---|
-//! | `tensions.svg` | sorted cable tensions, one series per α (first solver), α = 0 among them whenever its answer is known — Figure 6 |
+//! | `tensions.svg` | sorted cable tensions, one series per α (first solver), α = 0 among them whenever its answer is known — Figure 6; not for a general structure under 100 members, which has `member_forces.svg` |
+//! | `member_forces.svg` | a general structure under 100 members: every member's force at the figure's α, one labelled bar each |
 //! | `slack_fraction.svg` | slack fraction against α, one series per solver — Figure 7 |
-//! | `deformed_alpha{α}.svg` | the deformed grid at the largest α, displacements × `output.amplification`, oblique view and top view, τ in colour — Figure 8 |
+//! | `deformed_alpha{α}.svg` | the deformed structure at the figure's α (`output.figure_alpha`, else the largest), displacements amplified (`output.amplification`, else automatic), oblique view, plan and elevation, τ in colour — Figure 8 |
 //! | `error_{solver}.svg`, `eta_{solver}.svg` | e and η per iteration up to `output.max_plot_iterations`, one series per α — Figures 9, 10 |
 //! | `error_all.svg` | e per iteration of every LATIN solver at the largest α — Figure 11 |
 //! | `error_modules.svg` | e per iteration at the largest α, one series per module kind of `output.compare_modules` and LATIN solver — Figure 12 |
@@ -14,16 +15,21 @@
 //! In the line charts each series is one `<polyline>` of stroke width [`SERIES_STROKE_WIDTH`],
 //! and nothing else has that width.
 
+mod amplification;
+mod annotate;
 mod axes;
 mod chart;
 mod convergence;
 mod deformed;
 mod legend;
 mod marker;
+mod member_forces;
 mod palette;
 mod series;
 mod slack;
+mod tension_scale;
 mod tensions;
+mod views;
 
 pub use chart::LineChart;
 pub use series::{Frame, Scale, Series};
@@ -48,12 +54,14 @@ pub struct History {
     pub records: Vec<IterationRecord>,
 }
 
-/// How the figures are drawn: the case's `output.amplification` and
+/// How the figures are drawn: the case's `output.amplification`, `output.figure_alpha` and
 /// `output.max_plot_iterations`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FigureSettings {
-    /// Factor the displacements are drawn multiplied by in Figure 8.
-    pub amplification: f64,
+    /// Factor the displacements are drawn multiplied by in Figure 8; `None`: automatic.
+    pub amplification: Option<f64>,
+    /// The α Figure 8 and the member-force chart show; `None`: the largest.
+    pub figure_alpha: Option<f64>,
     /// Last iteration the convergence figures show.
     pub max_plot_iterations: usize,
 }
@@ -75,7 +83,7 @@ pub struct FigureData {
     tensions: Vec<(f64, Vec<f64>)>,
     slack: Vec<SlackSeries>,
     histories: Vec<History>,
-    /// The first solver's equilibrium at the largest α.
+    /// The first solver's equilibrium at the figure's α.
     deformed: Option<(f64, Equilibrium)>,
 }
 
@@ -106,11 +114,14 @@ impl FigureData {
             return;
         }
         self.tensions.push((alpha, sorted_cable_tensions(s, eq)));
-        if self
-            .deformed
-            .as_ref()
-            .is_none_or(|(largest, _)| alpha >= *largest)
-        {
+        let shown = match self.settings.figure_alpha {
+            Some(wanted) => alpha == wanted,
+            None => self
+                .deformed
+                .as_ref()
+                .is_none_or(|(largest, _)| alpha >= *largest),
+        };
+        if shown {
             self.deformed = Some((alpha, eq.clone()));
         }
     }
@@ -127,7 +138,7 @@ impl FigureData {
     /// Write every figure there is data for under `dir/plots`; returns their paths.
     pub fn write(&self, dir: &Path, s: &Structure) -> io::Result<Vec<PathBuf>> {
         let mut figures: Vec<(String, String)> = Vec::new();
-        if !self.tensions.is_empty() {
+        if !self.tensions.is_empty() && !member_forces::drawn_for(s) {
             let mut sets = self.tensions.clone();
             if !sets.iter().any(|(alpha, _)| *alpha == 0.0) {
                 sets.extend(tensions::at_rest(s));
@@ -145,9 +156,13 @@ impl FigureData {
         }
         figures.extend(convergence::figures(&self.histories, &self.settings)?);
         if let Some((alpha, eq)) = &self.deformed {
-            let amplification = self.settings.amplification;
-            let svg = deformed::to_svg(self.first_solver.name(), *alpha, amplification, s, eq)?;
+            let (solver, amplification) = (self.first_solver.name(), self.settings.amplification);
+            let svg = deformed::to_svg(solver, *alpha, amplification, s, eq)?;
             figures.push((format!("deformed_alpha{}.svg", alpha_label(*alpha)), svg));
+            if member_forces::drawn_for(s) {
+                let svg = member_forces::to_svg(solver, *alpha, s, eq)?;
+                figures.push(("member_forces.svg".into(), svg));
+            }
         }
         let plots = dir.join("plots");
         figures

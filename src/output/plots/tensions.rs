@@ -62,3 +62,34 @@ pub fn chart(solver: &str, sets: &[(f64, Vec<f64>)]) -> LineChart {
         series,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// D7 (issue 42): α = 0's curve is drawn when the supports take part of the prestress. On
+    /// the saddle net (`cases/saddle-net.toml`) the cables to the held boundary load the
+    /// supports, so `Bᵀτ₀` is not zero over all dofs, but it is at the free ones: u = 0 with
+    /// τ = τ₀ is the answer at zero load, and its curve is τ₀ sorted, one point per cable. (The
+    /// net itself, a general structure under 100 members, draws `member_forces.svg` instead.)
+    #[test]
+    fn d7_alpha_zero_is_known_when_supports_take_part_of_the_prestress() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/saddle-net.toml");
+        let s = crate::case::load(&path)
+            .expect("the shipped case")
+            .structure();
+        assert!(s.prestress_imbalance() > 1e-3 * s.prestress_scale);
+        let (alpha, tensions) = at_rest(&s).expect("u = 0 is the answer at zero load");
+        assert_eq!(alpha, 0.0);
+        assert_eq!(tensions.len(), s.n_cables());
+        assert!(tensions.windows(2).all(|w| w[0] <= w[1]));
+        let mut t0: Vec<f64> = s
+            .links
+            .iter()
+            .filter(|l| l.kind.is_cable())
+            .map(|l| l.prestress)
+            .collect();
+        t0.sort_by(f64::total_cmp);
+        assert_eq!(tensions, t0);
+    }
+}
