@@ -9,6 +9,9 @@ use crate::model::material::tension;
 use crate::model::{CurrentGeometry, Model};
 use crate::solvers::{Equilibrium, TautStiffness};
 
+/// A motion below this fraction of the structure's size is round-off, not a deflection.
+const ROUND_OFF_MOTION: f64 = 1e-9;
+
 /// The relative change of the answer that the geometry left out makes: with
 /// `δ = −H(U)⁻¹ r(U)`, r the large model's unbalance at the answer U and H its tangent there
 /// (the exact Hessian of §8's energy; where it is not positive definite, or beyond
@@ -57,7 +60,10 @@ pub fn geometric_term(
             .map(|d| d[0].hypot(d[1]).hypot(d[2]))
             .fold(0.0, f64::max)
     };
-    let displacement_change = largest_motion(&step) / largest_motion(&stepped);
+    // Motions below ROUND_OFF_MOTION of the structure's size (an unloaded answer's round-off)
+    // are no deflection to be relative to.
+    let floor = ROUND_OFF_MOTION * s.size();
+    let displacement_change = largest_motion(&step) / largest_motion(&stepped).max(floor);
     let after: Vec<f64> = CurrentGeometry::of(s, &stepped)
         .trial_tensions(s)
         .iter()
