@@ -7,6 +7,8 @@
 mod checks;
 mod geometry;
 mod grid;
+mod grouped;
+mod nearest_state;
 mod share;
 mod spec;
 mod statics;
@@ -16,6 +18,10 @@ mod supports;
 pub use checks::{CheckedMember, MemberChecks};
 pub use geometry::{length_and_direction, transverse_pair, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout, GridRole};
+pub use grouped::{
+    grouped_states, GroupedRefusal, GroupedStates, GROUPED_MAX_ENTRIES, RANK_RELATIVE,
+};
+pub use nearest_state::{nearest_state, Bounds, Fit, MET_RELATIVE};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use statics::{
     equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
