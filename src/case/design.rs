@@ -239,6 +239,11 @@ fn cleaned(mut forces: Vec<f64>) -> Vec<f64> {
     forces
 }
 
+/// A force to 7 significant digits, as a user would write it (−3044.163, not −3044.1634905…).
+fn shown(x: f64) -> String {
+    number(format!("{x:.6e}").parse().unwrap_or(x))
+}
+
 /// Refuse a state that misses a target or a sign, naming the groups.
 fn refuse_missed(
     forces: &[f64],
@@ -256,8 +261,8 @@ fn refuse_missed(
             format!(
                 "\"{}\" ({} N for {} N)",
                 groups[k].0,
-                number(forces[k]),
-                number(t)
+                shown(forces[k]),
+                shown(t)
             )
         })
         .collect();
@@ -273,7 +278,7 @@ fn refuse_missed(
                 "\"{}\" ({}, {} N)",
                 groups[k].0,
                 groups[k].2.name(),
-                number(forces[k])
+                shown(forces[k])
             )
         })
         .collect();

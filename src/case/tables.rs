@@ -79,7 +79,7 @@ impl Table<'_> {
         let n = names.len() - usize::from(has_last);
         let ok = n >= required.len()
             && n <= required.len() + optional.len()
-            && names
+            && names[..n]
                 .iter()
                 .zip(required.iter().chain(optional))
                 .all(|(a, b)| a == b);
