@@ -108,6 +108,11 @@ enum Command {
         /// Where to write the designed case (nothing is written without it).
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// Instead of `prestress.from`: project the members table's nearly balanced prestress
+        /// (rounded coordinates) on the self-stress states, least squares, and report the
+        /// largest change (never done by `run`).
+        #[arg(long)]
+        rebalance: bool,
         /// Override a case key, in TOML syntax (repeatable; validated like the file).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -200,8 +205,13 @@ fn main() -> ExitCode {
             set,
         } => run_command(&ranks, case, out, solvers, quiet, &set).map_err(Failure::from),
         Command::Check { case, set } => check_command(&ranks, case, &set),
-        Command::Design { case, out, set } => root_only(&ranks, || {
-            let report = design(&case, &set, out.as_deref()).map_err(|e| Failure {
+        Command::Design {
+            case,
+            out,
+            set,
+            rebalance,
+        } => root_only(&ranks, || {
+            let report = design(&case, &set, out.as_deref(), rebalance).map_err(|e| Failure {
                 message: e.to_string(),
                 exit_code: e.exit_code(),
             })?;

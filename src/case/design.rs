@@ -44,6 +44,9 @@ pub struct Design {
     pub groups: Vec<GroupForce>,
     /// `prestress.min_cable`, N.
     pub min_cable: f64,
+    /// Re-balanced (`design --rebalance`): the largest change of a member's prestress, N,
+    /// and that member's id.
+    pub rebalanced: Option<(f64, u64)>,
 }
 
 /// Where the design is asked for.
@@ -159,6 +162,7 @@ pub(super) fn apply(
             })
             .collect(),
         min_cable,
+        rebalanced: None,
     })
 }
 

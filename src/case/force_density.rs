@@ -219,5 +219,6 @@ fn report(
             })
             .collect(),
         min_cable: 0.0,
+        rebalanced: None,
     }
 }

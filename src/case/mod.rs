@@ -20,6 +20,7 @@ mod numbers;
 mod output;
 mod prestress;
 mod raw;
+mod rebalance;
 mod solver;
 pub mod sources;
 mod tables;
@@ -117,6 +118,16 @@ pub fn check_distinct_methods(
     methods: &[crate::solvers::Method],
 ) -> Result<(), CaseError> {
     solver::check_distinct_methods(key, methods)
+}
+
+/// As [`load_with`], the members table's prestress re-balanced: projected on the self-stress
+/// states, least squares (`tensolve design --rebalance`; the report says the largest change).
+pub fn load_rebalanced(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
+    let table = table_with(path, overrides)?;
+    let mut raw = raw::RawCase::deserialize(toml::Value::Table(table))
+        .map_err(|e| CaseError::Syntax(e.to_string().trim_end().to_string()))?;
+    raw.rebalance = true;
+    convert::convert(raw, path.parent().unwrap_or(Path::new("")))
 }
 
 /// The case file at `path` as a TOML table with `key=value` overrides applied, not validated

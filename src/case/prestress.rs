@@ -17,16 +17,26 @@ use crate::structure::{
 const FROM: &str = "prestress.from";
 
 /// Set `geometry`'s prestress from `[prestress] from` when it is given (`grid`: the case is a
-/// `[grid]`, whose prestress is `lower_cable`): the design's report when it designed one.
+/// `[grid]`, whose prestress is `lower_cable`), or re-balance the table's prestress
+/// (`rebalance`, `design --rebalance`): the design's report when it designed one.
 pub(super) fn apply(
     raw: &RawPrestress,
     grid: bool,
     geometry: &mut Geometry,
     fixes: &[NodeFix],
     model: GeometricModel,
+    rebalance: bool,
 ) -> Result<Option<Design>, CaseError> {
+    if rebalance && (grid || raw.from.is_some()) {
+        return Err(CaseError::invalid(
+            "--rebalance",
+            "given",
+            "it re-balances a [structure]'s members-table prestress: remove `prestress.from` (a designed prestress is balanced already)",
+        ));
+    }
     refuse_keys_of_other_sources(raw)?;
     let from = match raw.from {
+        None if rebalance && !grid => return super::rebalance::apply(geometry, fixes).map(Some),
         None => return Ok(None),
         Some(RawPrestressSource::SelfStress) => {
             self_stress(raw, grid, geometry, fixes, model)?;

@@ -50,6 +50,9 @@ pub(super) struct RawCase {
     pub model: RawModel,
     #[serde(default)]
     pub modal: RawModal,
+    /// `tensolve design --rebalance`: never read from the file.
+    #[serde(skip)]
+    pub rebalance: bool,
 }
 
 /// `[modal]`: the natural modes' settings (`output.modes` asks for them).

@@ -28,6 +28,8 @@ pub enum Fit {
     QuadraticProgramme,
     /// No fit: the form found by force densities (`prestress.from = "force-density"`).
     ForceDensity,
+    /// No fit: the table's prestress projected on the self-stress states (`--rebalance`).
+    Rebalanced,
 }
 
 impl Fit {
@@ -37,6 +39,9 @@ impl Fit {
             Fit::Direct => "direct (as many independent targets as states)",
             Fit::QuadraticProgramme => "nearest state under the signs (quadratic programme)",
             Fit::ForceDensity => "form found by force densities (one sparse solve)",
+            Fit::Rebalanced => {
+                "the members table's, projected on the self-stress states (least squares)"
+            }
         }
     }
 }

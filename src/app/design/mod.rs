@@ -75,19 +75,25 @@ pub struct DesignReport {
     pub free_dofs: usize,
 }
 
-/// Load the case at `path` (with `--set` overrides), design its prestress, and report; with
-/// `out`, write the designed case there.
+/// Load the case at `path` (with `--set` overrides), design its prestress (or, with
+/// `rebalance`, project the members table's on the self-stress states), and report; with `out`,
+/// write the designed case there.
 pub fn design(
     path: &Path,
     set: &[String],
     out: Option<&Path>,
+    rebalance: bool,
 ) -> Result<DesignReport, DesignError> {
-    let case = case::load_with(path, set)?;
+    let case = if rebalance {
+        case::load_rebalanced(path, set)?
+    } else {
+        case::load_with(path, set)?
+    };
     let Some(design) = case.design.clone() else {
         return Err(CaseError::Invalid {
             key: "prestress.from".into(),
             value: "not \"design\" or \"force-density\"".into(),
-            fix: "`tensolve design` designs a prestress: set `[prestress] from = \"design\"` with `targets`, or `from = \"force-density\"` with `force_density`".into(),
+            fix: "`tensolve design` designs a prestress: set `[prestress] from = \"design\"` with `targets`, or `from = \"force-density\"` with `force_density`, or re-balance the members table's with `--rebalance`".into(),
         }
         .into());
     };
@@ -144,6 +150,9 @@ impl DesignReport {
     /// The stability verdict in words.
     pub fn verdict(&self) -> String {
         match &self.stability {
+            None if self.design.counts.mechanisms == 0 => {
+                "no mechanism (m = 0): stable without the prestress".to_string()
+            }
             None => format!(
                 "not tested (above {DENSE_LIMIT} free dofs: the dense test of `check`)"
             ),
@@ -181,6 +190,12 @@ impl fmt::Display for DesignReport {
             shown(d.gap.1)
         )?;
         writeln!(f, "  prestress: {}", d.fit.name())?;
+        if let Some((change, id)) = d.rebalanced {
+            writeln!(
+                f,
+                "  re-balanced: largest change {change:.6e} N, on member {id}"
+            )?;
+        }
         if d.fit == crate::structure::Fit::ForceDensity {
             let mixed = self.groups.iter().any(|g| g.given.is_some_and(|q| q < 0.0));
             writeln!(
@@ -192,7 +207,7 @@ impl fmt::Display for DesignReport {
                     " (every force density positive)"
                 }
             )?;
-        } else {
+        } else if d.fit != crate::structure::Fit::Rebalanced {
             writeln!(f, "  min_cable = {} N", d.min_cable)?;
         }
         writeln!(f, "  stability: {}", self.verdict())?;
