@@ -640,7 +640,8 @@ fn rebalancing_projects_a_rounded_prestress_on_the_self_stress_states() {
         .collect();
     let t0 = DVector::from_vec(t0);
     let aat = &a * a.transpose();
-    let pinv = aat.pseudo_inverse(1e-10 * aat.amax()).unwrap();
+    let eps = 1e-10 * aat.amax();
+    let pinv = aat.pseudo_inverse(eps).unwrap();
     let expected = &t0 - a.transpose() * (pinv * (&a * &t0));
     let got = prestress(&case);
     assert!(max_relative_difference(&got, expected.as_slice()) < 1e-9);

@@ -2,8 +2,8 @@
 //! has a `group` column: per group, its members and the force of largest magnitude at the
 //! answer, with the member carrying it.
 
-use super::tables::result_path;
 use super::write_atomic;
+use crate::labels::alpha_label;
 use crate::structure::Structure;
 use std::collections::HashMap;
 use std::path::Path;
@@ -33,7 +33,11 @@ pub(super) fn write_group_forces(
             (row.2, row.3) = (t, i);
         }
     }
-    write_atomic(&result_path(dir, "groups", solver, alpha), |w| {
+    // As every per-solve file: `dir/groups/{solver}_alpha{α}.csv`.
+    let path = dir
+        .join("groups")
+        .join(format!("{solver}_alpha{}.csv", alpha_label(alpha)));
+    write_atomic(&path, |w| {
         writeln!(w, "group,kind,members,largest_force_N,member")?;
         for (label, members, force, i) in &rows {
             writeln!(

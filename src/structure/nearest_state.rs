@@ -7,13 +7,13 @@
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, ZeroConeT,
 };
 use nalgebra::{DMatrix, DVector};
 
-/// The tie-break weight ε (relative to unit targets): among the states that fit the targets
-/// equally well, the one of least norm `‖x‖` over the groups.
-const TIE_BREAK: f64 = 1e-8;
+/// A weight ε (relative to unit targets) on `‖y‖²` that keeps the fit's matrix positive
+/// definite; the least-norm tie-break itself is the programme's second stage.
+const TIE_BREAK: f64 = 1e-10;
 
 /// A bound or a target within this fraction of the design's scale counts as met (the
 /// interior-point solver's accuracy is about 1e-8).
@@ -98,9 +98,10 @@ pub fn nearest_state(
     Some((state_of(&y), Fit::QuadraticProgramme))
 }
 
-/// The quadratic programme in unit scale: `y` of `min ½ yᵀ P y + qᵀ y` with
-/// `P = N_Tᵀ N_T + ε I`, `q = −N_Tᵀ τ`, subject to `N_k y ≥ lower_k / scale` and
-/// `N_k y ≤ upper_k / scale`.
+/// The programme in two stages, in unit scale: first the best fit `z* = N_T y₁` of
+/// `min ‖N_T y − τ‖²` under the bounds; then, among the states fitting as well (`N_T y = z*`,
+/// the bounds), the one of least norm `‖y‖ = ‖x‖` — the tie-break a single weighted objective
+/// leaves to the solver's tolerance. Stage 2 not solved: stage 1's answer.
 fn programme(
     basis: &[Vec<f64>],
     n_t: &DMatrix<f64>,
@@ -110,7 +111,31 @@ fn programme(
 ) -> Option<DVector<f64>> {
     let s2 = basis.len();
     let p = n_t.transpose() * n_t + DMatrix::identity(s2, s2) * TIE_BREAK;
-    let q: Vec<f64> = (-(n_t.transpose() * tau)).iter().copied().collect();
+    let q = -(n_t.transpose() * tau);
+    let fit = solve_qp(basis, &p, &q, None, bounds, scale)?;
+    let z = n_t * &fit;
+    let least = solve_qp(
+        basis,
+        &DMatrix::identity(s2, s2),
+        &DVector::zeros(s2),
+        Some((n_t, &z)),
+        bounds,
+        scale,
+    );
+    Some(least.unwrap_or(fit))
+}
+
+/// `y` of `min ½ yᵀ P y + qᵀ y` subject to `E y = e` (when given), `N_k y ≥ lower_k / scale`
+/// and `N_k y ≤ upper_k / scale` (clarabel); `None` when it is not solved.
+fn solve_qp(
+    basis: &[Vec<f64>],
+    p: &DMatrix<f64>,
+    q: &DVector<f64>,
+    equality: Option<(&DMatrix<f64>, &DVector<f64>)>,
+    bounds: &[Bounds],
+    scale: f64,
+) -> Option<DVector<f64>> {
+    let s2 = basis.len();
     // P's upper triangle, as clarabel takes it.
     let (mut pi, mut pj, mut pv) = (Vec::new(), Vec::new(), Vec::new());
     for j in 0..s2 {
@@ -121,27 +146,37 @@ fn programme(
         }
     }
     let p = CscMatrix::new_from_triplets(s2, s2, pi, pj, pv);
-    // A y + s = b, s ≥ 0: −N_k y ≤ −lower_k, N_k y ≤ upper_k.
+    // A y + s = b: s = 0 on the equalities, then s ≥ 0: −N_k y ≤ −lower_k, N_k y ≤ upper_k.
     let (mut ai, mut aj, mut av, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut cones = Vec::new();
+    if let Some((e, values)) = equality {
+        for r in 0..e.nrows() {
+            for c in 0..s2 {
+                (ai.push(b.len()), aj.push(c), av.push(e[(r, c)]));
+            }
+            b.push(values[r]);
+        }
+        cones.push(ZeroConeT(e.nrows()));
+    }
+    let inequalities = b.len();
     for (k, bound) in bounds.iter().enumerate() {
         for (limit, sign) in [(bound.lower, -1.0), (bound.upper, 1.0)] {
             if let Some(limit) = limit {
                 let row = b.len();
                 for (c, v) in basis.iter().enumerate() {
-                    ai.push(row);
-                    aj.push(c);
-                    av.push(sign * v[k]);
+                    (ai.push(row), aj.push(c), av.push(sign * v[k]));
                 }
                 b.push(sign * limit / scale);
             }
         }
     }
+    cones.push(NonnegativeConeT(b.len() - inequalities));
     let a = CscMatrix::new_from_triplets(b.len(), s2, ai, aj, av);
-    let cones = [NonnegativeConeT(b.len())];
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .build()
         .ok()?;
+    let q: Vec<f64> = q.iter().copied().collect();
     let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).ok()?;
     solver.solve();
     matches!(
