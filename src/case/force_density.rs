@@ -172,7 +172,9 @@ fn solve_positions(
     let worst = (0..n)
         .flat_map(|r| (0..3).map(move |k| (r, k)))
         .fold(0.0f64, |m, (r, k)| m.max(residual[(r, k)].abs()));
-    if !size.is_finite() || !(worst <= SINGULAR_RESIDUAL * qmax * size.max(1.0)) {
+    // A NaN residual fails too: `worst <= …` is false.
+    let solved = worst <= SINGULAR_RESIDUAL * qmax * size.max(1.0);
+    if !size.is_finite() || !solved {
         return Err(singular(format!(
             "the solve leaves a residual of {}",
             number(worst)

@@ -10,6 +10,9 @@ use crate::structure::{
 use std::collections::HashMap;
 use std::path::Path;
 
+/// A table's row: its line number and its cells.
+type Row = (u64, Vec<String>);
+
 /// One table being read: its file name for messages.
 struct Table<'a> {
     file: &'a str,
@@ -35,7 +38,7 @@ impl Table<'_> {
         required: &[&str],
         optional: &[&str],
         last: Option<&str>,
-    ) -> Result<(Vec<(u64, Vec<String>)>, bool), CaseError> {
+    ) -> Result<(Vec<Row>, bool), CaseError> {
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)

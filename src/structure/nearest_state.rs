@@ -152,7 +152,9 @@ fn solve_qp(
     if let Some((e, values)) = equality {
         for r in 0..e.nrows() {
             for c in 0..s2 {
-                (ai.push(b.len()), aj.push(c), av.push(e[(r, c)]));
+                ai.push(b.len());
+                aj.push(c);
+                av.push(e[(r, c)]);
             }
             b.push(values[r]);
         }
@@ -164,7 +166,9 @@ fn solve_qp(
             if let Some(limit) = limit {
                 let row = b.len();
                 for (c, v) in basis.iter().enumerate() {
-                    (ai.push(row), aj.push(c), av.push(sign * v[k]));
+                    ai.push(row);
+                    aj.push(c);
+                    av.push(sign * v[k]);
                 }
                 b.push(sign * limit / scale);
             }
