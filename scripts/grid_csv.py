@@ -2,13 +2,15 @@
 """Write the module grid of tensolve's `[grid]` (docs/method.md §2) as `[structure]` tables.
 
     scripts/grid_csv.py OUTDIR [--modules NX NY] [--length L] [--height H] [--prestress P]
-                              [--braced] [--shear S] [--tilt T]
+                              [--braced] [--shear S] [--tilt T] [--groups]
 
 Writes OUTDIR/nodes.csv (node,x,y,z) and OUTDIR/members.csv
 (member,a,b,kind,young,section,prestress) with the grid generator's node numbering and member
 order, so that the tables, clamped like the grid, give the grid's answers to round-off.
 Defaults: the paper's case (16 x 16 standard modules of 1 m x 0.5 m, p = 2000 N, cables
-E = 1e11 Pa, S = 0.5e-4 m², bars E = 2e11 Pa, S = 2.8e-4 m²).
+E = 1e11 Pa, S = 0.5e-4 m², bars E = 2e11 Pa, S = 2.8e-4 m²). With --groups, a last column
+`group` names each member's kind (lower, upper, bracing, bar, diagonal): the groups of
+`prestress.from = "design"` (give --prestress 0 for a table the design fills).
 """
 import argparse
 import math
@@ -57,6 +59,8 @@ def main():
                     help="x += SHEAR * y: parallelogram modules")
     ap.add_argument("--tilt", type=float, default=0.0,
                     help="z += TILT * x: a tilted plane")
+    ap.add_argument("--groups", action="store_true",
+                    help="a last column `group`: the member's kind in its module")
     a = ap.parse_args()
     nodes, links = generate(a.modules[0], a.modules[1], a.length, a.height, a.braced)
     # An affine map keeps the prestress self-balanced when the force densities t0/length are
@@ -74,14 +78,15 @@ def main():
     density = {"lower": p / l, "upper": 2.0 * p / l, "bracing": 2.0 * p / l,
                "bar": -2.0 * p / l, "diagonal": 0.0}
     with open(os.path.join(a.outdir, "members.csv"), "w") as f:
-        f.write("member,a,b,kind,young,section,prestress\n")
+        f.write("member,a,b,kind,young,section,prestress" + (",group\n" if a.groups else "\n"))
         for m, (i, j, kind) in enumerate(links):
             xa, xb = nodes[i], nodes[j]
             d = [xb[k] - xa[k] for k in range(3)]
             length = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
             young, section = (2e11, 2.8e-4) if kind == "bar" else (1e11, 0.5e-4)
             t0 = density[kind] * length
-            f.write(f"{m},{i},{j},{'bar' if kind == 'bar' else 'cable'},{young!r},{section!r},{t0!r}\n")
+            group = f",{kind}" if a.groups else ""
+            f.write(f"{m},{i},{j},{'bar' if kind == 'bar' else 'cable'},{young!r},{section!r},{t0!r}{group}\n")
 
 
 if __name__ == "__main__":

@@ -393,6 +393,56 @@ force = [500.0, 866.0, 0.0]
 """ + LARGE)
 
 
+TOWER2 = """
+A 2-stage tower to design (issue 46), written by scripts/tensegrity_cases.py: the 3-stage
+tower's topology on two stages (form-found the same way), plus a cable ring on stage 0's top
+(3-4-5, group ring0) and a bar triangle on stage 1's bottom (6-7-8, group struts1); base
+(nodes 0-2) pinned. s = 6, m = 0; by the 11 groups of the `group` column (by symmetry),
+s₂ = 2 grouped self-stress states: the two bar groups' forces fix the design
+(`tensolve design cases/tower2-design.toml`). Its prestress column is 0: the design fills it.
+Each top node (9-11) carries 200 N sideways and 500 N down.
+"""
+
+
+def tower2_groups(j):
+    """The group of member j of the 2-stage tower with its two extra rings."""
+    if j < 12:
+        return ["bars0", "sides0", "bars1", "sides1"][j // 3]
+    if j < 15:
+        return "ring1"
+    if j < 27:
+        return ["saddle-a", "saddle-b", "lower-tie", "upper-tie"][(j - 15) % 4]
+    return "ring0" if j < 30 else "struts1"
+
+
+def tower2(out):
+    start = tower_start(2, 1.0, 1.5, 1.0)
+    members = tower_topology(2)
+    ends, bar = arrays(members)
+    X = form_find(start, ends, held_nodes(start, [0, 1, 2]), bar, 1.0)
+    members += [(3, 4, False), (4, 5, False), (5, 3, False), (6, 7, True), (7, 8, True), (8, 6, True)]
+    write_case(out, "tower2-design", TOWER2, X, members, [0.0] * len(members), """
+[[supports.fix]]
+nodes = [0, 1, 2]
+
+[[load.point]]
+nodes = [9, 10, 11]
+force = [200.0, 0.0, -500.0]
+
+[prestress]
+from = "design"
+targets = { bars0 = -3000.0, bars1 = -2000.0 }
+""" + LARGE)
+    # The group column, last.
+    path = os.path.join(out, "tower2-design", "members.csv")
+    with open(path) as f:
+        lines = f.read().splitlines()
+    with open(path, "w") as f:
+        f.write(lines[0] + ",group\n")
+        for j, line in enumerate(lines[1:]):
+            f.write(f"{line},{tower2_groups(j)}\n")
+
+
 def saddle(out):
     X, members, boundary = saddle_net(6, 1.0, 0.1)
     held = held_nodes(X, boundary)
@@ -448,7 +498,7 @@ def main():
     parser.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "cases"),
                         help="directory of the cases (default: the repository's cases/)")
     out = os.path.normpath(parser.parse_args().out)
-    for write in (simplex, prism4, tower, saddle, simplex_no_equilibrium):
+    for write in (simplex, prism4, tower, tower2, saddle, simplex_no_equilibrium):
         write(out)
 
 

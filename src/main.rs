@@ -16,6 +16,7 @@ use tensolve::app::against_large::large_answer;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
+use tensolve::app::design::design;
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
 use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions, Sharing};
@@ -93,6 +94,28 @@ enum Command {
         quiet: bool,
         /// Override a case key, in TOML syntax: `--set solver.dm=2e6`, `--set
         /// 'load.alpha=[0.5, 1.0]'`. Repeatable; validated like the file.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Design the prestress of a case whose `prestress.from` is "design" or "force-density":
+    /// print the counts s, m, s₂, the rank decision, each group's force, force density and rest
+    /// length and the prestress-stability verdict; with --out, write DIR/nodes.csv,
+    /// DIR/members.csv, DIR/groups.csv and DIR/<case>.toml, a case `run` takes as written.
+    ///
+    /// Exit status: 2 on bad input (an infeasible design included; nothing is written), 1 when
+    /// a file could not be written.
+    Design {
+        /// The case file (TOML).
+        case: PathBuf,
+        /// Where to write the designed case (nothing is written without it).
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Instead of `prestress.from`: project the members table's nearly balanced prestress
+        /// (rounded coordinates) on the self-stress states, least squares, and report the
+        /// largest change (never done by `run`).
+        #[arg(long)]
+        rebalance: bool,
+        /// Override a case key, in TOML syntax (repeatable; validated like the file).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -184,6 +207,19 @@ fn main() -> ExitCode {
             set,
         } => run_command(&ranks, case, out, solvers, quiet, &set).map_err(Failure::from),
         Command::Check { case, set } => check_command(&ranks, case, &set),
+        Command::Design {
+            case,
+            out,
+            set,
+            rebalance,
+        } => root_only(&ranks, || {
+            let report = design(&case, &set, out.as_deref(), rebalance).map_err(|e| Failure {
+                message: e.to_string(),
+                exit_code: e.exit_code(),
+            })?;
+            print_ignoring_closed_pipe(&report.to_string());
+            Ok(())
+        }),
         Command::Bench {
             case,
             out,

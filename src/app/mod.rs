@@ -8,6 +8,7 @@ pub mod allocator;
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod design;
 pub mod memory;
 pub mod ranks;
 pub mod reference;

@@ -26,7 +26,14 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     fixes.extend(supports(&raw.supports, &geometry, &index_of)?);
     check_every_free_node_used(&geometry, &fixes)?;
     // 3. The prestress: a self-stress state when asked for, then in equilibrium.
-    prestress::apply(&raw.prestress, grid.is_some(), &mut geometry, &fixes, model)?;
+    let design = prestress::apply(
+        &raw.prestress,
+        grid.is_some(),
+        &mut geometry,
+        &fixes,
+        model,
+        raw.rebalance,
+    )?;
     prestress::check_balanced(&geometry, &fixes)?;
     // 4. The load and its factors.
     let mut load = load::load(&raw.load, grid.is_some(), &geometry, &index_of)?;
@@ -54,6 +61,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         model,
         model_tolerance,
         modal_mass: raw.modal.mass.unwrap_or_default(),
+        design,
     })
 }
 

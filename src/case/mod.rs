@@ -10,7 +10,9 @@
 //! through `read_text`, whose bytes `sources` can record (MPI rank 0) or replay (the others).
 
 mod convert;
+mod design;
 mod error;
+mod force_density;
 mod grid;
 mod load;
 mod nodes;
@@ -18,6 +20,7 @@ mod numbers;
 mod output;
 mod prestress;
 mod raw;
+mod rebalance;
 mod solver;
 pub mod sources;
 mod tables;
@@ -25,6 +28,7 @@ mod typed;
 
 pub use tables::read_geometry;
 
+pub use design::{Design, GroupForce};
 pub use error::CaseError;
 pub use solver::default_subdomains;
 pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
@@ -114,6 +118,27 @@ pub fn check_distinct_methods(
     methods: &[crate::solvers::Method],
 ) -> Result<(), CaseError> {
     solver::check_distinct_methods(key, methods)
+}
+
+/// As [`load_with`], the members table's prestress re-balanced: projected on the self-stress
+/// states, least squares (`tensolve design --rebalance`; the report says the largest change).
+pub fn load_rebalanced(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
+    let table = table_with(path, overrides)?;
+    let mut raw = raw::RawCase::deserialize(toml::Value::Table(table))
+        .map_err(|e| CaseError::Syntax(e.to_string().trim_end().to_string()))?;
+    raw.rebalance = true;
+    convert::convert(raw, path.parent().unwrap_or(Path::new("")))
+}
+
+/// The case file at `path` as a TOML table with `key=value` overrides applied, not validated
+/// (`tensolve design` writes the designed case from it).
+pub fn table_with(path: &Path, overrides: &[String]) -> Result<toml::Table, CaseError> {
+    let mut table: toml::Table =
+        toml::from_str(&read_bounded(path)?).map_err(CaseError::from_toml)?;
+    for set in overrides {
+        apply_override(&mut table, set)?;
+    }
+    Ok(table)
 }
 
 /// Parse and validate case text (no output directory default is applied here); `[structure]`

@@ -6,7 +6,7 @@
 
 use super::numbers::{bounded, number, PHYSICAL_MAX};
 use super::raw::{RawPrestress, RawPrestressSource};
-use super::CaseError;
+use super::{CaseError, Design};
 use crate::model::GeometricModel;
 use crate::structure::{
     self_stress_dense, self_stress_through, DenseSelfStressRefusal, Geometry, NodeFix,
@@ -16,18 +16,119 @@ use crate::structure::{
 /// Where a `[prestress]` self-stress state's scale is read from.
 const FROM: &str = "prestress.from";
 
-/// Set `geometry`'s prestress from its self-stress state when `[prestress]` asks for it
-/// (`grid`: the case is a `[grid]`, whose prestress is `lower_cable`).
+/// Set `geometry`'s prestress from `[prestress] from` when it is given (`grid`: the case is a
+/// `[grid]`, whose prestress is `lower_cable`), or re-balance the table's prestress
+/// (`rebalance`, `design --rebalance`): the design's report when it designed one.
 pub(super) fn apply(
     raw: &RawPrestress,
     grid: bool,
     geometry: &mut Geometry,
     fixes: &[NodeFix],
     model: GeometricModel,
-) -> Result<(), CaseError> {
-    let Some(RawPrestressSource::SelfStress) = raw.from else {
-        return refuse_scale_without_source(raw);
+    rebalance: bool,
+) -> Result<Option<Design>, CaseError> {
+    if rebalance && (grid || raw.from.is_some()) {
+        return Err(CaseError::invalid(
+            "--rebalance",
+            "given",
+            "it re-balances a [structure]'s members-table prestress: remove `prestress.from` (a designed prestress is balanced already)",
+        ));
+    }
+    refuse_keys_of_other_sources(raw)?;
+    let from = match raw.from {
+        None if rebalance && !grid => return super::rebalance::apply(geometry, fixes).map(Some),
+        None => return Ok(None),
+        Some(RawPrestressSource::SelfStress) => {
+            self_stress(raw, grid, geometry, fixes, model)?;
+            return Ok(None);
+        }
+        Some(RawPrestressSource::Design) => "\"design\"",
+        Some(RawPrestressSource::ForceDensity) => "\"force-density\"",
     };
+    refuse_grid_and_table_prestress(grid, geometry, from)?;
+    Ok(Some(match raw.from {
+        Some(RawPrestressSource::ForceDensity) => {
+            super::force_density::apply(raw, geometry, fixes)?
+        }
+        _ => super::design::apply(raw, geometry, fixes)?,
+    }))
+}
+
+/// A `[grid]` (its prestress is `lower_cable`), or a members table with a prestress, refused
+/// for `from` (`"design"`, `"force-density"`): it replaces the table's prestress.
+fn refuse_grid_and_table_prestress(
+    grid: bool,
+    geometry: &Geometry,
+    from: &str,
+) -> Result<(), CaseError> {
+    if grid {
+        return Err(CaseError::invalid(
+            FROM,
+            from,
+            "a [grid]'s prestress is set by `prestress.lower_cable`; `from` needs a [structure] (write the grid as tables with groups: scripts/grid_csv.py --groups)",
+        ));
+    }
+    if let Some(m) = geometry.members.iter().find(|m| m.prestress != 0.0) {
+        return Err(CaseError::invalid(
+            FROM,
+            format!("{from} with a non-zero prestress in the members table (member {} first)", m.id),
+            "the designed prestress replaces the members' prestress: set the prestress column to 0, or remove `from`",
+        ));
+    }
+    Ok(())
+}
+
+/// The keys of one `from` given with another (or none), refused by name.
+fn refuse_keys_of_other_sources(raw: &RawPrestress) -> Result<(), CaseError> {
+    use RawPrestressSource::{Design as D, ForceDensity as F, SelfStress as S};
+    let keys: [(&str, Option<String>, RawPrestressSource); 5] = [
+        ("prestress.member", raw.member.map(|m| m.to_string()), S),
+        ("prestress.force", raw.force.map(|f| f.to_string()), S),
+        (
+            "prestress.targets",
+            raw.targets.as_ref().map(|_| "{ … }".into()),
+            D,
+        ),
+        (
+            "prestress.min_cable",
+            raw.min_cable.map(|f| f.to_string()),
+            D,
+        ),
+        (
+            "prestress.force_density",
+            raw.force_density.as_ref().map(|_| "{ … }".into()),
+            F,
+        ),
+    ];
+    for (key, given, source) in keys {
+        if let Some(value) = given {
+            let name = match source {
+                S => "self-stress",
+                D => "design",
+                F => "force-density",
+            };
+            if raw.from != Some(source) {
+                return Err(CaseError::invalid(
+                    key,
+                    value,
+                    format!(
+                        "it belongs to `from = \"{name}\"`: add that `from`, or remove the key"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The single self-stress state scaled by `member` and `force` (`from = "self-stress"`).
+fn self_stress(
+    raw: &RawPrestress,
+    grid: bool,
+    geometry: &mut Geometry,
+    fixes: &[NodeFix],
+    model: GeometricModel,
+) -> Result<(), CaseError> {
     // 1. The scale: member j carries tension `force`.
     let (id, j, force) = scale(raw, grid, geometry)?;
     // 2. The state, on the free dofs of the supports (settlements do not change them).
@@ -38,23 +139,6 @@ pub(super) fn apply(
     refuse_compressed_cables(geometry, &state, force)?;
     for (m, t) in geometry.members.iter_mut().zip(&state) {
         m.prestress = force * t;
-    }
-    Ok(())
-}
-
-/// Without `from = "self-stress"`, `member` and `force` scale nothing: refused when given.
-fn refuse_scale_without_source(raw: &RawPrestress) -> Result<(), CaseError> {
-    for (key, given) in [
-        ("prestress.member", raw.member.map(|m| m.to_string())),
-        ("prestress.force", raw.force.map(|f| f.to_string())),
-    ] {
-        if let Some(value) = given {
-            return Err(CaseError::invalid(
-                key,
-                value,
-                "it scales the self-stress state: add `from = \"self-stress\"`, or remove it",
-            ));
-        }
     }
     Ok(())
 }

@@ -50,6 +50,9 @@ pub(super) struct RawCase {
     pub model: RawModel,
     #[serde(default)]
     pub modal: RawModal,
+    /// `tensolve design --rebalance`: never read from the file.
+    #[serde(skip)]
+    pub rebalance: bool,
 }
 
 /// `[modal]`: the natural modes' settings (`output.modes` asks for them).
@@ -158,6 +161,9 @@ pub(super) struct RawPrestress {
     pub from: Option<RawPrestressSource>,
     pub member: Option<u64>,
     pub force: Option<f64>,
+    pub targets: Option<std::collections::BTreeMap<String, f64>>,
+    pub min_cable: Option<f64>,
+    pub force_density: Option<std::collections::BTreeMap<String, f64>>,
 }
 
 /// `prestress.from`: where a general structure's prestress comes from instead of the members
@@ -167,6 +173,10 @@ pub(super) struct RawPrestress {
 pub(super) enum RawPrestressSource {
     /// The structure's single self-stress state, scaled.
     SelfStress,
+    /// The grouped self-stress state nearest to `targets` (issue 46).
+    Design,
+    /// Schek's force density method: the free nodes placed by `force_density` (issue 46).
+    ForceDensity,
 }
 
 /// `[supports]`.

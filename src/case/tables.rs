@@ -1,5 +1,5 @@
 //! The `[structure]` tables: `nodes.csv` (`node,x,y,z`) and `members.csv`
-//! (`member,a,b,kind,young,section,prestress[,density[,strength[,inertia]]]`). Every row is checked and an error
+//! (`member,a,b,kind,young,section,prestress[,density[,strength[,inertia]]][,group]`). Every row is checked and an error
 //! names the file, the line, the column, the value and the fix.
 
 use super::numbers::{PHYSICAL_MAX, PHYSICAL_MIN};
@@ -9,6 +9,9 @@ use crate::structure::{
 };
 use std::collections::HashMap;
 use std::path::Path;
+
+/// A table's row: its line number and its cells.
+type Row = (u64, Vec<String>);
 
 /// One table being read: its file name for messages.
 struct Table<'a> {
@@ -26,14 +29,16 @@ impl Table<'_> {
         }
     }
 
-    /// Read `text` as CSV with the header `required` (+ `optional`, in order): the rows, each
-    /// with its line number and one string per column (optional ones empty when absent).
+    /// Read `text` as CSV with the header `required` (+ `optional`, in order, then `last`
+    /// when the header ends with it): the rows, each with its line number and one string per
+    /// column (optional ones empty when absent), and whether the header has `last`.
     fn rows(
         &self,
         text: &str,
         required: &[&str],
         optional: &[&str],
-    ) -> Result<Vec<(u64, Vec<String>)>, CaseError> {
+        last: Option<&str>,
+    ) -> Result<(Vec<Row>, bool), CaseError> {
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
@@ -54,6 +59,9 @@ impl Table<'_> {
                 };
                 text.push_str(&format!("{lead} `,{column}`"));
             }
+            if let Some(last) = last {
+                text.push_str(&format!(", and optionally last `,{last}`"));
+            }
             text
         };
         let header = match records.next() {
@@ -70,10 +78,11 @@ impl Table<'_> {
         };
         let line = header.position().map_or(1, |p| p.line());
         let names: Vec<&str> = header.iter().collect();
-        let n = names.len();
+        let has_last = last.is_some() && names.last().copied() == last;
+        let n = names.len() - usize::from(has_last);
         let ok = n >= required.len()
             && n <= required.len() + optional.len()
-            && names
+            && names[..n]
                 .iter()
                 .zip(required.iter().chain(optional))
                 .all(|(a, b)| a == b);
@@ -92,24 +101,25 @@ impl Table<'_> {
             if record.len() == 1 && record[0].is_empty() {
                 continue;
             }
-            if record.len() != n {
+            if record.len() != names.len() {
                 return Err(self.error(
                     line,
                     names
-                        .get(record.len().min(n - 1))
+                        .get(record.len().min(names.len() - 1))
                         .copied()
                         .unwrap_or("header"),
                     &record.iter().collect::<Vec<_>>().join(","),
                     format!(
-                        "the row has {} values: give exactly {n} (`{}`)",
+                        "the row has {} values: give exactly {} (`{}`)",
                         record.len(),
+                        names.len(),
                         names.join(",")
                     ),
                 ));
             }
             rows.push((line, record.iter().map(str::to_string).collect()));
         }
-        Ok(rows)
+        Ok((rows, has_last))
     }
 
     fn csv_error(&self, e: csv::Error) -> CaseError {
@@ -180,7 +190,7 @@ pub fn read_geometry(
     unilateral: bool,
 ) -> Result<Geometry, CaseError> {
     let (node_ids, nodes, index_of) = read_nodes(nodes_name, nodes_text)?;
-    let (members, checks) =
+    let (members, checks, groups) =
         read_members(members_name, members_text, nodes_name, &nodes, &index_of)?;
     Ok(Geometry {
         node_ids,
@@ -189,6 +199,7 @@ pub fn read_geometry(
         unilateral,
         grid_roles: None,
         checks,
+        groups,
     })
 }
 
@@ -202,7 +213,10 @@ fn read_nodes(nodes_name: &str, nodes_text: &str) -> Result<Nodes, CaseError> {
     let mut node_ids = Vec::new();
     let mut nodes = Vec::new();
     let mut index_of: HashMap<u64, (usize, u64)> = HashMap::new();
-    for (line, row) in table.rows(nodes_text, &["node", "x", "y", "z"], &[])? {
+    for (line, row) in table
+        .rows(nodes_text, &["node", "x", "y", "z"], &[], None)?
+        .0
+    {
         let id = table.id(line, "node", &row[0])?;
         if let Some(&(_, first)) = index_of.get(&id) {
             return Err(table.error(
@@ -228,6 +242,10 @@ fn read_nodes(nodes_name: &str, nodes_text: &str) -> Result<Nodes, CaseError> {
     Ok((node_ids, nodes, index_of))
 }
 
+/// Members, their checks' data when given, and their groups when the table has a `group`
+/// column.
+type Members = (Vec<Member>, Option<MemberChecks>, Option<Vec<String>>);
+
 /// The members table `members_text` (file `members_name`) between the nodes of `nodes` (ids
 /// in `index_of`, from the file `nodes_name`): every id unique, both ends defined and apart,
 /// a known kind, physical properties; with the member checks' data when a row gives a
@@ -238,14 +256,19 @@ fn read_members(
     nodes_name: &str,
     nodes: &[[f64; 3]],
     index_of: &HashMap<u64, (usize, u64)>,
-) -> Result<(Vec<Member>, Option<MemberChecks>), CaseError> {
+) -> Result<Members, CaseError> {
     let table = Table { file: members_name };
     let mut members = Vec::new();
     let mut checks = Vec::new();
     let mut seen: HashMap<u64, u64> = HashMap::new();
     let columns = ["member", "a", "b", "kind", "young", "section", "prestress"];
     let optional = ["density", "strength", "inertia"];
-    for (line, row) in table.rows(members_text, &columns, &optional)? {
+    let (rows, grouped) = table.rows(members_text, &columns, &optional, Some("group"))?;
+    let mut groups = Vec::new();
+    for (line, mut row) in rows {
+        if grouped {
+            groups.push(table.group(line, row.pop().unwrap_or_default())?);
+        }
         let id = table.id(line, "member", &row[0])?;
         if let Some(first) = seen.insert(id, line) {
             return Err(table.error(
@@ -322,10 +345,29 @@ fn read_members(
     let checked = checks
         .iter()
         .any(|c| c.strength.is_some() || c.inertia.is_some());
-    Ok((members, checked.then_some(MemberChecks::Each(checks))))
+    Ok((
+        members,
+        checked.then_some(MemberChecks::Each(checks)),
+        grouped.then_some(groups),
+    ))
 }
 
 impl Table<'_> {
+    /// Member group label `text` (the `group` column): a non-empty name of letters, digits,
+    /// `-`, `_` or `.` (a TOML bare key, so that `prestress.targets` can name it).
+    fn group(&self, line: u64, text: String) -> Result<String, CaseError> {
+        let bare = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.';
+        if text.is_empty() || text.len() > 64 || !text.chars().all(bare) {
+            return Err(self.error(
+                line,
+                "group",
+                &text,
+                "`group` must be a label of 1 to 64 letters, digits, `-`, `_` or `.` (e.g. `bars`, `lower-cables`)",
+            ));
+        }
+        Ok(text)
+    }
+
     /// The optional cells of member `id`'s row (a `kind`): `density` (kg/m³, ≥ 0; empty or
     /// absent: 0), `strength` (Pa, > 0) and `inertia` (m⁴, ≥ 0 on a cable, > 0 on a bar; empty
     /// or absent: not checked).

@@ -35,6 +35,9 @@ pub struct Case {
     /// How the natural modes spread a member's mass on its ends (`modal.mass`). Default
     /// `consistent`.
     pub modal_mass: crate::model::MassKind,
+    /// The designed prestress's report, when `prestress.from` is `"design"` or
+    /// `"force-density"` (issue 46).
+    pub design: Option<super::Design>,
 }
 
 impl Case {

@@ -4,6 +4,7 @@
 //! a sweep; the other modules write one kind of file each.
 
 mod atomic;
+mod groups;
 mod history;
 mod homogenised;
 pub mod modes;

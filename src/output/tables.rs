@@ -245,9 +245,13 @@ pub fn result_path(dir: &Path, kind: &str, solver: &str, alpha: f64) -> PathBuf 
 }
 
 /// A CSV file of `header` and `rows`, written atomically.
-fn write_rows<R, const N: usize>(path: &Path, header: [&str; N], rows: R) -> std::io::Result<()>
+fn write_rows<H, R, Row>(path: &Path, header: H, rows: R) -> std::io::Result<()>
 where
-    R: Iterator<Item = [String; N]>,
+    H: IntoIterator,
+    H::Item: AsRef<[u8]>,
+    R: Iterator<Item = Row>,
+    Row: IntoIterator,
+    Row::Item: AsRef<[u8]>,
 {
     write_atomic(path, |w| {
         let mut out = csv::Writer::from_writer(w);
@@ -298,16 +302,20 @@ pub fn write_tensions(
     // and nodes by the ids of its tables.
     let general = s.layout.is_none();
     let rows = cables.map(|(cable, (i, (l, t)))| {
-        [
+        let mut row = vec![
             if general { l.id } else { cable as u64 }.to_string(),
             s.kind_name(i).to_string(),
             s.node_ids[l.a].to_string(),
             s.node_ids[l.b].to_string(),
             t.to_string(),
-        ]
+        ];
+        row.extend(s.group_of(i).map(str::to_string));
+        row
     });
     let first = if general { "member" } else { "cable" };
-    write_rows(&path, [first, "kind", "node_a", "node_b", "tension"], rows)?;
+    let mut header = vec![first, "kind", "node_a", "node_b", "tension"];
+    header.extend(s.groups.as_ref().map(|_| "group"));
+    write_rows(&path, header, rows)?;
     Ok(path)
 }
 
@@ -366,7 +374,7 @@ pub fn write_forces(
     finite("member elongation", states.elongations.iter().copied())?;
     finite("member length", states.lengths.iter().copied())?;
     let rows = s.links.iter().enumerate().map(|(i, l)| {
-        [
+        vec![
             l.id.to_string(),
             s.kind_name(i).to_string(),
             s.node_ids[l.a].to_string(),
@@ -376,7 +384,7 @@ pub fn write_forces(
             states.lengths[i].to_string(),
         ]
     });
-    let header = [
+    let mut header = vec![
         "member",
         "kind",
         "node_a",
@@ -385,19 +393,23 @@ pub fn write_forces(
         "elongation_m",
         "current_length_m",
     ];
-    // The member checks' columns only when the case gives a strength or an inertia.
-    match results::checks::member_checks(model, eq) {
-        None => write_rows(&path, header, rows)?,
-        Some(checks) => {
-            let cells = checks.iter().map(check_cells).collect::<Vec<_>>();
-            let mut header = header.iter().chain(&CHECK_COLUMNS);
-            let header: [&str; 12] = std::array::from_fn(|_| *header.next().unwrap());
-            let rows = rows.zip(cells).map(|(base, checks)| {
-                let mut cells = base.into_iter().chain(checks);
-                std::array::from_fn::<String, 12, _>(|_| cells.next().unwrap_or_default())
-            });
-            write_rows(&path, header, rows)?
+    // The member checks' columns only when the case gives a strength or an inertia; the
+    // group last, when the members table has one.
+    let checks = results::checks::member_checks(model, eq);
+    if checks.is_some() {
+        header.extend(CHECK_COLUMNS);
+    }
+    header.extend(s.groups.as_ref().map(|_| "group"));
+    let rows = rows.enumerate().map(|(i, mut row)| {
+        if let Some(checks) = &checks {
+            row.extend(check_cells(&checks[i]));
         }
+        row.extend(s.group_of(i).map(str::to_string));
+        row
+    });
+    write_rows(&path, header, rows)?;
+    if s.groups.is_some() {
+        super::groups::write_group_forces(dir, solver, alpha, s, &eq.tensions)?;
     }
     Ok(path)
 }

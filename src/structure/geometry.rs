@@ -44,6 +44,8 @@ pub struct Geometry {
     /// The members' data for the member checks, when the case gives a strength or an inertia
     /// (kept after [`Geometry::release_members`]: a grid's is two entries).
     pub checks: Option<super::MemberChecks>,
+    /// Per member, its group label (the members table's `group` column); `None` without it.
+    pub groups: Option<Vec<String>>,
 }
 
 impl Geometry {
@@ -52,6 +54,17 @@ impl Geometry {
     pub fn release_members(&mut self) {
         self.members = Vec::new();
         self.grid_roles = None;
+        self.groups = None;
+    }
+
+    /// Per member, its group (issue 46): the `group` column's label, a grid member's kind
+    /// (its role in its module), else the member's own id, each member its own group.
+    pub fn member_groups(&self) -> Vec<String> {
+        match (&self.groups, &self.grid_roles) {
+            (Some(groups), _) => groups.clone(),
+            (None, Some(roles)) => roles.iter().map(|r| r.name().to_string()).collect(),
+            (None, None) => self.members.iter().map(|m| m.id.to_string()).collect(),
+        }
     }
 }
 

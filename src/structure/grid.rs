@@ -200,6 +200,7 @@ pub(super) fn geometry(spec: &GridSpec) -> (Geometry, GridLayout) {
         unilateral: spec.cables.unilateral,
         grid_roles: Some(roles),
         checks: None,
+        groups: None,
     };
     (geometry, layout)
 }

@@ -7,6 +7,8 @@
 mod checks;
 mod geometry;
 mod grid;
+mod grouped;
+mod nearest_state;
 mod share;
 mod spec;
 mod statics;
@@ -16,10 +18,14 @@ mod supports;
 pub use checks::{CheckedMember, MemberChecks};
 pub use geometry::{length_and_direction, transverse_pair, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout, GridRole};
+pub use grouped::{
+    grouped_states, GroupedRefusal, GroupedStates, GROUPED_MAX_ENTRIES, RANK_RELATIVE,
+};
+pub use nearest_state::{nearest_state, Bounds, Fit, MET_RELATIVE};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use statics::{
-    equilibrium_counts, self_stress_dense, self_stress_through, DenseSelfStress,
-    DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal, DENSE_LIMIT,
+    equilibrium_counts, project_on_self_stress, self_stress_dense, self_stress_through,
+    DenseSelfStress, DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal, DENSE_LIMIT,
 };
 pub use storage::{StructureSize, BASE_BYTES, BYTES_PER_LINK};
 
@@ -125,6 +131,9 @@ pub struct Structure {
     /// Per link, its role in its module when the structure is a generated module grid
     /// ([`Geometry::grid_roles`]); `None` for general structures.
     pub grid_roles: Option<Vec<GridRole>>,
+    /// Per link, its group label (the members table's `group` column, issue 46); `None`
+    /// without one.
+    pub groups: Option<Vec<String>>,
     /// Node ids as the user knows them (the CSV's `node`; the index for grids).
     pub node_ids: Vec<u64>,
     /// Initial node positions, m.
@@ -287,6 +296,7 @@ impl Structure {
         Structure {
             layout: None,
             grid_roles: geometry.grid_roles.clone(),
+            groups: geometry.groups.clone(),
             node_ids: geometry.node_ids.clone(),
             nodes: geometry.nodes.clone(),
             links,
@@ -319,6 +329,11 @@ impl Structure {
             }
         }
         out
+    }
+
+    /// Link `i`'s group label, when the members table has a `group` column.
+    pub fn group_of(&self, i: usize) -> Option<&str> {
+        self.groups.as_ref().map(|g| g[i].as_str())
     }
 
     /// Link `i`'s role in its module, on a generated module grid.

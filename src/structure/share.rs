@@ -15,6 +15,10 @@ impl Structure {
                 .grid_roles
                 .as_ref()
                 .map(|roles| links.iter().map(|&i| roles[i]).collect()),
+            groups: self
+                .groups
+                .as_ref()
+                .map(|g| links.iter().map(|&i| g[i].clone()).collect()),
             node_ids: self.node_ids.clone(),
             nodes: self.nodes.clone(),
             links: links.iter().map(|&i| self.links[i].clone()).collect(),

@@ -204,3 +204,55 @@ pub fn self_stress_dense(
     state[j] = 1.0;
     Ok(DenseSelfStress { state, trivial })
 }
+
+/// The members' forces `t0` projected on the self-stress states, least squares (issue 46,
+/// re-balancing): `t = t0 − B y` with `(BᵀB) y = Bᵀ t0` at the free dofs — the nearest
+/// balanced prestress. One sparse factorization when m = 0; with mechanisms, `BᵀB`'s
+/// pseudo-inverse (dense, up to [`DENSE_LIMIT`] free dofs), else `None`.
+pub fn project_on_self_stress(structure: &Structure, t0: &[f64]) -> Option<Vec<f64>> {
+    let n = structure.n_free;
+    let mut y = vec![0.0; n];
+    for (row, &t) in structure.link_dofs.iter().zip(t0) {
+        row.scatter(t, &mut y);
+    }
+    let (counts, factor) = counts_and_factor(structure);
+    match factor {
+        Some(factor) => factor.solve_in_place(&mut y),
+        None if counts.mechanisms == 0 => {}
+        None if n <= DENSE_LIMIT => y = pseudo_inverse_solve(structure, &y),
+        None => return None,
+    }
+    Some(
+        structure
+            .link_dofs
+            .iter()
+            .zip(t0)
+            .map(|(row, &t)| t - row.elongation(&y))
+            .collect(),
+    )
+}
+
+/// `(BᵀB)⁺ f` through the eigen-decomposition of `BᵀB` (eigenvalues below 1e-10 of the
+/// largest, the mechanisms', left out: f = Bᵀt0 has no component on them).
+fn pseudo_inverse_solve(structure: &Structure, f: &[f64]) -> Vec<f64> {
+    let n = structure.n_free;
+    let mut btb = nalgebra::DMatrix::<f64>::zeros(n, n);
+    for row in &structure.link_dofs {
+        for (p, cp) in row.iter() {
+            for (q, cq) in row.iter() {
+                btb[(p, q)] += cp * cq;
+            }
+        }
+    }
+    let eig = nalgebra::SymmetricEigen::new(btb);
+    let largest = eig.eigenvalues.amax();
+    let f = nalgebra::DVector::from_column_slice(f);
+    let mut y = nalgebra::DVector::zeros(n);
+    for (c, &lambda) in eig.eigenvalues.iter().enumerate() {
+        if lambda > 1e-10 * largest {
+            let v = eig.eigenvectors.column(c);
+            y += v * (v.dot(&f) / lambda);
+        }
+    }
+    y.iter().copied().collect()
+}

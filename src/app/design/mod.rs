@@ -1,0 +1,234 @@
+//! `tensolve design` (issue 46): a case whose `prestress.from` is `"design"` or
+//! `"force-density"`, designed and reported — the counts, the rank decision, each group's
+//! force, force density and rest length, the prestress-stability verdict — and, with `--out`,
+//! written as a case that `run` takes as written (`files`).
+
+mod files;
+
+use crate::case::{self, Case, CaseError, Design};
+use crate::model::{prestress_stability, PrestressStability};
+use crate::structure::{Geometry, LinkKind, DENSE_LIMIT, RANK_RELATIVE};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+pub use files::write_design;
+
+/// Why `design` stops.
+#[derive(Debug, Error)]
+pub enum DesignError {
+    /// The case, or its design, refused.
+    #[error("{0}")]
+    Case(#[from] CaseError),
+    /// A file of `--out` could not be written.
+    #[error("cannot write `{path}`: {reason}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        reason: String,
+    },
+}
+
+impl DesignError {
+    /// 2 for bad input, 1 for a file not written.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            DesignError::Case(_) => 2,
+            DesignError::Write { .. } => 1,
+        }
+    }
+}
+
+/// One group's numbers in the form designed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupRow {
+    /// The group's label.
+    pub name: String,
+    /// Cable or bar.
+    pub kind: LinkKind,
+    /// Its members.
+    pub members: usize,
+    /// Force, N: every member's (`design`), the largest in magnitude (`force-density`).
+    pub force: f64,
+    /// Force density `t/ℓ` over its members, N/m: `[min, max]`.
+    pub force_density: [f64; 2],
+    /// Rest length `ℓ·ES/(ES + t)` over its members, m: `[min, max]`.
+    pub rest_length: [f64; 2],
+    /// The target (N) or force density (N/m) the case gave, if any.
+    pub given: Option<f64>,
+}
+
+/// What `design` found.
+#[derive(Debug, Clone)]
+pub struct DesignReport {
+    /// The case file.
+    pub case: PathBuf,
+    /// The design's counts, rank decision and group forces.
+    pub design: Design,
+    /// Per group, in order of first appearance.
+    pub groups: Vec<GroupRow>,
+    /// The prestress-stability test of the designed prestress (`None` above
+    /// [`DENSE_LIMIT`] free dofs).
+    pub stability: Option<PrestressStability>,
+    /// Free dofs (the stability test's size).
+    pub free_dofs: usize,
+}
+
+/// Load the case at `path` (with `--set` overrides), design its prestress (or, with
+/// `rebalance`, project the members table's on the self-stress states), and report; with `out`,
+/// write the designed case there.
+pub fn design(
+    path: &Path,
+    set: &[String],
+    out: Option<&Path>,
+    rebalance: bool,
+) -> Result<DesignReport, DesignError> {
+    let case = if rebalance {
+        case::load_rebalanced(path, set)?
+    } else {
+        case::load_with(path, set)?
+    };
+    let Some(design) = case.design.clone() else {
+        return Err(CaseError::Invalid {
+            key: "prestress.from".into(),
+            value: "not \"design\" or \"force-density\"".into(),
+            fix: "`tensolve design` designs a prestress: set `[prestress] from = \"design\"` with `targets`, or `from = \"force-density\"` with `force_density`, or re-balance the members table's with `--rebalance`".into(),
+        }
+        .into());
+    };
+    let report = report(path, &case, design);
+    if let Some(dir) = out {
+        write_design(dir, path, set, &case, &report)?;
+    }
+    Ok(report)
+}
+
+/// The report of `case`, designed.
+fn report(path: &Path, case: &Case, design: Design) -> DesignReport {
+    let structure = case.structure();
+    let stability = prestress_stability(&structure);
+    DesignReport {
+        case: path.to_path_buf(),
+        groups: design
+            .groups
+            .iter()
+            .map(|g| group_row(&case.geometry, g))
+            .collect(),
+        design,
+        stability,
+        free_dofs: structure.n_free,
+    }
+}
+
+/// A group's row: its force densities and rest lengths over its members.
+fn group_row(geometry: &Geometry, g: &case::GroupForce) -> GroupRow {
+    let mut q = [f64::INFINITY, f64::NEG_INFINITY];
+    let mut rest = q;
+    for &j in &g.members {
+        let m = &geometry.members[j];
+        let (length, _) =
+            crate::structure::length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]);
+        let es = m.young * m.section;
+        // q = t/ℓ; the rest length ℓ₀ = ℓ·ES/(ES + t), from t = ES (ℓ − ℓ₀)/ℓ₀.
+        let (qj, rj) = (m.prestress / length, length * es / (es + m.prestress));
+        q = [q[0].min(qj), q[1].max(qj)];
+        rest = [rest[0].min(rj), rest[1].max(rj)];
+    }
+    GroupRow {
+        name: g.name.clone(),
+        kind: g.kind,
+        members: g.members.len(),
+        force: g.force,
+        force_density: q,
+        rest_length: rest,
+        given: g.given,
+    }
+}
+
+impl DesignReport {
+    /// The stability verdict in words.
+    pub fn verdict(&self) -> String {
+        match &self.stability {
+            None if self.design.counts.mechanisms == 0 => {
+                "no mechanism (m = 0): stable without the prestress".to_string()
+            }
+            None => format!(
+                "not tested (above {DENSE_LIMIT} free dofs: the dense test of `check`)"
+            ),
+            Some(s) if s.mechanisms == 0 => {
+                "no mechanism (m = 0): stable without the prestress".to_string()
+            }
+            Some(s) => format!(
+                "{} — the smallest eigenvalue of Mᵀ K_G M on the {} mechanism(s) is {:.6e} N/m (threshold {:.3e})",
+                if s.stable() { "prestress-stable" } else { "NOT prestress-stable" },
+                s.mechanisms,
+                s.smallest().unwrap_or(0.0),
+                s.threshold
+            ),
+        }
+    }
+}
+
+impl fmt::Display for DesignReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let d = &self.design;
+        let c = &d.counts;
+        writeln!(f, "design of {}", self.case.display())?;
+        writeln!(
+            f,
+            "  members {}, free dofs {}: rank r = {}, s = {} self-stress state(s), m = {} mechanism(s)",
+            c.members, c.free_dofs, c.rank, c.self_stress_states, c.mechanisms
+        )?;
+        let shown = |x: Option<f64>| x.map_or("none".to_string(), |v| format!("{v:.3e}"));
+        writeln!(
+            f,
+            "  groups {}, grouped self-stress states s₂ = {} (rank decision at σ/σ₁ ≤ {RANK_RELATIVE:e}: smallest kept {}, largest dropped {})",
+            d.groups.len(),
+            d.grouped_states,
+            shown(d.gap.0),
+            shown(d.gap.1)
+        )?;
+        writeln!(f, "  prestress: {}", d.fit.name())?;
+        if let Some((change, id)) = d.rebalanced {
+            writeln!(
+                f,
+                "  re-balanced: largest change {change:.6e} N, on member {id}"
+            )?;
+        }
+        if d.fit == crate::structure::Fit::ForceDensity {
+            let mixed = self.groups.iter().any(|g| g.given.is_some_and(|q| q < 0.0));
+            writeln!(
+                f,
+                "  rank condition: the force-density Laplacian at the free nodes is regular{}",
+                if mixed {
+                    " (force densities of mixed signs)"
+                } else {
+                    " (every force density positive)"
+                }
+            )?;
+        } else if d.fit != crate::structure::Fit::Rebalanced {
+            writeln!(f, "  min_cable = {} N", d.min_cable)?;
+        }
+        writeln!(f, "  stability: {}", self.verdict())?;
+        writeln!(
+            f,
+            "  {:<16} {:<6} {:>7} {:>14} {:>14} {:>14} {:>12}",
+            "group", "kind", "members", "force_N", "q_N_per_m", "rest_length_m", "given"
+        )?;
+        for g in &self.groups {
+            writeln!(
+                f,
+                "  {:<16} {:<6} {:>7} {:>14.6e} {:>14.6e} {:>14.9} {:>12}",
+                g.name,
+                g.kind.name(),
+                g.members,
+                g.force,
+                g.force_density[1],
+                g.rest_length[0],
+                g.given.map_or(String::new(), |v| format!("{v}"))
+            )?;
+        }
+        Ok(())
+    }
+}
