@@ -175,3 +175,81 @@ fn frequencies_agree_with_opensees_eigen_on_corot_truss() {
         }
     }
 }
+
+/// A grid's members get their mass from `bars.density` and `cables.density`: the paper's grid
+/// so given has the frequencies of the same grid written as tables (`cases/paper-csv.toml`)
+/// with those densities in a `density` column, at the prestressed state and under load;
+/// a negative density exits 2 naming the key, and a `[structure]` refuses the keys.
+#[test]
+fn grid_densities_give_the_tables_frequencies() {
+    let dir = tempfile::tempdir().unwrap();
+    let (bars, cables) = (7850.0, 8000.0);
+    let settings = [
+        "output.modes=5",
+        "load.alpha=[0.0, 1.0]",
+        "solver.methods=[\"newton\"]",
+        "output.plots=false",
+        "output.history=false",
+    ];
+    let grid_out = dir.path().join("grid");
+    let mut sets = settings.to_vec();
+    let (bar_key, cable_key) = (
+        format!("bars.density={bars}"),
+        format!("cables.density={cables}"),
+    );
+    sets.extend([bar_key.as_str(), cable_key.as_str()]);
+    let o = run(&manifest_path("cases/paper.toml"), &grid_out, &sets);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The tables, a density per member by kind.
+    std::fs::create_dir(dir.path().join("paper-grid")).unwrap();
+    std::fs::copy(
+        manifest_path("cases/paper-grid/nodes.csv"),
+        dir.path().join("paper-grid/nodes.csv"),
+    )
+    .unwrap();
+    let members = std::fs::read_to_string(manifest_path("cases/paper-grid/members.csv")).unwrap();
+    let mut lines = members.lines();
+    let mut table = format!("{},density\n", lines.next().unwrap());
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        let density = if line.contains(",bar,") { bars } else { cables };
+        table.push_str(&format!("{line},{density}\n"));
+    }
+    std::fs::write(dir.path().join("paper-grid/members.csv"), table).unwrap();
+    let case = dir.path().join("paper-csv.toml");
+    std::fs::copy(manifest_path("cases/paper-csv.toml"), &case).unwrap();
+    let tables_out = dir.path().join("tables");
+    let o = run(&case, &tables_out, &settings[..3]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for alpha in ["0", "1"] {
+        let file = format!("modes/newton_alpha{alpha}.csv");
+        let (grid, tables) = (modes(&grid_out.join(&file)), modes(&tables_out.join(&file)));
+        assert_eq!(grid.len(), 5);
+        assert_eq!(tables.len(), 5);
+        for (g, t) in grid.iter().zip(&tables) {
+            assert!(g.0 > 0.0, "α = {alpha}: {grid:?}");
+            assert!(
+                (g.0 - t.0).abs() <= 1e-9 * t.0,
+                "α = {alpha}: {grid:?} against {tables:?}"
+            );
+        }
+    }
+    let o = run(
+        &manifest_path("cases/paper.toml"),
+        &dir.path().join("negative"),
+        &["bars.density=-1.0"],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("bars.density") && stderr.contains("≥ 0"),
+        "{stderr}"
+    );
+    let o = run(
+        &manifest_path("cases/simplex.toml"),
+        &dir.path().join("structure"),
+        &["cables.density=7850.0"],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("cables.density"), "{stderr}");
+}

@@ -71,6 +71,7 @@ fn structure(
             let checks = super::grid::grid_checks(raw, &spec)?;
             let (mut geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
             geometry.checks = checks;
+            super::grid::grid_densities(raw, &mut geometry)?;
             (Some(spec), geometry, fixes)
         }
         (None, Some(st)) => {
@@ -89,11 +90,14 @@ fn structure(
             general_only("cables.section", raw.cables.section.map(|v| v.to_string()))?;
             general_only("bars.young", raw.bars.young.map(|v| v.to_string()))?;
             general_only("bars.section", raw.bars.section.map(|v| v.to_string()))?;
-            // The checks' keys too: a members table gives `strength` and `inertia` per member.
+            // The checks' and the mass's keys too: a members table gives `strength`, `inertia`
+            // and `density` per member.
             for (key, value) in [
                 ("bars.strength", raw.bars.strength),
                 ("bars.inertia", raw.bars.inertia),
                 ("cables.strength", raw.cables.strength),
+                ("bars.density", raw.bars.density),
+                ("cables.density", raw.cables.density),
             ] {
                 general_only(key, value.map(|v| v.to_string()))?;
             }

@@ -64,7 +64,8 @@ pub(super) fn check_modes_have_mass(
             "output.modes",
             output.modes.to_string(),
             "the natural modes need the members' mass, and no member has a density: give the \
-             members table a `density` column (kg/m³, after `prestress`), or set `modes = 0`",
+             members table a `density` column (kg/m³, after `prestress`; a grid: `bars.density` \
+             and `cables.density`), or set `modes = 0`",
         ));
     }
     Ok(())

@@ -137,6 +137,7 @@ pub(super) struct RawCables {
     pub section: Option<f64>,
     pub unilateral: Option<bool>,
     pub strength: Option<f64>,
+    pub density: Option<f64>,
 }
 
 /// `[bars]`.
@@ -147,6 +148,7 @@ pub(super) struct RawBars {
     pub section: Option<f64>,
     pub strength: Option<f64>,
     pub inertia: Option<f64>,
+    pub density: Option<f64>,
 }
 
 /// `[prestress]`.
