@@ -130,20 +130,27 @@ fn modes_without_a_density_are_refused_by_name() {
 /// members of steel, at the prestressed state (α = 0) and the shipped α, against OpenSees
 /// `eigen` on corotTruss at the same states (the tangent there, and the mass `ρ S L` per
 /// member), consistent and lumped: to 1e-6 of each frequency (`scripts/peers/corot_compare.py
-/// --modes`, which also compares the answers). A peer check: ignored by a plain `cargo test`,
+/// --modes`, which also compares the answers); and the simplex with point masses on nodes. A peer check: ignored by a plain `cargo test`,
 /// failed where openseespy or numpy is missing; CI runs it (`.ci/run` installs them).
 #[test]
 #[ignore = "peer check: needs python3 with openseespy and numpy (python3 -m pip install openseespy numpy); run with -- --include-ignored"]
 fn frequencies_agree_with_opensees_eigen_on_corot_truss() {
     require_python(&["openseespy.opensees", "numpy"]);
-    for name in ["simplex", "prism4", "tower", "saddle-net"] {
+    // The simplex with point masses too: 20 kg on each top node, 5 kg on a held one.
+    let point_masses = "[[modal.point_mass]]\nnodes = [3, 4, 5]\nmass = 20.0\n\n\
+                        [[modal.point_mass]]\nnodes = [0, 5]\nmass = 5.0\n";
+    let cases = ["simplex", "prism4", "tower", "saddle-net"]
+        .into_iter()
+        .map(|name| (name, ""))
+        .chain([("simplex", point_masses)]);
+    for (name, extra) in cases {
         for mass in ["consistent", "lumped"] {
             let dir = tempfile::tempdir().unwrap();
             let shipped = "alpha = [0.25, 0.5, 1.0]";
             let case = steel_copy(dir.path(), name, |text| {
                 assert!(text.contains(shipped), "{name}: the shipped α changed");
                 let at_rest = text.replace(shipped, "alpha = [0.0, 0.25, 0.5, 1.0]");
-                format!("{at_rest}\n[modal]\nmass = \"{mass}\"\n")
+                format!("{at_rest}\n[modal]\nmass = \"{mass}\"\n\n{extra}")
             });
             let out = dir.path().join("out");
             let o = run(&case, &out, &["output.modes=6"]);
@@ -252,4 +259,48 @@ fn grid_densities_give_the_tables_frequencies() {
     assert_eq!(o.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("cables.density"), "{stderr}");
+}
+
+/// `[[modal.point_mass]]` alone gives the simplex a mass: the massless members' structure with
+/// a mass m on each top node has frequencies ∝ 1/√m (the same shapes, 4 m: half the
+/// frequencies); a mass ≤ 0 exits 2 naming the entry's key.
+#[test]
+fn point_masses_alone_give_modes_scaling_as_one_over_root_mass() {
+    let dir = tempfile::tempdir().unwrap();
+    let frequencies = |mass: f64, tag: &str| {
+        let case = dir.path().join(format!("{tag}.toml"));
+        let text = std::fs::read_to_string(manifest_path("cases/simplex.toml")).unwrap();
+        let text = text.replace(
+            "simplex/",
+            &format!("{}/", manifest_path("cases/simplex").display()),
+        );
+        std::fs::write(
+            &case,
+            format!("{text}\n[[modal.point_mass]]\nnodes = [3, 4, 5]\nmass = {mass:?}\n"),
+        )
+        .unwrap();
+        let out = dir.path().join(tag);
+        let o = run(&case, &out, &["output.modes=6", "load.alpha=[0.0, 1.0]"]);
+        (o, out)
+    };
+    let (o, light) = frequencies(10.0, "light");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (o, heavy) = frequencies(40.0, "heavy");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for alpha in ["0", "1"] {
+        let file = format!("modes/newton_alpha{alpha}.csv");
+        let (light, heavy) = (modes(&light.join(&file)), modes(&heavy.join(&file)));
+        assert_eq!(light.len(), 6);
+        for (l, h) in light.iter().zip(&heavy) {
+            assert!(l.0 > 0.0, "α = {alpha}: {light:?}");
+            assert!(
+                (h.0 - l.0 / 2.0).abs() <= 1e-9 * l.0,
+                "α = {alpha}: {light:?} {heavy:?}"
+            );
+        }
+    }
+    let (o, _) = frequencies(0.0, "zero");
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("modal.point_mass[0].mass"), "{stderr}");
 }

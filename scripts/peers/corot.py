@@ -21,7 +21,8 @@ With `--modes N` it also writes, for each α, `OUT_DIR/modes/alpha{α}.csv` (mod
 the N lowest natural frequencies of OpenSees `eigen` (`-fullGenLapack`, dense) at that state,
 the corotTruss tangent there (material `E S / L` along the member plus the geometric `τ / ℓ`
 across it, slack cables none) against each member's mass ρ S L from the members table's
-`density` column (`-rho ρS`), consistent (`-cMass 1`: `ρ S L / 6 [2I I; I 2I]`, tensolve's
+`density` column (`-rho ρS`), plus `[[modal.point_mass]]` (`mass` kg on each component of the
+nodes its `nodes` or `box` selects, OpenSees `mass`), consistent (`-cMass 1`: `ρ S L / 6 [2I I; I 2I]`, tensolve's
 default) or lumped (`-cMass 0`: `ρ S L / 2` on each end) as the case's `modal.mass` says.
 
 Refused (exit 2, with the reason): a `[grid]` case, a non-zero `supports.fix` displacement,
@@ -130,6 +131,10 @@ def load_case(path):
         for n in selected_nodes(point, f"load.point[{i}]", ids, X):
             F[n] += np.array(point["force"], float)
     F[held] = 0.0
+    point_mass = np.zeros(len(ids))
+    for i, entry in enumerate(case.get("modal", {}).get("point_mass", [])):
+        for n in selected_nodes(entry, f"modal.point_mass[{i}]", ids, X):
+            point_mass[n] += float(entry["mass"])
     alpha = case["load"]["alpha"]
     if isinstance(alpha, dict):
         lo, hi, steps = float(alpha["from"]), float(alpha["to"]), int(alpha["steps"])
@@ -146,6 +151,7 @@ def load_case(path):
         "t0": np.array([float(r["prestress"]) for r in members]),
         "density": np.array([float(r.get("density") or 0.0) for r in members]),
         "consistent_mass": case.get("modal", {}).get("mass", "consistent") == "consistent",
+        "point_mass": point_mass,
         "unilateral": unilateral,
         "held": held,
         "F": F,
@@ -185,6 +191,9 @@ def build_model(c, ops):
         # Mass per unit length ρS, spread on the ends as tensolve's modal.mass says.
         mass = ["-rho", float(c["density"][j] * s), "-cMass", int(c["consistent_mass"])]
         ops.element("corotTruss", j + 1, int(a) + 1, int(b) + 1, float(s), material, *mass)
+    for i, m in enumerate(c["point_mass"]):
+        if m > 0.0:
+            ops.mass(i + 1, float(m), float(m), float(m))
     ops.timeSeries("Linear", 1)
     ops.pattern("Plain", 1, 1)
     for i, f in enumerate(c["F"]):
@@ -269,8 +278,9 @@ def main():
     if case["geometry"] not in (None, "large"):
         print(f"corot: note: the case asks for geometry = {case['geometry']!r}; this peer solves large displacements",
               file=sys.stderr)
-    if args.modes > 0 and not (case["density"] > 0.0).any():
-        print(f"corot: {args.case}: --modes needs the members' mass: a `density` column in the members table",
+    if args.modes > 0 and not ((case["density"] > 0.0).any() or (case["point_mass"] > 0.0).any()):
+        print(f"corot: {args.case}: --modes needs a mass: a `density` column in the members table, or "
+              "[[modal.point_mass]]",
               file=sys.stderr)
         return 2
     return 0 if solve(case, args.out_dir, args.increments, args.modes) else 1

@@ -7,7 +7,7 @@ use super::grid::grid_spec;
 use super::nodes::{index_of, select};
 use super::numbers::{vector, PHYSICAL_MAX};
 use super::raw::{RawCase, RawSupports};
-use super::{load, output, prestress, solver, Case, CaseError};
+use super::{load, modal, output, prestress, solver, Case, CaseError};
 use crate::host::{available, bytes_text};
 use crate::model::GeometricModel;
 use crate::structure::{Geometry, GridSpec, NodeFix, StructureSize};
@@ -37,7 +37,8 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     )?;
     // 6. The files to write.
     let output = output::output_choice(raw.output)?;
-    output::check_modes_have_mass(&output, &geometry)?;
+    let point_masses = modal::point_masses(&raw.modal, &geometry, &index_of)?;
+    output::check_modes_have_mass(&output, &geometry, &point_masses)?;
     // 7. `large` follows the load path: its α in increasing order (docs/method.md §8).
     if model == GeometricModel::Large {
         load.alphas.sort_by(f64::total_cmp);
@@ -51,6 +52,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         output,
         model,
         modal_mass: raw.modal.mass.unwrap_or_default(),
+        point_masses,
     })
 }
 

@@ -13,6 +13,7 @@ mod convert;
 mod error;
 mod grid;
 mod load;
+mod modal;
 mod nodes;
 mod numbers;
 mod output;

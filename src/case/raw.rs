@@ -57,6 +57,17 @@ pub(super) struct RawCase {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawModal {
     pub mass: Option<crate::model::MassKind>,
+    pub point_mass: Option<Vec<RawPointMass>>,
+}
+
+/// `[[modal.point_mass]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPointMass {
+    pub nodes: Option<Vec<u64>>,
+    #[serde(rename = "box")]
+    pub in_box: Option<RawBox>,
+    pub mass: f64,
 }
 
 /// `[model]`: the effects modelled.

@@ -31,6 +31,9 @@ pub struct Case {
     /// How the natural modes spread a member's mass on its ends (`modal.mass`). Default
     /// `consistent`.
     pub modal_mass: crate::model::MassKind,
+    /// Point masses of the natural modes (`modal.point_mass`): node index and kg on each of
+    /// its components.
+    pub point_masses: Vec<(usize, f64)>,
 }
 
 impl Case {
@@ -47,6 +50,7 @@ impl Case {
             gravity: self.load.gravity,
         };
         let mut s = Structure::new(&self.geometry, &self.fixes, &loading);
+        s.point_masses = self.point_masses.clone();
         if let Some(grid) = &self.grid {
             s.layout = Some(GridLayout::new(grid.modules[0], grid.modules[1]));
             s.prestress_scale = grid.prestress;

@@ -1,6 +1,6 @@
 //! The mass matrix of the natural modes (issue 45): each member's mass `m = ρ S ℓ` on its two
 //! ends, consistent (the linear truss element, `m/6 [2I I; I 2I]` per component) or lumped
-//! (`m/2` on each end), on the free dofs.
+//! (`m/2` on each end), on the free dofs, plus the point masses on their nodes' free components.
 
 use super::Model;
 use crate::linalg::StiffnessPattern;
@@ -50,6 +50,15 @@ impl Model {
                 }
             }
         }
+        // A point mass on each free component of its node.
+        for &(node, mass) in &s.point_masses {
+            for d in (0..3)
+                .map(|c| s.dof_of[3 * node + c])
+                .filter(|&d| d != CLAMPED)
+            {
+                values[pattern.diag_slot[d]] += mass;
+            }
+        }
     }
 }
 
@@ -62,17 +71,23 @@ mod tests {
 
     /// Each kind is the members' own matrix restricted to the free dofs: consistent
     /// `m/6 [2I I; I 2I]`, a held end's rows and columns dropped (its free end keeps `m/3`),
-    /// lumped `m/2 I`, assembled here densely on all `3n` dofs and compared entry by entry;
+    /// lumped `m/2 I`, plus the point masses on their nodes' diagonals, assembled here densely
+    /// on all `3n` dofs and compared entry by entry;
     /// the grid's supports leave members with one end held, and the free block holds no entry
     /// outside the pattern (its sum is the pattern's).
     #[test]
     fn each_kind_is_the_member_matrix_on_the_free_dofs() {
         let mut s = Structure::grid(&GridSpec::default(), &LoadPattern::default());
         s.links.iter_mut().for_each(|l| l.mass = 2.0 * l.length);
+        // Point masses: two entries on a free node (they add up), one on a held node (none).
+        let held = |s: &Structure, node: usize| s.dof_of[3 * node] == CLAMPED;
+        let free_node = (0..s.n_nodes()).find(|&n| !held(&s, n)).unwrap();
+        let held_node = (0..s.n_nodes()).find(|&n| held(&s, n)).unwrap();
+        s.point_masses = vec![(free_node, 3.0), (held_node, 5.0), (free_node, 1.5)];
         let model = Model::linear(s);
         let (pattern, _) = TautStiffness::analyse(&model.structure);
         let s = &model.structure;
-        let held = |node: usize| s.dof_of[3 * node] == CLAMPED;
+        let held = |node: usize| held(s, node);
         assert!(s.links.iter().any(|l| held(l.a) != held(l.b)));
         let n = s.dof_of.len();
         let mut global_of = vec![0; s.n_free];
@@ -91,6 +106,11 @@ mod tests {
                     full[b * n + b] += diagonal * l.mass;
                     full[a * n + b] += coupling * l.mass;
                     full[b * n + a] += coupling * l.mass;
+                }
+            }
+            for &(node, mass) in &s.point_masses {
+                for g in 3 * node..3 * node + 3 {
+                    full[g * n + g] += mass;
                 }
             }
             let mut m = vec![0.0; pattern.nnz()];
