@@ -304,3 +304,62 @@ fn point_masses_alone_give_modes_scaling_as_one_over_root_mass() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("modal.point_mass[0].mass"), "{stderr}");
 }
+
+/// With `output.vtk`, `modes/{solver}_alpha{α}.vtu` holds the modes for ParaView: its
+/// `frequency_Hz` the CSV's, its `mode_k` arrays the shapes CSV's node by node, its points the
+/// answer's deformed nodes under `large` (the `vtk/` file's positions plus displacements).
+#[test]
+fn the_modes_vtu_holds_the_csv_modes_on_the_deformed_nodes() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = steel_simplex(dir.path());
+    let out = dir.path().join("out");
+    let o = run(&case, &out, &["output.modes=3", "output.vtk=true"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let numbers = |text: &str| -> Vec<f64> {
+        text.split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    let arrays = |path: &Path| -> Vec<(String, Vec<f64>)> {
+        let text = std::fs::read_to_string(path).unwrap();
+        let doc = roxmltree::Document::parse(&text).unwrap();
+        doc.descendants()
+            .filter(|n| n.has_tag_name("DataArray"))
+            .map(|n| {
+                (
+                    n.attribute("Name").unwrap().to_string(),
+                    numbers(n.text().unwrap_or("")),
+                )
+            })
+            .collect()
+    };
+    let get = |arrays: &[(String, Vec<f64>)], name: &str| -> Vec<f64> {
+        arrays.iter().find(|(n, _)| n == name).unwrap().1.clone()
+    };
+    let modes_vtu = arrays(&out.join("modes/newton_alpha1.vtu"));
+    let solve_vtu = arrays(&out.join("vtk/newton_alpha1.vtu"));
+    let frequencies: Vec<f64> = modes(&out.join("modes/newton_alpha1.csv"))
+        .iter()
+        .map(|r| r.0)
+        .collect();
+    assert_eq!(get(&modes_vtu, "frequency_Hz"), frequencies);
+    let shapes = std::fs::read_to_string(out.join("modes/newton_alpha1_shapes.csv")).unwrap();
+    for k in 1..=3 {
+        let expected: Vec<f64> = shapes
+            .lines()
+            .skip(1)
+            .filter(|l| l.starts_with(&format!("{k},")))
+            .flat_map(|l| numbers(&l.split(',').skip(2).collect::<Vec<_>>().join(" ")))
+            .collect();
+        assert_eq!(expected.len(), 18);
+        assert_eq!(get(&modes_vtu, &format!("mode_{k}")), expected, "mode {k}");
+    }
+    let (x, u) = (get(&solve_vtu, "position"), get(&solve_vtu, "displacement"));
+    let moved: Vec<f64> = x.iter().zip(&u).map(|(a, b)| a + b).collect();
+    let points = get(&modes_vtu, "position");
+    assert!(u.iter().any(|v| v.abs() > 1e-3));
+    assert!(points
+        .iter()
+        .zip(&moved)
+        .all(|(p, q)| (p - q).abs() <= 1e-12 * (1.0 + q.abs())));
+}

@@ -3,6 +3,7 @@
 //! [`crate::results::modes::natural_modes`] and written atomically into the staging directory,
 //! like the other per-solve files.
 
+use super::modes_vtk::{modes_vtu_path, write_modes_vtu};
 use super::sinks::{Sink, SolveEnd, SolveKey, WriteError};
 use super::{result_path, write_atomic};
 use crate::labels::alpha_label;
@@ -28,20 +29,29 @@ pub struct ModesSink<'s> {
     model: &'s Model,
     count: usize,
     mass: MassKind,
+    /// Whether the modes go to a VTU file too (`output.vtk`).
+    vtk: bool,
     /// The stiffness's pattern and its symbolic analysis, made at the first answer.
     analysed: Option<(StiffnessPattern, SparseCholesky)>,
 }
 
 impl<'s> ModesSink<'s> {
     /// `count` modes of `model` under `mass`, written under `dir/modes` (the staging
-    /// directory); errors name the files under `root`.
-    pub fn new(root: &Path, dir: &Path, model: &'s Model, count: usize, mass: MassKind) -> Self {
+    /// directory), with a VTU file of them when `vtk`; errors name the files under `root`.
+    pub fn new(
+        root: &Path,
+        dir: &Path,
+        model: &'s Model,
+        (count, mass): (usize, MassKind),
+        vtk: bool,
+    ) -> Self {
         ModesSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
             model,
             count,
             mass,
+            vtk,
             analysed: None,
         }
     }
@@ -74,7 +84,15 @@ impl Sink for ModesSink<'_> {
         write_atomic(&shapes_path(&self.dir, solver, key.alpha), |w| {
             write_shapes(w, self.model, &modes)
         })
-        .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))
+        .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))?;
+        if !self.vtk {
+            return Ok(());
+        }
+        let u = &solution.equilibrium.displacements;
+        let path = modes_vtu_path(&self.dir, solver, key.alpha);
+        write_modes_vtu(&path, key.alpha, self.model, u, &modes).map_err(WriteError::at(
+            modes_vtu_path(&self.root, solver, key.alpha),
+        ))
     }
 }
 
