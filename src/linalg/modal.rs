@@ -284,7 +284,7 @@ pub fn lowest_generalized_modes(
             basis.extend(pattern, k, m, best);
             apply(&basis.blocks[0].v)
         } else {
-            apply(&basis.blocks.last().map_or(&[][..], |b| &b.v[..]))
+            apply(basis.blocks.last().map_or(&[][..], |b| &b.v[..]))
         };
     }
 }
