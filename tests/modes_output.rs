@@ -363,3 +363,39 @@ fn the_modes_vtu_holds_the_csv_modes_on_the_deformed_nodes() {
         .zip(&moved)
         .all(|(p, q)| (p - q).abs() <= 1e-12 * (1.0 + q.abs())));
 }
+
+/// With `output.plots`, `modes/{solver}_alpha{α}.svg` draws the lowest 4 modes: a title with
+/// each one's frequency as in the CSV (the mechanism's "prestress-governed" at α = 0), and every
+/// member twice per panel (the structure and the shape); none without `output.plots`.
+#[test]
+fn the_modes_figure_draws_the_lowest_four() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = steel_simplex(dir.path());
+    let out = dir.path().join("out");
+    let o = run(
+        &case,
+        &out,
+        &["output.modes=5", "output.plots=true", "load.alpha=[0.0]"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let svg = std::fs::read_to_string(out.join("modes/newton_alpha0.svg")).unwrap();
+    let rows = modes(&out.join("modes/newton_alpha0.csv"));
+    for (k, row) in rows.iter().enumerate().take(4) {
+        assert!(
+            svg.contains(&format!("mode {}: {:.4} Hz", k + 1, row.0)),
+            "{svg}"
+        );
+    }
+    assert!(!svg.contains("mode 5:"));
+    assert!(svg.contains("mode 1: ") && svg.contains("Hz, prestress-governed</text>"));
+    // The simplex's 9 members (3 bars, 3 side cables, the top ring).
+    assert_eq!(svg.matches("<line ").count(), 4 * 2 * 9);
+    let plain = dir.path().join("plain");
+    let o = run(
+        &case,
+        &plain,
+        &["output.modes=5", "output.plots=false", "load.alpha=[0.0]"],
+    );
+    assert!(o.status.success());
+    assert!(!plain.join("modes/newton_alpha0.svg").exists());
+}

@@ -7,6 +7,7 @@ mod atomic;
 mod history;
 mod homogenised;
 pub mod modes;
+mod modes_svg;
 mod modes_vtk;
 pub mod plots;
 pub mod publish;

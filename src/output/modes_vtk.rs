@@ -21,6 +21,22 @@ pub fn modes_vtu_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
         .join(format!("{solver}_alpha{}.vtu", alpha_label(alpha)))
 }
 
+/// The nodes where the modes of the answer at displacements `u` (free dofs) are taken: at
+/// `X + U` under `large`, at their initial positions otherwise.
+pub(super) fn modal_positions(model: &Model, u: &[f64]) -> Vec<[f64; 3]> {
+    let s = &model.structure;
+    s.nodes
+        .iter()
+        .enumerate()
+        .map(|(node, x)| {
+            std::array::from_fn(|c| match s.dof_of[3 * node + c] {
+                d if d != CLAMPED && model.updates_geometry() => x[c] + u[d],
+                _ => x[c],
+            })
+        })
+        .collect()
+}
+
 /// Writes the modes of the answer at displacements `u` (free dofs) into `path`.
 pub fn write_modes_vtu(
     path: &Path,
@@ -36,14 +52,7 @@ pub fn write_modes_vtu(
             .map(|&d| if d == CLAMPED { 0.0 } else { v[d] })
             .collect()
     };
-    let moved = on_nodes(u);
-    let points: Vec<f64> = s
-        .nodes
-        .iter()
-        .flatten()
-        .zip(&moved)
-        .map(|(x, du)| if model.updates_geometry() { x + du } else { *x })
-        .collect();
+    let points: Vec<f64> = modal_positions(model, u).into_iter().flatten().collect();
     let shapes: Vec<Vec<f64>> = modes.iter().map(|m| on_nodes(&m.shape)).collect();
     let frequencies: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();
     check_finite("node position", &points)?;
