@@ -123,7 +123,7 @@ fn case_keys(path: &mut Vec<(String, Holds)>, out: &mut Vec<(String, Holds, Vec<
 }
 
 /// Tables documented by one row of the key table, which names each of their keys.
-const ONE_ROW: &[&str] = &["load.point", "supports.fix[i].box"];
+const ONE_ROW: &[&str] = &["load.point", "modal.point_mass", "supports.fix[i].box"];
 
 /// Tables documented in a section of their own (whose TOML example names each key), not in
 /// the key table.
@@ -146,6 +146,7 @@ const DEFAULTS_IN_WORDS: &[&str] = &[
     "supports.fix[i].nodes",
     "supports.fix[i].box",
     "load.point",
+    "modal.point_mass",
     "load.alpha",
     "solver.tolerance",
     "solver.max_iterations",

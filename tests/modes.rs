@@ -1,7 +1,9 @@
 //! Natural modes (issue 45 item 1): the simplex's infinitesimal mechanism vibrates only
 //! through its prestress: its lowest mode is flagged prestress-governed, and with the members'
-//! elastic stiffness alone (no K_G) its frequency drops to zero; the sparse eigenpairs agree
-//! with a dense generalized solve.
+//! elastic stiffness alone (no K_G) its frequency drops to zero, under `prestress` and under
+//! `large` at the prestressed state; the sparse eigenpairs agree with a dense generalized solve.
+//! Under `large` at a loaded answer, the flag's elastic share is taken on the current geometry:
+//! one minus the geometric stiffness's share, by hand.
 
 mod common;
 
@@ -10,7 +12,9 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use tensolve::linalg::lowest_generalized_modes;
 use tensolve::model::{GeometricModel, MassKind, Model};
 use tensolve::results::modes::natural_modes;
-use tensolve::solvers::TautStiffness;
+use tensolve::solvers::newton::{LargeNewton, NewtonSettings};
+use tensolve::solvers::{drive, LoadPath, Silent, TautStiffness};
+use tensolve::structure::CLAMPED;
 
 /// The shipped simplex under `model`, its members of steel (7850 kg/m³).
 fn steel_simplex(model: GeometricModel) -> Model {
@@ -24,7 +28,14 @@ fn steel_simplex(model: GeometricModel) -> Model {
 
 #[test]
 fn the_simplex_mechanism_is_prestress_governed_and_vanishes_without_k_g() {
-    let model = steel_simplex(GeometricModel::Prestress);
+    // `large` at U = 0: its Hessian is the same K_E + K_G(t0).
+    for geometry in [GeometricModel::Prestress, GeometricModel::Large] {
+        the_mechanism_is_prestress_governed(geometry);
+    }
+}
+
+fn the_mechanism_is_prestress_governed(geometry: GeometricModel) {
+    let model = steel_simplex(geometry);
     let s = &model.structure;
     let taut = TautStiffness::new(&model).unwrap();
     let (u, carrying) = (vec![0.0; s.n_free], vec![true; s.links.len()]);
@@ -38,14 +49,14 @@ fn the_simplex_mechanism_is_prestress_governed_and_vanishes_without_k_g() {
         // The mechanism (m = 1): the lowest mode, held by the prestress alone.
         assert!(
             modes[0].prestress_governed(),
-            "{mass:?}: {:?}",
+            "{geometry:?} {mass:?}: {:?}",
             modes[0].elastic_share
         );
         assert!(modes[0].frequency_hz > 0.0);
         for mode in &modes[1..] {
             assert!(
                 !mode.prestress_governed(),
-                "{mass:?}: {}",
+                "{geometry:?} {mass:?}: {}",
                 mode.elastic_share
             );
             assert!(mode.frequency_hz > 3.0 * modes[0].frequency_hz);
@@ -75,7 +86,7 @@ fn the_simplex_mechanism_is_prestress_governed_and_vanishes_without_k_g() {
             let f = lambda.sqrt() / (2.0 * std::f64::consts::PI);
             assert!(
                 (mode.frequency_hz - f).abs() <= 1e-9 * f,
-                "{mass:?}: {} against {f}",
+                "{geometry:?} {mass:?}: {} against {f}",
                 mode.frequency_hz
             );
         }
@@ -86,16 +97,94 @@ fn the_simplex_mechanism_is_prestress_governed_and_vanishes_without_k_g() {
         let without = lowest_generalized_modes(p, &elastic, &m, &mut factor, count, 1e-10).unwrap();
         assert!(
             without.values[0].abs() <= 1e-10 * without.values[1],
-            "{mass:?}: {:?}",
+            "{geometry:?} {mass:?}: {:?}",
             without.values
         );
         let f1 = |lambda: f64| lambda.sqrt() / (2.0 * std::f64::consts::PI);
         eprintln!(
-            "{mass:?}: with K_G {:.6} Hz (elastic share {:.2e}); without {:.3e} Hz, next {:.6} Hz",
+            "{geometry:?} {geometry:?} {mass:?}: with K_G {:.6} Hz (elastic share {:.2e}); without {:.3e} Hz, next {:.6} Hz",
             modes[0].frequency_hz,
             modes[0].elastic_share,
             f1(without.values[0].max(0.0)),
             f1(without.values[1])
         );
     }
+}
+
+/// Under `large` at α = 1 (the top twisted and sunk by 55.6 mm), each mode's elastic share is
+/// `1 − φᵀ K_G φ / φᵀ K_T φ`, with the geometric part `Σ τ/ℓ |Δφ − n (n·Δφ)|²` over the
+/// members on the current geometry (`n`, `ℓ` from `X + U`), by hand here. The same share taken
+/// with the initial geometry's `K_E` differs: the check tells the two apart.
+#[test]
+fn under_large_the_elastic_share_is_taken_on_the_current_geometry() {
+    let model = steel_simplex(GeometricModel::Large);
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).unwrap();
+    let answer = drive(
+        &mut LoadPath::new(LargeNewton::new(&model, &taut, NewtonSettings::default())),
+        &model.load(1.0),
+        None,
+        &mut Silent,
+    );
+    assert!(answer.info.status.converged(), "{:?}", answer.info);
+    let eq = &answer.equilibrium;
+    let carrying: Vec<bool> = eq.slack.iter().map(|&slack| !slack).collect();
+    let at = (&eq.displacements[..], &eq.tensions[..], &carrying[..]);
+    let modes = natural_modes(
+        &model,
+        at,
+        &taut.pattern,
+        &taut.factor,
+        6,
+        MassKind::Consistent,
+    )
+    .unwrap();
+    // A node's position (or a mode's motion, `moved` = false) on the free dofs, 0 where held.
+    let value = |v: &[f64], node: usize, k: usize| match s.dof_of[3 * node + k] {
+        CLAMPED => 0.0,
+        d => v[d],
+    };
+    let position = |node: usize| -> [f64; 3] {
+        std::array::from_fn(|k| s.nodes[node][k] + value(&eq.displacements, node, k))
+    };
+    let mut shares = Vec::new();
+    for mode in &modes {
+        let mut geometric = 0.0;
+        let mut initial_elastic = 0.0;
+        let mut tangent = 0.0;
+        for (i, l) in s.links.iter().enumerate().filter(|&(i, _)| carrying[i]) {
+            let (pa, pb) = (position(l.a), position(l.b));
+            let d: [f64; 3] = std::array::from_fn(|k| pb[k] - pa[k]);
+            let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let n = d.map(|x| x / len);
+            let dphi: [f64; 3] =
+                std::array::from_fn(|k| value(&mode.shape, l.b, k) - value(&mode.shape, l.a, k));
+            let along: f64 = (0..3).map(|k| n[k] * dphi[k]).sum();
+            let across: f64 = (0..3).map(|k| (dphi[k] - n[k] * along).powi(2)).sum();
+            // G = k n nᵀ + (τ/ℓ)(I − n nᵀ) on the member's relative motion.
+            geometric += eq.tensions[i] / len * across;
+            tangent += l.stiffness * along * along + eq.tensions[i] / len * across;
+            let initial: f64 = (0..3).map(|k| l.direction[k] * dphi[k]).sum();
+            initial_elastic += l.stiffness * initial * initial;
+        }
+        let share = 1.0 - geometric / tangent;
+        assert!(
+            (mode.elastic_share - share).abs() <= 1e-9,
+            "{} Hz: {} against {share}",
+            mode.frequency_hz,
+            mode.elastic_share
+        );
+        assert!((tangent - mode.eigenvalue).abs() <= 1e-8 * mode.eigenvalue);
+        let initial_share = initial_elastic / tangent;
+        shares.push((share, initial_share));
+        eprintln!(
+            "{:.6} Hz: elastic share {:.6e} (initial geometry's K_E: {:.6e})",
+            mode.frequency_hz, mode.elastic_share, initial_share
+        );
+    }
+    // The opened mechanism: about half its stiffness elastic on the current geometry, and more
+    // than its whole (2.9) by the initial geometry's K_E.
+    let (current, initial) = shares[0];
+    assert!((0.3..0.7).contains(&current), "{shares:?}");
+    assert!(initial > 2.0 * current, "{shares:?}");
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """OpenSees corotational peer of tensolve's large-displacement model (SPEC §8).
 
-    python3 scripts/peers/corot.py CASE.toml OUT_DIR [--increments 20]
+    python3 scripts/peers/corot.py CASE.toml OUT_DIR [--increments 20] [--modes N]
 
 Reads a `[structure]` case (its two tables, `[[supports.fix]]` by `nodes` or `box` with
 `dofs`, `[[load.point]]`, `load.nodal`, `load.alpha`, `cables.unilateral`) and solves it as a
@@ -17,6 +17,14 @@ an unbalance of 1e-12 · (‖α_max F‖ + ‖Σ|t0| n‖) over the free dofs (U
 writes `OUT_DIR/displacements/alpha{α}.csv` (node,ux,uy,uz) and `OUT_DIR/forces/alpha{α}.csv`
 (member,kind,force; axial force, tension > 0), α labelled as tensolve labels its files.
 
+With `--modes N` it also writes, for each α, `OUT_DIR/modes/alpha{α}.csv` (mode,frequency_Hz):
+the N lowest natural frequencies of OpenSees `eigen` (`-fullGenLapack`, dense) at that state,
+the corotTruss tangent there (material `E S / L` along the member plus the geometric `τ / ℓ`
+across it, slack cables none) against each member's mass ρ S L from the members table's
+`density` column (`-rho ρS`), plus `[[modal.point_mass]]` (`mass` kg on each component of the
+nodes its `nodes` or `box` selects, OpenSees `mass`), consistent (`-cMass 1`: `ρ S L / 6 [2I I; I 2I]`, tensolve's
+default) or lumped (`-cMass 0`: `ρ S L / 2` on each end) as the case's `modal.mass` says.
+
 Refused (exit 2, with the reason): a `[grid]` case, a non-zero `supports.fix` displacement,
 `load.self_weight`, `prestress.from`. Exit 1 when a load step does not converge.
 Needs `pip install openseespy numpy` (on Debian also `apt-get install libblas3 liblapack3
@@ -25,6 +33,7 @@ libgfortran5`).
 
 import argparse
 import csv
+import math
 import os
 import sys
 import tomllib
@@ -122,6 +131,10 @@ def load_case(path):
         for n in selected_nodes(point, f"load.point[{i}]", ids, X):
             F[n] += np.array(point["force"], float)
     F[held] = 0.0
+    point_mass = np.zeros(len(ids))
+    for i, entry in enumerate(case.get("modal", {}).get("point_mass", [])):
+        for n in selected_nodes(entry, f"modal.point_mass[{i}]", ids, X):
+            point_mass[n] += float(entry["mass"])
     alpha = case["load"]["alpha"]
     if isinstance(alpha, dict):
         lo, hi, steps = float(alpha["from"]), float(alpha["to"]), int(alpha["steps"])
@@ -136,6 +149,9 @@ def load_case(path):
         "young": np.array([float(r["young"]) for r in members]),
         "section": np.array([float(r["section"]) for r in members]),
         "t0": np.array([float(r["prestress"]) for r in members]),
+        "density": np.array([float(r.get("density") or 0.0) for r in members]),
+        "consistent_mass": case.get("modal", {}).get("mass", "consistent") == "consistent",
+        "point_mass": point_mass,
         "unilateral": unilateral,
         "held": held,
         "F": F,
@@ -172,7 +188,12 @@ def build_model(c, ops):
         if t0 != 0.0:
             ops.uniaxialMaterial("InitStressMaterial", 2 * j + 2, 2 * j + 1, t0 / s)
             material = 2 * j + 2
-        ops.element("corotTruss", j + 1, int(a) + 1, int(b) + 1, float(s), material)
+        # Mass per unit length ρS, spread on the ends as tensolve's modal.mass says.
+        mass = ["-rho", float(c["density"][j] * s), "-cMass", int(c["consistent_mass"])]
+        ops.element("corotTruss", j + 1, int(a) + 1, int(b) + 1, float(s), material, *mass)
+    for i, m in enumerate(c["point_mass"]):
+        if m > 0.0:
+            ops.mass(i + 1, float(m), float(m), float(m))
     ops.timeSeries("Linear", 1)
     ops.pattern("Plain", 1, 1)
     for i, f in enumerate(c["F"]):
@@ -205,8 +226,21 @@ def write_state(c, ops, out_dir, alpha):
             w.writerow([member, "bar" if c["bar"][j] else "cable", repr(float(force))])
 
 
-def solve(c, out_dir, increments):
-    """Follow the load path; write each α's state. Returns False when a step fails."""
+def write_modes(ops, out_dir, alpha, count):
+    """modes/alpha{α}.csv: the `count` lowest frequencies of the current state's tangent."""
+    eigenvalues = ops.eigen("-fullGenLapack", count)
+    os.makedirs(os.path.join(out_dir, "modes"), exist_ok=True)
+    with open(os.path.join(out_dir, "modes", f"alpha{alpha_label(alpha)}.csv"), "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["mode", "frequency_Hz"])
+        for i, eigenvalue in enumerate(eigenvalues):
+            # f = ω / 2π with ω² the eigenvalue (0 for a zero or negative one, as tensolve).
+            w.writerow([i + 1, repr(math.sqrt(max(eigenvalue, 0.0)) / (2.0 * math.pi))])
+
+
+def solve(c, out_dir, increments, modes=0):
+    """Follow the load path; write each α's state (and its `modes` lowest frequencies).
+    Returns False when a step fails."""
     import openseespy.opensees as ops
 
     build_model(c, ops)
@@ -219,6 +253,8 @@ def solve(c, out_dir, increments):
                 return False
             current = alpha
         write_state(c, ops, out_dir, alpha)
+        if modes > 0:
+            write_modes(ops, out_dir, alpha, modes)
     ops.wipe()
     return True
 
@@ -228,9 +264,12 @@ def main():
     parser.add_argument("case")
     parser.add_argument("out_dir")
     parser.add_argument("--increments", type=int, default=20, help="load steps between two α (default 20)")
+    parser.add_argument("--modes", type=int, default=0, help="the lowest natural frequencies to write per α")
     args = parser.parse_args()
     if args.increments < 1:
         parser.error("--increments must be at least 1")
+    if args.modes < 0:
+        parser.error("--modes must be at least 0")
     try:
         case = load_case(args.case)
     except (CaseError, KeyError, ValueError, OSError, tomllib.TOMLDecodeError) as e:
@@ -239,7 +278,12 @@ def main():
     if case["geometry"] not in (None, "large"):
         print(f"corot: note: the case asks for geometry = {case['geometry']!r}; this peer solves large displacements",
               file=sys.stderr)
-    return 0 if solve(case, args.out_dir, args.increments) else 1
+    if args.modes > 0 and not ((case["density"] > 0.0).any() or (case["point_mass"] > 0.0).any()):
+        print(f"corot: {args.case}: --modes needs a mass: a `density` column in the members table, or "
+              "[[modal.point_mass]]",
+              file=sys.stderr)
+        return 2
+    return 0 if solve(case, args.out_dir, args.increments, args.modes) else 1
 
 
 if __name__ == "__main__":

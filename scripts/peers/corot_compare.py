@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """tensolve's large-displacement newton against the OpenSees corotational peer, α by α.
 
-    python3 scripts/peers/corot_compare.py CASE.toml TENSOLVE_RUN_DIR [--rtol 1e-6] [--increments 20]
+    python3 scripts/peers/corot_compare.py CASE.toml TENSOLVE_RUN_DIR [--rtol 1e-6] [--increments 20] [--modes]
     python3 scripts/peers/corot_compare.py CASE.toml --print-only
 
 Runs scripts/peers/corot.py on the case into a temporary directory, then reads tensolve's
@@ -11,6 +11,10 @@ ones exactly 0). Per α it passes when
   max |Δu| / max |u| ≤ rtol (every displacement component, u the peer's),
   max |Δτ| / max |τ| ≤ rtol over the cables (τ the peer's),
   and the slack cables are the same (tensolve: τ == 0; peer: |τ| ≤ 1e-9 max |τ|),
+and with `--modes` (tensolve run with `output.modes = N`, the members given a `density`)
+  max |Δf| / f ≤ rtol over the N lowest natural frequencies, against the peer's OpenSees
+  `eigen` at the same state (tensolve's TENSOLVE_RUN_DIR/modes/newton_alpha{α}.csv; the
+  peer's N is the row count of tensolve's file at the first α),
 and prints one line per α with the figures. Exit 0 when every α passes, 1 otherwise (or when
 the peer does not converge), 2 on usage errors (or a case the peer refuses).
 
@@ -55,6 +59,24 @@ def tensolve_state(run_dir, alpha):
     tension = {int(r["member"]): float(r["tension"])
                for r in read_csv(os.path.join(run_dir, "tensions", f"newton_alpha{label}.csv"))}
     return u, tension
+
+
+def frequencies(path):
+    """The frequency_Hz column of a modes file, in mode order."""
+    return np.array([float(r["frequency_Hz"]) for r in read_csv(path)])
+
+
+def compare_modes(alpha, peer_out, run_dir, rtol):
+    """One α's frequency figures and whether they pass."""
+    label = alpha_label(alpha)
+    theirs = frequencies(os.path.join(peer_out, "modes", f"alpha{label}.csv"))
+    ours = frequencies(os.path.join(run_dir, "modes", f"newton_alpha{label}.csv"))
+    if len(ours) != len(theirs):
+        return f", FAIL: {len(ours)} modes, the peer {len(theirs)}", False
+    # Relative to each frequency (to the largest where one is 0: a mechanism no stress holds).
+    scale = np.maximum(theirs, 1e-12 * theirs.max())
+    worst = float((np.abs(ours - theirs) / scale).max())
+    return f", {len(ours)} modes {theirs[0]:.6g}..{theirs[-1]:.6g} Hz, max |df|/f {worst:.2e}", worst <= rtol
 
 
 def relative(difference, scale):
@@ -107,7 +129,11 @@ def main():
     parser.add_argument("--rtol", type=float, default=1e-6)
     parser.add_argument("--increments", type=int, default=20, help="the peer's load steps between two α")
     parser.add_argument("--print-only", action="store_true", help="print the peer's answers, compare nothing")
+    parser.add_argument("--modes", action="store_true",
+                        help="compare the natural frequencies of TENSOLVE_RUN_DIR/modes too")
     args = parser.parse_args()
+    if args.modes and args.run_dir is None:
+        parser.error("--modes compares with TENSOLVE_RUN_DIR's modes: give it")
     if not args.print_only and args.run_dir is None:
         parser.error("give TENSOLVE_RUN_DIR, or --print-only")
     if args.run_dir is not None and not os.path.isdir(args.run_dir):
@@ -118,8 +144,16 @@ def main():
         print(f"corot_compare: {args.case}: {e}", file=sys.stderr)
         return 2
     peer_script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corot.py")
+    peer_args = ["--increments", str(args.increments)]
+    if args.modes:
+        try:
+            count = len(frequencies(os.path.join(args.run_dir, "modes", f"newton_alpha{alpha_label(alphas[0])}.csv")))
+        except (OSError, KeyError, ValueError) as e:
+            print(f"corot_compare: --modes: cannot read tensolve's modes: {e!r}", file=sys.stderr)
+            return 2
+        peer_args += ["--modes", str(count)]
     with tempfile.TemporaryDirectory() as out:
-        run = subprocess.run([sys.executable, peer_script, args.case, out, "--increments", str(args.increments)])
+        run = subprocess.run([sys.executable, peer_script, args.case, out, *peer_args])
         if run.returncode != 0:
             return run.returncode
         passed = True
@@ -135,6 +169,14 @@ def main():
                 passed = False
                 continue
             line, ok = compare(alpha, peer, ours, args.rtol)
+            if args.modes:
+                try:
+                    modes_line, modes_ok = compare_modes(alpha, out, args.run_dir, args.rtol)
+                except (OSError, KeyError, ValueError) as e:
+                    modes_line, modes_ok = f", FAIL, cannot read the modes: {e!r}", False
+                line = line.removesuffix(": pass").removesuffix(": FAIL") + modes_line
+                ok = ok and modes_ok
+                line += ": pass" if ok else ": FAIL"
             print(line)
             passed = passed and ok
     return 0 if passed else 1

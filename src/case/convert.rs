@@ -7,7 +7,7 @@ use super::grid::grid_spec;
 use super::nodes::{index_of, select};
 use super::numbers::{vector, PHYSICAL_MAX};
 use super::raw::{RawCase, RawSupports};
-use super::{load, output, prestress, solver, Case, CaseError};
+use super::{load, modal, output, prestress, solver, Case, CaseError};
 use crate::host::{available, bytes_text};
 use crate::model::GeometricModel;
 use crate::structure::{Geometry, GridSpec, NodeFix, StructureSize};
@@ -45,7 +45,8 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     )?;
     // 6. The files to write.
     let mut output = output::output_choice(raw.output)?;
-    output::check_modes_have_mass(&output, &geometry)?;
+    let point_masses = modal::point_masses(&raw.modal, &geometry, &index_of)?;
+    output::check_modes_have_mass(&output, &geometry, &point_masses)?;
     output::match_figure_alpha(&mut output, &load.alphas)?;
     // 7. `large` follows the load path: its α in increasing order (docs/method.md §8).
     if model == GeometricModel::Large {
@@ -62,6 +63,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         model_tolerance,
         modal_mass: raw.modal.mass.unwrap_or_default(),
         design,
+        point_masses,
     })
 }
 
@@ -97,6 +99,7 @@ fn structure(
             let checks = super::grid::grid_checks(raw, &spec)?;
             let (mut geometry, _, fixes) = crate::structure::Structure::grid_parts(&spec);
             geometry.checks = checks;
+            super::grid::grid_densities(raw, &mut geometry)?;
             (Some(spec), geometry, fixes)
         }
         (None, Some(st)) => {
@@ -115,11 +118,14 @@ fn structure(
             general_only("cables.section", raw.cables.section.map(|v| v.to_string()))?;
             general_only("bars.young", raw.bars.young.map(|v| v.to_string()))?;
             general_only("bars.section", raw.bars.section.map(|v| v.to_string()))?;
-            // The checks' keys too: a members table gives `strength` and `inertia` per member.
+            // The checks' and the mass's keys too: a members table gives `strength`, `inertia`
+            // and `density` per member.
             for (key, value) in [
                 ("bars.strength", raw.bars.strength),
                 ("bars.inertia", raw.bars.inertia),
                 ("cables.strength", raw.cables.strength),
+                ("bars.density", raw.bars.density),
+                ("cables.density", raw.cables.density),
             ] {
                 general_only(key, value.map(|v| v.to_string()))?;
             }

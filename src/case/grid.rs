@@ -4,7 +4,7 @@
 use super::numbers::{number, positive, PHYSICAL_MAX};
 use super::raw::{RawCase, RawGrid};
 use super::CaseError;
-use crate::structure::{CableSpec, CheckedMember, GridSpec, Material, MemberChecks};
+use crate::structure::{CableSpec, CheckedMember, Geometry, GridSpec, Material, MemberChecks};
 
 /// `[grid]` of a raw case: the grid's description, checked.
 pub(super) fn grid_spec(raw: &RawCase, g: &RawGrid) -> Result<GridSpec, CaseError> {
@@ -74,6 +74,29 @@ pub(super) fn grid_spec(raw: &RawCase, g: &RawGrid) -> Result<GridSpec, CaseErro
         prestress: p,
         clamp: raw.supports.clamp.unwrap_or(paper.clamp),
     })
+}
+
+/// The densities of a grid's members (`bars.density`, `cables.density`, kg/m³, ≥ 0; absent:
+/// 0, no mass), set on `geometry`'s members by kind: their mass for the natural modes and
+/// `load.self_weight`.
+pub(super) fn grid_densities(raw: &RawCase, geometry: &mut Geometry) -> Result<(), CaseError> {
+    let density = |key: &str, value: Option<f64>, what: &str| -> Result<f64, CaseError> {
+        match value {
+            None => Ok(0.0),
+            Some(v) if v.is_finite() && (0.0..=PHYSICAL_MAX).contains(&v) => Ok(v),
+            Some(v) => Err(CaseError::invalid(
+                key,
+                number(v),
+                format!("give {what} in kg/m³ as a number ≥ 0 and ≤ {PHYSICAL_MAX:e}"),
+            )),
+        }
+    };
+    let bars = density("bars.density", raw.bars.density, "the bars' density")?;
+    let cables = density("cables.density", raw.cables.density, "the cables' density")?;
+    for m in &mut geometry.members {
+        m.density = if m.kind.is_cable() { cables } else { bars };
+    }
+    Ok(())
 }
 
 /// The member checks of a grid (`bars.strength`, `bars.inertia`, `cables.strength`), when any

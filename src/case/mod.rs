@@ -15,6 +15,7 @@ mod error;
 mod force_density;
 mod grid;
 mod load;
+mod modal;
 mod nodes;
 mod numbers;
 mod output;

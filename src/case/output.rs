@@ -57,17 +57,20 @@ pub(super) fn output_choice(output: OutputChoice) -> Result<OutputChoice, CaseEr
     Ok(output)
 }
 
-/// `output.modes > 0` needs mass: some member of `geometry` with a `density`.
+/// `output.modes > 0` needs mass: some member of `geometry` with a `density`, or a point mass.
 pub(super) fn check_modes_have_mass(
     output: &OutputChoice,
     geometry: &crate::structure::Geometry,
+    point_masses: &[(usize, f64)],
 ) -> Result<(), CaseError> {
-    if output.modes > 0 && geometry.members.iter().all(|m| m.density <= 0.0) {
+    let massless = geometry.members.iter().all(|m| m.density <= 0.0) && point_masses.is_empty();
+    if output.modes > 0 && massless {
         return Err(CaseError::invalid(
             "output.modes",
             output.modes.to_string(),
             "the natural modes need the members' mass, and no member has a density: give the \
-             members table a `density` column (kg/m³, after `prestress`), or set `modes = 0`",
+             members table a `density` column (kg/m³, after `prestress`; a grid: `bars.density` \
+             and `cables.density`) or `[[modal.point_mass]]`, or set `modes = 0`",
         ));
     }
     Ok(())

@@ -60,6 +60,17 @@ pub(super) struct RawCase {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawModal {
     pub mass: Option<crate::model::MassKind>,
+    pub point_mass: Option<Vec<RawPointMass>>,
+}
+
+/// `[[modal.point_mass]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPointMass {
+    pub nodes: Option<Vec<u64>>,
+    #[serde(rename = "box")]
+    pub in_box: Option<RawBox>,
+    pub mass: f64,
 }
 
 /// `[model]`: the effects modelled.
@@ -141,6 +152,7 @@ pub(super) struct RawCables {
     pub section: Option<f64>,
     pub unilateral: Option<bool>,
     pub strength: Option<f64>,
+    pub density: Option<f64>,
 }
 
 /// `[bars]`.
@@ -151,6 +163,7 @@ pub(super) struct RawBars {
     pub section: Option<f64>,
     pub strength: Option<f64>,
     pub inertia: Option<f64>,
+    pub density: Option<f64>,
 }
 
 /// `[prestress]`.

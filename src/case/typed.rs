@@ -38,6 +38,9 @@ pub struct Case {
     /// The designed prestress's report, when `prestress.from` is `"design"` or
     /// `"force-density"` (issue 46).
     pub design: Option<super::Design>,
+    /// Point masses of the natural modes (`modal.point_mass`): node index and kg on each of
+    /// its components.
+    pub point_masses: Vec<(usize, f64)>,
 }
 
 impl Case {
@@ -54,6 +57,7 @@ impl Case {
             gravity: self.load.gravity,
         };
         let mut s = Structure::new(&self.geometry, &self.fixes, &loading);
+        s.point_masses = self.point_masses.clone();
         if let Some(grid) = &self.grid {
             s.layout = Some(GridLayout::new(grid.modules[0], grid.modules[1]));
             s.prestress_scale = grid.prestress;

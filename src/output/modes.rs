@@ -3,6 +3,8 @@
 //! [`crate::results::modes::natural_modes`] and written atomically into the staging directory,
 //! like the other per-solve files.
 
+use super::modes_svg::write_modes_svg;
+use super::modes_vtk::{modal_positions, modes_vtu_path, write_modes_vtu};
 use super::sinks::{Sink, SolveEnd, SolveKey, WriteError};
 use super::{result_path, write_atomic};
 use crate::labels::alpha_label;
@@ -28,20 +30,31 @@ pub struct ModesSink<'s> {
     model: &'s Model,
     count: usize,
     mass: MassKind,
+    /// Whether the modes go to a VTU file (`output.vtk`) and a figure (`output.plots`) too.
+    vtk: bool,
+    plots: bool,
     /// The stiffness's pattern and its symbolic analysis, made at the first answer.
     analysed: Option<(StiffnessPattern, SparseCholesky)>,
 }
 
 impl<'s> ModesSink<'s> {
     /// `count` modes of `model` under `mass`, written under `dir/modes` (the staging
-    /// directory); errors name the files under `root`.
-    pub fn new(root: &Path, dir: &Path, model: &'s Model, count: usize, mass: MassKind) -> Self {
+    /// directory), with a VTU file of them when `vtk`; errors name the files under `root`.
+    pub fn new(
+        root: &Path,
+        dir: &Path,
+        model: &'s Model,
+        (count, mass): (usize, MassKind),
+        (vtk, plots): (bool, bool),
+    ) -> Self {
         ModesSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
             model,
             count,
             mass,
+            vtk,
+            plots,
             analysed: None,
         }
     }
@@ -74,7 +87,22 @@ impl Sink for ModesSink<'_> {
         write_atomic(&shapes_path(&self.dir, solver, key.alpha), |w| {
             write_shapes(w, self.model, &modes)
         })
-        .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))
+        .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))?;
+        let u = &solution.equilibrium.displacements;
+        if self.vtk {
+            let path = modes_vtu_path(&self.dir, solver, key.alpha);
+            write_modes_vtu(&path, key.alpha, self.model, u, &modes).map_err(WriteError::at(
+                modes_vtu_path(&self.root, solver, key.alpha),
+            ))?;
+        }
+        if self.plots {
+            let figure =
+                |dir: &Path| result_path(dir, "modes", solver, key.alpha).with_extension("svg");
+            let at = modal_positions(self.model, u);
+            write_modes_svg(&figure(&self.dir), self.model, &at, &modes)
+                .map_err(WriteError::at(figure(&self.root)))?;
+        }
+        Ok(())
     }
 }
 

@@ -67,7 +67,7 @@ pub fn write_vtu(
     Ok(path)
 }
 
-fn check_finite(what: &str, values: &[f64]) -> io::Result<()> {
+pub(super) fn check_finite(what: &str, values: &[f64]) -> io::Result<()> {
     match values.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
         Some(i) => Err(io::Error::new(
@@ -132,7 +132,7 @@ fn write_grid(
     writeln!(w, "</VTKFile>")
 }
 
-fn write_cells(w: &mut dyn Write, s: &Structure) -> io::Result<()> {
+pub(super) fn write_cells(w: &mut dyn Write, s: &Structure) -> io::Result<()> {
     writeln!(w, "<Cells>")?;
     let connectivity = s
         .links
@@ -148,13 +148,13 @@ fn write_cells(w: &mut dyn Write, s: &Structure) -> io::Result<()> {
 }
 
 /// Shortest text that reads back to the same f64.
-fn float(x: &f64) -> String {
+pub(super) fn float(x: &f64) -> String {
     format!("{x:e}")
 }
 
 /// One ASCII `DataArray`, one tuple per line. A scalar array leaves `NumberOfComponents` to
 /// its default of 1: readers such as meshio turn an explicit 1 into an (n, 1) array.
-fn data_array(
+pub(super) fn data_array(
     w: &mut dyn Write,
     vtk_type: &str,
     name: &str,

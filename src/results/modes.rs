@@ -2,13 +2,14 @@
 //! `K_T φ = ω² M φ` on the free dofs, `K_T` the model's tangent there (the carrying members'
 //! `k BᵀB`, plus `K_G(t0)` with `prestress`, or the exact Hessian on the current geometry with
 //! `large`) and M the members' mass. A mode is prestress-governed when the members' elastic
-//! stiffness alone, `K_E = Σ_carrying k BᵢᵀBᵢ`, holds less than [`PRESTRESS_GOVERNED`] of its
+//! stiffness alone, `K_E = Σ_carrying k BᵢᵀBᵢ` (on the current geometry under `large`: `Bᵢ` the
+//! current `∇ℓᵢ`), holds less than [`PRESTRESS_GOVERNED`] of its
 //! stiffness: the prestress's geometric stiffness is what makes it vibrate at all.
 
 use crate::linalg::{
     lowest_generalized_modes, NoShiftFactorizes, SparseCholesky, StiffnessPattern,
 };
-use crate::model::{Kinematics, MassKind, Model};
+use crate::model::{CurrentGeometry, Kinematics, MassKind, Model};
 
 /// A mode is prestress-governed when `φᵀ K_E φ < PRESTRESS_GOVERNED · φᵀ K_T φ`.
 pub const PRESTRESS_GOVERNED: f64 = 0.01;
@@ -62,9 +63,18 @@ pub fn natural_modes(
             model.assemble_tangent(pattern, |i| carrying[i], &mut tangent)
         }
     }
+    // K_E on the geometry the tangent is taken on: the current one under `large`.
+    let current_rows;
+    let rows = match model.kinematics {
+        Kinematics::Large => {
+            current_rows = CurrentGeometry::of(s, u).rows;
+            &current_rows
+        }
+        Kinematics::Linear | Kinematics::Prestress(_) => &s.link_dofs,
+    };
     let mut elastic = vec![0.0; pattern.nnz()];
     pattern.assemble(
-        &s.link_dofs,
+        rows,
         |i| match carrying[i] {
             true => s.links[i].stiffness,
             false => 0.0,

@@ -167,6 +167,9 @@ pub struct Structure {
     /// The members' data for the member checks (strength, buckling), when the case gives any
     /// ([`Geometry::checks`]); `None`: no check, and no column of them in the output.
     pub checks: Option<MemberChecks>,
+    /// Point masses (`modal.point_mass`): node index and kg on each of its free components,
+    /// added to the members' mass in the natural modes (entries on one node add up).
+    pub point_masses: Vec<(usize, f64)>,
 }
 
 impl Structure {
@@ -310,6 +313,7 @@ impl Structure {
             settlement_force,
             prestress_scale,
             checks: geometry.checks.clone(),
+            point_masses: Vec::new(),
         }
     }
 

@@ -32,6 +32,7 @@ impl Structure {
             settlement_force: self.settlement_force.clone(),
             prestress_scale: self.prestress_scale,
             checks: self.checks.as_ref().map(|c| c.keeping(links)),
+            point_masses: self.point_masses.clone(),
         }
     }
 }

@@ -127,7 +127,13 @@ pub(super) fn sinks<'s>(
     sinks.add(out.vtk, PerSolveSink::vtk(root, dir, model));
     sinks.add(
         out.modes > 0,
-        ModesSink::new(root, dir, model, out.modes, case.modal_mass),
+        ModesSink::new(
+            root,
+            dir,
+            model,
+            (out.modes, case.modal_mass),
+            (out.vtk, out.plots),
+        ),
     );
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {
