@@ -56,14 +56,16 @@ fn modes(path: &Path) -> Vec<(f64, f64, bool)> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("mode,frequency_Hz,period_s,prestress_governed")
+        Some("mode,frequency_Hz,period_s,prestress_governed,converged")
     );
     lines
         .enumerate()
         .map(|(i, line)| {
             let cells: Vec<&str> = line.split(',').collect();
-            assert_eq!(cells.len(), 4, "{line}");
+            assert_eq!(cells.len(), 5, "{line}");
             assert_eq!(cells[0], (i + 1).to_string());
+            // The eigensolver's residual criterion held.
+            assert_eq!(cells[4], "true", "{line}");
             (
                 cells[1].parse().unwrap(),
                 cells[2].parse().unwrap(),

@@ -106,17 +106,18 @@ impl Sink for ModesSink<'_> {
     }
 }
 
-/// `mode,frequency_Hz,period_s,prestress_governed`, modes numbered from 1.
+/// `mode,frequency_Hz,period_s,prestress_governed,converged`, modes numbered from 1.
 fn write_frequencies(w: &mut dyn Write, modes: &[NaturalMode]) -> io::Result<()> {
-    writeln!(w, "mode,frequency_Hz,period_s,prestress_governed")?;
+    writeln!(w, "mode,frequency_Hz,period_s,prestress_governed,converged")?;
     for (i, mode) in modes.iter().enumerate() {
         writeln!(
             w,
-            "{},{},{},{}",
+            "{},{},{},{},{}",
             i + 1,
             mode.frequency_hz,
             mode.period_s(),
-            mode.prestress_governed()
+            mode.prestress_governed(),
+            mode.converged
         )?;
     }
     Ok(())

@@ -28,6 +28,9 @@ pub struct NaturalMode {
     pub elastic_share: f64,
     /// The shape on the free dofs, M-normalised (`φᵀ M φ = 1`).
     pub shape: Vec<f64>,
+    /// Whether the eigensolver's residual criterion held for the modes it returned (they
+    /// come from one solve: all or none); an unconverged mode is written, and says so.
+    pub converged: bool,
 }
 
 impl NaturalMode {
@@ -91,6 +94,7 @@ pub fn natural_modes(
         pattern.sym_matvec(a, x, &mut ax);
         crate::linalg::dot(x, &ax)
     };
+    let converged = modes.converged;
     Ok(modes
         .values
         .iter()
@@ -106,6 +110,7 @@ pub fn natural_modes(
                 eigenvalue,
                 elastic_share,
                 shape,
+                converged,
             }
         })
         .collect())
