@@ -80,12 +80,7 @@ pub fn write_modes_vtu(
             listed.join(" ")
         )?;
         writeln!(w, "</FieldData>")?;
-        writeln!(
-            w,
-            r#"<Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
-            s.n_nodes(),
-            s.links.len()
-        )?;
+        super::vtk::piece_start(w, s)?;
         writeln!(w, "<PointData>")?;
         for (i, shape) in shapes.iter().enumerate() {
             data_array(

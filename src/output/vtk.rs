@@ -101,12 +101,7 @@ fn write_grid(
         float(&alpha)
     )?;
     writeln!(w, "</FieldData>")?;
-    writeln!(
-        w,
-        r#"<Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
-        s.n_nodes(),
-        s.links.len()
-    )?;
+    piece_start(w, s)?;
     writeln!(w, r#"<PointData Vectors="displacement">"#)?;
     data_array(
         w,
@@ -130,6 +125,16 @@ fn write_grid(
     writeln!(w, "</Piece>")?;
     writeln!(w, "</UnstructuredGrid>")?;
     writeln!(w, "</VTKFile>")
+}
+
+/// `<Piece …>` of `s`: a point per node, a cell per link.
+pub(super) fn piece_start(w: &mut dyn Write, s: &Structure) -> io::Result<()> {
+    writeln!(
+        w,
+        r#"<Piece NumberOfPoints="{}" NumberOfCells="{}">"#,
+        s.n_nodes(),
+        s.links.len()
+    )
 }
 
 pub(super) fn write_cells(w: &mut dyn Write, s: &Structure) -> io::Result<()> {
