@@ -62,8 +62,14 @@ pub fn constitutive_residual(s: &Structure, eq: &Equilibrium) -> f64 {
 
 /// Largest nodal displacement magnitude, m.
 pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
-    let full = s.full_displacements(&eq.displacements);
-    full.chunks(3)
+    largest_motion(s, &eq.displacements)
+}
+
+/// Largest nodal magnitude of the free-dof motion `u`, every component (held ones at their
+/// prescribed value), m.
+pub fn largest_motion(s: &Structure, u: &[f64]) -> f64 {
+    s.full_displacements(u)
+        .chunks(3)
         // hypot: no overflow to inf for a large but finite displacement.
         .map(|u| u[0].hypot(u[1]).hypot(u[2]))
         .fold(0.0, f64::max)

@@ -28,7 +28,7 @@ pub fn geometric_term(
 ) -> Option<f64> {
     let s = &model.structure;
     let u = &eq.displacements;
-    let deflection = super::max_deflection(s, eq);
+    let deflection = super::largest_motion(s, u);
     if model.updates_geometry() || deflection.is_nan() || deflection <= 0.0 {
         return None;
     }
@@ -54,16 +54,11 @@ pub fn geometric_term(
     let stepped: Vec<f64> = u.iter().zip(&step).map(|(a, d)| a - d).collect();
     // Both changes relative to the stepped answer, the first-order large one: max_node |δ| /
     // max_node |U + δ| (every component: held ones do not move), and the forces likewise.
-    let largest_motion = |v: &[f64]| {
-        s.full_displacements(v)
-            .chunks(3)
-            .map(|d| d[0].hypot(d[1]).hypot(d[2]))
-            .fold(0.0, f64::max)
-    };
     // Motions below ROUND_OFF_MOTION of the structure's size (an unloaded answer's round-off)
     // are no deflection to be relative to.
     let floor = ROUND_OFF_MOTION * s.size();
-    let displacement_change = largest_motion(&step) / largest_motion(&stepped).max(floor);
+    let displacement_change =
+        super::largest_motion(s, &step) / super::largest_motion(s, &stepped).max(floor);
     let after: Vec<f64> = CurrentGeometry::of(s, &stepped)
         .trial_tensions(s)
         .iter()
