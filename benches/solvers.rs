@@ -16,7 +16,8 @@ use std::path::Path;
 use std::time::Duration;
 use tensolve::linalg::PROBE_ITERATIONS;
 use tensolve::model::{GeometricModel, Model};
-use tensolve::solvers::newton::{LargeNewton, Newton, NewtonSettings};
+use tensolve::solvers::large::LargeNewton;
+use tensolve::solvers::newton::{Newton, NewtonSettings};
 use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Equilibrium, LoadPath, Silent, TautStiffness};
 

@@ -12,7 +12,8 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use tensolve::linalg::lowest_generalized_modes;
 use tensolve::model::{GeometricModel, MassKind, Model};
 use tensolve::results::modes::natural_modes;
-use tensolve::solvers::newton::{LargeNewton, NewtonSettings};
+use tensolve::solvers::large::LargeNewton;
+use tensolve::solvers::newton::NewtonSettings;
 use tensolve::solvers::{drive, LoadPath, Silent, TautStiffness};
 use tensolve::structure::CLAMPED;
 

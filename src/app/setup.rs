@@ -6,7 +6,8 @@ use crate::decomposition::{Exchange, Homogenised, OneProcess};
 use crate::model::Model;
 use crate::results::uniqueness;
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
-use crate::solvers::newton::{LargeNewton, Newton};
+use crate::solvers::large::{Large, LargeNewton, LinearisedStep};
+use crate::solvers::newton::{Newton, NewtonSettings};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{
     check_shape, mechanism_by_substructures, AnySolver, LoadPath, Method, PathSolver, Settings,
@@ -228,12 +229,6 @@ pub fn set_up_on<'s>(
     exchange: &'s dyn Exchange,
 ) -> Result<SetUpSolver<'s>, SetupError> {
     let model = &prepared.model;
-    if !method.supports(model.geometry()) {
-        return Err(SetupError::ModelNotSupported {
-            solver: method.name(),
-            model: model.geometry().name(),
-        });
-    }
     let taut = || {
         prepared.taut.as_ref().ok_or(SetupError::TautReleased {
             solver: method.name(),
@@ -249,6 +244,18 @@ pub fn set_up_on<'s>(
             Box::new(Newton::new(model, taut()?, settings)?),
             prepared.taut_seconds,
         ),
+        Settings::PcgLcp(settings) if model.updates_geometry() => {
+            let step = LinearisedStep::pcg_lcp(settings);
+            (large_path(model, step), 0.0)
+        }
+        Settings::MonoLatin(settings) | Settings::MicroMacro(settings)
+            if model.updates_geometry() =>
+        {
+            (
+                large_path(model, LinearisedStep::latin(model, settings, exchange)),
+                0.0,
+            )
+        }
         Settings::PcgLcp(settings) => (
             Box::new(PcgLcp::new(model, taut()?, settings)),
             prepared.taut_seconds,
@@ -267,4 +274,16 @@ pub fn set_up_on<'s>(
         solver,
         setup_seconds: prepared.structure_seconds + shared + clock.elapsed().as_secs_f64(),
     })
+}
+
+/// pcg-lcp, mono-latin or micro-macro on the `large` model: Newton steps whose directions the
+/// solver finds on the problem linearised at each step ([`LinearisedStep`]), along the load
+/// path; the solve stops at the solver's own tolerance on r(U).
+fn large_path<'s>(model: &'s Model, step: LinearisedStep<'s>) -> Box<dyn HeldSolver + 's> {
+    let settings = NewtonSettings {
+        tolerance: step.tolerance(),
+        max_iterations: crate::solvers::INCREMENT_MAX_STEPS,
+        ..NewtonSettings::default()
+    };
+    Box::new(LoadPath::new(Large::with_step(model, step, settings)))
 }

@@ -3,7 +3,9 @@
 //! vectors, whose energy's Hessian is the tangent.
 
 use super::material::{tangent_weight, tension};
+use super::prestress::GeometricStiffness;
 use super::unbalance::{unbalances_on, Unbalances};
+use super::{Kinematics, Model};
 use crate::linalg::{SparseRow, StiffnessPattern};
 use crate::structure::{Link, Structure, CLAMPED};
 
@@ -149,5 +151,114 @@ impl CurrentGeometry {
             }
             pattern.add_block(i, &entries, &g, values);
         }
+    }
+}
+
+impl CurrentGeometry {
+    /// The `large` model linearised at U, as a model on the initial-geometry kinematics
+    /// (docs/method.md §8, the sequential LCP): the structure on the current geometry `X + U`
+    /// (rows of B along the current unit vectors, lengths ℓ), the trial tensions
+    /// `t0 + k (ℓ − L)` as its prestress (a slack cable's negative, so that it stays slack
+    /// until it is stretched back), `K_G(τ) = Σ (τ/ℓ)(I − n nᵀ)` as its geometric stiffness,
+    /// the prescribed displacements already applied. Its energy in ΔU is Π's second-order
+    /// model at U on each taut set: its gradient at ΔU = 0 is `∇Π(U)` and its Hessian on the
+    /// taut set of U is Π's. `trial`: the trial tensions at U. Without
+    /// `geometric_stiffness`, `K_G(τ)` is left out (the material tangent on the current
+    /// geometry alone: a modified Newton step).
+    pub fn linearised(
+        &self,
+        s: &Structure,
+        u: &[f64],
+        trial: &[f64],
+        geometric_stiffness: bool,
+    ) -> Model {
+        let mut moved = s.clone();
+        for (v, x) in moved.nodes.iter_mut().enumerate() {
+            for (k, xk) in x.iter_mut().enumerate() {
+                *xk += component(s, u, v, k, s.prescribed[3 * v + k]);
+            }
+        }
+        moved.prescribed.iter_mut().for_each(|d| *d = 0.0);
+        for (i, l) in moved.links.iter_mut().enumerate() {
+            l.direction = self.directions[i];
+            l.length = self.lengths[i];
+            l.prestress = trial[i];
+        }
+        moved.link_dofs = self.rows.clone();
+        // The solvers that split τ = t0 + t take `B_fᵀ t0` to the load (`settlement_force`):
+        // here t0 is the trial tension at U, not a balanced prestress.
+        moved.settlement_force.iter_mut().for_each(|f| *f = 0.0);
+        for (row, &t) in self.rows.iter().zip(trial) {
+            row.scatter(t, &mut moved.settlement_force);
+        }
+        let tensions: Vec<f64> = s
+            .links
+            .iter()
+            .zip(trial)
+            .map(|(l, &t)| tension(l, t))
+            .collect();
+        let kinematics = match geometric_stiffness {
+            true => Kinematics::Prestress(GeometricStiffness::of_tensions(&moved, &tensions)),
+            false => Kinematics::Linear,
+        };
+        Model {
+            structure: moved,
+            kinematics,
+        }
+    }
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::CurrentGeometry;
+    use crate::linalg::{norm, StiffnessPattern};
+    use crate::model::material::is_taut;
+    use crate::structure::{GridSpec, LoadPattern, Structure};
+
+    /// The linearised model at U is Π's second-order model there: its energy's slope at
+    /// ΔU = 0 along any d is `∇Π(U)·d + F·d` (the members' part), and its tangent on the
+    /// taut set of U is the large model's Hessian, `K_G(τ)` on the current geometry included;
+    /// without geometric stiffness, the material part alone.
+    #[test]
+    fn the_linearised_model_is_the_second_order_model_at_u() {
+        let s = Structure::grid(
+            &GridSpec {
+                modules: [3, 2],
+                ..GridSpec::default()
+            },
+            &LoadPattern::default(),
+        );
+        // Displacements large enough to turn members and slacken some cables.
+        let u: Vec<f64> = (0..s.n_free)
+            .map(|i| 0.02 * ((i as f64 * 0.73).sin() + 0.3 * (i as f64 * 1.9).cos()))
+            .collect();
+        let current = CurrentGeometry::of(&s, &u);
+        let trial = current.trial_tensions(&s);
+        let taut: Vec<bool> = s.links.iter().zip(&trial).map(|(l, &t)| is_taut(l, t)).collect();
+        assert!(taut.iter().any(|t| !t) && taut.iter().filter(|t| **t).count() > 10);
+        let linearised = current.linearised(&s, &u, &trial, true);
+        let d: Vec<f64> = (0..s.n_free).map(|i| (i as f64 * 0.37).cos()).collect();
+        let zero = vec![0.0; s.n_free];
+        let (slope, expected) = (
+            linearised.internal_slope(&zero, &d),
+            super::internal_slope(&s, &u, &d),
+        );
+        assert!((slope - expected).abs() <= 1e-12 * expected.abs(), "{slope} {expected}");
+        let pattern = StiffnessPattern::new(s.n_free, &s.link_dofs);
+        let mut hessian = vec![0.0; pattern.nnz()];
+        current.assemble_tangent(&s, &trial, &pattern, &mut hessian);
+        let (mut want, mut got) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
+        pattern.sym_matvec(&hessian, &d, &mut want);
+        linearised.tangent_product(&taut, 0.0, &d, &mut got);
+        let scale = norm(&want);
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() <= 1e-10 * scale, "{g} against {w}");
+        }
+        // Without K_G(τ): the material tangent on the current geometry, which differs.
+        let material = current.linearised(&s, &u, &trial, false);
+        material.tangent_product(&taut, 0.0, &d, &mut got);
+        let difference: f64 = got.iter().zip(&want).map(|(g, w)| (g - w).abs()).sum();
+        assert!(difference > 1e-6 * scale);
     }
 }

@@ -1,12 +1,11 @@
 //! The solvers a case may ask for, and what the rest of the program knows of each: its name,
-//! its colour in the figures, the factors it holds, whether it reports the energy error e, the
-//! geometric models it takes. Every fact about a solver that is not its algorithm is here,
+//! its colour in the figures, the factors it holds, whether it reports the energy error e.
+//! Every fact about a solver that is not its algorithm is here,
 //! matched exhaustively, so a new solver cannot be forgotten by one of them.
 
 use super::latin::LatinSettings;
 use super::newton::NewtonSettings;
 use super::pcg_lcp::PcgLcpSettings;
-use crate::model::GeometricModel;
 use serde::Deserialize;
 
 /// A solver the case may ask for.
@@ -39,15 +38,6 @@ impl Method {
             Method::PcgLcp => "pcg-lcp",
             Method::MonoLatin => "mono-latin",
             Method::MicroMacro => "micro-macro",
-        }
-    }
-
-    /// Whether the solver takes geometric model `model` (README "Real tensegrities"):
-    /// newton every model, the others `linear` and `prestress` (`large` is newton's alone).
-    pub fn supports(self, model: GeometricModel) -> bool {
-        match self {
-            Method::Newton => true,
-            Method::PcgLcp | Method::MonoLatin | Method::MicroMacro => !model.updates_geometry(),
         }
     }
 

@@ -5,6 +5,7 @@
 
 mod driver;
 mod energy_error;
+pub mod large;
 pub mod latin;
 mod load_path;
 mod mechanism_by_substructures;
@@ -119,19 +120,6 @@ pub enum SetupError {
         min: f64,
         /// The largest l accepted.
         max: f64,
-    },
-    /// The solver does not take the case's geometric model.
-    #[error(
-        "`{solver}` does not take `model.geometry = \"{model}\"`: newton takes \"linear\", \
-         \"prestress\" and \"large\"; pcg-lcp, mono-latin and micro-macro \"linear\" and \
-         \"prestress\". Remove it from `solver.methods` (or `--solver`), or change \
-         `model.geometry`"
-    )]
-    ModelNotSupported {
-        /// The solver's name.
-        solver: &'static str,
-        /// The model's name.
-        model: &'static str,
     },
     /// The LATIN macro problem is singular.
     #[error(

@@ -62,8 +62,21 @@ impl<'s> Latin<'s> {
         let structure = &model.structure;
         settings.validate(structure)?;
         let partition = Partition::new(structure, settings.subdomains, settings.weak);
-        let world = WorldFacts::of(structure, &settings, partition.substructures.len());
-        Self::set_up(model, &partition, world, None, settings, exchange)
+        Self::on_partition(model, &partition, settings, exchange)
+    }
+
+    /// [`Latin::on_ranks`] on a partition made before, of the same links: a `large` solve's
+    /// linearised problems keep the partition of the initial geometry, whichever way the
+    /// members' midpoints move.
+    pub(crate) fn on_partition(
+        model: &'s Model,
+        partition: &Partition,
+        settings: LatinSettings,
+        exchange: &'s dyn Exchange,
+    ) -> Result<Self, SetupError> {
+        settings.validate(&model.structure)?;
+        let world = WorldFacts::of(&model.structure, &settings, partition.substructures.len());
+        Self::set_up(model, partition, world, None, settings, exchange)
     }
 
     /// [`Latin::on_ranks`] on a rank that keeps only its substructures' links: `model`

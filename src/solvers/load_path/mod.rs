@@ -51,6 +51,13 @@ pub trait PathSolver: Solver {
     /// The relative residual the solver stops on.
     fn tolerance(&self) -> f64;
 
+    /// Whether the solver's last steps failed for a reason of its own (an inner solve that
+    /// did not converge), not the structure's: a path that cannot go on then ends
+    /// [`Status::Stalled`], not at a limit point. By default never.
+    fn failed_on_its_own(&self) -> bool {
+        false
+    }
+
     /// What the path reads of `state`.
     fn point<'a>(&self, state: &'a Self::State) -> PathPoint<'a>;
 }
@@ -210,12 +217,18 @@ impl<S: PathSolver> LoadPath<S> {
     /// Halve the increment and retry it from the last equilibrium, or stop at a limit point.
     fn halve(&mut self, state: &mut PathState<S::State>) {
         self.work.halvings += 1;
+        let own_failure = self.solver.failed_on_its_own();
         // The retry assembles its tangent: the failed attempt's factor, nearly singular near a
         // limit point, would steer every retry off the path as a chord.
         self.solver.forget_tangent();
         state.increment *= 0.5;
         if state.increment < MIN_INCREMENT {
-            state.stop = Some(Status::LimitPoint);
+            // The halvings found no equilibrium: a limit point of the structure, unless the
+            // solver's own steps failed on the way (it cannot tell).
+            state.stop = Some(match own_failure {
+                true => Status::Stalled,
+                false => Status::LimitPoint,
+            });
             // The answer is the last equilibrium; its stopping value is measured at the
             // solve's load, the α of its row, not at the load where it is an equilibrium.
             state.load = state.target.clone();

@@ -17,10 +17,8 @@
 //!
 //! Stopping measure: [`Measure::EquilibriumResidual`], `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`.
 
-mod large;
 mod line_search;
 
-pub use large::{LargeNewton, LargeWork};
 
 use super::{stop_when, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
 use crate::linalg::{
