@@ -294,7 +294,7 @@ fn sweep(c: &mut Criterion) {
                 let newton = LargeNewton::new(model, taut, NewtonSettings::default());
                 let mut large = LoadPath::new(newton);
                 let iterations = run_sweep(&mut large, model, &alphas, true);
-                let work = (large.work(), large.solver().work());
+                let work = (large.work(), large.solver().step_rule().work());
                 (iterations, format!("{work:?}"))
             } else {
                 let mut newton =

@@ -298,7 +298,7 @@ fn bracket_loss_of_equilibrium_is_a_limit_point_naming_the_cables() {
 fn internal_slope_is_the_gradient_along_d() {
     use tensolve::model::{CurrentGeometry, GeometricModel};
     use tensolve::solvers::large::LargeNewton;
-use tensolve::solvers::newton::NewtonSettings;
+    use tensolve::solvers::newton::NewtonSettings;
     use tensolve::solvers::{drive, LoadPath, Silent, TautStiffness};
     let mut case = tensolve::case::load(&manifest_path("cases/tower.toml")).unwrap();
     case.model = GeometricModel::Large;

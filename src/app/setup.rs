@@ -5,8 +5,8 @@ use crate::case::{Case, SolverChoice};
 use crate::decomposition::{Exchange, Homogenised, OneProcess};
 use crate::model::Model;
 use crate::results::uniqueness;
-use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
 use crate::solvers::large::{Large, LargeNewton, LinearisedStep};
+use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
 use crate::solvers::newton::{Newton, NewtonSettings};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{

@@ -208,7 +208,6 @@ impl CurrentGeometry {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::CurrentGeometry;
@@ -235,7 +234,12 @@ mod tests {
             .collect();
         let current = CurrentGeometry::of(&s, &u);
         let trial = current.trial_tensions(&s);
-        let taut: Vec<bool> = s.links.iter().zip(&trial).map(|(l, &t)| is_taut(l, t)).collect();
+        let taut: Vec<bool> = s
+            .links
+            .iter()
+            .zip(&trial)
+            .map(|(l, &t)| is_taut(l, t))
+            .collect();
         assert!(taut.iter().any(|t| !t) && taut.iter().filter(|t| **t).count() > 10);
         let linearised = current.linearised(&s, &u, &trial, true);
         let d: Vec<f64> = (0..s.n_free).map(|i| (i as f64 * 0.37).cos()).collect();
@@ -244,7 +248,10 @@ mod tests {
             linearised.internal_slope(&zero, &d),
             super::internal_slope(&s, &u, &d),
         );
-        assert!((slope - expected).abs() <= 1e-12 * expected.abs(), "{slope} {expected}");
+        assert!(
+            (slope - expected).abs() <= 1e-12 * expected.abs(),
+            "{slope} {expected}"
+        );
         let pattern = StiffnessPattern::new(s.n_free, &s.link_dofs);
         let mut hessian = vec![0.0; pattern.nnz()];
         current.assemble_tangent(&s, &trial, &pattern, &mut hessian);

@@ -56,6 +56,12 @@ pub trait TangentStep {
     fn failed_on_its_own(&self) -> bool {
         false
     }
+
+    /// Whether the solve stops only when the load-relative residual is at the tolerance too
+    /// (newton's stop), not r(U) alone.
+    fn stops_on_load_residual(&self) -> bool {
+        true
+    }
 }
 
 /// newton on the exact-length law: Newton steps on the factorized Hessian.
@@ -187,11 +193,16 @@ impl<'s, R: TangentStep> Large<'s, R> {
         best
     }
 
-    /// r(U) and its load-relative form both at or below the tolerance (with every cable slack
-    /// the load-relative scale holds the released prestress and alone could pass a state far
-    /// from equilibrium).
+    /// r(U) and, where the direction rule stops so ([`TangentStep::stops_on_load_residual`]),
+    /// its load-relative form both at or below the tolerance (with every cable slack the
+    /// load-relative scale holds the released prestress and alone could pass a state far from
+    /// equilibrium).
     fn converged(&self, eval: &Evaluation) -> bool {
-        eval.load_residual.max(eval.residual) <= self.settings.tolerance
+        let load_residual = match self.step.stops_on_load_residual() {
+            true => eval.load_residual,
+            false => 0.0,
+        };
+        load_residual.max(eval.residual) <= self.settings.tolerance
     }
 }
 

@@ -19,7 +19,6 @@
 
 mod line_search;
 
-
 use super::{stop_when, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
 use crate::linalg::{
     dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern,

@@ -1,0 +1,132 @@
+//! What `large` costs in each solver (issue 44), measured in one run as medians:
+//! - `sweep41`: the paper case's 41-α sweep (α = 0, 0.03, …, 1.2), each solver set up once,
+//!   under `linear` (warm starts, as `tensolve run`) and under `large` (along the load path),
+//!   and their ratio;
+//! - `grid128`: micro-macro against newton under `large` on `cases/scale-128.toml` at a small
+//!   α (one solve from the prestressed state), with the solvers' default settings.
+//!
+//! Run with `cargo bench --bench large` (`-- sweep41` or `-- grid128` for one part). Each
+//! figure is the median of [`REPEATS`] runs (the machine is shared and noisy).
+
+use std::path::Path;
+use std::time::Instant;
+use tensolve::app::setup::{prepare, set_up, SetUpSolver};
+use tensolve::case::Case;
+use tensolve::model::GeometricModel;
+use tensolve::solvers::{Equilibrium, Method, Silent};
+
+const REPEATS: usize = 3;
+
+fn case(name: &str, geometry: GeometricModel) -> Case {
+    let path = format!("{}/cases/{name}", env!("CARGO_MANIFEST_DIR"));
+    let mut case = tensolve::case::load(Path::new(&path)).expect("case loads");
+    case.model = geometry;
+    case
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// One sweep of `solver` over `alphas` (each α from the previous answer; `large` from its
+/// own last equilibrium): seconds and the summed iterations. Every solve must converge.
+fn sweep(solver: &mut SetUpSolver<'_>, case: &Case, alphas: &[f64]) -> (f64, usize) {
+    let model = case.model();
+    let clock = Instant::now();
+    let (mut previous, mut iterations): (Option<Equilibrium>, usize) = (None, 0);
+    for &alpha in alphas {
+        let load = model.load(alpha);
+        let solution = solver
+            .solver
+            .solve_from(&load, previous.as_ref(), None, &mut Silent);
+        assert!(
+            solution.info.status.converged(),
+            "{} {:?} at α {alpha}: {:?}",
+            solver.method.name(),
+            case.model,
+            solution.info
+        );
+        iterations += solution.info.iterations;
+        previous = Some(solution.equilibrium);
+    }
+    (clock.elapsed().as_secs_f64(), iterations)
+}
+
+/// The 41-α sweep per solver, `linear` against `large`.
+fn sweep41() {
+    let alphas: Vec<f64> = (0..41).map(|i| 1.2 * i as f64 / 40.0).collect();
+    println!("sweep41: the paper case, 41 α from 0 to 1.2, median of {REPEATS} sweeps");
+    println!("solver       linear s  (its/α)   large s  (steps/α)   large / linear");
+    for method in Method::ALL {
+        let mut row = Vec::new();
+        for geometry in [GeometricModel::Linear, GeometricModel::Large] {
+            let case = case("paper.toml", geometry);
+            let prepared = prepare(&case).expect("prepared");
+            let mut seconds = Vec::new();
+            let mut iterations = 0;
+            for _ in 0..REPEATS {
+                // Set up afresh each time: `large` keeps its path's last equilibrium.
+                let mut solver = set_up(method, &case.solver, &prepared).expect("set up");
+                let (s, its) = sweep(&mut solver, &case, &alphas);
+                seconds.push(s);
+                iterations = its;
+            }
+            row.push((median(seconds), iterations as f64 / alphas.len() as f64));
+        }
+        println!(
+            "{:12} {:8.3}  ({:5.1})  {:8.3}  ({:5.1})    {:6.1}",
+            method.name(),
+            row[0].0,
+            row[0].1,
+            row[1].0,
+            row[1].1,
+            row[1].0 / row[0].0
+        );
+    }
+}
+
+/// micro-macro against newton under `large` on the 128 × 128 grid.
+fn grid128() {
+    let alpha = 0.01;
+    println!("grid128: cases/scale-128.toml under large at α = {alpha}, median of {REPEATS}");
+    let case = {
+        let mut case = case("scale-128.toml", GeometricModel::Large);
+        case.load.alphas = vec![alpha];
+        case
+    };
+    let prepared = prepare(&case).expect("prepared");
+    let mut times = Vec::new();
+    for method in [Method::Newton, Method::MicroMacro] {
+        let mut seconds = Vec::new();
+        let mut steps = 0;
+        for _ in 0..REPEATS {
+            let clock = Instant::now();
+            let mut solver = set_up(method, &case.solver, &prepared).expect("set up");
+            let (_, its) = sweep(&mut solver, &case, &[alpha]);
+            seconds.push(clock.elapsed().as_secs_f64());
+            steps = its;
+        }
+        let s = median(seconds);
+        println!(
+            "{:12} {s:8.2} s set-up + solve, {steps} Newton steps",
+            method.name()
+        );
+        times.push(s);
+    }
+    println!("micro-macro / newton: {:.1}", times[1] / times[0]);
+}
+
+fn main() {
+    let filter: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let wanted = |name: &str| filter.is_empty() || filter.iter().any(|f| name.contains(f));
+    if wanted("sweep41") {
+        sweep41();
+    }
+    if wanted("grid128") {
+        grid128();
+    }
+}
