@@ -37,8 +37,9 @@ enum LinearisedSolver<'s> {
     Latin {
         /// Its settings (its tolerances set by the forcing term).
         settings: LatinSettings,
-        /// The partition, kept from the initial geometry.
-        partition: Partition,
+        /// The partition, kept from the initial geometry (boxed: it is large beside pcg-lcp's
+        /// settings).
+        partition: Box<Partition>,
         /// The processes the substructures are shared among.
         exchange: &'s dyn Exchange,
     },
@@ -100,7 +101,7 @@ impl<'s> LinearisedStep<'s> {
             failed: false,
             solver: LinearisedSolver::Latin {
                 settings,
-                partition,
+                partition: Box::new(partition),
                 exchange,
             },
             work: LinearisedWork::default(),
