@@ -68,8 +68,8 @@ impl<'s> HessianStep<'s> {
 
 impl TangentStep for HessianStep<'_> {
     /// `ΔU = −H⁻¹ ∇Π`: a chord step with the last factor while chord steps contract the
-    /// residual ([`CHORD_CONTRACTION`]), else with H assembled and factorized, shifted where it
-    /// is not positive definite; `None` when no shift up to [`MAX_SHIFT`] makes it factorisable.
+    /// residual (`CHORD_CONTRACTION`), else with H assembled and factorized, shifted where it
+    /// is not positive definite; `None` when no shift up to `MAX_SHIFT` makes it factorisable.
     fn direction(&mut self, model: &Model, state: &LargeState) -> Option<Vec<f64>> {
         self.work.steps += 1;
         let mut step: Vec<f64> = state.eval.gradient.iter().map(|g| -g).collect();
@@ -122,7 +122,7 @@ impl TangentStep for HessianStep<'_> {
         Some(step)
     }
 
-    /// A chord step that contracted the residual by less than [`CHORD_CONTRACTION`]: the next
+    /// A chord step that contracted the residual by less than `CHORD_CONTRACTION`: the next
     /// step refactorizes.
     fn taken(&mut self, before: f64, after: f64) {
         if self.last_was_chord && after > CHORD_CONTRACTION * before {

@@ -158,7 +158,7 @@ impl<'s> LinearisedStep<'s> {
 
 impl TangentStep for LinearisedStep<'_> {
     /// ΔU: the displacements of the linearised problem at U, solved to the forcing term
-    /// `r(U)²` (clamped to [`FORCING_FLOOR`] × tolerance and [`FORCING_LOOSEST`]).
+    /// `r(U)²` (clamped to `FORCING_FLOOR` × tolerance and `FORCING_LOOSEST`).
     fn direction(&mut self, model: &Model, state: &LargeState) -> Option<Vec<f64>> {
         let eval = &state.eval;
         let linearised = eval.current.linearised(
