@@ -54,7 +54,7 @@ pub enum GeometricModel {
     /// linearisation about the prestressed state; stiffens prestress-stable mechanisms.
     Prestress,
     /// The exact-length law `τ = t0 + k (ℓ − L)` on the current geometry, dead loads (§8),
-    /// solved by `newton` along the load path.
+    /// solved by Newton steps along the load path (every solver: [`crate::solvers::large`]).
     Large,
 }
 
@@ -76,7 +76,7 @@ impl GeometricModel {
                 "plus the geometric stiffness of the prestress, K + K_G(t0)"
             }
             GeometricModel::Large => {
-                "the exact-length law on the current geometry, newton along the load path"
+                "the exact-length law on the current geometry, Newton steps along the load path"
             }
         }
     }
