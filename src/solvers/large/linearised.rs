@@ -25,7 +25,7 @@ const FORCING_LOOSEST: f64 = 1e-4;
 /// step is the linearised problem's plus a term quadratic in the step, so the inner solve
 /// must do better than the outer tolerance for the outer one to be met.
 const FORCING_FLOOR: f64 = 0.3;
-/// The tightest the η of a LATIN linearised problem is asked for, whatever the forcing.
+/// The loosest η a LATIN linearised problem is asked for, whatever the forcing.
 const LATIN_INDICATOR_LOOSEST: f64 = 1e-2;
 
 /// The solver that solves the linearised problems.
@@ -119,7 +119,10 @@ impl<'s> LinearisedStep<'s> {
     }
 
     /// The linearised problem `linearised` solved under `load` to `forcing`; `None` when
-    /// its solver cannot be set up on it (an indefinite tangent).
+    /// its solver cannot be set up on it: pcg-lcp's `K + K_G(τ)` with every cable taut not
+    /// positive definite (the structure's own tangent, as newton's Hessian that no shift
+    /// makes factorisable: a limit point may be near), or a LATIN operator refused (the
+    /// solver's own failure, [`TangentStep::failed_on_its_own`]).
     fn solve(&mut self, linearised: &Model, load: &[f64], forcing: f64) -> Option<Solution> {
         let clock = Instant::now();
         match &self.solver {
@@ -147,8 +150,12 @@ impl<'s> LinearisedStep<'s> {
                         .max(settings.tolerance),
                     ..*settings
                 };
-                let mut solver =
-                    Latin::on_partition(linearised, partition, settings, *exchange).ok()?;
+                let Ok(mut solver) =
+                    Latin::on_partition(linearised, partition, settings, *exchange)
+                else {
+                    self.failed = true;
+                    return None;
+                };
                 self.work.setup_seconds += clock.elapsed().as_secs_f64();
                 Some(drive(&mut solver, load, None, &mut Silent))
             }
@@ -170,10 +177,7 @@ impl TangentStep for LinearisedStep<'_> {
         let forcing = (eval.residual * eval.residual)
             .min(FORCING_LOOSEST)
             .max(FORCING_FLOOR * self.tolerance);
-        let Some(solution) = self.solve(&linearised, &state.load, forcing) else {
-            self.failed = true;
-            return None;
-        };
+        let solution = self.solve(&linearised, &state.load, forcing)?;
         self.work.steps += 1;
         self.work.inner_iterations += solution.info.iterations;
         if solution.info.status != Status::Converged {
