@@ -5,15 +5,22 @@
 //! - `grid128`: micro-macro against newton under `large` on `cases/scale-128.toml` at a small
 //!   α (one solve from the prestressed state), with the solvers' default settings.
 //!
-//! Run with `cargo bench --bench large` (`-- sweep41` or `-- grid128` for one part). Each
+//! - `steps`: where `large`'s time goes in pcg-lcp, mono-latin and micro-macro on that sweep
+//!   (one run): the linearised solves' set-up seconds and inner iterations per Newton step.
+//!
+//! Run with `cargo bench --bench large` (`-- sweep41`, `-- grid128` or `-- steps` for one part). Each
 //! figure is the median of [`REPEATS`] runs (the machine is shared and noisy).
 
 use std::path::Path;
 use std::time::Instant;
 use tensolve::app::setup::{prepare, set_up, SetUpSolver};
 use tensolve::case::Case;
+use tensolve::decomposition::OneProcess;
 use tensolve::model::GeometricModel;
-use tensolve::solvers::{Equilibrium, Method, Silent};
+use tensolve::solvers::large::{Large, LinearisedStep};
+use tensolve::solvers::newton::NewtonSettings;
+use tensolve::solvers::INCREMENT_MAX_STEPS;
+use tensolve::solvers::{AnySolver, Equilibrium, LoadPath, Method, Settings, Silent};
 
 const REPEATS: usize = 3;
 
@@ -117,6 +124,53 @@ fn grid128() {
     println!("micro-macro / newton: {:.1}", times[1] / times[0]);
 }
 
+/// Where the time of `large` goes in the solvers that find their directions on the linearised
+/// problems: the 41-α sweep once, the direction rule's own counters.
+fn steps() {
+    let alphas: Vec<f64> = (0..41).map(|i| 1.2 * i as f64 / 40.0).collect();
+    let case = case("paper.toml", GeometricModel::Large);
+    let model = case.model();
+    println!("steps: the paper case under large, 41 α, one sweep");
+    println!("solver       seconds  Newton steps  set-up s  inner its/step  unconverged");
+    for method in [Method::PcgLcp, Method::MonoLatin, Method::MicroMacro] {
+        let step = match case.solver.settings(method) {
+            Settings::PcgLcp(settings) => LinearisedStep::pcg_lcp(settings),
+            Settings::MonoLatin(settings) | Settings::MicroMacro(settings) => {
+                LinearisedStep::latin(&model, settings, &OneProcess)
+            }
+            Settings::Newton(_) => unreachable!("newton finds its own directions"),
+        };
+        let settings = NewtonSettings {
+            tolerance: step.tolerance(),
+            max_iterations: INCREMENT_MAX_STEPS,
+            ..NewtonSettings::default()
+        };
+        let mut path = LoadPath::new(Large::with_step(&model, step, settings));
+        let clock = Instant::now();
+        let mut previous: Option<Equilibrium> = None;
+        for &alpha in &alphas {
+            let solution =
+                path.solve_from(&model.load(alpha), previous.as_ref(), None, &mut Silent);
+            assert!(
+                solution.info.status.converged(),
+                "{alpha}: {:?}",
+                solution.info
+            );
+            previous = Some(solution.equilibrium);
+        }
+        let seconds = clock.elapsed().as_secs_f64();
+        let work = path.solver().step_rule().work();
+        println!(
+            "{:12} {seconds:7.3}  {:12}  {:8.3}  {:14.1}  {:11}",
+            method.name(),
+            work.steps,
+            work.setup_seconds,
+            work.inner_iterations as f64 / work.steps.max(1) as f64,
+            work.inner_unconverged
+        );
+    }
+}
+
 fn main() {
     let filter: Vec<String> = std::env::args()
         .skip(1)
@@ -128,5 +182,8 @@ fn main() {
     }
     if wanted("grid128") {
         grid128();
+    }
+    if wanted("steps") {
+        steps();
     }
 }
