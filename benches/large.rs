@@ -18,8 +18,6 @@ use tensolve::case::Case;
 use tensolve::decomposition::OneProcess;
 use tensolve::model::GeometricModel;
 use tensolve::solvers::large::{Large, LinearisedStep};
-use tensolve::solvers::newton::NewtonSettings;
-use tensolve::solvers::INCREMENT_MAX_STEPS;
 use tensolve::solvers::{AnySolver, Equilibrium, LoadPath, Method, Settings, Silent};
 
 const REPEATS: usize = 3;
@@ -140,12 +138,7 @@ fn steps() {
             }
             Settings::Newton(_) => unreachable!("newton finds its own directions"),
         };
-        let settings = NewtonSettings {
-            tolerance: step.tolerance(),
-            max_iterations: INCREMENT_MAX_STEPS,
-            ..NewtonSettings::default()
-        };
-        let mut path = LoadPath::new(Large::with_step(&model, step, settings));
+        let mut path = LoadPath::new(Large::linearised(&model, step));
         let clock = Instant::now();
         let mut previous: Option<Equilibrium> = None;
         for &alpha in &alphas {

@@ -7,7 +7,7 @@ use crate::model::Model;
 use crate::results::uniqueness;
 use crate::solvers::large::{Large, LargeNewton, LinearisedStep};
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
-use crate::solvers::newton::{Newton, NewtonSettings};
+use crate::solvers::newton::Newton;
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{
     check_shape, mechanism_by_substructures, AnySolver, LoadPath, Method, PathSolver, Settings,
@@ -276,14 +276,8 @@ pub fn set_up_on<'s>(
     })
 }
 
-/// pcg-lcp, mono-latin or micro-macro on the `large` model: Newton steps whose directions the
-/// solver finds on the problem linearised at each step ([`LinearisedStep`]), along the load
-/// path; the solve stops at the solver's own tolerance on r(U).
+/// pcg-lcp, mono-latin or micro-macro on the `large` model, along the load path
+/// ([`Large::linearised`]).
 fn large_path<'s>(model: &'s Model, step: LinearisedStep<'s>) -> Box<dyn HeldSolver + 's> {
-    let settings = NewtonSettings {
-        tolerance: step.tolerance(),
-        max_iterations: crate::solvers::INCREMENT_MAX_STEPS,
-        ..NewtonSettings::default()
-    };
-    Box::new(LoadPath::new(Large::with_step(model, step, settings)))
+    Box::new(LoadPath::new(Large::linearised(model, step)))
 }

@@ -152,9 +152,7 @@ impl CurrentGeometry {
             pattern.add_block(i, &entries, &g, values);
         }
     }
-}
 
-impl CurrentGeometry {
     /// The `large` model linearised at U, as a model on the initial-geometry kinematics
     /// (docs/method.md §8, the sequential LCP): the structure on the current geometry `X + U`
     /// (rows of B along the current unit vectors, lengths ℓ), the trial tensions

@@ -109,7 +109,7 @@ impl<'s> LinearisedStep<'s> {
     }
 
     /// The tolerance the large solve stops at: the inner solver's own on r(U).
-    pub fn tolerance(&self) -> f64 {
+    pub(super) fn tolerance(&self) -> f64 {
         self.tolerance
     }
 

@@ -75,6 +75,22 @@ impl<'s> LargeNewton<'s> {
     }
 }
 
+impl<'s> Large<'s, LinearisedStep<'s>> {
+    /// pcg-lcp, mono-latin or micro-macro on the `large` model: Newton steps whose directions
+    /// the solver finds on the problem linearised at each step (`step`); the solve stops at
+    /// the solver's own tolerance on r(U), each load increment after at most
+    /// [`crate::solvers::INCREMENT_MAX_STEPS`] steps (`solver.max_iterations` caps each
+    /// linearised solve instead).
+    pub fn linearised(model: &'s Model, step: LinearisedStep<'s>) -> Self {
+        let settings = NewtonSettings {
+            tolerance: step.tolerance(),
+            max_iterations: crate::solvers::INCREMENT_MAX_STEPS,
+            ..NewtonSettings::default()
+        };
+        Large::with_step(model, step, settings)
+    }
+}
+
 /// Newton's method on the large model, its directions from `R`, set up for one model.
 pub struct Large<'s, R> {
     model: &'s Model,
