@@ -90,6 +90,9 @@ fn the_geometric_term_is_the_measured_difference_where_small_and_flags_it_where_
         ("cases/tower.toml", "prestress", "[0.25, 0.5, 1.0]"),
         ("cases/saddle-net.toml", "prestress", "[1.0]"),
         ("cases/paper.toml", "linear", "[0.01, 0.05, 0.25, 1.0]"),
+        // A settlement of 5 mm is no part of the step (the estimate read 91 % at α = 0.05
+        // for a measured 0.57 % when it was).
+        ("cases/skew-grid.toml", "linear", "[0.05, 0.5]"),
     ];
     for (case, geometry, alphas) in cases {
         for (estimate, measured) in estimates(case, geometry, alphas) {

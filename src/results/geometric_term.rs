@@ -53,12 +53,17 @@ pub fn geometric_term(
         .solve_in_place(&mut step);
     let stepped: Vec<f64> = u.iter().zip(&step).map(|(a, d)| a - d).collect();
     // Both changes relative to the stepped answer, the first-order large one: max_node |δ| /
-    // max_node |U + δ| (every component: held ones do not move), and the forces likewise.
+    // max_node |U + δ| (U with its prescribed displacements), and the forces likewise.
     // Motions below ROUND_OFF_MOTION of the structure's size (an unloaded answer's round-off)
     // are no deflection to be relative to.
     let floor = ROUND_OFF_MOTION * s.size();
-    let displacement_change =
-        super::largest_motion(s, &step) / super::largest_motion(s, &stepped).max(floor);
+    // δ moves free dofs only: a settlement is no part of it.
+    let step_motion = s
+        .full_change(&step)
+        .chunks(3)
+        .map(|d| d[0].hypot(d[1]).hypot(d[2]))
+        .fold(0.0, f64::max);
+    let displacement_change = step_motion / super::largest_motion(s, &stepped).max(floor);
     let after: Vec<f64> = CurrentGeometry::of(s, &stepped)
         .trial_tensions(s)
         .iter()

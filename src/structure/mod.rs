@@ -446,4 +446,13 @@ impl Structure {
             .map(|(&d, &ud)| if d == CLAMPED { ud } else { u[d] })
             .collect()
     }
+
+    /// A change `du` of the free dofs on every node's three components, zero where a component
+    /// is held (a settlement is no part of a change).
+    pub fn full_change(&self, du: &[f64]) -> Vec<f64> {
+        self.dof_of
+            .iter()
+            .map(|&d| if d == CLAMPED { 0.0 } else { du[d] })
+            .collect()
+    }
 }
