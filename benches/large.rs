@@ -8,7 +8,12 @@
 //! - `steps`: where `large`'s time goes in pcg-lcp, mono-latin and micro-macro on that sweep
 //!   (one run): the linearised solves' set-up seconds and inner iterations per Newton step.
 //!
-//! Run with `cargo bench --bench large` (`-- sweep41`, `-- grid128` or `-- steps` for one part). Each
+//! - `auto`: what `model.geometry = "auto"` costs: `tensolve run` of the paper case (newton,
+//!   then mono-latin) over 41 α from 0 to 0.05 (every row `linear`: the cost of measuring each
+//!   α against `large`) against the case pinned `linear`, and over 41 α from 0 to 1.2 (`large`
+//!   from α = 0.09) against the case pinned `large`.
+//!
+//! Run with `cargo bench --bench large` (`-- sweep41`, `-- grid128`, `-- steps` or `-- auto` for one part). Each
 //! figure is the median of [`REPEATS`] runs (the machine is shared and noisy).
 
 use std::path::Path;
@@ -26,6 +31,7 @@ fn case(name: &str, geometry: GeometricModel) -> Case {
     let path = format!("{}/cases/{name}", env!("CARGO_MANIFEST_DIR"));
     let mut case = tensolve::case::load(Path::new(&path)).expect("case loads");
     case.model = geometry;
+    case.model_auto = false;
     case
 }
 
@@ -178,5 +184,69 @@ fn main() {
     }
     if wanted("steps") {
         steps();
+    }
+    if wanted("auto") {
+        auto();
+    }
+}
+
+/// `tensolve run` of the paper case by `method` over `alphas` under `geometry` (`None`:
+/// `auto`), no file but the summary: seconds, and the rows' models.
+fn run_paper(
+    method: Method,
+    alphas: &[f64],
+    geometry: Option<GeometricModel>,
+) -> (f64, Vec<GeometricModel>) {
+    let mut case = case("paper.toml", geometry.unwrap_or(GeometricModel::Linear));
+    case.model_auto = geometry.is_none();
+    case.load.alphas = alphas.to_vec();
+    case.solver.reference = tensolve::case::ReferenceChoice::None;
+    case.output.plots = false;
+    case.output.history = false;
+    case.output.tensions = false;
+    case.output.displacements = false;
+    let out = std::env::temp_dir().join(format!("tensolve-bench-auto-{}", std::process::id()));
+    let options = tensolve::app::sweep::RunOptions {
+        out_dir: Some(out.clone()),
+        methods: Some(vec![method]),
+    };
+    let clock = Instant::now();
+    let rows = tensolve::app::sweep::run(&case, &options, &mut |_| {}).expect("the run converges");
+    let seconds = clock.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&out);
+    (seconds, rows.iter().map(|r| r.model).collect())
+}
+
+/// What `auto` costs beside the model it picks.
+fn auto() {
+    let small: Vec<f64> = (0..41).map(|i| 0.05 * i as f64 / 40.0).collect();
+    let whole: Vec<f64> = (0..41).map(|i| 1.2 * i as f64 / 40.0).collect();
+    println!("auto: tensolve run of the paper case, 41 α, median of {REPEATS} runs");
+    println!("solver       α range    auto s    pinned s  (model)   auto / pinned  rows linear");
+    for method in [Method::Newton, Method::MonoLatin] {
+        for (range, alphas, pinned) in [
+            ("0 .. 0.05", &small, GeometricModel::Linear),
+            ("0 .. 1.2", &whole, GeometricModel::Large),
+        ] {
+            let mut auto_seconds = Vec::new();
+            let mut pinned_seconds = Vec::new();
+            let mut linear_rows = 0;
+            for _ in 0..REPEATS {
+                let (s, models) = run_paper(method, alphas, None);
+                auto_seconds.push(s);
+                linear_rows = models
+                    .iter()
+                    .filter(|&&m| m == GeometricModel::Linear)
+                    .count();
+                pinned_seconds.push(run_paper(method, alphas, Some(pinned)).0);
+            }
+            let (a, p) = (median(auto_seconds), median(pinned_seconds));
+            println!(
+                "{:12} {range:9} {a:8.3}  {p:8.3}  ({:6})   {:6.2}         {linear_rows} / 41",
+                method.name(),
+                pinned.name(),
+                a / p
+            );
+        }
     }
 }

@@ -267,9 +267,6 @@ LARGE = """
 [load]
 alpha = [0.25, 0.5, 1.0]
 
-[model]
-geometry = "large"
-
 [solver]
 methods = ["newton"]
 """
@@ -456,9 +453,6 @@ nodes = {boundary}
 [load]
 nodal = [0.0, 0.0, -300.0]
 alpha = [0.25, 0.5, 1.0]
-
-[model]
-geometry = "large"
 
 [solver]
 methods = ["newton"]

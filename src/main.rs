@@ -393,7 +393,7 @@ fn bench_command(
     quiet: bool,
     set: &[String],
 ) -> Result<(), BenchError> {
-    let case = case::load_with(path, set)?;
+    let mut case = case::load_with(path, set)?;
     // Refused before anything else when there is no reference to measure e against.
     let reference = bench::reference_method(&case)?;
     let work = Workload::bench(&case, reference);
@@ -402,7 +402,8 @@ fn bench_command(
     let dir = out.unwrap_or_else(|| bench::default_dir(path));
     let mut reporter = Reporter::new(quiet, case.solver.methods.len() * case.load.alphas.len());
     reporter.begin_stage("building the structure and factorising its taut stiffness");
-    let prepared = tensolve::app::setup::prepare(&case);
+    // Under `auto`, every α is measured on the model it starts with.
+    let prepared = tensolve::app::auto::prepare_start(&mut case, true).map(|(p, _)| p);
     reporter.end_stage();
     if prepared.is_err() {
         reporter.finish();

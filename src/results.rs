@@ -6,7 +6,10 @@ mod geometric_term;
 pub mod modes;
 pub mod uniqueness;
 
-pub use geometric_term::geometric_term;
+pub use geometric_term::{
+    distance_to_large, geometric_term, LargeDistance, DISTANCE_FAR, DISTANCE_SETTLED,
+    DISTANCE_STEPS,
+};
 
 use crate::linalg::{norm, smallest_eigenvalues};
 use crate::model::material::{tension, trial_tension};

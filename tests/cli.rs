@@ -500,7 +500,8 @@ fn stability_csv_reports_the_smallest_tangent_eigenvalue() {
     let case = Temp::file(
         "stability",
         "[grid]\nmodules = [16, 16]\n[load]\nalpha = [1.0]\n[solver]\nmethods = [\"newton\"]\n\
-         [output]\nstability = true\ntensions = false\ndisplacements = false\n",
+         [output]\nstability = true\ntensions = false\ndisplacements = false\n\
+         [model]\ngeometry = \"linear\"\n",
     );
     let out = Temp::dir("stability-out");
     let o = tensolve(&["run", case.arg(), "--out", out.arg(), "--quiet"]);

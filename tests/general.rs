@@ -804,7 +804,7 @@ fn self_stress_prestress_refusals_exit_2_naming_the_key() {
         "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
          [[supports.fix]]\nnodes = [1, 2, 3, 4, 6]\n\
          [prestress]\nfrom = \"self-stress\"\nmember = 10\nforce = 1000.0\n\
-         [load]\nalpha = [1.0]\n",
+         [load]\nalpha = [1.0]\n[model]\ngeometry = \"linear\"\n",
     )
     .unwrap();
     let out = tensolve(&["check", dir.0.join("case.toml").to_str().unwrap()]);

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{csv_rows, manifest_path, stderr, tensolve, Temp};
+use common::{csv_rows, difference_of_runs, manifest_path, stderr, tensolve, Temp};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -37,36 +37,6 @@ fn solve(case: &Path, geometry: &str, alphas: &str, out: &Temp) {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
-/// The measured difference of two runs at `alpha`: the larger of `max_node |U − U_large| /
-/// max_node |U_large|` and `max_i |τᵢ − τᵢ_large| / max_i |τᵢ_large|`.
-fn measured(model: &Path, large: &Path, alpha: &str) -> f64 {
-    let read =
-        |dir: &Path, what: &str| csv_rows(&dir.join(format!("{what}/newton_alpha{alpha}.csv")));
-    let motion = |r: &HashMap<String, String>| [number(r, "ux"), number(r, "uy"), number(r, "uz")];
-    let size = |u: [f64; 3]| u.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let (u, u_large) = (read(model, "displacements"), read(large, "displacements"));
-    let deflection = u_large.iter().map(|r| size(motion(r))).fold(0.0, f64::max);
-    let displacement = u
-        .iter()
-        .zip(&u_large)
-        .map(|(a, b)| {
-            let (a, b) = (motion(a), motion(b));
-            size([a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-        })
-        .fold(0.0, f64::max);
-    let (f, f_large) = (read(model, "forces"), read(large, "forces"));
-    let largest = f_large
-        .iter()
-        .map(|r| number(r, "force_N").abs())
-        .fold(0.0, f64::max);
-    let force = f
-        .iter()
-        .zip(&f_large)
-        .map(|(a, b)| (number(a, "force_N") - number(b, "force_N")).abs())
-        .fold(0.0, f64::max);
-    (displacement / deflection).max(force / largest)
-}
-
 /// Per α of `case`, (the geometric term of `geometry`, the measured difference to `large`).
 fn estimates(case: &str, geometry: &str, alphas: &str) -> Vec<(f64, f64)> {
     let case = manifest_path(case);
@@ -77,7 +47,10 @@ fn estimates(case: &str, geometry: &str, alphas: &str) -> Vec<(f64, f64)> {
         .iter()
         .map(|row| {
             let estimate = number(row, "geometric_term");
-            (estimate, measured(&model.0, &large.0, &row["alpha"]))
+            (
+                estimate,
+                difference_of_runs(&model.0, &large.0, "newton", &row["alpha"]),
+            )
         })
         .collect()
 }

@@ -12,9 +12,11 @@ use std::time::{Duration, Instant};
 use tensolve::output::OutputDir;
 
 /// A 4 × 4 grid solved by `methods` at `alphas`, with `extra` TOML appended.
+/// (Pinned to the linear model: these are the solvers' own limits, not `auto`'s choice.)
 fn small_case(methods: &str, alphas: &str, extra: &str) -> String {
     format!(
-        "[grid]\nmodules = [4, 4]\n[load]\nalpha = {alphas}\n[solver]\nmethods = {methods}\n{extra}"
+        "[model]\ngeometry = \"linear\"\n[grid]\nmodules = [4, 4]\n[load]\nalpha = {alphas}\n\
+         [solver]\nmethods = {methods}\n{extra}"
     )
 }
 
@@ -805,7 +807,8 @@ fn e3_one_module_per_substructure_sets_up_a_regular_macro_problem() {
     // repro e3_macro_onemodule: 64 × 64 modules, one per substructure, was refused as "the
     // macro problem is singular". check sets micro-macro up (its macro problem factorized);
     // three iterations of a run set it up again and stop on max_iterations, not on set-up.
-    let text = "[grid]\nmodules = [64, 64]\n[supports]\nclamp = \"lower-all-edges\"\n\
+    let text = "[model]\ngeometry = \"linear\"\n\
+                [grid]\nmodules = [64, 64]\n[supports]\nclamp = \"lower-all-edges\"\n\
                 [load]\nalpha = [0.15]\n[solver]\nmethods = [\"micro-macro\"]\n\
                 subdomains = [64, 64]\nreference = \"none\"\n";
     let case = Temp::file("e3-one", text);

@@ -91,7 +91,8 @@ fn interrupted_sweep_keeps_finished_results_whole() {
     let case = dir.with_extension("toml");
     std::fs::write(
         &case,
-        "[grid]\nmodules = [16, 16]\n[load]\nalpha = { from = 0.02, to = 2.0, steps = 100 }\n",
+        "[grid]\nmodules = [16, 16]\n[load]\nalpha = { from = 0.02, to = 2.0, steps = 100 }\n\
+         [model]\ngeometry = \"linear\"\n",
     )
     .unwrap();
     let mut child = run_into(&case, &dir).spawn().unwrap();
@@ -115,7 +116,7 @@ fn interrupted_sweep_keeps_finished_results_whole() {
     // A rerun into the same directory replaces the files with a complete sweep.
     std::fs::write(
         &case,
-        "[grid]\nmodules = [16, 16]\n[load]\nalpha = [0.02, 0.5]\n",
+        "[grid]\nmodules = [16, 16]\n[load]\nalpha = [0.02, 0.5]\n[model]\ngeometry = \"linear\"\n",
     )
     .unwrap();
     let rerun = run_into(&case, &dir).status().unwrap();

@@ -18,7 +18,8 @@ fn check(case: &Temp, sets: &[&str]) -> std::process::Output {
 
 /// The paper's 16 × 16 grid with micro-macro alone.
 const PAPER_MICRO_MACRO: &str =
-    "[grid]\nmodules = [16, 16]\n[load]\nalpha = [1.0]\n[solver]\nmethods = [\"micro-macro\"]\n";
+    "[grid]\nmodules = [16, 16]\n[load]\nalpha = [1.0]\n[model]\ngeometry = \"linear\"\n\
+     [solver]\nmethods = [\"micro-macro\"]\n";
 
 /// A valid `solver.macro_degree` (1 to 16) the partition cannot take was refused as "the macro
 /// problem is singular", advising `weak_interfaces = "macro"`, the default (T4, M10).

@@ -283,6 +283,22 @@ fn large_on_ranks_is_the_threaded_run() {
     );
 }
 
+/// `model.geometry = "auto"` on ranks (issue 44): every rank measures newton's linear answer
+/// alike, so all move to `large` at the same α (0.1 on the paper's grid) and give the
+/// threaded run's rows, `model` column included.
+#[test]
+fn auto_on_ranks_is_the_threaded_run() {
+    ranks_agree_with_threads(
+        "cases/paper.toml",
+        &[
+            "load.alpha=[0.05, 0.1, 0.5]",
+            "model.geometry=\"auto\"",
+            "solver.reference=\"none\"",
+        ],
+        &[2],
+    );
+}
+
 #[test]
 fn scale_16_on_ranks_is_the_threaded_run() {
     ranks_agree_with_threads(

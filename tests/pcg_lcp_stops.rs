@@ -39,7 +39,8 @@ fn pcg_lcp_says_no_equilibrium_where_the_stays_go_slack() {
         "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
          [[supports.fix]]\nnodes = [0, 2, 3]\n\
          [[load.point]]\nnodes = [1]\nforce = [0.0, 0.0, 1000.0]\n\
-         [load]\nalpha = [0.5, 1.0]\n[solver]\nmethods = [\"pcg-lcp\"]\n",
+         [load]\nalpha = [0.5, 1.0]\n[model]\ngeometry = \"linear\"\n\
+         [solver]\nmethods = [\"pcg-lcp\"]\n",
     )
     .unwrap();
     let out = Temp::dir("bracket-out");

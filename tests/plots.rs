@@ -280,7 +280,7 @@ fn figures_need_no_history_file_and_nothing_is_drawn_unless_asked() {
 /// The case of [`case_text`] with one α and only the solvers named.
 fn small_case(alpha: f64, methods: &str, output: &str) -> String {
     format!(
-        "[grid]\nmodules = [4, 4]\n[load]\nalpha = [{alpha:?}]\n\
+        "[model]\ngeometry = \"linear\"\n[grid]\nmodules = [4, 4]\n[load]\nalpha = [{alpha:?}]\n\
          [solver]\nmethods = [{methods}]\nsubdomains = [2, 2]\n\
          [output]\nplots = true\nhistory = false\nsummary = false\ntensions = false\n\
          displacements = false\n{output}\n"

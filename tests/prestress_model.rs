@@ -315,7 +315,8 @@ fn check_says_solvable_only_of_what_it_does_not_refuse() {
 fn check_prints_one_count_of_mechanisms() {
     let case = Temp::file(
         "t9-strip",
-        "[grid]\nmodules = [40, 1]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\nalpha = [1]\n",
+        "[grid]\nmodules = [40, 1]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\nalpha = [1]\n\
+         [model]\ngeometry = \"linear\"\n",
     );
     let check = tensolve(&["check", case.arg()]);
     let text = output_text(&check);
@@ -387,7 +388,8 @@ fn tripod(tag: &str, kind: &str, rest: &str) -> Temp {
         tag,
         TRIPOD_NODES,
         &format!("member,a,b,kind,young,section,prestress\n{members}"),
-        &format!("[[supports.fix]]\nnodes = [0, 1, 2]\n{rest}"),
+        // The linear model's refusals and advice (`auto` would move on to `large`).
+        &format!("[model]\ngeometry = \"linear\"\n[[supports.fix]]\nnodes = [0, 1, 2]\n{rest}"),
     )
 }
 

@@ -320,7 +320,7 @@ fn refusals_name_the_mode_the_model_and_the_solver() {
     let (dir, case) = simplex_variant(
         "unstiffened",
         |table| without_prestress(table).join("\n") + "\n",
-        |text| text,
+        |text| text + "\n[model]\ngeometry = \"large\"\n",
     );
     let case = case.to_str().unwrap();
     for command in ["run", "check"] {
@@ -354,6 +354,20 @@ fn refusals_name_the_mode_the_model_and_the_solver() {
         let held = ["0", "1", "2"].contains(&row["node"].as_str());
         assert_eq!(motion == 0.0, held, "{row:?}");
     }
+    // Under `auto` (no pin), linear's refusal: a mechanism its prestress does not stiffen.
+    let (_auto_dir, auto_case) = simplex_variant(
+        "unstiffened-auto",
+        |table| without_prestress(table).join("\n") + "\n",
+        |text| text,
+    );
+    let auto = tensolve(&["check", auto_case.to_str().unwrap()]);
+    assert_eq!(auto.status.code(), Some(2));
+    assert!(
+        stderr(&auto).contains("zero-stiffness mode")
+            && stderr(&auto).contains("its prestress does not stiffen it either"),
+        "{}",
+        stderr(&auto)
+    );
     let linear = tensolve(&[
         "run",
         &case_path("simplex"),
@@ -433,8 +447,8 @@ fn self_stress_of_a_prestress_stable_mechanism() {
         },
         |text| {
             text.replace(
-                "[model]",
-                "[prestress]\nfrom = \"self-stress\"\nmember = 3\nforce = 2000.0\n\n[model]",
+                "[solver]",
+                "[prestress]\nfrom = \"self-stress\"\nmember = 3\nforce = 2000.0\n\n[solver]",
             )
         },
     );

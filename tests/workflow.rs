@@ -176,7 +176,7 @@ fn large_displacements_are_flagged() {
     let flagged = Temp::file(
         "large-displacement",
         "[grid]\nmodules = [24, 10]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\n\
-         alpha = [0.05, 1.0]\n[solver]\nmethods = [\"newton\"]\n",
+         alpha = [0.05, 1.0]\n[solver]\nmethods = [\"newton\"]\n[model]\ngeometry = \"linear\"\n",
     );
     let out = Temp::dir("large-displacement-out");
     let o = tensolve(&["run", flagged.arg(), "--out", out.arg()]);
@@ -245,7 +245,8 @@ fn the_geometric_term_is_computed_only_when_asked() {
     // none), whose run then releases K's factor after the mechanism check, solves alike.
     let text = |methods: &str, term: bool| {
         format!(
-            "[grid]\nmodules = [24, 10]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\n\
+            "[model]\ngeometry = \"linear\"\n\
+             [grid]\nmodules = [24, 10]\n[supports]\nclamp = \"lower-x-edges\"\n[load]\n\
              alpha = [0.05]\n[solver]\nmethods = {methods}\nreference = \"none\"\n\
              [output]\ngeometric_term = {term}\n"
         )

@@ -5,6 +5,7 @@
 
 pub mod against_large;
 pub mod allocator;
+pub mod auto;
 pub mod bench;
 pub mod check;
 pub mod compare;

@@ -3,7 +3,7 @@
 
 use crate::case::{Case, SolverChoice};
 use crate::decomposition::{Exchange, Homogenised, OneProcess};
-use crate::model::Model;
+use crate::model::{GeometricModel, Model};
 use crate::results::uniqueness;
 use crate::solvers::large::{Large, LargeNewton, LinearisedStep};
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
@@ -170,6 +170,21 @@ impl Prepared {
         self.share = Some(share);
         self.structure_seconds += clock.elapsed().as_secs_f64();
         Ok(true)
+    }
+
+    /// The same structure under `geometry`, its stiffness with every cable taut factorized
+    /// anew (`K + K_G(t0)` for the models with geometric stiffness): `auto`'s move to `large`.
+    pub fn under(&self, geometry: GeometricModel) -> Result<Prepared, SetupError> {
+        let clock = Instant::now();
+        let model = Model::new(self.model.structure.clone(), geometry);
+        let taut = TautStiffness::new(&model)?;
+        Ok(Prepared {
+            model,
+            taut: Some(taut),
+            structure_seconds: self.structure_seconds,
+            taut_seconds: clock.elapsed().as_secs_f64(),
+            share: None,
+        })
     }
 
     /// Drop the factor of K with every cable taut once the mechanism check is done, for a run

@@ -6,7 +6,7 @@
 use super::grid::grid_spec;
 use super::nodes::{index_of, select};
 use super::numbers::{vector, PHYSICAL_MAX};
-use super::raw::{RawCase, RawSupports};
+use super::raw::{GeometryKey, RawCase, RawSupports};
 use super::{load, modal, output, prestress, solver, Case, CaseError};
 use crate::host::{available, bytes_text};
 use crate::model::GeometricModel;
@@ -17,7 +17,14 @@ use std::path::Path;
 /// The typed case of a raw one, checked in file order; `[structure]` tables are read
 /// relative to `base`.
 pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
-    let model = raw.model.geometry.unwrap_or_default();
+    // `auto` (the default) starts on the initial geometry; the run moves to `large` where
+    // the scene calls for it.
+    let (model, model_auto) = match raw.model.geometry.unwrap_or(GeometryKey::Auto) {
+        GeometryKey::Auto => (GeometricModel::Linear, true),
+        GeometryKey::Linear => (GeometricModel::Linear, false),
+        GeometryKey::Prestress => (GeometricModel::Prestress, false),
+        GeometryKey::Large => (GeometricModel::Large, false),
+    };
     let model_tolerance = model_tolerance(raw.model.tolerance)?;
     // 1. The structure: a [grid]'s generated geometry and clamps, or a [structure]'s tables.
     let (grid, mut geometry, mut fixes) = structure(&raw, base)?;
@@ -31,7 +38,12 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         grid.is_some(),
         &mut geometry,
         &fixes,
-        model,
+        // A self-stress state under `auto` is computed with the mechanisms, as under `large`.
+        if model_auto {
+            GeometricModel::Large
+        } else {
+            model
+        },
         raw.rebalance,
     )?;
     prestress::check_balanced(&geometry, &fixes)?;
@@ -48,8 +60,9 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     let point_masses = modal::point_masses(&raw.modal, &geometry, &index_of)?;
     output::check_modes_have_mass(&output, &geometry, &point_masses)?;
     output::match_figure_alpha(&mut output, &load.alphas)?;
-    // 7. `large` follows the load path: its α in increasing order (docs/method.md §8).
-    if model == GeometricModel::Large {
+    // 7. `large` follows the load path: its α in increasing order (docs/method.md §8), as
+    //    does `auto`, which may move to `large` along the sweep.
+    if model == GeometricModel::Large || model_auto {
         load.alphas.sort_by(f64::total_cmp);
     }
     Ok(Case {
@@ -60,6 +73,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         solver,
         output,
         model,
+        model_auto,
         model_tolerance,
         modal_mass: raw.modal.mass.unwrap_or_default(),
         design,

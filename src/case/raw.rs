@@ -77,8 +77,19 @@ pub(super) struct RawPointMass {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawModel {
-    pub geometry: Option<crate::model::GeometricModel>,
+    pub geometry: Option<GeometryKey>,
     pub tolerance: Option<f64>,
+}
+
+/// `model.geometry`: a model the case pins, or `auto` (the default).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum GeometryKey {
+    /// The model chosen per row (docs/method.md §8, "auto").
+    Auto,
+    Linear,
+    Prestress,
+    Large,
 }
 
 /// `[grid]`.

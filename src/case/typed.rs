@@ -26,8 +26,14 @@ pub struct Case {
     pub solver: SolverChoice,
     /// What to write, and where.
     pub output: OutputChoice,
-    /// The geometric effects modelled (`model.geometry`). Default `linear`.
+    /// The geometric effects modelled (`model.geometry`): the model pinned, or under `auto`
+    /// the one the run starts with (`linear`; a mechanism the prestress stiffens starts
+    /// `large`, `crate::app::auto`).
     pub model: crate::model::GeometricModel,
+    /// `model.geometry = "auto"` (the default): each row is solved with the cheapest model
+    /// within `model_tolerance` of `large`, moving to `large` along the sweep where the
+    /// difference grows past it.
+    pub model_auto: bool,
     /// How far from the large-displacement answer a model on the initial geometry may be, as
     /// a fraction of the largest deflection and of the largest member force
     /// (`model.tolerance`; default [`crate::results::DEFAULT_MODEL_TOLERANCE`]).
@@ -47,6 +53,11 @@ impl Case {
     /// The model the case describes: its structure under its geometric model.
     pub fn model(&self) -> Model {
         Model::new(self.structure(), self.model)
+    }
+
+    /// Its structure under `geometry`.
+    pub fn model_with(&self, geometry: crate::model::GeometricModel) -> Model {
+        Model::new(self.structure(), geometry)
     }
 
     /// The structure the case describes, under its load at α = 1.

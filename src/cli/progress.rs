@@ -151,8 +151,8 @@ impl Reporter {
             RunEvent::LinksKept { kept, whole } => self.links_kept = Some((kept, whole)),
             RunEvent::Row(row) => {
                 // Rows refused (beyond the model, no equilibrium, unstable, not converged) have no
-                // answer whose geometric term means anything.
-                if row.needs_large() && row.converged {
+                // answer whose geometric term means anything; `auto` measured its own choice.
+                if row.needs_large() && row.converged && row.model_pinned {
                     let value = row.geometric_term.unwrap_or(0.0);
                     self.geometric.0 += 1;
                     let largest = |r: &SummaryRow| r.geometric_term.unwrap_or(0.0);
@@ -239,6 +239,8 @@ fn format_row(r: &SummaryRow) -> String {
             ));
         }
     }
+    // The model of the row, and why that one.
+    line.push_str(&format!(", {} ({})", r.model.name(), r.model_reason));
     if !r.status.no_answer()
         && !r.updates_geometry
         && r.max_member_rotation > tensolve::results::SMALL_DISPLACEMENT_LIMIT

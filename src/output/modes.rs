@@ -24,10 +24,9 @@ pub fn shapes_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
 
 /// The natural modes of every solve with a finite answer (converged or not, as the other
 /// per-solve files), `count` of them under `mass`.
-pub struct ModesSink<'s> {
+pub struct ModesSink {
     root: PathBuf,
     dir: PathBuf,
-    model: &'s Model,
     count: usize,
     mass: MassKind,
     /// Whether the modes go to a VTU file (`output.vtk`) and a figure (`output.plots`) too.
@@ -37,20 +36,19 @@ pub struct ModesSink<'s> {
     analysed: Option<(StiffnessPattern, SparseCholesky)>,
 }
 
-impl<'s> ModesSink<'s> {
-    /// `count` modes of `model` under `mass`, written under `dir/modes` (the staging
-    /// directory), with a VTU file of them when `vtk`; errors name the files under `root`.
+impl ModesSink {
+    /// `count` modes of each answer under its model and `mass`, written under `dir/modes`
+    /// (the staging directory), with a VTU file of them when `vtk`; errors name the files
+    /// under `root`.
     pub fn new(
         root: &Path,
         dir: &Path,
-        model: &'s Model,
         (count, mass): (usize, MassKind),
         (vtk, plots): (bool, bool),
     ) -> Self {
         ModesSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
-            model,
             count,
             mass,
             vtk,
@@ -60,23 +58,26 @@ impl<'s> ModesSink<'s> {
     }
 
     /// The modes at `eq`: none when `K_T − σM` factorizes for no shift tried.
-    fn modes(&mut self, eq: &Equilibrium) -> Vec<NaturalMode> {
-        let structure = &self.model.structure;
+    fn modes(&mut self, model: &Model, eq: &Equilibrium) -> Vec<NaturalMode> {
+        let structure = &model.structure;
         let (pattern, analysed) = self
             .analysed
             .get_or_insert_with(|| TautStiffness::analyse(structure));
         let carrying: Vec<bool> = eq.slack.iter().map(|&s| !s).collect();
         let at = (&eq.displacements[..], &eq.tensions[..], &carrying[..]);
-        natural_modes(self.model, at, pattern, analysed, self.count, self.mass).unwrap_or_default()
+        natural_modes(model, at, pattern, analysed, self.count, self.mass).unwrap_or_default()
     }
 }
 
-impl Sink for ModesSink<'_> {
+impl Sink for ModesSink {
     fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { solution, .. } = end else {
+        let SolveEnd::Solved {
+            solution, model, ..
+        } = end
+        else {
             return Ok(());
         };
-        let modes = self.modes(&solution.equilibrium);
+        let modes = self.modes(model, &solution.equilibrium);
         let solver = key.method.name();
         write_atomic(&result_path(&self.dir, "modes", solver, key.alpha), |w| {
             write_frequencies(w, &modes)
@@ -85,21 +86,21 @@ impl Sink for ModesSink<'_> {
             &self.root, "modes", solver, key.alpha,
         )))?;
         write_atomic(&shapes_path(&self.dir, solver, key.alpha), |w| {
-            write_shapes(w, self.model, &modes)
+            write_shapes(w, model, &modes)
         })
         .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))?;
         let u = &solution.equilibrium.displacements;
         if self.vtk {
             let path = modes_vtu_path(&self.dir, solver, key.alpha);
-            write_modes_vtu(&path, key.alpha, self.model, u, &modes).map_err(WriteError::at(
+            write_modes_vtu(&path, key.alpha, model, u, &modes).map_err(WriteError::at(
                 modes_vtu_path(&self.root, solver, key.alpha),
             ))?;
         }
         if self.plots {
             let figure =
                 |dir: &Path| result_path(dir, "modes", solver, key.alpha).with_extension("svg");
-            let at = modal_positions(self.model, u);
-            write_modes_svg(&figure(&self.dir), self.model, &at, &modes)
+            let at = modal_positions(model, u);
+            write_modes_svg(&figure(&self.dir), model, &at, &modes)
                 .map_err(WriteError::at(figure(&self.root)))?;
         }
         Ok(())

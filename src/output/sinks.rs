@@ -84,6 +84,8 @@ pub enum SolveEnd<'a> {
         solution: &'a Solution,
         /// Its row of `summary.csv`.
         row: &'a SummaryRow,
+        /// The model it was solved with (under `model.geometry = "auto"`, the row's).
+        model: &'a Model,
     },
     /// The answer has a non-finite value: no file of it is written.
     NonFinite,
@@ -177,23 +179,21 @@ type WriteSolve = fn(&Path, &str, f64, &Model, &Equilibrium) -> io::Result<PathB
 
 /// One file per solve, written when the solve ends with a finite answer:
 /// `tensions/…`, `displacements/…`, `forces/…`, `reactions/…`, `vtk/…`.
-pub struct PerSolveSink<'s> {
+pub struct PerSolveSink {
     root: PathBuf,
     dir: PathBuf,
-    model: &'s Model,
     write: WriteSolve,
     /// The file a write error names, under `root`.
     error_path: fn(&Path, &str, f64) -> PathBuf,
 }
 
-impl<'s> PerSolveSink<'s> {
+impl PerSolveSink {
     /// `tensions/{solver}_alpha{α}.csv` of `model`'s structure, written under `dir` (the
     /// staging directory); errors name the file under `root`.
-    pub fn tensions(root: &Path, dir: &Path, model: &'s Model) -> Self {
+    pub fn tensions(root: &Path, dir: &Path) -> Self {
         Self::new(
             root,
             dir,
-            model,
             |dir, solver, alpha, m, eq| write_tensions(dir, solver, alpha, &m.structure, eq),
             |dir, solver, alpha| result_path(dir, "tensions", solver, alpha),
         )
@@ -201,11 +201,10 @@ impl<'s> PerSolveSink<'s> {
 
     /// `displacements/{solver}_alpha{α}.csv` of `model`'s structure, written under `dir`;
     /// errors name the file under `root`.
-    pub fn displacements(root: &Path, dir: &Path, model: &'s Model) -> Self {
+    pub fn displacements(root: &Path, dir: &Path) -> Self {
         Self::new(
             root,
             dir,
-            model,
             |dir, solver, alpha, m, eq| write_displacements(dir, solver, alpha, &m.structure, eq),
             |dir, solver, alpha| result_path(dir, "displacements", solver, alpha),
         )
@@ -213,27 +212,26 @@ impl<'s> PerSolveSink<'s> {
 
     /// `forces/{solver}_alpha{α}.csv` of `model`, written under `dir`; errors name the file
     /// under `root`.
-    pub fn forces(root: &Path, dir: &Path, model: &'s Model) -> Self {
-        Self::new(root, dir, model, write_forces, |dir, solver, alpha| {
+    pub fn forces(root: &Path, dir: &Path) -> Self {
+        Self::new(root, dir, write_forces, |dir, solver, alpha| {
             result_path(dir, "forces", solver, alpha)
         })
     }
 
     /// `reactions/{solver}_alpha{α}.csv` of `model`, written under `dir`; errors name the
     /// file under `root`.
-    pub fn reactions(root: &Path, dir: &Path, model: &'s Model) -> Self {
-        Self::new(root, dir, model, write_reactions, |dir, solver, alpha| {
+    pub fn reactions(root: &Path, dir: &Path) -> Self {
+        Self::new(root, dir, write_reactions, |dir, solver, alpha| {
             result_path(dir, "reactions", solver, alpha)
         })
     }
 
     /// `vtk/{solver}_alpha{α}.vtu` of `model`'s structure, written under `dir`; errors name
     /// the file under `root`.
-    pub fn vtk(root: &Path, dir: &Path, model: &'s Model) -> Self {
+    pub fn vtk(root: &Path, dir: &Path) -> Self {
         Self::new(
             root,
             dir,
-            model,
             |dir, solver, alpha, m, eq| write_vtu(dir, solver, alpha, &m.structure, eq),
             vtu_path,
         )
@@ -242,30 +240,31 @@ impl<'s> PerSolveSink<'s> {
     fn new(
         root: &Path,
         dir: &Path,
-        model: &'s Model,
         write: WriteSolve,
         error_path: fn(&Path, &str, f64) -> PathBuf,
     ) -> Self {
         PerSolveSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
-            model,
             write,
             error_path,
         }
     }
 }
 
-impl Sink for PerSolveSink<'_> {
+impl Sink for PerSolveSink {
     fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { solution, .. } = end else {
+        let SolveEnd::Solved {
+            solution, model, ..
+        } = end
+        else {
             return Ok(());
         };
         (self.write)(
             &self.dir,
             key.method.name(),
             key.alpha,
-            self.model,
+            model,
             &solution.equilibrium,
         )
         .map(|_| ())
@@ -379,20 +378,24 @@ impl Sink for PublishSink<'_> {
 /// solve.
 pub struct StabilitySink<'s> {
     out: &'s RefCell<OutputDir>,
-    model: &'s Model,
     taut: &'s TautStiffness,
 }
 
 impl<'s> StabilitySink<'s> {
     /// `stability.csv` in `out`; the eigenvalues reuse the symbolic factorization of `taut`.
-    pub fn new(out: &'s RefCell<OutputDir>, model: &'s Model, taut: &'s TautStiffness) -> Self {
-        StabilitySink { out, model, taut }
+    pub fn new(out: &'s RefCell<OutputDir>, taut: &'s TautStiffness) -> Self {
+        StabilitySink { out, taut }
     }
 }
 
 impl Sink for StabilitySink<'_> {
     fn end(&mut self, _key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { solution, row } = end else {
+        let SolveEnd::Solved {
+            solution,
+            row,
+            model,
+        } = end
+        else {
             return Ok(());
         };
         let row = StabilityRow {
@@ -400,7 +403,7 @@ impl Sink for StabilitySink<'_> {
             alpha: row.alpha,
             slack_cables: row.slack_cables,
             min_tangent_eigenvalue: row.min_tangent_eigenvalue.unwrap_or_else(|| {
-                results::smallest_tangent_eigenvalue(self.model, &solution.equilibrium, self.taut)
+                results::smallest_tangent_eigenvalue(model, &solution.equilibrium, self.taut)
             }),
         };
         append(
@@ -416,23 +419,25 @@ impl Sink for StabilitySink<'_> {
 /// with an answer (the reactions' own table, `reactions/…`, holds one row per held component).
 pub struct ReactionTotalsSink<'s> {
     out: &'s RefCell<OutputDir>,
-    model: &'s Model,
 }
 
 impl<'s> ReactionTotalsSink<'s> {
-    /// `reaction_totals.csv` in `out`, of `model`'s reactions.
-    pub fn new(out: &'s RefCell<OutputDir>, model: &'s Model) -> Self {
-        ReactionTotalsSink { out, model }
+    /// `reaction_totals.csv` in `out`, of each solve's reactions under its model.
+    pub fn new(out: &'s RefCell<OutputDir>) -> Self {
+        ReactionTotalsSink { out }
     }
 }
 
 impl Sink for ReactionTotalsSink<'_> {
     fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
-        let SolveEnd::Solved { solution, .. } = end else {
+        let SolveEnd::Solved {
+            solution, model, ..
+        } = end
+        else {
             return Ok(());
         };
         let name = "reaction_totals.csv";
-        let totals = reaction_totals(self.model, &solution.equilibrium, key.alpha)
+        let totals = reaction_totals(model, &solution.equilibrium, key.alpha)
             .map_err(|e| withdrawn(self.out, name, e))?;
         let line = reaction_totals_line(key.method.name(), key.alpha, totals);
         append(self.out, name, REACTION_TOTALS_HEADER, &line)

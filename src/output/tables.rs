@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::labels::alpha_label;
-use crate::model::Model;
+use crate::model::{GeometricModel, Model};
 use crate::results;
 use crate::solvers::{Equilibrium, Measure, Solution, Status};
 use crate::structure::Structure;
@@ -74,6 +74,12 @@ pub struct SummaryRow {
     /// The largest member utilisation and its member, when the case checks members and the
     /// row has an answer (columns `max_utilisation`, `max_utilisation_member`).
     pub governing: Option<results::checks::Governing>,
+    /// The geometric model the row was solved with (column `model`).
+    pub model: GeometricModel,
+    /// Why that model (not a column: the solve line says it).
+    pub model_reason: String,
+    /// The case pins the model (else `auto` chose it): only a pinned model is warned of.
+    pub model_pinned: bool,
 }
 
 impl SummaryRow {
@@ -117,6 +123,12 @@ impl SummaryRow {
             path_reached: None,
             path_restarted: false,
             governing: None,
+            model: match measures.updates_geometry {
+                true => GeometricModel::Large,
+                false => GeometricModel::Linear,
+            },
+            model_reason: String::new(),
+            model_pinned: true,
         }
     }
 }
@@ -158,7 +170,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique,model";
 
 /// The columns `summary.csv` gains when the case checks members (a strength or an inertia).
 pub const SUMMARY_CHECK_COLUMNS: &str = ",max_utilisation,max_utilisation_member";
@@ -197,7 +209,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -235,6 +247,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         r.path_from.map(alpha_label).unwrap_or_default(),
         r.path_reached.map(alpha_label).unwrap_or_default(),
         r.uniqueness.as_ref().map_or("", |u| u.column()),
+        r.model.name(),
     )
 }
 

@@ -210,3 +210,40 @@ pub fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
 pub fn summary_rows(dir: &Path) -> Vec<std::collections::HashMap<String, String>> {
     csv_rows(&dir.join("summary.csv"))
 }
+
+/// The difference of two runs' answers by `solver` at `alpha` (`displacements/` and `forces/`
+/// written): the larger of `max_node |U − U_large| / max_node |U_large|` and
+/// `max_i |τᵢ − τᵢ_large| / max_i |τᵢ_large|`, `large` the second run.
+pub fn difference_of_runs(model: &Path, large: &Path, solver: &str, alpha: &str) -> f64 {
+    use std::collections::HashMap;
+    let number = |r: &HashMap<String, String>, key: &str| -> f64 {
+        r[key]
+            .parse()
+            .unwrap_or_else(|_| panic!("{key} = {:?}", r[key]))
+    };
+    let read =
+        |dir: &Path, what: &str| csv_rows(&dir.join(format!("{what}/{solver}_alpha{alpha}.csv")));
+    let motion = |r: &HashMap<String, String>| [number(r, "ux"), number(r, "uy"), number(r, "uz")];
+    let size = |u: [f64; 3]| u.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let (u, u_large) = (read(model, "displacements"), read(large, "displacements"));
+    let deflection = u_large.iter().map(|r| size(motion(r))).fold(0.0, f64::max);
+    let displacement = u
+        .iter()
+        .zip(&u_large)
+        .map(|(a, b)| {
+            let (a, b) = (motion(a), motion(b));
+            size([a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        })
+        .fold(0.0, f64::max);
+    let (f, f_large) = (read(model, "forces"), read(large, "forces"));
+    let largest = f_large
+        .iter()
+        .map(|r| number(r, "force_N").abs())
+        .fold(0.0, f64::max);
+    let force = f
+        .iter()
+        .zip(&f_large)
+        .map(|(a, b)| (number(a, "force_N") - number(b, "force_N")).abs())
+        .fold(0.0, f64::max);
+    (displacement / deflection).max(force / largest)
+}

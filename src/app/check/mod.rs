@@ -3,6 +3,7 @@
 
 mod text;
 
+use super::auto::{linear_start, mechanism_start, RowModel};
 use super::memory::{MemoryEstimate, Workload};
 use super::setup::zero_modes_by_substructures;
 use crate::case::Case;
@@ -50,8 +51,11 @@ pub struct ModelReport {
     pub counts: EquilibriumCounts,
     /// The lower cable prestress p, N.
     pub prestress: f64,
-    /// The geometric effects modelled (`model.geometry`).
+    /// The geometric effects modelled (`model.geometry`): under `auto`, the model it starts
+    /// with.
     pub geometry: GeometricModel,
+    /// Under `model.geometry = "auto"`: the model it starts with, and why.
+    pub auto: Option<RowModel>,
     /// The nodes' bounding box, m: `[min, max]` per axis.
     pub bounding_box: [[f64; 2]; 3],
     /// The range of the members' lengths, m.
@@ -80,6 +84,26 @@ pub struct ModelReport {
 }
 
 pub use crate::structure::{equilibrium_counts, EquilibriumCounts};
+
+/// Under `auto`, on a mechanism (`regular` the linear model's refusal): the `large` model it
+/// starts with when its prestress stiffens it (K + K_G(t0) factorizes), which `regular` and
+/// the report then say; `None` otherwise (a mechanism the prestress does not stiffen keeps
+/// linear's refusal).
+fn auto_large_start(
+    case: &Case,
+    regular: &mut Result<(), SetupError>,
+    report: &mut CheckReport,
+) -> Option<Model> {
+    if !case.model_auto || !matches!(regular, Err(SetupError::Mechanism { .. })) {
+        return None;
+    }
+    let large = case.model_with(GeometricModel::Large);
+    TautStiffness::new(&large).ok()?;
+    *regular = Ok(());
+    report.model.geometry = GeometricModel::Large;
+    report.model.auto = Some(mechanism_start());
+    Some(large)
+}
 
 impl ModelReport {
     /// Largest over smallest member stiffness `k = E·S/ℓ` (1 without members).
@@ -182,6 +206,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         },
         prestress: s.prestress_scale,
         geometry: case.model,
+        auto: case.model_auto.then(|| linear_start(case.model_tolerance)),
         bounding_box: s.bounding_box(),
         lengths: range(s.links.iter().map(|l| l.length)),
         axial_rigidity: range(s.links.iter().map(|l| l.stiffness * l.length)),
@@ -213,6 +238,9 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         Some(modes) => Err(TautStiffness::refusal(&case_model, modes)),
         None => TautStiffness::new(&case_model).map(drop),
     };
+    // Under `auto`, a mechanism its prestress stiffens starts `large`.
+    let large_model = auto_large_start(case, &mut regular, &mut report);
+    let case_model = large_model.as_ref().unwrap_or(&case_model);
     // The refusal's count of K's zero modes (m: k > 0 on every member) is the sparse one,
     // capped; the dense test's is exact, and the output says one m.
     if let (Err(SetupError::Mechanism { zero_modes, .. }), Some(st)) =
@@ -230,10 +258,10 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
     let at_rest;
     let latin_model = match case_model.updates_geometry() {
         true => {
-            at_rest = crate::solvers::large::latin_problem_at_rest(&case_model);
+            at_rest = crate::solvers::large::latin_problem_at_rest(case_model);
             &at_rest
         }
-        false => &case_model,
+        false => case_model,
     };
     for &method in &case.solver.methods {
         let Some(settings) = case.solver.latin_settings(method) else {
@@ -316,7 +344,8 @@ mod tests {
         case::parse(&format!(
             "[grid]\nmodules = [20, 5]\nmodule = \"{module}\"\n[supports]\nclamp = \"{clamp}\"\n\
              [load]\nalpha = [1.0]\n[solver]\nmethods = [{methods}]\nreference = \"none\"\n\
-             subdomains = [2, 1]\n[output]\ngeometric_term = false\n"
+             subdomains = [2, 1]\n[output]\ngeometric_term = false\n\
+             [model]\ngeometry = \"linear\"\n"
         ))
         .expect("the case parses")
     }

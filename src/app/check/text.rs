@@ -104,12 +104,21 @@ impl CheckReport {
     /// mechanisms' prestress stability).
     fn write_model(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let m = &self.model;
-        writeln!(
-            f,
-            "model           geometry = {} ({})",
-            m.geometry.name(),
-            m.geometry.description()
-        )?;
+        match &m.auto {
+            Some(start) => writeln!(
+                f,
+                "model           geometry = auto, starts {} ({}): {}",
+                m.geometry.name(),
+                m.geometry.description(),
+                start.reason.trim_start_matches("auto: ")
+            )?,
+            None => writeln!(
+                f,
+                "model           geometry = {} ({})",
+                m.geometry.name(),
+                m.geometry.description()
+            )?,
+        }
         writeln!(
             f,
             "max |B^T t0|    {:.3e} N ({:.1e} of the prestress scale)",

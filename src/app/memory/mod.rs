@@ -122,8 +122,8 @@ fn whole_structure_units<'m>(methods: impl Iterator<Item = &'m Method>) -> f64 {
 /// What a command will do with the structure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Workload {
-    /// The solvers set up together (the run's solvers, and LATIN's reference solver when it
-    /// is not one of them).
+    /// The solvers set up together (the run's solvers, LATIN's reference solver when it is not
+    /// one of them, and newton as `auto`'s probe).
     pub methods: Vec<Method>,
     /// `output.stability`: one more factorization of the tangent stiffness per row.
     pub stability: bool,
@@ -276,6 +276,10 @@ impl Workload {
             if methods.iter().any(|m| m.reports_error()) && !shared {
                 all.push(reference);
             }
+        }
+        // `auto` measures newton's linear answer at each α against `large` (its probe).
+        if case.model_auto && !all.contains(&Method::Newton) {
+            all.push(Method::Newton);
         }
         let keeps_taut = AnswerChecks::of(case).any() || all.iter().any(|m| !m.is_latin());
         Workload {

@@ -117,20 +117,16 @@ pub(super) fn sinks<'s>(
                 .map_or(structure.n_cables(), |share| share.world_cables()),
         ),
     );
-    sinks.add(out.tensions, PerSolveSink::tensions(root, dir, model));
-    sinks.add(
-        out.displacements,
-        PerSolveSink::displacements(root, dir, model),
-    );
-    sinks.add(out.forces, PerSolveSink::forces(root, dir, model));
-    sinks.add(out.reactions, PerSolveSink::reactions(root, dir, model));
-    sinks.add(out.vtk, PerSolveSink::vtk(root, dir, model));
+    sinks.add(out.tensions, PerSolveSink::tensions(root, dir));
+    sinks.add(out.displacements, PerSolveSink::displacements(root, dir));
+    sinks.add(out.forces, PerSolveSink::forces(root, dir));
+    sinks.add(out.reactions, PerSolveSink::reactions(root, dir));
+    sinks.add(out.vtk, PerSolveSink::vtk(root, dir));
     sinks.add(
         out.modes > 0,
         ModesSink::new(
             root,
             dir,
-            model,
             (out.modes, case.modal_mass),
             (out.vtk, out.plots),
         ),
@@ -148,9 +144,9 @@ pub(super) fn sinks<'s>(
     }
     sinks.add(true, PublishSink::new(output));
     if let Some(taut) = taut {
-        sinks.add(out.stability, StabilitySink::new(output, model, taut));
+        sinks.add(out.stability, StabilitySink::new(output, taut));
     }
-    sinks.add(out.reactions, ReactionTotalsSink::new(output, model));
+    sinks.add(out.reactions, ReactionTotalsSink::new(output));
     let checks = model.structure.checks.is_some();
     sinks.add(out.summary, SummarySink::new(output, checks));
     sinks

@@ -5,6 +5,7 @@
 mod error;
 mod figure12;
 mod files;
+mod models;
 mod path;
 mod sharing;
 mod verdict;
@@ -12,12 +13,14 @@ mod verdict;
 use error::on_every_rank;
 pub use error::RunError;
 use files::{open_output, sinks, write_homogenised, write_mechanisms};
+use models::Models;
 use path::PathStart;
 pub use sharing::Sharing;
 
+use super::auto::{prepare_start, RowModel};
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
-use super::setup::{prepare_keeping, set_up_on, AnswerChecks, Prepared, SetUpSolver};
+use super::setup::{set_up_on, AnswerChecks, Prepared, SetUpSolver};
 use crate::case::Case;
 use crate::decomposition::{Exchange, OneProcess};
 use crate::output::{alpha_label, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError};
@@ -141,11 +144,13 @@ pub fn run_on(
         true => "building the structure and checking it for mechanisms by substructures",
         false => "building the structure and factorising its taut stiffness",
     }));
-    let prepared = match writes || work.keeps_taut {
-        true => prepare_or_locate_mechanisms(described, &dir, writes, work.keeps_taut),
-        false => Ok(Prepared::unchecked(described)),
+    //    Under `auto`, the model it starts with: `linear`, or `large` for a mechanism its
+    //    prestress stiffens (which the case then says).
+    let started = match writes || work.keeps_taut {
+        true => prepare_or_locate_mechanisms(&mut case, &dir, writes, work.keeps_taut),
+        false => Ok((Prepared::unchecked(&case), RowModel::pinned(case.model))),
     };
-    let mut prepared = on_every_rank(exchange, prepared)?;
+    let (mut prepared, start) = on_every_rank(exchange, started)?;
     if !work.keeps_taut {
         prepared.release_taut();
     }
@@ -192,8 +197,11 @@ pub fn run_on(
     };
     on_every_rank(exchange, homogenised)?;
     // 6. Every α, every solver (steps 7–9 in `Sweep`); 10. the files of the whole sweep.
+    // 6a. The model of each α's rows: the case's, or under `auto` chosen per α.
+    let large = std::cell::OnceCell::new();
+    let models = Models::new(case, &methods, start, &prepared, &large)?;
     let mut sweep = Sweep::new(
-        case, &prepared, solvers, reference, sinks, exchange, sharing,
+        models, &prepared, solvers, reference, sinks, exchange, sharing,
     );
     for &alpha in &case.load.alphas {
         sweep.solve_alpha(alpha, events)?;
@@ -268,16 +276,17 @@ fn set_up_all<'s>(
     Ok(solvers)
 }
 
-/// The structure of `case` and its taut stiffness; a refused mechanism's modes, node by node,
+/// The structure of `case` and its taut stiffness, under the model it starts with
+/// ([`prepare_start`]); a refused mechanism's modes, node by node,
 /// are written to `mechanisms.csv` under `dir` before the refusal is returned (by the process
 /// that `writes`).
 fn prepare_or_locate_mechanisms(
-    case: &Case,
+    case: &mut Case,
     dir: &Path,
     writes: bool,
     keeps_taut: bool,
-) -> Result<Prepared, RunError> {
-    prepare_keeping(case, keeps_taut).or_else(|refused| {
+) -> Result<(Prepared, RowModel), RunError> {
+    prepare_start(case, keeps_taut).or_else(|refused| {
         if writes && !refused.modes().is_empty() {
             write_mechanisms(dir, refused.modes())?;
         }
@@ -307,11 +316,13 @@ struct Sweep<'s> {
     exchange: &'s dyn Exchange,
     /// Which ranks keep only their substructures' links.
     sharing: Sharing,
+    /// The model of each α's rows.
+    models: Models<'s>,
 }
 
 impl<'s> Sweep<'s> {
     fn new(
-        case: &Case,
+        models: Models<'s>,
         prepared: &'s Prepared,
         solvers: Vec<SetUpSolver<'s>>,
         reference: ReferenceSource<'s>,
@@ -328,7 +339,8 @@ impl<'s> Sweep<'s> {
             solvers,
             reference,
             sinks,
-            checks: AnswerChecks::of(case),
+            checks: AnswerChecks::of(models.case),
+            models,
             rows: Vec::new(),
             failures: Vec::new(),
         }
@@ -341,6 +353,7 @@ impl<'s> Sweep<'s> {
         alpha: f64,
         events: &mut dyn FnMut(RunEvent<'_>),
     ) -> Result<(), RunError> {
+        self.choose_model(alpha, events)?;
         let model = &self.prepared.model;
         let load = model.load(alpha);
         if self.reference.needed() {
@@ -457,6 +470,9 @@ impl<'s> Sweep<'s> {
             )
             .on_path(path);
             row.model_tolerance = self.checks.model_tolerance;
+            row.model = self.models.row.model;
+            row.model_reason = self.models.row.reason.clone();
+            row.model_pinned = self.models.row.pinned;
             row.uniqueness = verdict.uniqueness.clone();
             // The member checks, on the answer of a row that has one (rank 0 holds every link).
             row.governing = (together.is_none() && !row.status.no_answer())
@@ -491,6 +507,7 @@ impl<'s> Sweep<'s> {
             false => SolveEnd::Solved {
                 solution: &solution,
                 row: &row,
+                model: &self.prepared.model,
             },
         };
         self.sinks.end(key, end)?;

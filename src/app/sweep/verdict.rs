@@ -342,7 +342,8 @@ mod tests {
     #[test]
     fn a_solvers_certificate_holds_on_a_non_finite_answer() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/simplex.toml");
-        let case = crate::case::load_with(&path, &[]).unwrap();
+        let set = ["model.geometry = \"large\"".to_string()];
+        let case = crate::case::load_with(&path, &set).unwrap();
         let prepared = crate::app::setup::prepare(&case).unwrap();
         let s = &prepared.model.structure;
         let none = NoEquilibrium {
