@@ -104,6 +104,15 @@ impl CurrentGeometry {
             .collect()
     }
 
+    /// The member forces τ on this geometry: the trial tensions, a slack cable's clipped to 0.
+    pub fn tensions(&self, s: &Structure) -> Vec<f64> {
+        s.links
+            .iter()
+            .zip(self.trial_tensions(s))
+            .map(|(l, t)| tension(l, t))
+            .collect()
+    }
+
     /// `r ← Σ τ ∇ℓ − F` on this geometry (docs/method.md §8: the large model's energy
     /// gradient) and its sizes ([`unbalances_on`]); returns the trial tensions
     /// `t0 + k (ℓ − L)` too.

@@ -8,7 +8,7 @@
 //! which `model.geometry = "auto"` decides by.
 
 use super::uniqueness::CHECKED_UP_TO_DOFS;
-use crate::model::material::tension;
+use crate::linalg::SparseCholesky;
 use crate::model::{CurrentGeometry, Model};
 use crate::solvers::{Equilibrium, TautStiffness};
 
@@ -45,8 +45,9 @@ pub fn geometric_term(
     if !moves(model, eq) {
         return None;
     }
-    let stepped = newton_step(model, u, load, taut);
-    let term = relative_change(model, u, &eq.tensions, &stepped);
+    let stepped = HessianSteps::new(taut).step(model, u, load);
+    let stepped_forces = large_forces(&model.structure, &stepped);
+    let term = relative_change(model, (u, &eq.tensions), (&stepped, &stepped_forces));
     term.is_finite().then_some(term)
 }
 
@@ -81,13 +82,17 @@ pub fn distance_to_large(
         return LargeDistance::Within(0.0);
     }
     let s = &model.structure;
+    let mut steps = HessianSteps::new(taut);
     let mut u = eq.displacements.clone();
+    let mut forces = large_forces(s, &u);
     for step in 1..=DISTANCE_STEPS {
-        let stepped = newton_step(model, &u, load, taut);
-        let distance = relative_change(model, &eq.displacements, &eq.tensions, &stepped);
+        let stepped = steps.step(model, &u, load);
+        let stepped_forces = large_forces(s, &stepped);
+        let to = (&stepped[..], &stepped_forces[..]);
+        let distance = relative_change(model, (&eq.displacements, &eq.tensions), to);
         // The step's own size, on the same measure (the large model's forces at both ends).
-        let last_step = relative_change(model, &u, &large_forces(s, &u), &stepped);
-        u = stepped;
+        let last_step = relative_change(model, (&u, &forces), to);
+        (u, forces) = (stepped, stepped_forces);
         if !distance.is_finite() || !last_step.is_finite() {
             return LargeDistance::Unsettled;
         }
@@ -110,49 +115,59 @@ fn moves(model: &Model, eq: &Equilibrium) -> bool {
     !model.updates_geometry() && deflection.is_finite() && deflection > 0.0
 }
 
-/// `U − H(U)⁻¹ r(U)`: one Newton step of the large model from `u`, r = Σ τ ∇ℓ − F on the
-/// current geometry, H its Hessian there (K with every cable taut where H does not factorize
-/// or is too large to).
-fn newton_step(model: &Model, u: &[f64], load: &[f64], taut: &TautStiffness) -> Vec<f64> {
-    let s = &model.structure;
-    let geometry = CurrentGeometry::of(s, u);
-    let mut step = vec![0.0; u.len()];
-    let (trial, _) = geometry.unbalances(s, load, &mut step);
-    let mut hessian_factor = None;
-    if s.n_free <= CHECKED_UP_TO_DOFS {
-        let mut hessian = vec![0.0; taut.pattern.nnz()];
-        geometry.assemble_tangent(s, &trial, &taut.pattern, &mut hessian);
-        let mut factor = taut.factor.share_symbolic();
-        hessian_factor = factor
-            .factorize(&taut.pattern, &hessian)
-            .is_ok()
-            .then_some(factor);
-    }
-    // δ = −H⁻¹ r.
-    hessian_factor
-        .as_ref()
-        .unwrap_or(&taut.factor)
-        .solve_in_place(&mut step);
-    u.iter().zip(&step).map(|(a, d)| a - d).collect()
+/// Newton steps of the large model, `U − H(U)⁻¹ r(U)`, r = Σ τ ∇ℓ − F on the current
+/// geometry and H its Hessian there (K with every cable taut where H does not factorize or is
+/// too large to): one factor and one value array on K's analysis, refactorized at each step.
+struct HessianSteps<'t> {
+    taut: &'t TautStiffness,
+    /// H's factor and values, when the structure is small enough for them.
+    hessian: Option<(SparseCholesky, Vec<f64>)>,
 }
 
-/// The change from displacements `u` with member forces `forces` to the large model at
-/// `stepped`, relative to the latter: the larger of `max_node |U' − U| / max_node |U'|` (U'
-/// with its prescribed displacements; the change moves free dofs only) and
-/// `max_i |τᵢ(U') − τᵢ| / max_i |τᵢ(U')|`, the large model's member forces at U' against
-/// `forces`. Motions below [`ROUND_OFF_MOTION`] of the structure's size (an unloaded answer's
-/// round-off) are no deflection to be relative to.
-fn relative_change(model: &Model, u: &[f64], forces: &[f64], stepped: &[f64]) -> f64 {
+impl<'t> HessianSteps<'t> {
+    fn new(taut: &'t TautStiffness) -> Self {
+        let small = taut.pattern.n <= CHECKED_UP_TO_DOFS;
+        HessianSteps {
+            taut,
+            hessian: small.then(|| (taut.factor.share_symbolic(), vec![0.0; taut.pattern.nnz()])),
+        }
+    }
+
+    /// One step from `u`: `u − H(u)⁻¹ r(u)`.
+    fn step(&mut self, model: &Model, u: &[f64], load: &[f64]) -> Vec<f64> {
+        let s = &model.structure;
+        let geometry = CurrentGeometry::of(s, u);
+        let mut step = vec![0.0; u.len()];
+        let (trial, _) = geometry.unbalances(s, load, &mut step);
+        let pattern = &self.taut.pattern;
+        let factored = self.hessian.as_mut().and_then(|(factor, values)| {
+            geometry.assemble_tangent(s, &trial, pattern, values);
+            factor
+                .factorize(pattern, values)
+                .is_ok()
+                .then_some(&*factor)
+        });
+        // δ = −H⁻¹ r.
+        factored
+            .unwrap_or(&self.taut.factor)
+            .solve_in_place(&mut step);
+        u.iter().zip(&step).map(|(a, d)| a - d).collect()
+    }
+}
+
+/// The change from displacements U with member forces τ (`from`) to displacements U' with
+/// the large model's forces τ' there (`to`), relative to the latter: the larger of
+/// `max_node |U' − U| / max_node |U'|` (U' with its prescribed displacements; the change
+/// moves free dofs only) and `max_i |τ'ᵢ − τᵢ| / max_i |τ'ᵢ|`. Motions below
+/// [`ROUND_OFF_MOTION`] of the structure's size (an unloaded answer's round-off) are no
+/// deflection to be relative to.
+fn relative_change(model: &Model, from: (&[f64], &[f64]), to: (&[f64], &[f64])) -> f64 {
     let s = &model.structure;
+    let ((u, forces), (stepped, after)) = (from, to);
     let change: Vec<f64> = stepped.iter().zip(u).map(|(a, b)| a - b).collect();
-    let change_motion = s
-        .full_change(&change)
-        .chunks(3)
-        .map(|d| d[0].hypot(d[1]).hypot(d[2]))
-        .fold(0.0, f64::max);
+    let change_motion = super::largest_node_norm(&s.full_change(&change));
     let floor = ROUND_OFF_MOTION * s.size();
     let displacement_change = change_motion / super::largest_motion(s, stepped).max(floor);
-    let after = large_forces(s, stepped);
     let largest_force = after.iter().fold(0.0, |m: f64, t| m.max(t.abs()));
     let force_change = after
         .iter()
@@ -168,10 +183,5 @@ fn relative_change(model: &Model, u: &[f64], forces: &[f64], stepped: &[f64]) ->
 
 /// The large model's member forces at `u` (a slack cable's 0).
 fn large_forces(s: &crate::structure::Structure, u: &[f64]) -> Vec<f64> {
-    CurrentGeometry::of(s, u)
-        .trial_tensions(s)
-        .iter()
-        .zip(&s.links)
-        .map(|(&trial, l)| tension(l, trial))
-        .collect()
+    CurrentGeometry::of(s, u).tensions(s)
 }
