@@ -10,31 +10,30 @@ use std::collections::HashMap;
 
 type Row = HashMap<String, String>;
 
-/// `case` (its path) by newton at `alphas`, with `sets`, its displacements and forces written:
-/// the rows and the run's stderr.
-fn run(case: &str, alphas: &str, sets: &[&str], out: &Temp) -> (Vec<Row>, String) {
+/// `tensolve run` of `case` (its path under the repository) into `out`, one `--set` per
+/// entry of `sets`.
+fn run_with(case: &str, sets: &[&str], out: &Temp) -> std::process::Output {
     let case = manifest_path(case);
-    let alpha = format!("load.alpha={alphas}");
-    let mut args = vec![
-        "run",
-        case.to_str().unwrap(),
-        "--solver",
-        "newton",
-        "--set",
-        &alpha,
-        "--set",
-        "output.displacements=true",
-        "--set",
-        "output.forces=true",
-        "--set",
-        "output.plots=false",
-        "--out",
-        out.arg(),
-    ];
+    let mut args = vec!["run", case.to_str().unwrap(), "--out", out.arg()];
     for set in sets {
         args.extend(["--set", set]);
     }
-    let o = tensolve(&args);
+    tensolve(&args)
+}
+
+/// `case` by newton at `alphas`, with `sets`, its displacements and forces written: the rows
+/// and the run's stderr.
+fn run(case: &str, alphas: &str, sets: &[&str], out: &Temp) -> (Vec<Row>, String) {
+    let alpha = format!("load.alpha={alphas}");
+    let mut all = vec![
+        "solver.methods=[\"newton\"]",
+        alpha.as_str(),
+        "output.displacements=true",
+        "output.forces=true",
+        "output.plots=false",
+    ];
+    all.extend(sets);
+    let o = run_with(case, &all, out);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     (csv_rows(&out.0.join("summary.csv")), stderr(&o))
 }
@@ -186,21 +185,17 @@ fn the_shipped_tensegrities_run_with_no_model_key_and_say_why_large() {
 #[test]
 fn the_solve_line_and_check_say_which_model_and_why() {
     let out = Temp::dir("auto-lines");
-    let case = manifest_path("cases/paper.toml");
-    let o = tensolve(&[
-        "run",
-        case.to_str().unwrap(),
-        "--solver",
-        "newton",
-        "--set",
-        "model.geometry=\"auto\"",
-        "--set",
-        "load.alpha=[0.01, 0.25, 0.5]",
-        "--set",
-        "output.plots=false",
-        "--out",
-        out.arg(),
-    ]);
+    let newton = "solver.methods=[\"newton\"]";
+    let o = run_with(
+        "cases/paper.toml",
+        &[
+            newton,
+            "model.geometry=\"auto\"",
+            "load.alpha=[0.01, 0.25, 0.5]",
+            "output.plots=false",
+        ],
+        &out,
+    );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let err = stderr(&o);
     for line in [
@@ -216,18 +211,11 @@ fn the_solve_line_and_check_say_which_model_and_why() {
     assert!(!err.contains("leave out a geometric term"), "{err}");
     // A pinned model says so.
     let pinned = Temp::dir("auto-pinned");
-    let o = tensolve(&[
-        "run",
-        case.to_str().unwrap(),
-        "--solver",
-        "newton",
-        "--set",
-        "load.alpha=[0.01]",
-        "--set",
-        "output.plots=false",
-        "--out",
-        pinned.arg(),
-    ]);
+    let o = run_with(
+        "cases/paper.toml",
+        &[newton, "load.alpha=[0.01]", "output.plots=false"],
+        &pinned,
+    );
     assert!(stderr(&o).contains("linear (pinned)"), "{}", stderr(&o));
     // `check` says what `auto` starts with.
     let check = |case: &str| {
@@ -260,15 +248,7 @@ fn the_solve_line_and_check_say_which_model_and_why() {
 #[test]
 fn a_bad_model_geometry_exits_2_naming_the_key_and_the_choices() {
     let out = Temp::dir("auto-bad");
-    let case = manifest_path("cases/prism4.toml");
-    let o = tensolve(&[
-        "run",
-        case.to_str().unwrap(),
-        "--set",
-        "model.geometry=\"automatic\"",
-        "--out",
-        out.arg(),
-    ]);
+    let o = run_with("cases/prism4.toml", &["model.geometry=\"automatic\""], &out);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
