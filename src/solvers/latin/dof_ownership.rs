@@ -16,6 +16,14 @@ pub(super) struct DofOwnership {
     pub(super) n_shared: usize,
     /// Per substructure, the local indices of its shared dofs.
     pub(super) shared_local: Vec<Vec<u32>>,
+    /// Per free dof, its local index in its owner.
+    owner_local: Vec<u32>,
+    /// Per shared dof (by slot), where its holders other than the owner start in
+    /// `other_holders` (one more entry than slots).
+    other_start: Vec<u32>,
+    /// The holders of shared dofs other than their owners, `(substructure, local index)`, in
+    /// the substructures' order.
+    other_holders: Vec<(u32, u32)>,
 }
 
 /// [`DofOwnership::shared_slot`] of a dof only one substructure holds.
@@ -32,13 +40,36 @@ impl DofOwnership {
         self.shared_slot[d] as usize
     }
 
+    /// The mean of a free dof's values in the substructures holding it,
+    /// `(0 + v_1 + v_2 + …) / count` in the substructures' order (0 where none holds it);
+    /// `value(e, local)` reads substructure e's value.
+    pub(super) fn mean(&self, d: usize, value: impl Fn(usize, usize) -> f64) -> f64 {
+        let e = self.owner[d];
+        if e == u32::MAX {
+            return 0.0;
+        }
+        let mut sum = 0.0 + value(e as usize, self.owner_local[d] as usize);
+        let slot = self.shared_slot[d];
+        if slot == NOT_SHARED {
+            return sum;
+        }
+        let range =
+            self.other_start[slot as usize] as usize..self.other_start[slot as usize + 1] as usize;
+        for &(e, local) in &self.other_holders[range.clone()] {
+            sum += value(e as usize, local as usize);
+        }
+        sum / (1 + range.len()) as f64
+    }
+
     pub(super) fn of(subs: &[Substructure], n_free: usize) -> DofOwnership {
         let mut owner = vec![u32::MAX; n_free];
+        let mut owner_local = vec![0u32; n_free];
         let mut holders = vec![0u8; n_free];
         for (e, sub) in subs.iter().enumerate() {
-            for &d in &sub.dof_global {
+            for (local, &d) in sub.dof_global.iter().enumerate() {
                 if owner[d] == u32::MAX {
                     owner[d] = e as u32;
+                    owner_local[d] = local as u32;
                 }
                 holders[d] = holders[d].saturating_add(1);
             }
@@ -62,11 +93,51 @@ impl DofOwnership {
                     .collect()
             })
             .collect();
+        let (other_start, other_holders) = other_holders(subs, &owner, &shared_slot, n_shared);
         DofOwnership {
             owner,
             shared_slot,
             n_shared,
             shared_local,
+            owner_local,
+            other_start,
+            other_holders,
         }
     }
+}
+
+/// Per shared slot, the holders of that dof other than its owner, in the substructures' order
+/// (a count, a prefix sum, then a fill).
+fn other_holders(
+    subs: &[Substructure],
+    owner: &[u32],
+    shared_slot: &[u32],
+    n_shared: usize,
+) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let others = |e: usize| {
+        subs[e]
+            .dof_global
+            .iter()
+            .enumerate()
+            .filter(move |&(_, &d)| shared_slot[d] != NOT_SHARED && owner[d] as usize != e)
+    };
+    let mut start = vec![0u32; n_shared + 1];
+    for e in 0..subs.len() {
+        for (_, &d) in others(e) {
+            start[shared_slot[d] as usize + 1] += 1;
+        }
+    }
+    for k in 0..n_shared {
+        start[k + 1] += start[k];
+    }
+    let mut next = start.clone();
+    let mut holders = vec![(0u32, 0u32); start[n_shared] as usize];
+    for e in 0..subs.len() {
+        for (local, &d) in others(e) {
+            let at = &mut next[shared_slot[d] as usize];
+            holders[*at as usize] = (e as u32, local as u32);
+            *at += 1;
+        }
+    }
+    (start, holders)
 }

@@ -91,7 +91,8 @@ impl Latin<'_> {
             &self.input_pieces(&state.subs),
         );
         self.set_linear_stage_input(&mut state.subs, &next);
-        state.acceleration.input = next;
+        let old = std::mem::replace(&mut state.acceleration.input, next);
+        state.acceleration.anderson.recycle(old);
         let accuracy = self.macro_accuracy(state);
         self.linear_stage(&state.load, &mut state.subs, None, accuracy);
         let residuals = self.local_stage_measuring(state);

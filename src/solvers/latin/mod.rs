@@ -58,9 +58,11 @@ pub use state::{LatinState, StatusSteps};
 pub(crate) use state::{SideState, SubState};
 pub(crate) use substructure::{OperatorStorage, Substructure};
 
+use crate::linalg::CHUNK;
 use crate::model::Model;
 use crate::structure::Structure;
 use macro_problem::MacroProblem;
+use rayon::prelude::*;
 
 /// What `tensolve check` prints about a partition.
 #[derive(Debug, Clone)]
@@ -239,18 +241,12 @@ impl<'s> Latin<'s> {
     /// U of the linear stage on the free dofs, interface nodes averaged over the
     /// substructures holding them.
     fn displacements(&self, subs: &[SubState]) -> Vec<f64> {
-        let n = self.structure.n_free;
-        let (mut u, mut count) = (vec![0.0; n], vec![0u32; n]);
-        for (sub, st) in self.substructures.iter().zip(subs) {
-            for (local, &global) in sub.dof_global.iter().enumerate() {
-                u[global] += st.u[local];
-                count[global] += 1;
-            }
-        }
-        u.iter_mut()
-            .zip(&count)
-            .for_each(|(ui, &c)| *ui /= c.max(1) as f64);
-        u
+        let own = &self.dof_ownership;
+        (0..self.structure.n_free)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .map(|d| own.mean(d, |e, local| subs[e].u[local]))
+            .collect()
     }
 
     /// Every substructure's homogenised flexibility and macro basis, with l as set up (a
