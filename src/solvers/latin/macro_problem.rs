@@ -68,7 +68,7 @@ const APPLY_ROWS_PER_TASK: usize = 512;
 /// The pattern of the macro matrix, fixed by the partition and the kernels (the search
 /// directions change only values): its lower triangle, the order that maps the assembly's
 /// entries onto it, and the symbolic `L D Lᵀ` analysis (AMD).
-struct MacroPattern {
+pub(super) struct MacroPattern {
     lower: SymbolicSparseColMat<usize>,
     argsort: Argsort<usize>,
     /// Number of assembled entries the order maps (the same partition always gives the same).
@@ -83,7 +83,7 @@ struct MacroPattern {
 
 /// The scaled augmented matrix `D [Ã, N; Nᵀ, 0] D` (lower triangle, D = √d_m on forces,
 /// 1/√d_m on kernel amplitudes: every block O(1)) and its `L D Lᵀ` factor.
-struct Factor {
+pub(super) struct Factor {
     pattern: Arc<MacroPattern>,
     lower: SparseColMat<usize, f64>,
     values: Vec<f64>,
@@ -307,7 +307,10 @@ impl MacroProblem {
 impl MacroPattern {
     /// The pattern of `entries` (n × n, lower triangle), its assembly order and its symbolic
     /// `L D Lᵀ` analysis (AMD).
-    fn new(n: usize, entries: &[Pair<usize, usize>]) -> Result<Self, SingularMacroProblem> {
+    pub(super) fn new(
+        n: usize,
+        entries: &[Pair<usize, usize>],
+    ) -> Result<Self, SingularMacroProblem> {
         let (lower, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, entries)
             .map_err(|_| SingularMacroProblem)?;
         let symbolic = factorize_symbolic_cholesky(
@@ -332,7 +335,7 @@ impl MacroPattern {
 impl Factor {
     /// The regularised `L D Lᵀ` factor of the matrix of `values` (in `pattern`'s assembly
     /// order); the first `n_forces` unknowns are forces (+), the rest kernel amplitudes (−).
-    fn new(
+    pub(super) fn new(
         pattern: Arc<MacroPattern>,
         values: &[f64],
         n_forces: usize,
@@ -408,7 +411,7 @@ impl Factor {
 impl Factor {
     /// `M y`, M symmetric stored by its lower triangle: row i is lower column i (rows ≥ i)
     /// and lower row i (columns < i), each row summed alone, rows in parallel.
-    fn apply(&self, y: &[f64]) -> Vec<f64> {
+    pub(super) fn apply(&self, y: &[f64]) -> Vec<f64> {
         let m = self.lower.as_ref();
         let (rows, vals) = (m.symbolic().row_idx(), m.val());
         let pattern = &self.pattern;
@@ -526,53 +529,4 @@ fn equilibration(m: SparseColMatRef<'_, usize, f64>, n_forces: usize) -> Vec<f64
         }
     }
     scaling
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `M y` row by row in parallel against the dense symmetric product, on a 40 × 40 banded
-    /// matrix stored by its lower triangle with a duplicated entry (assembly adds them):
-    /// every row to 1e-14 of its scale, so a dropped or doubled off-diagonal entry fails.
-    #[test]
-    fn the_macro_operator_by_rows_is_the_symmetric_product() {
-        let n = 40;
-        let mut entries = Vec::new();
-        let mut values = Vec::new();
-        for c in 0..n {
-            for r in c..(c + 4).min(n) {
-                entries.push(Pair { row: r, col: c });
-                values.push(if r == c {
-                    10.0 + c as f64
-                } else {
-                    1.0 / (1 + r + c) as f64
-                });
-            }
-        }
-        entries.push(Pair { row: 7, col: 5 });
-        values.push(0.25);
-        let mut dense = vec![vec![0.0; n]; n];
-        for (p, v) in entries.iter().zip(&values) {
-            dense[p.row][p.col] += v;
-            if p.row != p.col {
-                dense[p.col][p.row] += v;
-            }
-        }
-        let pattern = Arc::new(MacroPattern::new(n, &entries).unwrap());
-        let factor = Factor::new(pattern, &values, n).unwrap();
-        let y: Vec<f64> = (0..n)
-            .map(|i| 1.0 + (i % 5) as f64 - 0.3 * i as f64)
-            .collect();
-        let by_rows = factor.apply(&y);
-        for i in 0..n {
-            let want: f64 = (0..n).map(|j| dense[i][j] * y[j]).sum();
-            let scale: f64 = (0..n).map(|j| (dense[i][j] * y[j]).abs()).sum();
-            assert!(
-                (by_rows[i] - want).abs() <= 1e-14 * scale,
-                "row {i}: {} {want}",
-                by_rows[i]
-            );
-        }
-    }
 }
