@@ -39,12 +39,12 @@ pub(crate) struct StepStart {
 
 /// The operators are rebuilt for a new status only when the search directions of more than
 /// this fraction of the cables disagree with it (a taut cable at 0.01 k, a slack one at k):
-/// the law follows every new status at no cost, l is only a search direction. Late steps
-/// change tens of cables of 196 608 on a 128 × 128 grid; a rebuild for each took 13 at 16
-/// substructures (and 10 at 64). 1e-2 left ≈ 1800 cables with the wrong l and cost 25 % more
-/// iterations; 5e-4 (98 cables there) keeps the count and at most 8 rebuilds
-/// (docs/method.md §9).
-const REBUILD_FRACTION: f64 = 5e-4;
+/// the law follows every new status at no cost, l is only a search direction. But a taut
+/// cable left at 0.01 k contracts by about 0.98 an iteration: 5e-4 (98 cables of 196 608 on a
+/// 128 × 128 grid) left the tail of a run slower than the structure without its slack cables.
+/// 2e-5 (4 cables there, 63 on 512 × 512) took 128 × 128 / 256 × 256 modules from 77 / 117 to
+/// 68 / 100 iterations with 5 / 7 rebuilds (docs/method.md §9).
+const REBUILD_FRACTION: f64 = 2e-5;
 
 /// A cable keeps its status while its trial tension is within this fraction of the r(U)
 /// tolerance times the RMS trial tension of the cables: its force is then below what r(U)
