@@ -4,6 +4,7 @@
 //! factor, and the smallest eigenvalues of a
 //! stiffness (mechanism detection).
 
+mod buckets;
 mod cholesky;
 mod dense;
 mod low_rank;
@@ -17,6 +18,7 @@ mod sparse_row;
 mod spd_solver;
 mod spectrum;
 
+pub use buckets::buckets;
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
 pub use low_rank::LowRankUpdate;

@@ -2,6 +2,7 @@
 //! r(U) sums across substructures and what neighbouring ranks send each other.
 
 use super::Substructure;
+use crate::linalg::buckets;
 
 /// Which substructure owns each free dof (the first of those holding it) and, per
 /// substructure, its dofs held by others too (in its local order): what r(U) sums across
@@ -20,7 +21,7 @@ pub(super) struct DofOwnership {
     owner_local: Vec<u32>,
     /// Per shared dof (by slot), where its holders other than the owner start in
     /// `other_holders` (one more entry than slots).
-    other_start: Vec<u32>,
+    other_start: Vec<usize>,
     /// The holders of shared dofs other than their owners, `(substructure, local index)`, in
     /// the substructures' order.
     other_holders: Vec<(u32, u32)>,
@@ -53,8 +54,7 @@ impl DofOwnership {
         if slot == NOT_SHARED {
             return sum;
         }
-        let range =
-            self.other_start[slot as usize] as usize..self.other_start[slot as usize + 1] as usize;
+        let range = self.other_start[slot as usize]..self.other_start[slot as usize + 1];
         for &(e, local) in &self.other_holders[range.clone()] {
             sum += value(e as usize, local as usize);
         }
@@ -106,38 +106,20 @@ impl DofOwnership {
     }
 }
 
-/// Per shared slot, the holders of that dof other than its owner, in the substructures' order
-/// (a count, a prefix sum, then a fill).
+/// Per shared slot, the holders of that dof other than its owner, in the substructures' order.
 fn other_holders(
     subs: &[Substructure],
     owner: &[u32],
     shared_slot: &[u32],
     n_shared: usize,
-) -> (Vec<u32>, Vec<(u32, u32)>) {
-    let others = |e: usize| {
-        subs[e]
-            .dof_global
-            .iter()
-            .enumerate()
-            .filter(move |&(_, &d)| shared_slot[d] != NOT_SHARED && owner[d] as usize != e)
-    };
-    let mut start = vec![0u32; n_shared + 1];
-    for e in 0..subs.len() {
-        for (_, &d) in others(e) {
-            start[shared_slot[d] as usize + 1] += 1;
+) -> (Vec<usize>, Vec<(u32, u32)>) {
+    buckets(n_shared, |emit| {
+        for (e, sub) in subs.iter().enumerate() {
+            for (local, &d) in sub.dof_global.iter().enumerate() {
+                if shared_slot[d] != NOT_SHARED && owner[d] as usize != e {
+                    emit(shared_slot[d] as usize, (e as u32, local as u32));
+                }
+            }
         }
-    }
-    for k in 0..n_shared {
-        start[k + 1] += start[k];
-    }
-    let mut next = start.clone();
-    let mut holders = vec![(0u32, 0u32); start[n_shared] as usize];
-    for e in 0..subs.len() {
-        for (local, &d) in others(e) {
-            let at = &mut next[shared_slot[d] as usize];
-            holders[*at as usize] = (e as u32, local as u32);
-            *at += 1;
-        }
-    }
-    (start, holders)
+    })
 }

@@ -18,7 +18,7 @@
 
 use super::substructure::Substructure;
 use super::Interface;
-use crate::linalg::{gemv, gemv_transposed};
+use crate::linalg::{buckets, gemv, gemv_transposed};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::{
@@ -474,28 +474,16 @@ impl Factor {
 fn strict_lower_by_row(
     lower: SymbolicSparseColMatRef<'_, usize>,
 ) -> (Vec<usize>, Vec<(usize, usize)>) {
-    let n = lower.nrows();
-    let mut row_start = vec![0usize; n + 1];
-    for c in 0..lower.ncols() {
-        for &r in lower.row_idx_of_col_raw(c).iter().filter(|&&r| r != c) {
-            row_start[r + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        row_start[i + 1] += row_start[i];
-    }
-    let mut next = row_start.clone();
-    let mut by_row = vec![(0, 0); row_start[n]];
-    for c in 0..lower.ncols() {
-        for at in lower.col_range(c) {
-            let r = lower.row_idx()[at];
-            if r != c {
-                by_row[next[r]] = (c, at);
-                next[r] += 1;
+    buckets(lower.nrows(), |emit| {
+        for c in 0..lower.ncols() {
+            for at in lower.col_range(c) {
+                let r = lower.row_idx()[at];
+                if r != c {
+                    emit(r, (c, at));
+                }
             }
         }
-    }
-    (row_start, by_row)
+    })
 }
 
 /// A symmetric equilibration S of the macro matrix M (lower triangle `m`, whose first
