@@ -40,6 +40,7 @@ mod search;
 mod set_up;
 mod settings;
 mod shapes;
+mod slack_direction;
 mod state;
 mod status_step;
 mod substructure;

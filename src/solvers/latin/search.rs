@@ -1,9 +1,9 @@
 //! Status-following search directions (docs/method.md §6): when the cables' status asks for
-//! it, l becomes ε·l on the slack cables and the operators of the substructures where l
+//! it, l becomes ε·l on the slack cables (`slack_direction`) and the operators of the substructures where l
 //! changed are rebuilt (each rank those it holds), then the macro problem.
 
 use super::operators::share_homogenised;
-use super::{Latin, LatinState, SubState, SLACK_SEARCH_FACTOR, STATUS_BAND, STATUS_PERSISTENCE};
+use super::{Latin, LatinState, SubState, STATUS_BAND, STATUS_PERSISTENCE};
 use crate::model::material;
 use rayon::prelude::*;
 
@@ -90,10 +90,8 @@ impl Latin<'_> {
     /// `true` when rebuilt.
     pub(super) fn set_search(&mut self, slack: Vec<bool>) -> bool {
         let mut search = self.base_search.clone();
-        for (l, &is_slack) in search.iter_mut().zip(&slack) {
-            if is_slack {
-                *l *= SLACK_SEARCH_FACTOR;
-            }
+        for (l, factor) in search.iter_mut().zip(self.slack_factors(&slack)) {
+            *l *= factor;
         }
         // Each process knows the status of its own substructures' links: the changed ones
         // are gathered from the ranks that hold them.

@@ -336,3 +336,76 @@ fn the_macro_operator_by_rows_is_the_symmetric_product() {
         );
     }
 }
+
+/// How soft a slack cable's l (docs/method.md §9): on micro-macro's substructures a slack
+/// cable gets ε_soft where both its nodes stay held without it, ε where not; always ε with
+/// one substructure (mono-latin) and on one-module substructures. The paper's grid on 16
+/// substructures: with every cable slack, a node off the interfaces and unclamped with at most
+/// two bars has a stiffness of rank two at most in space, so its cables get ε; a cable between
+/// two clamped nodes stays soft.
+#[test]
+fn a_slack_cable_is_soft_only_where_its_nodes_stay_held() {
+    use super::super::slack_direction::SOFT_SLACK_SEARCH_FACTOR as SOFT;
+    use super::super::SLACK_SEARCH_FACTOR as EPS;
+    use crate::structure::CLAMPED;
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
+    let latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro)).unwrap();
+    let interface_dofs: std::collections::HashSet<usize> = latin
+        .substructures
+        .iter()
+        .flat_map(|sub| sub.gamma_dofs.iter().map(|&d| sub.dof_global[d]))
+        .collect();
+    let mut bars = vec![0; s.nodes.len()];
+    for l in s.links.iter().filter(|l| !l.unilateral) {
+        bars[l.a] += 1;
+        bars[l.b] += 1;
+    }
+    let loose = |n: usize| {
+        bars[n] <= 2
+            && (0..3).all(|c| {
+                let d = s.dof_of[3 * n + c];
+                d != CLAMPED && !interface_dofs.contains(&d)
+            })
+    };
+    let count = |factors: &[f64], x: f64| factors.iter().filter(|&&f| f == x).count();
+    let third = slack_every(s, 3);
+    let factors = latin.slack_factors(&third);
+    for (i, (&f, &slack)) in factors.iter().zip(&third).enumerate() {
+        assert!(
+            if slack {
+                f == SOFT || f == EPS
+            } else {
+                f == 1.0
+            },
+            "link {i}: {f}"
+        );
+    }
+    println!(
+        "a third slack: {} at ε_soft, {} at ε",
+        count(&factors, SOFT),
+        count(&factors, EPS)
+    );
+    assert!(count(&factors, SOFT) > count(&factors, EPS));
+    let every: Vec<bool> = s.links.iter().map(|l| l.unilateral).collect();
+    let factors = latin.slack_factors(&every);
+    println!(
+        "every cable: {} at ε_soft, {} at ε",
+        count(&factors, SOFT),
+        count(&factors, EPS)
+    );
+    for (i, (l, &f)) in s.links.iter().zip(&factors).enumerate() {
+        assert_eq!(f == 1.0, !l.unilateral, "link {i}");
+        if l.unilateral && (loose(l.a) || loose(l.b)) {
+            assert_eq!(f, EPS, "link {i}: a node held by two bars at most");
+        }
+        if l.unilateral && s.clamped[l.a] && s.clamped[l.b] {
+            assert_eq!(f, SOFT, "link {i}: a cable between two clamped nodes");
+        }
+    }
+    for partition in [[1, 1], [16, 16]] {
+        let latin = Latin::new(&model, settings(partition, WeakInterfaces::Macro)).unwrap();
+        let factors = latin.slack_factors(&third);
+        assert_eq!(count(&factors, EPS), third.iter().filter(|&&x| x).count());
+    }
+}
