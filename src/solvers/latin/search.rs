@@ -1,6 +1,7 @@
 //! Status-following search directions (docs/method.md §6): when the cables' status asks for
-//! it, l becomes ε·l on the slack cables (`slack_direction`) and the operators of the substructures where l
-//! changed are rebuilt (each rank those it holds), then the macro problem.
+//! it, l becomes ε·l on the slack cables (how small ε is: `slack_direction`) and the operators
+//! of the substructures where l changed are rebuilt (each rank those it holds), then the
+//! macro problem.
 
 use super::operators::share_homogenised;
 use super::{Latin, LatinState, SubState, STATUS_BAND, STATUS_PERSISTENCE};

@@ -31,46 +31,39 @@ impl Latin<'_> {
     /// and taut cables; on a slack cable [`SOFT_SLACK_SEARCH_FACTOR`] where each of its nodes
     /// stays held without it in its substructure ([`HELD_FRACTION`]), else
     /// [`SLACK_SEARCH_FACTOR`]; ε on substructures of fewer than [`SOFT_MIN_LINKS`] links.
-    /// Decided within each substructure, so each rank decides its
-    /// own. With one substructure (mono-latin), ε everywhere: at ε_soft mono-latin ran away
-    /// on the skew grid at α = 2 (142 slack cables for 30, 1000 iterations).
+    /// Decided within each substructure, by the rank that holds it (the others' cables keep
+    /// ε: a rank builds only its own substructures' operators). With one substructure
+    /// (mono-latin), ε everywhere: at ε_soft mono-latin ran away on the skew grid at α = 2
+    /// (142 slack cables for 30, 1000 iterations).
     pub(super) fn slack_factors(&self, slack: &[bool]) -> Vec<f64> {
         let links = &self.structure.links;
+        let mut factors: Vec<f64> = slack
+            .iter()
+            .map(|&s| if s { SLACK_SEARCH_FACTOR } else { 1.0 })
+            .collect();
         if self.interfaces.is_empty() {
-            return slack
-                .iter()
-                .map(|&s| if s { SLACK_SEARCH_FACTOR } else { 1.0 })
-                .collect();
+            return factors;
         }
-        let per_sub: Vec<Vec<(usize, f64)>> = self
-            .substructures
+        let soft: Vec<Vec<usize>> = self.substructures[self.held.clone()]
             .par_iter()
+            .filter(|sub| sub.links.len() >= SOFT_MIN_LINKS)
             .map(|sub| {
-                let soft_allowed = sub.links.len() >= SOFT_MIN_LINKS;
                 let interface: HashSet<usize> =
                     sub.gamma_dofs.iter().map(|&d| sub.dof_global[d]).collect();
                 let held = self.held_stiffness(&sub.links, slack, &interface);
                 let stays_held = |node: usize, k: f64| held[&node] >= HELD_FRACTION * k;
                 sub.links
                     .iter()
-                    .filter(|&&i| slack[i])
-                    .map(|&i| {
+                    .copied()
+                    .filter(|&i| {
                         let l = &links[i];
-                        let soft = soft_allowed
-                            && stays_held(l.a, l.stiffness)
-                            && stays_held(l.b, l.stiffness);
-                        let factor = match soft {
-                            true => SOFT_SLACK_SEARCH_FACTOR,
-                            false => SLACK_SEARCH_FACTOR,
-                        };
-                        (i, factor)
+                        slack[i] && stays_held(l.a, l.stiffness) && stays_held(l.b, l.stiffness)
                     })
                     .collect()
             })
             .collect();
-        let mut factors = vec![1.0; links.len()];
-        for (i, factor) in per_sub.into_iter().flatten() {
-            factors[i] = factor;
+        for i in soft.into_iter().flatten() {
+            factors[i] = SOFT_SLACK_SEARCH_FACTOR;
         }
         factors
     }
