@@ -5,7 +5,7 @@
 //! leaves K_E nearly singular there.
 
 use super::{Latin, SLACK_SEARCH_FACTOR};
-use crate::structure::{Link, CLAMPED};
+use crate::structure::CLAMPED;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
@@ -81,7 +81,7 @@ impl Latin<'_> {
         let (links, dof_of) = (&self.structure.links, &self.structure.dof_of);
         let mut stiffness: HashMap<usize, Matrix3<f64>> = HashMap::new();
         for &i in sub_links {
-            let l: &Link = &links[i];
+            let l = &links[i];
             let n = Vector3::from(l.direction);
             // A += k n nᵀ for a bar or a taut cable.
             let k = if slack[i] { 0.0 } else { l.stiffness };
