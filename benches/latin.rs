@@ -24,8 +24,10 @@
 //! `cargo bench --bench latin -- factor [SIDE]` times K's factor on SIDE × SIDE modules (256:
 //! 590 k free dofs), in newton's own order, with faer's parallelism `Par::rayon(t)`, t = 1, 2,
 //! 4 … threads: the numeric factorization, a solve of one right-hand side and of a block of 16
-//! (medians of 3). It is why K's factor stays sequential (docs/performance.md, "newton's
-//! factor on several threads").
+//! (medians of 3); then two whole factorizations at once on one thread each against one
+//! alone, the most that factoring the two halves of the elimination tree side by side could
+//! gain; and the factor in the two halves of the nested dissection's top level side by side,
+//! as newton's Hessian on two threads (docs/performance.md, "newton on two threads").
 
 use criterion::{criterion_group, Criterion};
 use std::path::Path;
@@ -423,6 +425,52 @@ fn factor_table(args: &[String]) {
         } else {
             (2 * threads).min(most)
         };
+    }
+    // The most a split of the elimination tree in two (its halves factored side by side)
+    // could gain: two whole factorizations at once, one thread each, against one alone.
+    if most >= 2 {
+        let pattern = &taut.pattern;
+        let mut first = taut.factor.share_symbolic_with(faer::Par::Seq);
+        let mut second = taut.factor.share_symbolic_with(faer::Par::Seq);
+        // Five rounds, each timing one alone then two at once (the machine's load drifts).
+        let time = |f: &mut dyn FnMut()| {
+            let clock = std::time::Instant::now();
+            f();
+            clock.elapsed().as_secs_f64()
+        };
+        let (mut alone, mut both) = (Vec::new(), Vec::new());
+        for _ in 0..5 {
+            alone.push(time(&mut || {
+                first.factorize(pattern, &taut.values).expect("spd");
+            }));
+            both.push(time(&mut || {
+                rayon::join(
+                    || first.factorize(pattern, &taut.values).expect("spd"),
+                    || second.factorize(pattern, &taut.values).expect("spd"),
+                );
+            }));
+        }
+        let median = |mut t: Vec<f64>| {
+            t.sort_by(f64::total_cmp);
+            t[t.len() / 2]
+        };
+        let (alone, both) = (median(alone), median(both));
+        println!(
+            "two factorizations at once, one thread each: {both:.3} s against {alone:.3} s \
+             alone: {:.2}x the throughput of one thread",
+            2.0 * alone / both
+        );
+        // What newton uses on two threads: the halves side by side, then the separator.
+        let mut split = taut
+            .factor
+            .share_symbolic_split(pattern)
+            .expect("a top-level split");
+        let halves = median3(|| split.factorize(pattern, &taut.values).expect("spd"));
+        println!(
+            "in two halves side by side (newton's Hessian on two threads): {halves:.3} s, \
+             {:.2}x one thread's whole factor",
+            alone / halves
+        );
     }
 }
 

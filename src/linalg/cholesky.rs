@@ -4,6 +4,7 @@
 //! be shared.
 
 use super::ordering::{node_ordering, NodeOrdering};
+use super::split_cholesky::SplitCholesky;
 use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -29,11 +30,13 @@ pub struct NotPositiveDefinite {
 /// Sparse Cholesky factor `A = L Lᵀ` of a matrix on a [`StiffnessPattern`]: one symbolic
 /// analysis, reused by every numeric [`SparseCholesky::factorize`].
 pub struct SparseCholesky {
-    analysis: Arc<Analysis>,
-    l_values: Vec<f64>,
+    pub(super) analysis: Arc<Analysis>,
+    pub(super) l_values: Vec<f64>,
     factor_scratch: MemBuffer,
     par: Par,
     factorized: bool,
+    /// Factored in two halves side by side instead ([`SparseCholesky::share_symbolic_split`]).
+    pub(super) split: Option<Box<SplitCholesky>>,
 }
 
 /// What one symbolic analysis fixes: the fill-reducing order (faer's symbolic factor holds it
@@ -42,7 +45,7 @@ pub struct SparseCholesky {
 /// values through `permuted_slot` (one pass) and hands the permuted triangle to faer's numeric
 /// kernel: faer's own path re-permutes A at every factorization (15 % of a factorization of
 /// the paper case).
-struct Analysis {
+pub(super) struct Analysis {
     /// CSC pattern of the triangle of `P A Pᵀ` faer's numeric kernel reads: the upper one for
     /// its simplicial factor, the lower one for its supernodal one. Rows come in no particular
     /// order within a column (both kernels scatter them).
@@ -50,13 +53,16 @@ struct Analysis {
     row_idx: Vec<usize>,
     /// Slot in that triangle of each slot of A.
     permuted_slot: Vec<u32>,
-    symbolic: SymbolicCholesky<usize>,
+    pub(super) symbolic: SymbolicCholesky<usize>,
+    /// The order (forward, inverse) and, with nested dissection, its top level's two parts.
+    order: (Vec<usize>, Vec<usize>),
+    top_split: Option<[usize; 2]>,
 }
 
 impl Analysis {
     fn new(pattern: &StiffnessPattern, ordering: NodeOrdering<'_>) -> Analysis {
         let n = pattern.n;
-        let (order, inverse) = node_ordering(pattern, ordering);
+        let (order, inverse, top_split) = node_ordering(pattern, ordering);
         assert!(
             pattern.nnz() < u32::MAX as usize,
             "pattern too large for 32-bit slots"
@@ -116,6 +122,8 @@ impl Analysis {
             row_idx,
             permuted_slot,
             symbolic,
+            order: (order, inverse),
+            top_split,
         }
     }
 
@@ -171,7 +179,31 @@ impl SparseCholesky {
             par,
             factorized: false,
             analysis,
+            split: None,
         }
+    }
+
+    /// A factorization workspace on the same pattern that factors the two halves of the
+    /// nested dissection's top level side by side (`src/linalg/split_cholesky.rs`): the
+    /// same matrix, another elimination of its separator. `None` when the analysis has no
+    /// such split (an AMD order, or a split the pattern's entries cross).
+    pub fn share_symbolic_split(&self, pattern: &StiffnessPattern) -> Option<SparseCholesky> {
+        let analysis = &self.analysis;
+        let (order, inverse) = &analysis.order;
+        let split = SplitCholesky::new(pattern, order, inverse, analysis.top_split?)?;
+        Some(SparseCholesky {
+            analysis: Arc::clone(analysis),
+            l_values: Vec::new(),
+            factor_scratch: MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
+            par: self.par,
+            factorized: false,
+            split: Some(Box::new(split)),
+        })
+    }
+
+    /// Whether this factor works in two halves ([`SparseCholesky::share_symbolic_split`]).
+    pub fn is_split(&self) -> bool {
+        self.split.is_some()
     }
 
     /// A second factorization workspace on the same symbolic analysis (no new analysis); it
@@ -191,6 +223,9 @@ impl SparseCholesky {
         pattern: &StiffnessPattern,
         values: &[f64],
     ) -> Result<(), NotPositiveDefinite> {
+        if let Some(split) = &mut self.split {
+            return split.factorize(values);
+        }
         let analysis = &*self.analysis;
         assert_eq!(
             values.len(),
@@ -247,6 +282,9 @@ impl SparseCholesky {
     /// `X ← A⁻¹ X` for a column-major block of right-hand sides: `X ← Pᵀ (L Lᵀ)⁻¹ P X` (faer
     /// applies the permutation its symbolic factor holds).
     pub fn solve_block_in_place(&self, x: MatMut<'_, f64>) {
+        if let Some(split) = &self.split {
+            return split.solve_block_in_place(x);
+        }
         assert!(self.factorized, "solve before a successful factorization");
         let symbolic = &self.analysis.symbolic;
         let mut scratch =
@@ -262,6 +300,9 @@ impl SparseCholesky {
     /// `X ← L⁻¹ P X` for a column-major block: the first half of a solve, which leaves X in the
     /// factor's order. With [`SparseCholesky::backward_in_place`], `A⁻¹ = Pᵀ L⁻ᵀ · L⁻¹ P`.
     pub fn forward_block_in_place(&self, mut x: MatMut<'_, f64>) {
+        if let Some(split) = &self.split {
+            return split.forward_block_in_place(x);
+        }
         assert!(self.factorized, "solve before a successful factorization");
         let symbolic = &self.analysis.symbolic;
         let (n, k) = (x.nrows(), x.ncols());
@@ -302,6 +343,9 @@ impl SparseCholesky {
 
     /// `x ← Pᵀ L⁻ᵀ x`: the second half of a solve, from the factor's order back to A's.
     pub fn backward_in_place(&self, x: &mut [f64]) {
+        if let Some(split) = &self.split {
+            return split.backward_in_place(x);
+        }
         assert!(self.factorized, "solve before a successful factorization");
         let symbolic = &self.analysis.symbolic;
         let n = x.len();
@@ -340,6 +384,16 @@ impl SparseCholesky {
 impl Clone for SparseCholesky {
     /// Shares the symbolic analysis, copies the numeric factor, allocates fresh workspaces.
     fn clone(&self) -> Self {
+        if let Some(split) = &self.split {
+            return SparseCholesky {
+                analysis: Arc::clone(&self.analysis),
+                l_values: Vec::new(),
+                factor_scratch: MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
+                par: self.par,
+                factorized: self.factorized,
+                split: Some(split.clone()),
+            };
+        }
         let mut copy = self.share_symbolic();
         copy.l_values.copy_from_slice(&self.l_values);
         copy.factorized = self.factorized;
@@ -348,7 +402,7 @@ impl Clone for SparseCholesky {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::linalg::SparseRow;
     use faer::Mat;
@@ -356,7 +410,10 @@ mod tests {
     /// Bars between the nodes of a `w × h` grid (neighbours and diagonals), three dofs per
     /// node, with stiffnesses that vary from bar to bar, and a soft spring on every dof so that
     /// the stiffness is regular.
-    fn grid_stiffness(w: usize, h: usize) -> (StiffnessPattern, Vec<f64>, Vec<[f64; 3]>) {
+    pub(in crate::linalg) fn grid_stiffness(
+        w: usize,
+        h: usize,
+    ) -> (StiffnessPattern, Vec<f64>, Vec<[f64; 3]>) {
         let node = |i: usize, j: usize| i + w * j;
         let mut rows = Vec::new();
         let mut add = |a: usize, b: usize, d: [f64; 3]| {
@@ -393,7 +450,12 @@ mod tests {
         (pattern, values, xy)
     }
 
-    fn relative_residual(p: &StiffnessPattern, values: &[f64], x: &[f64], b: &[f64]) -> f64 {
+    pub(in crate::linalg) fn relative_residual(
+        p: &StiffnessPattern,
+        values: &[f64],
+        x: &[f64],
+        b: &[f64],
+    ) -> f64 {
         let mut ax = vec![0.0; p.n];
         p.sym_matvec(values, x, &mut ax);
         let r: f64 = ax.iter().zip(b).map(|(a, b)| (a - b) * (a - b)).sum();

@@ -17,6 +17,7 @@ mod pcg;
 mod sparse_row;
 mod spd_solver;
 mod spectrum;
+mod split_cholesky;
 
 pub use buckets::buckets;
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};

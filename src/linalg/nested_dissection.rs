@@ -19,7 +19,18 @@ pub fn nested_dissection(
     neighbours: &[usize],
     coordinates: &[[f64; 3]],
 ) -> Vec<usize> {
+    nested_dissection_split(offsets, neighbours, coordinates).0
+}
+
+/// [`nested_dissection`], and the sizes of the top level's two parts: the order is the first
+/// part's vertices, then the second's, then the top separator's (`None`: no split).
+pub fn nested_dissection_split(
+    offsets: &[usize],
+    neighbours: &[usize],
+    coordinates: &[[f64; 3]],
+) -> (Vec<usize>, Option<[usize; 2]>) {
     let n = coordinates.len();
+    let mut top = None;
     let mut order = Vec::with_capacity(n);
     // region[v]: the part v currently belongs to; a vertex is only split from vertices of its
     // own part.
@@ -109,12 +120,15 @@ pub fn nested_dissection(
             order.extend_from_slice(&vertices);
             continue;
         }
+        if vertices.len() == n {
+            top = Some([left.len(), right.len()]);
+        }
         // Popped in reverse: left, then right, then the separator.
         stack.push(Task::Emit(separator));
         stack.push(Task::Split(right));
         stack.push(Task::Split(left));
     }
-    order
+    (order, top)
 }
 
 #[cfg(test)]

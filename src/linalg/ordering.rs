@@ -2,7 +2,8 @@
 //! ordered by approximate minimum degree or by nested dissection from the nodes' coordinates,
 //! expanded back to the dofs. [`super::SparseCholesky`] analyses a pattern in this order.
 
-use super::{nested_dissection, StiffnessPattern};
+use super::nested_dissection::nested_dissection_split;
+use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::amd;
 use faer::sparse::SymbolicSparseColMatRef;
@@ -18,6 +19,8 @@ pub enum NodeOrdering<'a> {
     /// Nested dissection from each node's coordinates (one per node of the pattern,
     /// i.e. per three dofs), [`nested_dissection`]; falls back to AMD if the count differs.
     NestedDissection(&'a [[f64; 3]]),
+    /// The pattern's own order (a pattern already ordered, such as a half of a split factor).
+    Given,
 }
 
 /// The node graph of a node-major pattern, as CSR (offsets, neighbours), symmetric.
@@ -58,21 +61,25 @@ fn node_graph(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
     (offsets, neighbours)
 }
 
-/// The dof permutation (forward, inverse) of `ordering` on `p`'s node graph.
+/// The dof permutation (forward, inverse) of `ordering` on `p`'s node graph, and with nested
+/// dissection the dof counts of its top level's two parts (the separator after them).
 pub(super) fn node_ordering(
     p: &StiffnessPattern,
     ordering: NodeOrdering<'_>,
-) -> (Vec<usize>, Vec<usize>) {
+) -> (Vec<usize>, Vec<usize>, Option<[usize; 2]>) {
     let n = p.n;
-    let identity = || ((0..n).collect(), (0..n).collect());
-    if !n.is_multiple_of(3) || n == 0 {
+    let identity = || ((0..n).collect(), (0..n).collect(), None);
+    if !n.is_multiple_of(3) || n == 0 || matches!(ordering, NodeOrdering::Given) {
         return identity();
     }
     let nodes = n / 3;
     let (offsets, neighbours) = node_graph(p);
+    let mut top = None;
     let perm = match ordering {
         NodeOrdering::NestedDissection(xy) if xy.len() == nodes => {
-            nested_dissection(&offsets, &neighbours, xy)
+            let (order, parts) = nested_dissection_split(&offsets, &neighbours, xy);
+            top = parts.map(|[a, b]| [3 * a, 3 * b]);
+            order
         }
         _ => {
             let graph =
@@ -101,5 +108,5 @@ pub(super) fn node_ordering(
             .flat_map(|&k| [3 * k, 3 * k + 1, 3 * k + 2])
             .collect()
     };
-    (expand(&perm), expand(&perm_inv))
+    (expand(&perm), expand(&perm_inv), top)
 }

@@ -21,12 +21,13 @@ mod line_search;
 
 use super::{stop_when, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
 use crate::linalg::{
-    dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern,
+    dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern, CHUNK,
 };
 use crate::model::material::{self, SlackRule};
 use crate::model::{unbalances_on, Model};
 use crate::structure::Structure;
 pub(crate) use line_search::{exact_line_search, EnergyAlongStep};
+use rayon::prelude::*;
 
 /// Settings, each default written once, at its field.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -120,6 +121,11 @@ struct Factored {
 /// iterations).
 const STALL_ITERATIONS: usize = 10;
 
+/// The Hessian is factored in two halves side by side from this many free dofs, with a second
+/// thread: on 256 × 256 modules (590 k dofs, a separator of 2 301) measured in
+/// docs/performance.md ("newton on two threads"); below, the separator's dense work weighs more.
+const SPLIT_MIN_DOFS: usize = 100_000;
+
 /// The newton solver, set up for one structure.
 pub struct Newton<'s> {
     model: &'s Model,
@@ -172,13 +178,19 @@ impl<'s> Newton<'s> {
             structure,
             taut,
             settings,
-            chol: taut.factor.share_symbolic(),
+            chol: hessian_factor(taut, structure.n_free),
             factored: None,
             correction: (Base::Taut, LowRankUpdate::none(structure.n_free)),
             hessian: vec![0.0; taut.values.len()],
             mean_stiffness: taut.pattern.mean_diagonal(&taut.values),
             work: NewtonWork::default(),
         })
+    }
+
+    /// Whether the Hessian is factored in two halves side by side (a second thread and at
+    /// least `SPLIT_MIN_DOFS` free dofs).
+    pub fn factors_in_halves(&self) -> bool {
+        self.chol.is_split()
     }
 
     /// What the linear algebra cost so far.
@@ -190,11 +202,19 @@ impl<'s> Newton<'s> {
     /// geometric force `K_G U` when the model has it: docs/method.md §8).
     fn evaluate(&self, state: &mut NewtonState) {
         let s = self.structure;
-        for (i, (l, ld)) in s.links.iter().zip(&s.link_dofs).enumerate() {
-            let trial = material::trial_tension(l, ld.elongation(&state.u));
-            state.trial[i] = trial;
-            state.tensions[i] = material::tension(l, trial);
-        }
+        let u = &state.u;
+        (
+            &mut state.trial,
+            &mut state.tensions,
+            &s.links,
+            &s.link_dofs,
+        )
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .for_each(|(trial, tension, l, ld)| {
+                *trial = material::trial_tension(l, ld.elongation(u));
+                *tension = material::tension(l, *trial);
+            });
         let geometric_force = self.model.prestress_force(&state.u);
         let sizes = unbalances_on(
             s,
@@ -449,6 +469,16 @@ impl Solver for Newton<'_> {
     fn iterate(&self, state: &NewtonState) -> Equilibrium {
         Equilibrium::classified(self.model, state.u.clone(), state.tensions.clone())
     }
+}
+
+/// The Hessian's factor: in two halves side by side (`SparseCholesky::share_symbolic_split`)
+/// when there is a second thread and the problem is large enough for the halves to outweigh
+/// the separator's dense work, else on K's analysis as it is.
+fn hessian_factor(taut: &TautStiffness, n_free: usize) -> SparseCholesky {
+    let split = (rayon::current_num_threads() >= 2 && n_free >= SPLIT_MIN_DOFS)
+        .then(|| taut.factor.share_symbolic_split(&taut.pattern))
+        .flatten();
+    split.unwrap_or_else(|| taut.factor.share_symbolic())
 }
 
 /// `values = H = Σ_taut k Bᵢᵀ Bᵢ + K_G + μ I` (docs/method.md §3, §8), lower triangle on
