@@ -54,8 +54,8 @@ pub(super) struct Analysis {
     /// Slot in that triangle of each slot of A.
     permuted_slot: Vec<u32>,
     pub(super) symbolic: SymbolicCholesky<usize>,
-    /// The order (forward, inverse) and, with nested dissection, its top level's two parts.
-    order: (Vec<usize>, Vec<usize>),
+    /// With nested dissection, the dof counts of its top level's two parts (the order itself
+    /// is the symbolic factor's permutation).
     top_split: Option<[usize; 2]>,
 }
 
@@ -122,7 +122,6 @@ impl Analysis {
             row_idx,
             permuted_slot,
             symbolic,
-            order: (order, inverse),
             top_split,
         }
     }
@@ -189,7 +188,7 @@ impl SparseCholesky {
     /// such split (an AMD order, or a split the pattern's entries cross).
     pub fn share_symbolic_split(&self, pattern: &StiffnessPattern) -> Option<SparseCholesky> {
         let analysis = &self.analysis;
-        let (order, inverse) = &analysis.order;
+        let (order, inverse) = analysis.symbolic.perm()?.arrays();
         let split = SplitCholesky::new(pattern, order, inverse, analysis.top_split?)?;
         Some(SparseCholesky {
             analysis: Arc::clone(analysis),

@@ -17,7 +17,8 @@ pub enum NodeOrdering<'a> {
     /// dofs, with the same fill on these grids.
     Amd,
     /// Nested dissection from each node's coordinates (one per node of the pattern,
-    /// i.e. per three dofs), [`nested_dissection`]; falls back to AMD if the count differs.
+    /// i.e. per three dofs), [`nested_dissection`](super::nested_dissection); falls back to
+    /// AMD if the count differs.
     NestedDissection(&'a [[f64; 3]]),
     /// The pattern's own order (a pattern already ordered, such as a half of a split factor).
     Given,
