@@ -188,16 +188,31 @@ impl SparseCholesky {
     /// such split (an AMD order, or a split the pattern's entries cross).
     pub fn share_symbolic_split(&self, pattern: &StiffnessPattern) -> Option<SparseCholesky> {
         let analysis = &self.analysis;
-        let (order, inverse) = analysis.symbolic.perm()?.arrays();
-        let split = SplitCholesky::new(pattern, order, inverse, analysis.top_split?)?;
-        Some(SparseCholesky {
-            analysis: Arc::clone(analysis),
+        let inverse = analysis.symbolic.perm()?.arrays().1;
+        let split = SplitCholesky::new(pattern, inverse, analysis.top_split?)?;
+        Some(self.holding(split))
+    }
+
+    /// A factor on this analysis that works through `split` (no whole factor's storage).
+    fn holding(&self, split: SplitCholesky) -> SparseCholesky {
+        SparseCholesky {
+            analysis: Arc::clone(&self.analysis),
             l_values: Vec::new(),
             factor_scratch: MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
             par: self.par,
             factorized: false,
             split: Some(Box::new(split)),
-        })
+        }
+    }
+
+    /// The factor's order (forward: the dof at each position; inverse), which a split's
+    /// solves apply: the analysis of a split is always ordered.
+    fn split_order(&self) -> (&[usize], &[usize]) {
+        self.analysis
+            .symbolic
+            .perm()
+            .expect("a split factor's analysis has an order")
+            .arrays()
     }
 
     /// Whether this factor works in two halves ([`SparseCholesky::share_symbolic_split`]).
@@ -282,7 +297,7 @@ impl SparseCholesky {
     /// applies the permutation its symbolic factor holds).
     pub fn solve_block_in_place(&self, x: MatMut<'_, f64>) {
         if let Some(split) = &self.split {
-            return split.solve_block_in_place(x);
+            return split.solve_block_in_place(self.split_order(), x);
         }
         assert!(self.factorized, "solve before a successful factorization");
         let symbolic = &self.analysis.symbolic;
@@ -300,7 +315,7 @@ impl SparseCholesky {
     /// factor's order. With [`SparseCholesky::backward_in_place`], `A⁻¹ = Pᵀ L⁻ᵀ · L⁻¹ P`.
     pub fn forward_block_in_place(&self, mut x: MatMut<'_, f64>) {
         if let Some(split) = &self.split {
-            return split.forward_block_in_place(x);
+            return split.forward_block_in_place(self.split_order().0, x);
         }
         assert!(self.factorized, "solve before a successful factorization");
         let symbolic = &self.analysis.symbolic;
@@ -343,7 +358,7 @@ impl SparseCholesky {
     /// `x ← Pᵀ L⁻ᵀ x`: the second half of a solve, from the factor's order back to A's.
     pub fn backward_in_place(&self, x: &mut [f64]) {
         if let Some(split) = &self.split {
-            return split.backward_in_place(x);
+            return split.backward_in_place(self.split_order().1, x);
         }
         assert!(self.factorized, "solve before a successful factorization");
         let symbolic = &self.analysis.symbolic;
@@ -384,14 +399,7 @@ impl Clone for SparseCholesky {
     /// Shares the symbolic analysis, copies the numeric factor, allocates fresh workspaces.
     fn clone(&self) -> Self {
         if let Some(split) = &self.split {
-            return SparseCholesky {
-                analysis: Arc::clone(&self.analysis),
-                l_values: Vec::new(),
-                factor_scratch: MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
-                par: self.par,
-                factorized: self.factorized,
-                split: Some(split.clone()),
-            };
+            return self.holding((**split).clone());
         }
         let mut copy = self.share_symbolic();
         copy.l_values.copy_from_slice(&self.l_values);

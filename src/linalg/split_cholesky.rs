@@ -52,9 +52,6 @@ struct Half {
 /// K in two halves and a separator (module doc).
 #[derive(Clone)]
 pub(super) struct SplitCholesky {
-    /// `order[k]`: the dof at position k of the factor's order; `inverse` the other way.
-    order: Vec<usize>,
-    inverse: Vec<usize>,
     halves: [Half; 2],
     /// The separator's first position and its size.
     separator: (usize, usize),
@@ -66,12 +63,11 @@ pub(super) struct SplitCholesky {
 }
 
 impl SplitCholesky {
-    /// The split of `pattern` in the order `order` (`inverse` its inverse) whose first
-    /// `parts[0]` positions are A and the next `parts[1]` are B. `None` when the order's
+    /// The split of `pattern` in the order whose inverse is `inverse` (`inverse[d]`: the
+    /// position of dof d) and whose first `parts[0]` positions are A, the next `parts[1]` B. `None` when the order's
     /// top level is not such a split (an entry couples A with B, or a part is empty).
     pub(super) fn new(
         pattern: &StiffnessPattern,
-        order: &[usize],
         inverse: &[usize],
         parts: [usize; 2],
     ) -> Option<SplitCholesky> {
@@ -156,8 +152,6 @@ impl SplitCholesky {
         let (first, second) = rayon::join(|| make(0), || make(1));
         let halves = [first, second];
         Some(SplitCholesky {
-            order: order.to_vec(),
-            inverse: inverse.to_vec(),
             halves,
             separator: (s0, m),
             separator_entries,
@@ -209,13 +203,13 @@ impl SplitCholesky {
         Ok(())
     }
 
-    /// `X ← L⁻¹ P X`, left in the factor's order: the halves' forward solves side by side,
-    /// then L̃'s.
-    pub(super) fn forward_block_in_place(&self, mut x: MatMut<'_, f64>) {
+    /// `X ← L⁻¹ P X`, left in the factor's order (`order[k]`: the dof at position k): the
+    /// halves' forward solves side by side, then L̃'s.
+    pub(super) fn forward_block_in_place(&self, order: &[usize], mut x: MatMut<'_, f64>) {
         assert!(self.factorized, "solve before a successful factorization");
         let (s0, m) = self.separator;
         let k = x.ncols();
-        let permuted = Mat::from_fn(x.nrows(), k, |i, j| x[(self.order[i], j)]);
+        let permuted = Mat::from_fn(x.nrows(), k, |i, j| x[(order[i], j)]);
         let [first, second] = &self.halves;
         // Y_h = L_hh⁻¹ B_h and C_h = L_Sh Y_h = −T_h Z_h, Z_h the separator part of
         // L(M_h)⁻¹ [B_h; 0].
@@ -234,9 +228,9 @@ impl SplitCholesky {
         x.as_mut().subrows_mut(s0, m).copy_from(&ys);
     }
 
-    /// `x ← Pᵀ L⁻ᵀ x` for one column in the factor's order: L̃'s backward solve, then the
-    /// halves' side by side.
-    pub(super) fn backward_in_place(&self, x: &mut [f64]) {
+    /// `x ← Pᵀ L⁻ᵀ x` for one column in the factor's order (`inverse[d]`: the position of dof
+    /// d): L̃'s backward solve, then the halves' side by side.
+    pub(super) fn backward_in_place(&self, inverse: &[usize], x: &mut [f64]) {
         assert!(self.factorized, "solve before a successful factorization");
         let (s0, m) = self.separator;
         let mut xs = x[s0..].to_vec();
@@ -252,17 +246,21 @@ impl SplitCholesky {
         permuted[first.offset..first.offset + first.len].copy_from_slice(&xa);
         permuted[second.offset..second.offset + second.len].copy_from_slice(&xb);
         permuted[s0..].copy_from_slice(&xs);
-        for (v, &at) in x.iter_mut().zip(&self.inverse) {
+        for (v, &at) in x.iter_mut().zip(inverse) {
             *v = permuted[at];
         }
     }
 
     /// `X ← K⁻¹ X`: the block forward, then each column backward.
-    pub(super) fn solve_block_in_place(&self, mut x: MatMut<'_, f64>) {
-        self.forward_block_in_place(x.as_mut());
+    pub(super) fn solve_block_in_place(
+        &self,
+        (order, inverse): (&[usize], &[usize]),
+        mut x: MatMut<'_, f64>,
+    ) {
+        self.forward_block_in_place(order, x.as_mut());
         for j in 0..x.ncols() {
             let mut column: Vec<f64> = x.as_ref().col(j).iter().copied().collect();
-            self.backward_in_place(&mut column);
+            self.backward_in_place(inverse, &mut column);
             x.as_mut()
                 .col_mut(j)
                 .copy_from(faer::ColRef::from_slice(&column));
