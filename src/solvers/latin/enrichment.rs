@@ -192,16 +192,26 @@ impl SoftModes {
     }
 }
 
+/// What an enrichment does ([`Latin::plan_enrichment`]): the substructures whose soft modes
+/// are retaken, the interfaces they lie on (whose bases change) and every substructure on
+/// those interfaces (condensed anew on the new bases); all increasing.
+pub(super) struct Enrichment {
+    stale: Vec<usize>,
+    touched: Vec<usize>,
+    /// The substructures [`Latin::enrich`] condenses anew: a rebuild only refactorizes these.
+    pub affected: Vec<usize>,
+}
+
 impl Latin<'_> {
-    /// The soft modes of the substructures `which` (increasing) whose modes are stale under
-    /// the search directions `search` taken anew from their operators, the macro bases of their interfaces remade (polynomial fields, then the
-    /// soft modes of the first side, then of the second), the operators of every substructure
-    /// on those interfaces condensed on the new bases (K_E's factor kept), and the macro
-    /// problem set up anew. Nothing to do without `solver.soft_modes`.
-    pub(super) fn enrich(&mut self, which: &[usize], search: &[f64]) -> Result<(), SetupError> {
-        let Some(soft) = self.soft_modes.as_mut() else {
-            return Ok(());
-        };
+    /// Of the substructures `which` (increasing), those whose soft modes are stale under the
+    /// search directions `search`, and what retaking them changes; marks their modes as taken
+    /// with `search`. `None` without `solver.soft_modes`.
+    pub(super) fn plan_enrichment(
+        &mut self,
+        which: &[usize],
+        search: &[f64],
+    ) -> Option<Enrichment> {
+        let soft = self.soft_modes.as_mut()?;
         let stale = soft.stale(
             &self.substructures,
             which,
@@ -209,7 +219,39 @@ impl Latin<'_> {
             search,
             self.exchange,
         );
-        if stale.is_empty() {
+        let touched: Vec<usize> = (0..self.interfaces.len())
+            .filter(|&k| {
+                self.interfaces[k]
+                    .topology
+                    .sides
+                    .iter()
+                    .any(|e| stale.binary_search(e).is_ok())
+            })
+            .collect();
+        let mut affected: Vec<usize> = touched
+            .iter()
+            .flat_map(|&k| self.interfaces[k].topology.sides)
+            .collect();
+        affected.sort_unstable();
+        affected.dedup();
+        Some(Enrichment {
+            stale,
+            touched,
+            affected,
+        })
+    }
+
+    /// The enrichment `plan`: the stale substructures' soft modes taken anew from their
+    /// operators, the macro bases of the touched interfaces remade (polynomial fields, then
+    /// the soft modes of the first side, then of the second), the operators of the affected
+    /// substructures condensed on the new bases (K_E's factor kept), and the macro problem
+    /// set up anew; with nothing stale, the macro problem refactorized on the bases as they
+    /// stand.
+    pub(super) fn enrich(&mut self, plan: Enrichment) -> Result<(), SetupError> {
+        let Some(soft) = self.soft_modes.as_mut() else {
+            return Ok(());
+        };
+        if plan.stale.is_empty() {
             // The bases stand: the changed operators were condensed on them.
             self.macro_problem = self
                 .macro_problem
@@ -219,24 +261,14 @@ impl Latin<'_> {
                 })?;
             return Ok(());
         }
-        let which = stale.as_slice();
         soft.update(
             &self.substructures,
-            which,
+            &plan.stale,
             &self.held,
             self.dm,
             self.exchange,
         );
-        let touched: Vec<usize> = (0..self.interfaces.len())
-            .filter(|&k| {
-                self.interfaces[k]
-                    .topology
-                    .sides
-                    .iter()
-                    .any(|e| which.binary_search(e).is_ok())
-            })
-            .collect();
-        for &k in &touched {
+        for &k in &plan.touched {
             let polynomial = &soft.polynomial[k];
             let mut fields: Vec<Vec<f64>> = polynomial
                 .column_iter()
@@ -252,12 +284,7 @@ impl Latin<'_> {
             self.interfaces[k].set_fields(&fields, &labels);
         }
         number_macro_dofs(&mut self.interfaces);
-        let mut affected: Vec<usize> = touched
-            .iter()
-            .flat_map(|&k| self.interfaces[k].topology.sides)
-            .collect();
-        affected.sort_unstable();
-        affected.dedup();
+        let affected = &plan.affected;
         let (structure, interfaces, dm, storage) =
             (self.structure, &self.interfaces, self.dm, self.storage);
         let partition = &soft.partition;
@@ -279,12 +306,7 @@ impl Latin<'_> {
                 prestress: self.model.prestress_stiffness().is_some(),
             });
         }
-        share_homogenised(
-            &mut self.substructures,
-            &affected,
-            self.exchange,
-            &self.held,
-        );
+        share_homogenised(&mut self.substructures, affected, self.exchange, &self.held);
         self.macro_problem =
             MacroProblem::new(&self.substructures, &self.interfaces, dm).map_err(|_| {
                 SetupError::SingularMacroProblem {

@@ -130,25 +130,42 @@ impl Latin<'_> {
 
     /// The operators of the substructures `changed` rebuilt in place for the directions
     /// `search` (each rank those it holds; the rebuild stands only if it succeeded on all),
-    /// their L_E shared, and the macro problem refactorised. `false` on failure, when the
-    /// changed substructures' operators are left unusable.
+    /// their L_E shared, and the macro problem refactorised; with soft interface modes, the
+    /// modes retaken where stale and the substructures on their interfaces condensed on the
+    /// new bases (those only refactorized here). `false` on failure, when the changed
+    /// substructures' operators are left unusable.
     fn rebuild(&mut self, changed: &[usize], search: &[f64]) -> bool {
         let (dm, storage, held) = (self.dm, self.storage, self.held.clone());
+        let plan = self.plan_enrichment(changed, search);
+        let condensed_later: &[usize] = plan.as_ref().map_or(&[], |p| &p.affected);
         let rebuilt = self
             .substructures
             .par_iter_mut()
             .enumerate()
             .filter(|(e, _)| held.contains(e) && changed.binary_search(e).is_ok())
-            .map(|(_, sub)| sub.set_search(search, dm, storage))
+            .map(|(e, sub)| match condensed_later.binary_search(&e) {
+                Ok(_) => sub.refactor(search, dm, storage),
+                Err(_) => sub.set_search(search, dm, storage),
+            })
             .collect::<Result<Vec<()>, _>>()
             .is_ok();
         if !self.exchange.all(rebuilt) {
             return false;
         }
-        share_homogenised(&mut self.substructures, changed, self.exchange, &held);
-        if self.soft_modes.is_some() {
-            // The soft modes of the changed substructures, and the macro problem anew.
-            return self.enrich(changed, search).is_ok();
+        let condensed_now: Vec<usize> = changed
+            .iter()
+            .filter(|e| condensed_later.binary_search(e).is_err())
+            .copied()
+            .collect();
+        share_homogenised(
+            &mut self.substructures,
+            &condensed_now,
+            self.exchange,
+            &held,
+        );
+        if let Some(plan) = plan {
+            // The soft modes of the stale substructures, and the macro problem anew.
+            return self.enrich(plan).is_ok();
         }
         match self
             .macro_problem

@@ -192,7 +192,9 @@ impl<'s> Latin<'s> {
             ));
             let all: Vec<usize> = (0..latin.substructures.len()).collect();
             let search = latin.search.clone();
-            latin.enrich(&all, &search)?;
+            if let Some(plan) = latin.plan_enrichment(&all, &search) {
+                latin.enrich(plan)?;
+            }
         }
         // 6. On several ranks, what passes point to point after each linear stage.
         if exchange.size() > 1 && !latin.reads_whole_state() {

@@ -236,7 +236,26 @@ impl Substructure {
             .ops
             .take()
             .expect("a substructure's operators are rebuilt only on the rank that holds it");
-        let rebuilt = self.rebuild_operators(&mut ops, search, dm, storage);
+        let rebuilt = self.rebuild_operators(&mut ops, search, dm, storage, true);
+        self.ops = Some(ops);
+        rebuilt
+    }
+
+    /// Step 4 of [`Self::set_search`] alone: K_E for the directions `search`, factorized; Z_E,
+    /// K*_E, K⁺_E and L_E are left for [`Self::set_interfaces`], which a rebuild that retakes
+    /// soft interface modes calls next (condensing on the old bases first would be thrown
+    /// away).
+    pub(super) fn refactor(
+        &mut self,
+        search: &[f64],
+        dm: f64,
+        storage: OperatorStorage,
+    ) -> Result<(), SingularSubstructure> {
+        let mut ops = self
+            .ops
+            .take()
+            .expect("a substructure's operators are rebuilt only on the rank that holds it");
+        let rebuilt = self.rebuild_operators(&mut ops, search, dm, storage, false);
         self.ops = Some(ops);
         rebuilt
     }
@@ -282,13 +301,15 @@ impl Substructure {
         built.map(|_| ())
     }
 
-    /// Steps 4–7 of [`Self::new`] on E's kept pattern, analysis and kernel.
+    /// Steps 4–7 of [`Self::new`] on E's kept pattern, analysis and kernel (step 4 alone
+    /// without `condense`).
     fn rebuild_operators(
         &mut self,
         ops: &mut LocalOperators,
         search: &[f64],
         dm: f64,
         storage: OperatorStorage,
+        condense: bool,
     ) -> Result<(), SingularSubstructure> {
         // 4. K_E = B_Eᵀ l B_E + K_G,E + d_m C_Eᵀ C_E, factorized.
         let values = stiffness(
@@ -310,6 +331,9 @@ impl Substructure {
             }
         }
         drop(values);
+        if !condense {
+            return Ok(());
+        }
         // 5. Z_E and K*_E; 7. K⁺_E and L_E (Q_E of step 6 is kept).
         let (z, k_star) = self.condense_operators(&ops.factor, dm);
         let (k_plus, flexibility) = invert(&k_star, &self.kernel, dm)?;
@@ -320,7 +344,11 @@ impl Substructure {
 
     /// `Z_E = K_E⁻¹ C_Eᵀ R_E` and `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E` (symmetrised) from the
     /// factor of K_E.
-    fn condense_operators(&self, factor: &SpdSolver, dm: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+    pub(super) fn condense_operators(
+        &self,
+        factor: &SpdSolver,
+        dm: f64,
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
         // Z_E column by column of the block-diagonal R_E.
         let n_macro = self.n_macro;
         let mut z = DMatrix::<f64>::zeros(self.n_dofs(), n_macro);

@@ -1,4 +1,4 @@
-//! The operators: rebuilds, the macro problem's accuracy, shapes, r(U) by substructure, Z_E, the macro solve's refinement, kernels of thin substructures, the stop on η, the macro operator by rows, U gathered by dof.
+//! The operators: rebuilds, the macro problem's accuracy, shapes, r(U) by substructure, Z_E, the macro solve's refinement, kernels of thin substructures, the stop on η, the macro operator by rows, U gathered by dof, a rebuild with soft modes condensing each operator once.
 
 use super::super::macro_problem::{Factor, MacroPattern};
 use super::*;
@@ -45,6 +45,52 @@ fn a_rebuild_and_its_undo_give_the_set_up_operators_bit_for_bit() {
     assert!(
         operator_bits(&latin) == set_up,
         "the undo's operators differ from the set-up's"
+    );
+}
+
+/// With soft interface modes, a rebuild only refactorizes the substructures that its
+/// enrichment condenses anew on the new bases (a condensation on the old bases would be thrown
+/// away): after it, every substructure's Z_E and K*_E are those its factor gives on its
+/// bases, bit for bit. Slack on a third of the cables (every substructure's modes retaken),
+/// then one more cable slack (its substructure's modes kept: condensed at the rebuild itself).
+#[test]
+fn after_a_rebuild_with_soft_modes_every_operator_is_condensed_on_its_bases() {
+    let model = Model::linear(paper_structure());
+    let s = &model.structure;
+    let settings = LatinSettings {
+        soft_modes: Some(0.3),
+        ..settings([4, 4], WeakInterfaces::Macro)
+    };
+    let mut latin = Latin::new(&model, settings).unwrap();
+    let condensed_on_its_bases = |latin: &Latin<'_>| {
+        latin.substructures.iter().all(|sub| {
+            let ops = sub.ops();
+            let (z, k_star) = sub.condense_operators(&ops.factor, latin.dm);
+            let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            ops.z.as_ref().map(bits) == Some(bits(&z)) && bits(&ops.k_star) == bits(&k_star)
+        })
+    };
+    let macro_dofs = latin.macro_problem.n_forces;
+    let mut slack = slack_every(s, 3);
+    assert!(latin.set_search(slack.clone()));
+    assert!(
+        condensed_on_its_bases(&latin),
+        "slack on a third of the cables"
+    );
+    assert_ne!(
+        latin.macro_problem.n_forces, macro_dofs,
+        "the modes were not retaken"
+    );
+    let one_more = (0..s.links.len())
+        .find(|&i| s.links[i].unilateral && !slack[i])
+        .expect("a taut cable");
+    slack[one_more] = true;
+    let macro_dofs = latin.macro_problem.n_forces;
+    assert!(latin.set_search(slack));
+    assert!(condensed_on_its_bases(&latin), "one cable more");
+    assert_eq!(
+        latin.macro_problem.n_forces, macro_dofs,
+        "one cable retook a substructure's modes"
     );
 }
 
