@@ -232,13 +232,7 @@ impl Substructure {
         dm: f64,
         storage: OperatorStorage,
     ) -> Result<(), SingularSubstructure> {
-        let mut ops = self
-            .ops
-            .take()
-            .expect("a substructure's operators are rebuilt only on the rank that holds it");
-        let rebuilt = self.rebuild_operators(&mut ops, search, dm, storage, true);
-        self.ops = Some(ops);
-        rebuilt
+        self.rebuild_operators(search, dm, storage, true)
     }
 
     /// Step 4 of [`Self::set_search`] alone: K_E for the directions `search`, factorized; Z_E,
@@ -251,13 +245,7 @@ impl Substructure {
         dm: f64,
         storage: OperatorStorage,
     ) -> Result<(), SingularSubstructure> {
-        let mut ops = self
-            .ops
-            .take()
-            .expect("a substructure's operators are rebuilt only on the rank that holds it");
-        let rebuilt = self.rebuild_operators(&mut ops, search, dm, storage, false);
-        self.ops = Some(ops);
-        rebuilt
+        self.rebuild_operators(search, dm, storage, false)
     }
 
     /// E's sides re-read from `interfaces`, whose macro bases changed (not their nodes), and
@@ -304,6 +292,23 @@ impl Substructure {
     /// Steps 4–7 of [`Self::new`] on E's kept pattern, analysis and kernel (step 4 alone
     /// without `condense`).
     fn rebuild_operators(
+        &mut self,
+        search: &[f64],
+        dm: f64,
+        storage: OperatorStorage,
+        condense: bool,
+    ) -> Result<(), SingularSubstructure> {
+        let mut ops = self
+            .ops
+            .take()
+            .expect("a substructure's operators are rebuilt only on the rank that holds it");
+        let rebuilt = self.rebuild_taken(&mut ops, search, dm, storage, condense);
+        self.ops = Some(ops);
+        rebuilt
+    }
+
+    /// [`Self::rebuild_operators`] on E's operators `ops`, taken out of E meanwhile.
+    fn rebuild_taken(
         &mut self,
         ops: &mut LocalOperators,
         search: &[f64],
