@@ -11,6 +11,12 @@ use nalgebra::{DMatrix, SymmetricEigen};
 /// Blocks the Krylov basis grows to before it restarts from its best Ritz vectors.
 const RESTART_BLOCKS: usize = 12;
 
+/// Free dofs up to which a Krylov solve that returns fewer pairs than asked, or unconverged
+/// ones, is redone densely ([`dense_generalized_modes`]): a mass that dwarfs the others (a
+/// 1e8 kg point mass on a 3-node simplex) leaves the Krylov vectors M-dependent to round-off,
+/// and the basis stops short of the modes asked for.
+pub const DENSE_MODES_UP_TO: usize = 600;
+
 /// The lowest eigenpairs found, ascending.
 #[derive(Debug, Clone)]
 pub struct GeneralizedModes {
@@ -18,8 +24,8 @@ pub struct GeneralizedModes {
     pub values: Vec<f64>,
     /// The eigenvectors, M-orthonormal, one per value.
     pub vectors: Vec<Vec<f64>>,
-    /// Every pair's residual `‖K φ − λ M φ‖` fell below the tolerance (or the basis spans
-    /// the whole space).
+    /// As many pairs as asked for (up to the dofs) were found, and every pair's residual
+    /// `‖K φ − λ M φ‖` fell below the tolerance.
     pub converged: bool,
 }
 
@@ -216,8 +222,9 @@ impl Basis {
 /// The `count` lowest eigenpairs of `K φ = λ M φ`, K and M symmetric lower triangles on
 /// `pattern` (K positive semidefinite, M positive semidefinite and positive on K's kernel).
 /// `chol` must have been analysed on `pattern`; it is left holding `K − σM`. Converged when
-/// every pair's residual `‖K φ − λ M φ‖ ≤ tolerance · (|λ| + 1e-4 ρ) ‖M φ‖`, ρ the mean diagonal
-/// of K over M's.
+/// `count` pairs (at most the dofs with mass) were found and every pair's residual
+/// `‖K φ − λ M φ‖ ≤ tolerance · (|λ| + 1e-4 ρ) ‖M φ‖`, ρ the mean diagonal of K over M's.
+/// Up to [`DENSE_MODES_UP_TO`] dofs, a Krylov solve short of that is redone densely.
 pub fn lowest_generalized_modes(
     pattern: &StiffnessPattern,
     k: &[f64],
@@ -226,10 +233,30 @@ pub fn lowest_generalized_modes(
     count: usize,
     tolerance: f64,
 ) -> Result<GeneralizedModes, NoShiftFactorizes> {
+    let ratio = pattern.mean_diagonal(k).abs() / pattern.mean_diagonal(m).max(f64::MIN_POSITIVE);
+    let sigma = factorize_shifted(pattern, k, m, chol, ratio)?;
+    let krylov = krylov_modes(pattern, (k, m), chol, count, tolerance, ratio);
+    if krylov.converged || pattern.n > DENSE_MODES_UP_TO {
+        return Ok(krylov);
+    }
+    let dense = dense_generalized_modes(pattern, (k, m), sigma, count);
+    let converged = dense.values.len() == count.min(massive_dofs(pattern, m))
+        && residuals_hold(pattern, (k, m), &dense, 1e-4 * ratio, tolerance);
+    Ok(GeneralizedModes { converged, ..dense })
+}
+
+/// Block Lanczos on `(K − σM)⁻¹ M` (`chol` holding `K − σM`), [`lowest_generalized_modes`]'s
+/// first try.
+fn krylov_modes(
+    pattern: &StiffnessPattern,
+    (k, m): (&[f64], &[f64]),
+    chol: &mut SparseCholesky,
+    count: usize,
+    tolerance: f64,
+    ratio: f64,
+) -> GeneralizedModes {
     let n = pattern.n;
     let count = count.min(n);
-    let ratio = pattern.mean_diagonal(k).abs() / pattern.mean_diagonal(m).max(f64::MIN_POSITIVE);
-    factorize_shifted(pattern, k, m, chol, ratio)?;
     // The residuals' absolute floor: 1e-4 of the mean diagonal's eigenvalue scale (a zero
     // mode's residual is round-off on K, not zero).
     let floor = 1e-4 * ratio;
@@ -249,7 +276,6 @@ pub fn lowest_generalized_modes(
         .flat_map(|j| random_vector(n, j as u64 + 1))
         .collect();
     let mut block = apply(&start);
-    let (mut kx, mut mx) = (vec![0.0; n], vec![0.0; n]);
     // Vectors the basis has taken, over every restart: the work is bounded by this.
     let mut taken = 0;
     loop {
@@ -257,24 +283,17 @@ pub fn lowest_generalized_modes(
         taken += kept;
         let exhausted = kept == 0 || basis.len() >= n;
         let (values, vectors) = basis.ritz(count);
-        let converged = exhausted
-            || values.iter().zip(vectors.chunks(n)).all(|(&lambda, x)| {
-                pattern.sym_matvec(k, x, &mut kx);
-                pattern.sym_matvec(m, x, &mut mx);
-                let r: f64 = kx
-                    .iter()
-                    .zip(&mx)
-                    .map(|(a, b)| (a - lambda * b).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                r <= tolerance * (lambda.abs() + floor) * dot8(&mx, &mx).sqrt()
-            });
-        if converged || taken >= 60 * block_size.max(4) {
-            return Ok(GeneralizedModes {
-                values,
-                vectors: vectors.chunks(n).map(<[f64]>::to_vec).collect(),
-                converged,
-            });
+        let modes = GeneralizedModes {
+            values,
+            vectors: vectors.chunks(n).map(<[f64]>::to_vec).collect(),
+            converged: false,
+        };
+        // A basis that spans the whole space holds every pair; one that stopped short of
+        // `count` (M-dependent to round-off) holds fewer than asked: not converged.
+        let converged = modes.values.len() == count
+            && (basis.len() >= n || residuals_hold(pattern, (k, m), &modes, floor, tolerance));
+        if converged || exhausted || taken >= 60 * block_size.max(4) {
+            return GeneralizedModes { converged, ..modes };
         }
         block = if basis.len() >= RESTART_BLOCKS * block_size {
             // Restart from the best block_size Ritz vectors: the basis's cost (its products
@@ -286,6 +305,119 @@ pub fn lowest_generalized_modes(
         } else {
             apply(basis.blocks.last().map_or(&[][..], |b| &b.v[..]))
         };
+    }
+}
+
+/// Whether every pair of `modes` has `‖K φ − λ M φ‖ ≤ tolerance · (|λ| + floor) ‖M φ‖`.
+fn residuals_hold(
+    pattern: &StiffnessPattern,
+    (k, m): (&[f64], &[f64]),
+    modes: &GeneralizedModes,
+    floor: f64,
+    tolerance: f64,
+) -> bool {
+    let n = pattern.n;
+    let (mut kx, mut mx) = (vec![0.0; n], vec![0.0; n]);
+    modes.values.iter().zip(&modes.vectors).all(|(&lambda, x)| {
+        pattern.sym_matvec(k, x, &mut kx);
+        pattern.sym_matvec(m, x, &mut mx);
+        let r: f64 = kx
+            .iter()
+            .zip(&mx)
+            .map(|(a, b)| (a - lambda * b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        r <= tolerance * (lambda.abs() + floor) * dot8(&mx, &mx).sqrt()
+    })
+}
+
+/// The dofs with mass: the diagonal entries of M above 0 (a massless dof has no mode).
+fn massive_dofs(pattern: &StiffnessPattern, m: &[f64]) -> usize {
+    pattern
+        .entries()
+        .filter(|&(r, c, slot)| r == c && m[slot] > 0.0)
+        .count()
+}
+
+/// The `count` lowest pairs of `K φ = λ M φ` densely: `K − σM = L Lᵀ` (σ from
+/// [`factorize_shifted`], so positive definite), the eigenpairs `(μ, y)` of the symmetric
+/// `L⁻¹ M L⁻ᵀ`, then `φ = L⁻ᵀ y / √μ` (M-normalised: `φᵀ M φ = 1`), each refined by two steps
+/// of inverse iteration at its own shift, `φ ← (K − λM)⁻¹ M φ` (one shift resolves the pairs
+/// to `‖K − σM‖` only: 1e-7 of the stiff end with a mass 1e8 times the others), λ the
+/// Rayleigh quotient `φᵀ K φ / φᵀ M φ`. A μ at round-off of the largest (a massless
+/// direction, λ infinite) is no mode.
+fn dense_generalized_modes(
+    pattern: &StiffnessPattern,
+    (k, m): (&[f64], &[f64]),
+    sigma: f64,
+    count: usize,
+) -> GeneralizedModes {
+    let n = pattern.n;
+    let empty = GeneralizedModes {
+        values: Vec::new(),
+        vectors: Vec::new(),
+        converged: false,
+    };
+    let (mut shifted, mut mass) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+    for (r, c, slot) in pattern.entries() {
+        let (a, b) = (k[slot] - sigma * m[slot], m[slot]);
+        (shifted[(r, c)], shifted[(c, r)]) = (a, a);
+        (mass[(r, c)], mass[(c, r)]) = (b, b);
+    }
+    let Some(cholesky) = nalgebra::Cholesky::new(shifted.clone()) else {
+        return empty;
+    };
+    let l = cholesky.l();
+    // C = L⁻¹ M L⁻ᵀ: two triangular solves.
+    let Some(half) = l.solve_lower_triangular(&mass) else {
+        return empty;
+    };
+    let Some(c) = l.solve_lower_triangular(&half.transpose()) else {
+        return empty;
+    };
+    let c = (&c + c.transpose()) * 0.5;
+    let eig = SymmetricEigen::new(c);
+    let largest = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+    // Descending μ is ascending λ.
+    let mut order: Vec<usize> = (0..n)
+        .filter(|&i| eig.eigenvalues[i] > 1e-14 * largest)
+        .collect();
+    order.sort_by(|&i, &j| eig.eigenvalues[j].total_cmp(&eig.eigenvalues[i]));
+    order.truncate(count);
+    let lt = l.transpose();
+    // K itself, from K − σM.
+    let stiffness = &shifted + &mass * sigma;
+    let (mut values, mut vectors) = (Vec::new(), Vec::new());
+    for i in order {
+        let Some(mut phi) = lt.solve_upper_triangular(&eig.eigenvectors.column(i).into_owned())
+        else {
+            return empty;
+        };
+        let mut lambda = sigma + 1.0 / eig.eigenvalues[i];
+        for step in 0..=2 {
+            // M-normalised, and λ its Rayleigh quotient φᵀ K φ.
+            let norm = phi.dot(&(&mass * &phi)).sqrt();
+            phi /= norm;
+            lambda = phi.dot(&(&stiffness * &phi));
+            if step == 2 {
+                break;
+            }
+            // φ ← (K − λM)⁻¹ M φ.
+            let Some(next) = (&stiffness - &mass * lambda).lu().solve(&(&mass * &phi)) else {
+                break;
+            };
+            if !next.iter().all(|x| x.is_finite()) {
+                break;
+            }
+            phi = next;
+        }
+        values.push(lambda);
+        vectors.push(phi.iter().copied().collect());
+    }
+    GeneralizedModes {
+        values,
+        vectors,
+        converged: false,
     }
 }
 
