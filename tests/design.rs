@@ -670,3 +670,129 @@ fn rebalancing_projects_a_rounded_prestress_on_the_self_stress_states() {
     assert_eq!(code(&o), 2);
     assert!(stderr(&o).contains("--rebalance"));
 }
+
+/// The rest lengths `ℓ·ES/(ES + t)` of a written design's members, from its tables.
+fn rest_lengths(dir: &Path) -> Vec<f64> {
+    let nodes: HashMap<String, [f64; 3]> = csv_rows(&dir.join("nodes.csv"))
+        .into_iter()
+        .map(|r| {
+            let x = |k: &str| r[k].parse::<f64>().unwrap();
+            (r["node"].clone(), [x("x"), x("y"), x("z")])
+        })
+        .collect();
+    csv_rows(&dir.join("members.csv"))
+        .iter()
+        .map(|r| {
+            let x = |k: &str| r[k].parse::<f64>().unwrap();
+            let (a, b) = (nodes[&r["a"]], nodes[&r["b"]]);
+            let length = (0..3).map(|k| (b[k] - a[k]).powi(2)).sum::<f64>().sqrt();
+            let es = x("young") * x("section");
+            length * es / (es + x("prestress"))
+        })
+        .collect()
+}
+
+/// The star of four cables and one bar (issue 57, R5-3), designed by force densities.
+fn star_case(dir: &Temp) -> String {
+    case_in(
+        dir,
+        "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n[[supports.fix]]\n\
+         nodes = [0, 1, 2, 3, 4]\n[[load.point]]\nnodes = [5]\nforce = [10.0, 0.0, -100.0]\n\
+         [prestress]\nfrom = \"force-density\"\nforce_density = { c = 1.0, b = -2.0 }\n\
+         [load]\nalpha = [1.0]\n[solver]\nmethods = [\"newton\"]\n",
+        &[
+            (
+                "nodes.csv",
+                "node,x,y,z\n0,1,0,0\n1,-1,0,0\n2,0,1,0\n3,0,-1,0\n4,0,0,-1\n5,0.1,0.2,0.5\n"
+                    .to_string(),
+            ),
+            (
+                "members.csv",
+                "member,a,b,kind,young,section,prestress,group\n0,0,5,cable,1e11,5e-5,0,c\n\
+                 1,1,5,cable,1e11,5e-5,0,c\n2,2,5,cable,1e11,5e-5,0,c\n3,3,5,cable,1e11,5e-5,0,c\n\
+                 4,4,5,bar,2e11,2.8e-4,0,b\n"
+                    .to_string(),
+            ),
+        ],
+    )
+}
+
+/// `design` of `path` with `set` into a fresh directory: its exit code, and where it wrote.
+fn design_into(path: &str, set: &str) -> (i32, Temp, String) {
+    let out = Temp::dir("designed");
+    let o = tensolve(&["design", path, "--set", set, "--out", out.arg()]);
+    (code(&o), out, stderr(&o))
+}
+
+/// A bar force at or beyond −E·S (a negative rest length: −34 m, −1.4e7 m) is refused with exit
+/// 2 and nothing written (issue 57, R5-3: it was written, called stable, and `run` refused it).
+#[test]
+fn a_design_with_a_negative_rest_length_is_refused() {
+    let tower = case_path("tower2-design");
+    let (code, out, err) = design_into(&tower, "prestress.targets={bars0=-6.0e7, bars1=-2000.0}");
+    assert_eq!(code, 2, "{err}");
+    assert!(!out.0.exists());
+    for part in [
+        "member 0 (bar)",
+        "−E·S = -5.600000e7 N",
+        "rest length",
+        "prestress.targets",
+    ] {
+        assert!(err.contains(part), "{err} lacks {part}");
+    }
+    let dir = Temp::dir("star");
+    let star = star_case(&dir);
+    let (code, out, err) = design_into(&star, "prestress.force_density={c=1.0, b=-4.0000000001}");
+    assert_eq!(code, 2, "{err}");
+    assert!(!out.0.exists());
+    assert!(
+        err.contains("prestress.force_density") && err.contains("member 4"),
+        "{err}"
+    );
+    // The same star with b = −2 is a form: written, every rest length positive, and run.
+    let (code, out, err) = design_into(&star, "prestress.force_density={c=1.0, b=-2.0}");
+    assert_eq!(code, 0, "{err}");
+    assert!(rest_lengths(&out.0).iter().all(|&l| l > 0.0));
+}
+
+proptest::proptest! {
+    #![proptest_config(common::fixed_seed_config(24, 20_261_203))]
+
+    /// Whatever `design` writes, `run` takes as written, with every rest length > 0; what it
+    /// does not write it refuses with exit 2 (issue 57): random bar targets of either sign and
+    /// magnitudes from 1 N to 1e9 N on the two-stage tower, random force densities on the star.
+    #[test]
+    fn whatever_design_writes_run_takes(
+        bars0 in -9.0f64..9.0,
+        bars1 in -9.0f64..9.0,
+        c in 0.05f64..10.0,
+        b in -30.0f64..5.0,
+    ) {
+        let signed = |e: f64| e.signum() * 10f64.powf(e.abs());
+        let tower = case_path("tower2-design");
+        let dir = Temp::dir("star");
+        let star = star_case(&dir);
+        let tries = [
+            (tower, format!("prestress.targets={{bars0={:e}, bars1={:e}}}", signed(bars0), signed(bars1))),
+            (star, format!("prestress.force_density={{c={c:e}, b={b:e}}}")),
+        ];
+        for (path, set) in tries {
+            let (exit, out, err) = design_into(&path, &set);
+            if exit != 0 {
+                proptest::prop_assert_eq!(exit, 2, "{}: {}", set, err);
+                proptest::prop_assert!(!out.0.exists(), "{} wrote files", set);
+                continue;
+            }
+            let rest = rest_lengths(&out.0);
+            proptest::prop_assert!(rest.iter().all(|&l| l > 0.0), "{}: {:?}", set, rest);
+            let written = std::fs::read_dir(&out.0)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| p.extension().is_some_and(|x| x == "toml"))
+                .unwrap();
+            let ran = Temp::dir("designed-run");
+            let o = tensolve(&["run", written.to_str().unwrap(), "--out", ran.arg(), "--quiet"]);
+            proptest::prop_assert!(code(&o) != 2, "{}: run refused the written design: {}", set, stderr(&o));
+        }
+    }
+}

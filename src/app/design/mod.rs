@@ -20,6 +20,10 @@ pub enum DesignError {
     /// The case, or its design, refused.
     #[error("{0}")]
     Case(#[from] CaseError),
+    /// The design is no structure `run` takes: a rest length at or below 0, no prestress
+    /// stability, or a set-up `run` refuses. Nothing is written.
+    #[error("the design is refused, and nothing is written: {0}")]
+    Impossible(String),
     /// A file of `--out` could not be written.
     #[error("cannot write `{path}`: {reason}")]
     Write {
@@ -34,7 +38,7 @@ impl DesignError {
     /// 2 for bad input, 1 for a file not written.
     pub fn exit_code(&self) -> i32 {
         match self {
-            DesignError::Case(_) => 2,
+            DesignError::Case(_) | DesignError::Impossible(_) => 2,
             DesignError::Write { .. } => 1,
         }
     }
@@ -98,10 +102,60 @@ pub fn design(
         .into());
     };
     let report = report(path, &case, design);
+    refuse_impossible(&case, &report)?;
     if let Some(dir) = out {
         write_design(dir, path, set, &case, &report)?;
     }
     Ok(report)
+}
+
+/// Refuse a design that `run` would not take as written (issue 57, R5-3): a member whose force
+/// is at or beyond −E·S (its rest length `ℓ·ES/(ES + t)` is not positive), a prestress that does
+/// not stiffen the mechanisms, or any refusal of `run`'s own set-up on the designed case.
+fn refuse_impossible(case: &Case, report: &DesignReport) -> Result<(), DesignError> {
+    let (key, what) = match report.design.fit {
+        crate::structure::Fit::ForceDensity => ("prestress.force_density", "force density"),
+        crate::structure::Fit::Rebalanced => ("the members table's prestress", "prestress"),
+        _ => ("prestress.targets", "target"),
+    };
+    let geometry = &case.geometry;
+    for m in &geometry.members {
+        let es = m.young * m.section;
+        // ℓ₀ = ℓ·ES/(ES + t) > 0 ⇔ t > −ES.
+        if !(es + m.prestress > 0.0) {
+            let (length, _) =
+                crate::structure::length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]);
+            return Err(DesignError::Impossible(format!(
+                "member {} ({}) would carry {:.6e} N, at or beyond −E·S = {:.6e} N: its rest \
+                 length ℓ·ES/(ES + t) would be {:.6e} m, no member; `{key}` asks for more \
+                 compression than its section takes: lower that group's {what}, or give it a \
+                 larger E·S",
+                m.id,
+                m.kind.name(),
+                m.prestress,
+                -es,
+                length * es / (es + m.prestress),
+            )));
+        }
+    }
+    if let Some(stability) = report.stability.as_ref().filter(|s| !s.stable()) {
+        return Err(DesignError::Impossible(format!(
+            "the designed prestress is not prestress-stable (the smallest eigenvalue of Mᵀ K_G M \
+             on the {} mechanism(s) is {:.6e} N/m, threshold {:.3e}): `run` would refuse it as \
+             a mechanism; change `{key}` (signs: cables in tension, bars in compression), or \
+             add members or supports",
+            stability.mechanisms,
+            stability.smallest().unwrap_or(0.0),
+            stability.threshold
+        )));
+    }
+    // What `run` does first, on the case as it would be written.
+    let mut designed = case.clone();
+    crate::app::auto::prepare_start(&mut designed, false)
+        .map(|_| ())
+        .map_err(|refused| {
+            DesignError::Impossible(format!("`run` refuses the designed case: {refused}"))
+        })
 }
 
 /// The report of `case`, designed.
