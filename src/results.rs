@@ -7,8 +7,7 @@ pub mod modes;
 pub mod uniqueness;
 
 pub use geometric_term::{
-    distance_to_large, geometric_term, LargeDistance, DISTANCE_FAR, DISTANCE_SETTLED,
-    DISTANCE_STEPS,
+    distance_to_large, LargeDistance, DISTANCE_FAR, DISTANCE_SETTLED, DISTANCE_STEPS,
 };
 
 use crate::linalg::{norm, smallest_eigenvalues};
@@ -357,6 +356,14 @@ pub fn smallest_tangent_eigenvalue(model: &Model, eq: &Equilibrium, taut: &TautS
         pattern,
         &mut values,
     );
+    smallest_assembled_eigenvalue(taut, &values)
+}
+
+/// The smallest eigenvalue (N/m) of a tangent assembled on K's pattern (`values`), as
+/// [`smallest_tangent_eigenvalue`] reports it: 0 within [`TANGENT_ZERO_RELATIVE`] of the mean
+/// diagonal, at least `−mean diagonal`.
+pub fn smallest_assembled_eigenvalue(taut: &TautStiffness, values: &[f64]) -> f64 {
+    let pattern = &taut.pattern;
     let mut factor = taut.factor.share_symbolic();
     // Up to 20 000 free dofs, a block of 4 to 1e-10; beyond, where a solve costs 0.1–0.3 s,
     // a single vector to 1e-4 in at most 10 solves (the sign and two digits).
@@ -365,8 +372,8 @@ pub fn smallest_tangent_eigenvalue(model: &Model, eq: &Equilibrium, taut: &TautS
     } else {
         (1, 10, 1e-4)
     };
-    let eig = smallest_eigenvalues(pattern, &values, &mut factor, block, iterations, tolerance);
-    let scale = pattern.mean_diagonal(&values);
+    let eig = smallest_eigenvalues(pattern, values, &mut factor, block, iterations, tolerance);
+    let scale = pattern.mean_diagonal(values);
     // Below TANGENT_ZERO_RELATIVE of the mean diagonal an eigenvalue is zero: the Ritz values
     // carry round-off of about 1e-10 of the scale, which must not decide stable or unstable.
     let zero = TANGENT_ZERO_RELATIVE * scale;

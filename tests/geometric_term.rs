@@ -110,7 +110,7 @@ fn a_pinned_prestress_on_the_prism_warns_with_the_measured_difference_to_large()
     // All three rows are off by more than 1 %; the worst is α = 1, measured there.
     let expected = format!(
         "3 row(s) leave out a geometric term (the members' rotation under their tension) that \
-         changes the answer by more than model.tolerance = 1 % (estimated up to {:.1} %: \
+         changes the answer by more than model.tolerance = 1 % (measured up to {:.1} %: \
          newton, alpha 1; measured there, `large` gives a largest deflection of {:.4e} m \
          against {:.4e} m",
         100.0 * number(&p, "geometric_term"),

@@ -8,7 +8,9 @@
 //!   the large model to the large answer near it ([`distance_to_large`]); the first α where
 //!   that distance passes the tolerance, or cannot be measured, and every α after it, are
 //!   solved with `large`: the geometric effect grows with the load, and the α are in
-//!   increasing order.
+//!   increasing order. So is an α where the steps settle on an equilibrium whose tangent is not
+//!   positive definite (a column past its Euler load): however close, linear's answer there
+//!   sits next to a saddle of the energy, which only `large` can say (it reports `unstable`).
 
 use super::setup::{prepare_keeping, set_up, Prepared, SetUpSolver};
 use crate::case::Case;
@@ -154,11 +156,21 @@ impl<'s> AutoModel<'s> {
         };
         let taut = self.prepared.taut.as_ref();
         let Some(taut) = taut.filter(|_| solution.info.status.converged()) else {
+            // The status the linear row would have: a runaway the run's own test certifies is
+            // no equilibrium, not the solver's stall on it (issue 57, A1).
+            let model = &self.prepared.model;
+            let eq = &solution.equilibrium;
+            let status = match crate::solvers::no_equilibrium(model, eq, load)
+                .or_else(|| crate::solvers::no_equilibrium_of_answer(model, eq, load))
+            {
+                Some(_) => crate::solvers::Status::NoEquilibrium,
+                None => solution.info.status,
+            };
             return large(
                 format!(
                     "auto: newton found no linear answer at alpha = {} to measure ({})",
                     alpha_label(alpha),
-                    solution.info.status
+                    status.code()
                 ),
                 "no linear answer there".to_string(),
             );
@@ -193,6 +205,14 @@ impl<'s> AutoModel<'s> {
                     percent(d)
                 ),
                 format!("linear {} and more from large there", percent(d)),
+            ),
+            LargeDistance::Unstable { eigenvalue, .. } => large(
+                format!(
+                    "auto: the large-displacement equilibrium next to linear's answer is unstable \
+                     (large's tangent there has the eigenvalue {eigenvalue:.3e} N/m): large \
+                     decides"
+                ),
+                "an unstable large equilibrium next to linear's answer there".to_string(),
             ),
             LargeDistance::Unsettled => large(
                 format!(

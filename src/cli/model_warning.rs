@@ -1,6 +1,6 @@
 //! The warning of a run whose model on the initial geometry is off by more than
-//! `model.tolerance`: the estimate (`geometric_term`) and, where `large` was solved at the worst
-//! row's α, what it measured.
+//! `model.tolerance`: the distance measured (`geometric_term`) and, where `large` was solved at
+//! the worst row's α, what it gives there.
 
 use tensolve::app::against_large::LargeAnswer;
 
@@ -17,7 +17,14 @@ pub fn off_by_warning(
         worst.solver,
         tensolve::output::alpha_label(worst.alpha)
     );
-    let largest = worst.geometric_term.unwrap_or(0.0);
+    let largest = match worst.geometric_term() {
+        Some(d) => format!("measured up to {:.1} %", 100.0 * d),
+        None => format!(
+            "or by an amount not measured: large's Newton steps from the answer did not settle \
+             in {} steps",
+            tensolve::results::DISTANCE_STEPS
+        ),
+    };
     let change = |model: f64, large: f64| match large.abs() > 0.0 {
         true => format!("{:+.1} %", 100.0 * (large - model) / large.abs()),
         false => "–".to_string(),
@@ -40,10 +47,9 @@ pub fn off_by_warning(
     };
     format!(
         "warning: {count} row(s) leave out a geometric term (the members' rotation under their \
-         tension) that changes the answer by more than model.tolerance = {} % (estimated up \
-         to {:.1} %: {at}{measured}): `model.geometry = \"large\"` computes the \
-         large-displacement answer (summary.csv: geometric_term, small_displacement_ok = false)",
+         tension) that changes the answer by more than model.tolerance = {} % ({largest}: \
+         {at}{measured}): `model.geometry = \"large\"` computes the large-displacement answer \
+         (summary.csv: geometric_term, small_displacement_ok = false)",
         (100.0 * tolerance * 1e6).round() / 1e6,
-        100.0 * largest
     )
 }

@@ -153,9 +153,9 @@ impl Reporter {
                 // Rows refused (beyond the model, no equilibrium, unstable, not converged) have no
                 // answer whose geometric term means anything; `auto` measured its own choice.
                 if row.needs_large() && row.converged && row.model_pinned {
-                    let value = row.geometric_term.unwrap_or(0.0);
+                    let value = row.geometric_term().unwrap_or(f64::INFINITY);
                     self.geometric.0 += 1;
-                    let largest = |r: &SummaryRow| r.geometric_term.unwrap_or(0.0);
+                    let largest = |r: &SummaryRow| r.geometric_term().unwrap_or(f64::INFINITY);
                     if self.geometric.1.as_ref().is_none_or(|r| value > largest(r)) {
                         self.geometric.1 = Some(row.clone());
                     }
@@ -204,7 +204,14 @@ fn format_row(r: &SummaryRow) -> String {
             (true, true) if r.alpha == 0.0 => {
                 "converged (no load: Δη at round-off of the prestress)".to_string()
             }
-            (true, true) => "converged (Δη at round-off of the prestress)".to_string(),
+            (true, true) if r.measure == Measure::Indicator => {
+                "converged (Δη at round-off of the prestress)".to_string()
+            }
+            // newton (issue 57, E2): r(U) at round-off, the load below the prestress's.
+            (true, true) => "converged at round-off (the load is below the round-off of the \
+                             prestress's balance: the answer is the prestressed state to \
+                             round-off)"
+                .to_string(),
             (true, false) => "converged".to_string(),
             (false, _) => format!("NOT converged ({})", r.status),
         },

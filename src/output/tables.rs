@@ -47,9 +47,10 @@ pub struct SummaryRow {
     /// The smallest eigenvalue of the tangent stiffness at the answer, N/m, when computed
     /// (models with geometric stiffness, or `output.stability`).
     pub min_tangent_eigenvalue: Option<f64>,
-    /// The relative change of the answer the geometric term the model leaves out would make
-    /// ([`results::geometric_term`]); `None` for `large` and without displacements.
-    pub geometric_term: Option<f64>,
+    /// How far the answer is from the large-displacement one, measured by Newton steps of the
+    /// large model ([`results::distance_to_large`]; column `geometric_term`); `None` for
+    /// `large` and without displacements.
+    pub large_distance: Option<results::LargeDistance>,
     /// The case's `model.tolerance`: a geometric term above it says the model is off.
     pub model_tolerance: f64,
     /// Whether a converged answer is the only equilibrium, when checked (column `unique`; the
@@ -90,10 +91,10 @@ impl SummaryRow {
         alpha: f64,
         measures: &results::AnswerMeasures,
         solution: &Solution,
-        verdict: (Option<f64>, Option<f64>),
+        verdict: (Option<f64>, Option<results::LargeDistance>),
         setup_seconds: f64,
     ) -> SummaryRow {
-        let (min_tangent_eigenvalue, geometric_term) = verdict;
+        let (min_tangent_eigenvalue, large_distance) = verdict;
         let eq = &solution.equilibrium;
         SummaryRow {
             solver: solver.to_string(),
@@ -113,7 +114,7 @@ impl SummaryRow {
             slack_by_kind: measures.slack_by_kind,
             max_member_rotation: measures.max_member_rotation,
             updates_geometry: measures.updates_geometry,
-            geometric_term,
+            large_distance,
             model_tolerance: results::DEFAULT_MODEL_TOLERANCE,
             uniqueness: None,
             setup_seconds,
@@ -145,11 +146,16 @@ impl SummaryRow {
         })
     }
 
-    /// Whether the geometric term the model leaves out is above the case's `model.tolerance`:
-    /// `model.geometry = "large"` would differ by more.
+    /// Whether the answer is further than the case's `model.tolerance` from the large one, or
+    /// no distance could be measured, or large's equilibrium next to it is unstable:
+    /// `model.geometry = "large"` is needed.
     pub fn needs_large(&self) -> bool {
-        self.geometric_term
-            .is_some_and(|g| g > self.model_tolerance)
+        self.large_distance.is_some_and(results::LargeDistance::off)
+    }
+
+    /// The `geometric_term` column: the measured relative distance to `large`, where known.
+    pub fn geometric_term(&self) -> Option<f64> {
+        self.large_distance.and_then(results::LargeDistance::value)
     }
 
     /// Whether every number of the row is finite (a row with inf or NaN is never written).
@@ -161,7 +167,7 @@ impl SummaryRow {
             self.equilibrium_residual,
             self.max_member_rotation,
             self.min_tangent_eigenvalue.unwrap_or(0.0),
-            self.geometric_term.unwrap_or(0.0),
+            self.geometric_term().unwrap_or(0.0),
             self.governing.map_or(0.0, |g| g.utilisation),
         ]
         .iter()
@@ -240,7 +246,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
             .map(|v| format!("{v:e}"))
             .unwrap_or_default(),
         answer(
-            r.geometric_term
+            r.geometric_term()
                 .map(|v| format!("{v:e}"))
                 .unwrap_or_default()
         ),

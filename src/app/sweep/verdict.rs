@@ -5,14 +5,16 @@ use crate::app::setup::{AnswerChecks, Prepared};
 use crate::output::{alpha_label, SummaryRow};
 use crate::results;
 use crate::results::uniqueness::Uniqueness;
+use crate::results::LargeDistance;
 use crate::solvers::{Equilibrium, Measure, NoEquilibrium, Solution, Status};
 
 /// What the sweep found of an answer beyond its solver's stop.
 pub(super) struct Verdict {
     /// The smallest tangent eigenvalue at the answer, when computed.
     pub min_tangent_eigenvalue: Option<f64>,
-    /// The relative change the geometric term the model leaves out would make.
-    pub geometric_term: Option<f64>,
+    /// How far a model on the initial geometry is from `large` there (column
+    /// `geometric_term`), with large's stability next to it.
+    pub geometric_term: Option<LargeDistance>,
     /// Why the answer is no equilibrium, when it is none.
     pub no_equilibrium: Option<crate::solvers::NoEquilibrium>,
     /// What the advice of a failure line may name: the structure's self-stress states s (a
@@ -56,7 +58,10 @@ impl Advice {
 /// Judge `solution` (docs/method.md §8): its displacements may be a direction along which the
 /// energy decreases without bound (no equilibrium exists: [`Status::NoEquilibrium`]); with
 /// `checks.eigenvalue`, the smallest tangent eigenvalue at the answer, and a converged answer
-/// where it is negative is an unstable equilibrium ([`Status::Unstable`]).
+/// where it is negative is an unstable equilibrium ([`Status::Unstable`]); with
+/// `checks.geometric_term`, a model on the initial geometry's distance to `large`, and a
+/// converged answer next to which large's equilibrium is a saddle is [`Status::Unstable`] too
+/// (a column past its Euler load: a model on the initial geometry cannot see it).
 ///
 /// `certificate` tests a direction for no equilibrium ([`crate::solvers::no_equilibrium`] on
 /// the whole structure, or the solver's own test over the shares of the links the ranks keep).
@@ -115,6 +120,19 @@ pub(super) fn assess(
         advice.stopped = (!solution.info.status.converged()).then_some(solution.info.status);
         solution.info.status = Status::BeyondModel;
     }
+    let geometric_term = taut
+        .filter(|_| checks.geometric_term && !model.updates_geometry())
+        .map(|taut| {
+            let eq = &solution.equilibrium;
+            results::distance_to_large(model, eq, load, taut, checks.model_tolerance)
+        });
+    // Large's equilibrium next to the answer is a saddle: whatever the model on the initial
+    // geometry says, no load path stays there.
+    if solution.info.status.converged()
+        && matches!(geometric_term, Some(LargeDistance::Unstable { .. }))
+    {
+        solution.info.status = Status::Unstable;
+    }
     let uniqueness = solution
         .info
         .status
@@ -128,9 +146,7 @@ pub(super) fn assess(
     }
     Verdict {
         min_tangent_eigenvalue,
-        geometric_term: taut
-            .filter(|_| checks.geometric_term)
-            .and_then(|taut| results::geometric_term(model, &solution.equilibrium, load, taut)),
+        geometric_term,
         no_equilibrium: None,
         advice,
         uniqueness,
@@ -290,6 +306,23 @@ pub(super) fn not_converged_message(
                     .as_ref()
                     .map(Uniqueness::motion_nodes)
                     .unwrap_or_default()
+            )
+        }
+        (None, Status::Unstable)
+            if matches!(verdict.geometric_term, Some(LargeDistance::Unstable { .. })) =>
+        {
+            let eigenvalue = match verdict.geometric_term {
+                Some(LargeDistance::Unstable { eigenvalue, .. }) => eigenvalue,
+                _ => f64::NAN,
+            };
+            format!(
+                "{head}: an unstable equilibrium: the residual criterion of the {} model holds, \
+                 but the large-displacement equilibrium next to its answer is a saddle of the \
+                 energy (large's tangent there has the eigenvalue {eigenvalue:.3e} N/m: a \
+                 compressed member past its buckling load, say), which a load path would not \
+                 stay on and which a model on the initial geometry cannot see; solve with \
+                 model.geometry = \"large\"; its row says converged = false, status = unstable",
+                row.model.name()
             )
         }
         (None, Status::Unstable) => format!(
