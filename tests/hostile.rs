@@ -459,6 +459,76 @@ fn e2_tiny_load_factors_get_short_file_names() {
     assert_eq!(tensolve::output::alpha_label(0.05), "0.05");
 }
 
+/// newton at α = 1e-250 on a 2 × 2 grid, under `linear` and under `auto` (issue 57, E2): the
+/// load is below the round-off of the prestress's balance, so the load-relative stop cannot be
+/// met; it ended `stalled` at r(U) 3e-17. The answer is the prestressed state to round-off, and
+/// the row converges saying so; at α = 1e-3 the same grid converges on the criterion itself.
+#[test]
+fn e2_a_load_below_the_prestress_round_off_converges_at_round_off() {
+    for geometry in ["linear", "auto"] {
+        for (alpha, at_roundoff) in [("1e-250", true), ("1e-3", false)] {
+            let case = Temp::file(
+                "e2-newton",
+                &format!(
+                    "[model]\ngeometry = \"{geometry}\"\n[grid]\nmodules = [2, 2]\n[load]\n\
+                     alpha = [{alpha}]\n[solver]\nmethods = [\"newton\"]\n"
+                ),
+            );
+            let dir = Temp::dir("e2-newton-out");
+            let out = tensolve(&["run", case.arg(), "--out", dir.0.to_str().unwrap()]);
+            assert_eq!(code(&out), 0, "{geometry} {alpha}: {}", stderr(&out));
+            let row = &summary(&dir.0)[0];
+            assert_eq!(row[2], "true", "{row:?}");
+            let residual: f64 = row[10].parse().unwrap();
+            assert!(residual <= 1e-14, "{row:?}");
+            assert_eq!(
+                stderr(&out).contains("converged at round-off (the load is below the round-off"),
+                at_roundoff,
+                "{geometry} {alpha}: {}",
+                stderr(&out)
+            );
+        }
+    }
+}
+
+/// Result files honour the umask as `summary.csv` does (issue 57, R5-9: they were 0600 under
+/// umask 022): 0644 under 022, 0600 under 077.
+#[test]
+fn result_files_honour_the_umask() {
+    use std::os::unix::fs::PermissionsExt;
+    for (umask, mode) in [("022", 0o644), ("077", 0o600)] {
+        let case = Temp::file("r9", &small_case("[\"newton\"]", "[1.0]", ""));
+        let dir = Temp::dir("r9-out");
+        let o = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "umask {umask} && exec \"$0\" run \"$1\" --out \"$2\" --quiet"
+            ))
+            .args([
+                env!("CARGO_BIN_EXE_tensolve"),
+                case.arg(),
+                dir.0.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        for file in [
+            "summary.csv",
+            "tensions/newton_alpha1.csv",
+            "displacements/newton_alpha1.csv",
+        ] {
+            let path = dir.0.join(file);
+            if !path.exists() {
+                continue;
+            }
+            let got = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+            assert_eq!(got, mode, "umask {umask}: {file} {got:o}");
+        }
+        let tensions = dir.0.join("tensions/newton_alpha1.csv");
+        assert!(tensions.exists());
+    }
+}
+
 #[test]
 fn e4_tiny_moduli_are_refused_by_name() {
     for key in ["cables", "bars"] {

@@ -22,9 +22,12 @@ pub fn write_atomic(
         .unwrap_or_default();
     // `tempfile` opens with O_CREAT | O_EXCL under a random name: no link is followed and no
     // other process can guess or share the name. Dropped on error, the file is removed.
+    // Created with mode 0666 less the umask, as `File::create` (and `summary.csv`) would:
+    // tempfile's own 0600 made every result file private whatever the umask (issue 57, R5-9).
     let tmp = tempfile::Builder::new()
         .prefix(&format!(".{file_name}."))
         .suffix(".tmp")
+        .permissions(create_mode())
         .tempfile_in(dir)?;
     let mut w = BufWriter::new(tmp);
     fill(&mut w)?;
@@ -32,6 +35,12 @@ pub fn write_atomic(
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+/// The mode a new file is created with before the umask: 0666.
+fn create_mode() -> std::fs::Permissions {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::Permissions::from_mode(0o666)
 }
 
 /// Create `dir` and make sure a file can be written in it (a probe file of a random name,

@@ -34,7 +34,7 @@ pub use no_equilibrium::{
 };
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use solution::{Equilibrium, Solution};
-pub use solver::{stop_when, Progress, Solver};
+pub use solver::{residual_stop, stop_when, Progress, Solver, PRESTRESS_ROUND_OFF};
 pub use status::{LoadPathEnd, Measure, SolveInfo, Status};
 pub use taut::TautStiffness;
 

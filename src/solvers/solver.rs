@@ -31,6 +31,37 @@ pub struct Progress {
     pub at_roundoff: bool,
 }
 
+/// r(U) at or below this is the round-off of the prestress's own balance (`‖Bᵀt0‖` of a
+/// balanced prestress is 1e-17 to 1e-15 of `‖|B|ᵀ|t0|‖`).
+pub const PRESTRESS_ROUND_OFF: f64 = 1e-14;
+
+/// The stop of newton's two residuals (issue 57, E2): converged when r(U) and the unbalance
+/// relative to the load's own forces (`load_residual`) are both within `tolerance`; converged
+/// *at round-off* (the second `true`) when the solver can go no further (`stalled`) with r(U) at
+/// [`PRESTRESS_ROUND_OFF`] and the load's forces below `PRESTRESS_ROUND_OFF / tolerance` of the
+/// prestress's: the load is then below the round-off of the prestress's balance
+/// (α = 1e-250 on a grid), the relative measure cannot be met in floating point, and the answer
+/// is the prestressed state to round-off — which the row says; else stalled when `stalled`.
+pub fn residual_stop(
+    residual: f64,
+    load_residual: f64,
+    tolerance: f64,
+    stalled: bool,
+) -> (Option<Status>, bool) {
+    let converged = load_residual.max(residual) <= tolerance;
+    // The load's forces over the prestress's, `(‖F‖ + ‖|B|ᵀ|τ − t0|‖) / (‖F‖ + ‖|B|ᵀ|τ|‖)`: below
+    // PRESTRESS_ROUND_OFF / tolerance, the load-relative unbalance cannot reach the tolerance
+    // above the prestress's round-off. A tolerance below that round-off itself (1e-15) is no
+    // such load: the row stalls, as it says (issue 13, C7).
+    let load_share = residual / load_residual;
+    let at_roundoff = !converged
+        && stalled
+        && tolerance > PRESTRESS_ROUND_OFF
+        && residual <= PRESTRESS_ROUND_OFF
+        && load_share <= PRESTRESS_ROUND_OFF / tolerance;
+    (stop_when(converged || at_roundoff, stalled), at_roundoff)
+}
+
 /// The stop of a solver whose criterion is a residual below its tolerance: converged when
 /// `converged`, else stalled when `stalled`, else none.
 pub fn stop_when(converged: bool, stalled: bool) -> Option<Status> {

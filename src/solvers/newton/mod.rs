@@ -19,7 +19,7 @@
 
 mod line_search;
 
-use super::{stop_when, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
+use super::{residual_stop, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
 use crate::linalg::{
     dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern, CHUNK,
 };
@@ -441,8 +441,10 @@ impl Solver for Newton<'_> {
         // r(U) ≤ tol, and the same unbalance relative to the forces the load brings into play
         // (the prestress left out): the second is the stricter, and keeps U = 0 from passing
         // at a huge prestress (issue 13, D5a).
-        let stop = stop_when(
-            state.load_residual.max(state.residual) <= self.settings.tolerance,
+        let (stop, at_roundoff) = residual_stop(
+            state.residual,
+            state.load_residual,
+            self.settings.tolerance,
             state.stalled,
         );
         Progress {
@@ -455,7 +457,7 @@ impl Solver for Newton<'_> {
                 .iter()
                 .filter(|&&x| x)
                 .count(),
-            at_roundoff: false,
+            at_roundoff,
             stop,
         }
     }
