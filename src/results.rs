@@ -7,7 +7,8 @@ pub mod modes;
 pub mod uniqueness;
 
 pub use geometric_term::{
-    distance_to_large, LargeDistance, DISTANCE_FAR, DISTANCE_SETTLED, DISTANCE_STEPS,
+    distance_to_large, LargeDistance, DISTANCE_FAR, DISTANCE_ROUND_OFF, DISTANCE_SETTLED,
+    DISTANCE_STEPS,
 };
 
 use crate::linalg::{norm, smallest_eigenvalues};

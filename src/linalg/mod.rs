@@ -23,7 +23,7 @@ pub use buckets::buckets;
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
 pub use low_rank::LowRankUpdate;
-pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes};
+pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes, DENSE_MODES_UP_TO};
 pub use nested_dissection::nested_dissection;
 pub use ordering::NodeOrdering;
 pub use parallel::{par_dot, par_update, par_zip_map, CHUNK};

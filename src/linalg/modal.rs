@@ -12,9 +12,9 @@ use nalgebra::{DMatrix, SymmetricEigen};
 const RESTART_BLOCKS: usize = 12;
 
 /// Free dofs up to which a Krylov solve that returns fewer pairs than asked, or unconverged
-/// ones, is redone densely ([`dense_generalized_modes`]): a mass that dwarfs the others (a
-/// 1e8 kg point mass on a 3-node simplex) leaves the Krylov vectors M-dependent to round-off,
-/// and the basis stops short of the modes asked for.
+/// ones, is redone densely (a dense shift-invert solve, then inverse iteration per mode): a
+/// mass that dwarfs the others (a 1e8 kg point mass on a 3-node simplex) leaves the Krylov
+/// vectors M-dependent to round-off, and the basis stops short of the modes asked for.
 pub const DENSE_MODES_UP_TO: usize = 600;
 
 /// The lowest eigenpairs found, ascending.

@@ -121,8 +121,9 @@ fn refuse_impossible(case: &Case, report: &DesignReport) -> Result<(), DesignErr
     let geometry = &case.geometry;
     for m in &geometry.members {
         let es = m.young * m.section;
-        // ℓ₀ = ℓ·ES/(ES + t) > 0 ⇔ t > −ES.
-        if !(es + m.prestress > 0.0) {
+        // ℓ₀ = ℓ·ES/(ES + t) > 0 ⇔ t > −ES (a NaN fails too).
+        let positive_rest_length = es + m.prestress > 0.0;
+        if !positive_rest_length {
             let (length, _) =
                 crate::structure::length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]);
             return Err(DesignError::Impossible(format!(
