@@ -175,10 +175,12 @@ fn solve_positions(
     // A NaN residual fails too: `worst <= …` is false.
     let solved = worst <= SINGULAR_RESIDUAL * qmax * size.max(1.0);
     if !size.is_finite() || !solved {
-        return Err(singular(format!(
-            "the solve leaves a residual of {}",
-            number(worst)
-        )));
+        // Non-finite positions have no residual to quote (it read "a residual of 0").
+        let why = match size.is_finite() {
+            true => format!("the solve leaves a residual of {}", number(worst)),
+            false => "the solve gives positions that are not finite".to_string(),
+        };
+        return Err(singular(why));
     }
     Ok((0..n).map(|r| [x[(r, 0)], x[(r, 1)], x[(r, 2)]]).collect())
 }

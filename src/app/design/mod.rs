@@ -225,6 +225,15 @@ impl DesignReport {
     }
 }
 
+/// A target or force density as the case gave it, short: `-2000`, `0.5`, `-1e-300` (its
+/// digits, not 300 zeros; issue 57, R5-10).
+fn given_label(v: f64) -> String {
+    match v != 0.0 && !(1e-4..1e15).contains(&v.abs()) {
+        true => format!("{v:e}"),
+        false => format!("{v}"),
+    }
+}
+
 impl fmt::Display for DesignReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let d = &self.design;
@@ -281,9 +290,22 @@ impl fmt::Display for DesignReport {
                 g.force,
                 g.force_density[1],
                 g.rest_length[0],
-                g.given.map_or(String::new(), |v| format!("{v}"))
+                g.given.map_or(String::new(), given_label)
             )?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A target of −1e-300 printed its 300 zeros (issue 57, R5-10); ordinary ones stay plain.
+    #[test]
+    fn a_given_value_is_printed_short() {
+        assert_eq!(super::given_label(-1e-300), "-1e-300");
+        assert_eq!(super::given_label(-2000.0), "-2000");
+        assert_eq!(super::given_label(0.5), "0.5");
+        assert_eq!(super::given_label(2.5e20), "2.5e20");
+        assert_eq!(super::given_label(0.0), "0");
     }
 }
