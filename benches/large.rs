@@ -140,7 +140,7 @@ fn steps() {
         let step = match case.solver.settings(method) {
             Settings::PcgLcp(settings) => LinearisedStep::pcg_lcp(settings),
             Settings::MonoLatin(settings) | Settings::MicroMacro(settings) => {
-                LinearisedStep::latin(&model, settings, &OneProcess)
+                LinearisedStep::latin(&model, settings, &OneProcess).unwrap()
             }
             Settings::Newton(_) => unreachable!("newton finds its own directions"),
         };

@@ -8,6 +8,7 @@ mod common;
 
 use common::{code, csv_rows, manifest_path, stderr, tensolve, Temp};
 use std::collections::HashMap;
+use tensolve::solvers::LIMIT_TOLERANCE;
 
 type Row = HashMap<String, String>;
 
@@ -135,16 +136,34 @@ fn arch_beyond_its_limit_point_says_limit_point_whatever_the_alpha_list() {
             assert_eq!(row["status"], "limit_point", "{row:?}");
             assert_eq!(row["converged"], "false", "{row:?}");
             // D5: every later row starts from the last equilibrium on the path, α = 2, and
-            // stops at the limit point, within the smallest increment of the path.
+            // stops at the limit point, located to LIMIT_TOLERANCE of its load (L1).
             assert_eq!(number(row, "path_from"), 2.0, "{row:?}");
             let reached = number(row, "path_reached");
-            let increment = (alpha - 2.0) / 1024.0;
             assert!(
-                reached <= limit && reached >= limit - 2.0 * increment,
+                reached <= limit && reached >= limit * (1.0 - LIMIT_TOLERANCE),
                 "{alpha}: reached {reached}, limit {limit}"
             );
         }
     }
+    // L1: the limit is located once, by the first row past it: every later row reports the
+    // same (it varied 2.1289 to 2.1338 per row, each locating it anew), and the failure is
+    // said once for all of them.
+    let beyond: Vec<&str> = rows[2..]
+        .iter()
+        .map(|r| r["path_reached"].as_str())
+        .collect();
+    assert!(beyond.iter().all(|r| *r == beyond[0]), "{beyond:?}");
+    assert_eq!(
+        stderr(&run).matches("limit point:").count(),
+        1,
+        "{}",
+        stderr(&run)
+    );
+    assert!(
+        stderr(&run).contains("newton at alpha = 3, 4, 5, 6, 7, 8: limit point:"),
+        "{}",
+        stderr(&run)
+    );
     // The same loads alone: the same verdicts, from the prestressed state.
     for alpha in [2.1, 2.2, 5.0, 8.0] {
         let (run, rows) = arch.run(&[alpha]);
@@ -166,7 +185,7 @@ fn arch_beyond_its_limit_point_says_limit_point_whatever_the_alpha_list() {
                 assert_eq!(number(row, "path_from"), 0.0, "{row:?}");
                 let reached = number(row, "path_reached");
                 assert!(
-                    reached <= limit && reached >= limit - 2.0 * alpha / 1024.0,
+                    reached <= limit && reached >= limit * (1.0 - LIMIT_TOLERANCE),
                     "{alpha}: reached {reached}"
                 );
             }
@@ -191,11 +210,82 @@ fn a_limit_point_row_says_where_the_path_stopped() {
     );
     assert!(
         stderr(&run).contains(
-            "newton at alpha = 5: limit point: the load path from alpha = 2 (the last \
+            "newton at alpha = 4, 5: limit point: the load path from alpha = 2 (the last \
              equilibrium reached) was followed to alpha = 2.13"
         ) && stderr(&run).contains("lie on another branch"),
         "{}",
         stderr(&run)
+    );
+    // The bracket it was located in, both ends within LIMIT_TOLERANCE of the exact limit.
+    let (limit, _) = arch_limit();
+    let text = stderr(&run);
+    let bracket = text
+        .split("the limit lies between alpha = ")
+        .nth(1)
+        .and_then(|rest| rest.split(" (").next())
+        .expect("the bracket is said");
+    let ends: Vec<f64> = bracket.split(" and ").map(|x| x.parse().unwrap()).collect();
+    assert!(
+        ends[0] <= limit && limit <= ends[1],
+        "{ends:?} around {limit}"
+    );
+    assert!(
+        ends[1] - ends[0] <= 2.0 * LIMIT_TOLERANCE * ends[0],
+        "{ends:?}"
+    );
+}
+
+/// The newcomer's 3-stage tower (tests/data/tower3q) under loads 1000 times too large: its
+/// path needs increments far below a thousandth of α = 0.25 at first, and reaches a limit at
+/// α ≈ 0.319.
+fn tower_too_loaded() -> CaseDir {
+    let table = |name: &str| {
+        std::fs::read_to_string(manifest_path(&format!("tests/data/tower3q/{name}.csv"))).unwrap()
+    };
+    CaseDir::new(
+        "tower-too-loaded",
+        &table("nodes"),
+        &table("members"),
+        "[[supports.fix]]\nnodes = [0, 1, 2, 3]\n[[load.point]]\nnodes = [12, 13, 14, 15]\n\
+         force = [1500000.0, 0.0, -1000000.0]\n[prestress]\nfrom = \"design\"\n\
+         targets = { bars0 = -5000.0, bars1 = -4000.0, bars2 = -3000.0 }\n[load]\nalpha = [0.25]\n",
+    )
+}
+
+/// N-D1: the smallest increment is a load, not a fraction of the path. α = 0.25 asked alone
+/// said "limit point at α = 0" (its increments stopped at 1/1024 of 0.25), while a sweep of
+/// small steps converged there; now both converge to the same answer, and the limit beyond
+/// (≈ 0.319) is located to LIMIT_TOLERANCE from either start.
+#[test]
+fn the_verdict_at_an_alpha_does_not_depend_on_the_alphas_before_it() {
+    let tower = tower_too_loaded();
+    let (alone, rows) = tower.run(&[0.25]);
+    assert_eq!(code(&alone), 0, "{}", stderr(&alone));
+    let direct = number(&rows[0], "max_deflection");
+    let steps: Vec<f64> = (1..=10).map(|i| 0.025 * i as f64).collect();
+    let (swept, rows) = tower.run(&steps);
+    assert_eq!(code(&swept), 0, "{}", stderr(&swept));
+    let last = rows.last().unwrap();
+    assert_eq!(last["status"], "converged", "{last:?}");
+    let through = number(last, "max_deflection");
+    assert!(
+        (direct - through).abs() <= 1e-8 * direct,
+        "{direct} vs {through}"
+    );
+    assert!(direct > 5.0, "a large displacement: {direct}");
+    // The limit beyond, from the prestressed state and from α = 0.31.
+    let limit_of = |alphas: &[f64]| {
+        let (run, rows) = tower.run(alphas);
+        assert_eq!(code(&run), 1, "{}", stderr(&run));
+        let row = rows.last().unwrap();
+        assert_eq!(row["status"], "limit_point", "{row:?}");
+        number(row, "path_reached")
+    };
+    let (from_rest, from_near) = (limit_of(&[0.4]), limit_of(&[0.31, 0.4]));
+    assert!((0.3185..0.3195).contains(&from_rest), "{from_rest}");
+    assert!(
+        (from_rest - from_near).abs() <= LIMIT_TOLERANCE * from_rest,
+        "{from_rest} vs {from_near}"
     );
 }
 

@@ -267,7 +267,7 @@ pub fn set_up_on<'s>(
             if model.updates_geometry() =>
         {
             (
-                large_path(model, LinearisedStep::latin(model, settings, exchange)),
+                large_path(model, LinearisedStep::latin(model, settings, exchange)?),
                 0.0,
             )
         }

@@ -204,10 +204,8 @@ fn format_row(r: &SummaryRow) -> String {
             (true, true) if r.alpha == 0.0 => {
                 "converged (no load: Δη at round-off of the prestress)".to_string()
             }
-            (true, true) if r.measure == Measure::Indicator => {
-                "converged (Δη at round-off of the prestress)".to_string()
-            }
-            // newton (issue 57, E2): r(U) at round-off, the load below the prestress's.
+            // Every solver (issue 57, E2, R5-5, R5-6): r(U) at round-off, the load below the
+            // prestress's.
             (true, true) => "converged at round-off (the load is below the round-off of the \
                              prestress's balance: the answer is the prestressed state to \
                              round-off)"

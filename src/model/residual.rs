@@ -15,15 +15,21 @@ impl Model {
     /// geometric stiffness), or `t0 + k (ℓ(U) − L)` along the current `∇ℓ` (large
     /// displacements); clipped at 0 for unilateral cables. Zero exactly at the solution.
     pub fn residual(&self, u: &[f64], load: &[f64]) -> f64 {
+        self.unbalance_sizes(u, load).relative
+    }
+
+    /// r(U) and r_F(U), the same unbalance relative to the forces the load brings into play
+    /// ([`Unbalances`]): what the stop every solver shares reads ([`crate::solvers::Balance`]).
+    pub fn unbalance_sizes(&self, u: &[f64], load: &[f64]) -> Unbalances {
         let s = &self.structure;
         let mut r = vec![0.0; s.n_free];
         match self.kinematics {
             Kinematics::Large => {
                 let current = CurrentGeometry::of(s, u);
-                current.unbalances(s, load, &mut r).1.relative
+                current.unbalances(s, load, &mut r).1
             }
             Kinematics::Linear | Kinematics::Prestress(_) => {
-                self.small_unbalances(u, load, &mut r).2.relative
+                self.small_unbalances(u, load, &mut r).2
             }
         }
     }
@@ -55,7 +61,7 @@ impl Model {
         (trial, tensions, sizes)
     }
 
-    /// `(r(U), r_frozen(U))`: r(U), and the residual under the law linearised at a slack
+    /// `(r(U) and r_F(U), r_frozen(U))`: r(U), and the residual under the law linearised at a slack
     /// status (docs/method.md §9, the inner problem of a status step: `τ = t0 + k e` of either
     /// sign on bars and on the cables taut in `slack`, `τ = 0` on the cables slack in it)
     /// relative to the same scale as r(U), in one pass over the links and a correction on the
@@ -65,7 +71,7 @@ impl Model {
         u: &[f64],
         load: &[f64],
         slack: &[bool],
-    ) -> (f64, f64) {
+    ) -> (Unbalances, f64) {
         let s = &self.structure;
         let mut r = vec![0.0; s.n_free];
         let (trial, tensions, exact) = self.small_unbalances(u, load, &mut r);
@@ -84,6 +90,6 @@ impl Model {
         } else {
             r_norm
         };
-        (exact.relative, frozen)
+        (exact, frozen)
     }
 }

@@ -22,7 +22,8 @@ mod taut;
 pub use driver::{drive, drive_from, AnySolver};
 pub use energy_error::Reference;
 pub use load_path::{
-    LoadPath, PathPoint, PathSolver, PathState, PathWork, INCREMENT_MAX_STEPS, MIN_INCREMENT,
+    LoadPath, PathPoint, PathSolver, PathState, PathWork, GROWTH_STEPS, INCREMENT_MAX_STEPS,
+    LIMIT_TOLERANCE, SMALLEST_INCREMENT,
 };
 pub use mechanism_by_substructures::{
     check_shape, mechanism_by_substructures, SubstructuredVerdict, CHECK_MODULES,
@@ -34,7 +35,9 @@ pub use no_equilibrium::{
 };
 pub use observer::{IterationRecord, Observer, Recorder, Silent, Tee};
 pub use solution::{Equilibrium, Solution};
-pub use solver::{residual_stop, stop_when, Progress, Solver, PRESTRESS_ROUND_OFF};
+pub use solver::{
+    residual_stop, stop_when, Balance, BalanceTolerances, Progress, Solver, PRESTRESS_ROUND_OFF,
+};
 pub use status::{LoadPathEnd, Measure, SolveInfo, Status};
 pub use taut::TautStiffness;
 

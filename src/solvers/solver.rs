@@ -35,31 +35,74 @@ pub struct Progress {
 /// balanced prestress is 1e-17 to 1e-15 of `‖|B|ᵀ|t0|‖`).
 pub const PRESTRESS_ROUND_OFF: f64 = 1e-14;
 
-/// The stop of newton's two residuals (issue 57, E2): converged when r(U) and the unbalance
-/// relative to the load's own forces (`load_residual`) are both within `tolerance`; converged
-/// *at round-off* (the second `true`) when the solver can go no further (`stalled`) with r(U) at
-/// [`PRESTRESS_ROUND_OFF`] and the load's forces below `PRESTRESS_ROUND_OFF / tolerance` of the
-/// prestress's: the load is then below the round-off of the prestress's balance
-/// (α = 1e-250 on a grid), the relative measure cannot be met in floating point, and the answer
-/// is the prestressed state to round-off — which the row says; else stalled when `stalled`.
-pub fn residual_stop(
-    residual: f64,
-    load_residual: f64,
-    tolerance: f64,
-    stalled: bool,
-) -> (Option<Status>, bool) {
-    let converged = load_residual.max(residual) <= tolerance;
-    // The load's forces over the prestress's, `(‖F‖ + ‖|B|ᵀ|τ − t0|‖) / (‖F‖ + ‖|B|ᵀ|τ|‖)`: below
-    // PRESTRESS_ROUND_OFF / tolerance, the load-relative unbalance cannot reach the tolerance
-    // above the prestress's round-off. A tolerance below that round-off itself (1e-15) is no
-    // such load: the row stalls, as it says (issue 13, C7).
-    let load_share = residual / load_residual;
-    let at_roundoff = !converged
-        && stalled
-        && tolerance > PRESTRESS_ROUND_OFF
-        && residual <= PRESTRESS_ROUND_OFF
-        && load_share <= PRESTRESS_ROUND_OFF / tolerance;
-    (stop_when(converged || at_roundoff, stalled), at_roundoff)
+/// Where an iterate stands against the equilibrium stop every solver shares, under every model
+/// (issue 57; docs/method.md §6, "One stop"): r(U) relative to all the forces meeting at the
+/// nodes, `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`, and the same unbalance relative to the forces the
+/// load brings into play, `r_F(U) = ‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ − t0|‖)`. The second keeps the
+/// prestress, which dominates the first's scale, from passing U = 0 under a small load (R5-6:
+/// U = 0 "converged" at α = 1e-9 under `large`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Balance {
+    /// r(U) ≤ its tolerance and r_F(U) ≤ its tolerance.
+    Met,
+    /// Not met, but r(U) is at the round-off of the prestress's balance
+    /// ([`PRESTRESS_ROUND_OFF`]) and the load's forces are below `PRESTRESS_ROUND_OFF` / the
+    /// r_F tolerance of the prestress's: no iterate in floating point meets r_F's tolerance. A
+    /// solver that can go no further there has the answer at round-off, and its row says so.
+    AtRoundOff,
+    /// Neither: the iterate is not an equilibrium to the tolerances.
+    Unmet,
+}
+
+/// The two tolerances of [`Balance`]: on r(U) and on r_F(U).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BalanceTolerances {
+    /// Tolerance of r(U).
+    pub residual: f64,
+    /// Tolerance of r_F(U), the unbalance relative to the load's forces.
+    pub load_residual: f64,
+}
+
+impl BalanceTolerances {
+    /// The same tolerance on both (newton, pcg-lcp).
+    pub fn both(tolerance: f64) -> Self {
+        BalanceTolerances {
+            residual: tolerance,
+            load_residual: tolerance,
+        }
+    }
+
+    /// Where r(U) = `residual` and r_F(U) = `load_residual` stand.
+    pub fn balance(self, residual: f64, load_residual: f64) -> Balance {
+        if residual <= self.residual && load_residual <= self.load_residual {
+            return Balance::Met;
+        }
+        // The load's forces over all of them, `(‖F‖ + ‖|B|ᵀ|τ − t0|‖) / (‖F‖ + ‖|B|ᵀ|τ|‖)`:
+        // below PRESTRESS_ROUND_OFF / tolerance, r_F cannot reach its tolerance above the
+        // prestress's round-off. A tolerance below that round-off itself (1e-15) is no such
+        // load: the row stalls, as it says (issue 13, C7).
+        let load_share = residual / load_residual;
+        let floor = self.load_residual > PRESTRESS_ROUND_OFF
+            && self.residual > PRESTRESS_ROUND_OFF
+            && residual <= PRESTRESS_ROUND_OFF
+            && load_share <= PRESTRESS_ROUND_OFF / self.load_residual;
+        match floor {
+            true => Balance::AtRoundOff,
+            false => Balance::Unmet,
+        }
+    }
+}
+
+/// The stop of a solver on [`Balance`] alone (newton; every solver under `large`): converged
+/// when it is met; converged *at round-off* (the second `true`) when the solver can go no
+/// further (`stalled`) at [`Balance::AtRoundOff`] (α = 1e-250 on a grid: the answer is the
+/// prestressed state to round-off, which the row says); else stalled when `stalled`.
+pub fn residual_stop(balance: Balance, stalled: bool) -> (Option<Status>, bool) {
+    let at_roundoff = balance == Balance::AtRoundOff && stalled;
+    (
+        stop_when(balance == Balance::Met || at_roundoff, stalled),
+        at_roundoff,
+    )
 }
 
 /// The stop of a solver whose criterion is a residual below its tolerance: converged when

@@ -48,13 +48,13 @@ impl Status {
         }
     }
 
-    /// Whether the final iterate is no answer at all (no equilibrium, or the load never
-    /// reached): no displacement or tension file is written for it.
+    /// Whether the final iterate is no answer: no equilibrium, the load never reached, beyond
+    /// the model, or the stopping criterion unmet (stalled, at the cap). No displacement or
+    /// tension file is written for it, and its row leaves the answer's columns empty: a row
+    /// that did not converge writes nothing that looks like an answer (issue 57, D10: stalled
+    /// rows wrote U = 0 files). An unstable equilibrium is one, and is written.
     pub fn no_answer(self) -> bool {
-        matches!(
-            self,
-            Status::NoEquilibrium | Status::LimitPoint | Status::BeyondModel
-        )
+        !matches!(self, Status::Converged | Status::Unstable)
     }
 }
 
@@ -145,4 +145,7 @@ pub struct LoadPathEnd {
     pub slackened: Vec<u64>,
     /// The Newton steps each increment was given before it was halved.
     pub increment_steps: usize,
+    /// At a limit point: the fraction of the path past `reached` within which the limit lies
+    /// (the smallest increment that found no equilibrium).
+    pub limit_bracket: Option<f64>,
 }

@@ -74,12 +74,54 @@ pub fn on_every_rank<T>(
 }
 
 impl RunError {
-    /// The failure of a run some of whose solves (`failures`, one line each) failed.
-    pub(super) fn not_converged(failures: &[String]) -> Self {
+    /// The failure of a run some of whose solves (`failures`) failed.
+    pub(super) fn not_converged(failures: &Failures) -> Self {
         RunError::NotConverged {
-            count: failures.len(),
-            list: failure_list(failures),
+            count: failures.count,
+            list: failure_list(&failures.lines()),
         }
+    }
+}
+
+/// The solves of a run that failed, each said once: the rows of one solver whose failure reads
+/// the same (a limit point located once and met by every later α, L1) share one line,
+/// `newton at alpha = 3, 4, 5: limit point: …`.
+#[derive(Debug, Default)]
+pub(super) struct Failures {
+    /// Solves failed.
+    count: usize,
+    /// Per line: the solver, its α labels, and what the line says after them.
+    lines: Vec<(String, Vec<String>, String)>,
+}
+
+impl Failures {
+    /// A failed solve of `solver` at α `alpha` (its label), `what` saying how after the head
+    /// `{solver} at alpha = {alpha}: `.
+    pub(super) fn push(&mut self, solver: &str, alpha: String, what: String) {
+        self.count += 1;
+        match self
+            .lines
+            .iter_mut()
+            .find(|(s, _, w)| s == solver && *w == what)
+        {
+            Some((_, alphas, _)) => alphas.push(alpha),
+            None => self.lines.push((solver.to_string(), vec![alpha], what)),
+        }
+    }
+
+    /// Whether no solve failed.
+    pub(super) fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// One line per failure said.
+    fn lines(&self) -> Vec<String> {
+        self.lines
+            .iter()
+            .map(|(solver, alphas, what)| {
+                format!("{solver} at alpha = {}: {what}", alphas.join(", "))
+            })
+            .collect()
     }
 }
 

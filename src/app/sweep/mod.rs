@@ -10,8 +10,8 @@ mod path;
 mod sharing;
 mod verdict;
 
-use error::on_every_rank;
 pub use error::RunError;
+use error::{on_every_rank, Failures};
 use files::{open_output, sinks, write_homogenised, write_mechanisms};
 use models::Models;
 use path::PathStart;
@@ -310,7 +310,7 @@ struct Sweep<'s> {
     /// The checks made of every answer with K's factor.
     checks: AnswerChecks,
     rows: Vec<SummaryRow>,
-    failures: Vec<String>,
+    failures: Failures,
     /// The processes of the run: a solve's files, written by rank 0 alone, are agreed on
     /// before the next solve's collectives.
     exchange: &'s dyn Exchange,
@@ -342,7 +342,7 @@ impl<'s> Sweep<'s> {
             checks: AnswerChecks::of(models.case),
             models,
             rows: Vec::new(),
-            failures: Vec::new(),
+            failures: Failures::default(),
         }
     }
 
@@ -487,18 +487,23 @@ impl<'s> Sweep<'s> {
                 Some(_) => "no equilibrium (the solver's certificate holds), and its iterate ",
                 None => "",
             };
-            self.failures.push(format!(
-                "{} at alpha = {}: {found}produced non-finite values after {} iterations; no \
-                 row and no files written for it",
+            self.failures.push(
                 key.method.name(),
                 alpha_label(alpha),
-                solution.info.iterations,
-            ));
+                format!(
+                    "{found}produced non-finite values after {} iterations; no row and no \
+                     files written for it",
+                    solution.info.iterations,
+                ),
+            );
             return Ok(());
         };
         if !row.converged {
-            self.failures
-                .push(not_converged_message(&row, &solution, &verdict));
+            self.failures.push(
+                key.method.name(),
+                alpha_label(row.alpha),
+                not_converged_message(&row, &solution, &verdict),
+            );
         }
         // 9. The files of this solve; with no answer, its row and no file that would look
         //    like one.
@@ -517,7 +522,7 @@ impl<'s> Sweep<'s> {
     }
 
     /// Step 10: the files of the whole sweep; the rows and the failures.
-    fn close(mut self) -> Result<(Vec<SummaryRow>, Vec<String>), RunError> {
+    fn close(mut self) -> Result<(Vec<SummaryRow>, Failures), RunError> {
         self.sinks.close()?;
         Ok((self.rows, self.failures))
     }

@@ -158,19 +158,33 @@ pub(super) fn assess(
 /// slack).
 fn limit_point_reason(row: &SummaryRow, solution: &Solution) -> String {
     let path = solution.info.load_path.as_ref();
+    // Ten significant digits: rows that met one located limit read the same (their α differ
+    // in the last bits of `reached + bracket`).
+    let label = |alpha: f64| alpha_label(format!("{alpha:.9e}").parse().unwrap_or(alpha));
     let mut reason = match (row.path_from, row.path_reached) {
         (Some(from), Some(reached)) => format!(
             "the load path from alpha = {} (the last equilibrium reached) was followed to \
              alpha = {} and no further",
-            alpha_label(from),
-            alpha_label(reached)
+            label(from),
+            label(reached)
         ),
         _ => "the load path could not be followed to this load".to_string(),
     };
-    reason.push_str(&format!(
-        " (increments halved below {} of the path",
-        crate::solvers::MIN_INCREMENT
-    ));
+    // The bracket the limit was located in: from the last equilibrium to the smallest
+    // increment that found none.
+    let bracket = path.and_then(|p| p.limit_bracket);
+    if let (Some(from), Some(reached), Some(width)) = (row.path_from, row.path_reached, bracket) {
+        reason.push_str(&format!(
+            ": the limit lies between alpha = {} and {} (no equilibrium found by the smallest \
+             increment, {} of the load reached or {} of the unit load",
+            label(reached),
+            label(reached + width * (row.alpha - from)),
+            crate::solvers::LIMIT_TOLERANCE,
+            crate::solvers::SMALLEST_INCREMENT,
+        ));
+    } else {
+        reason.push_str(" (no equilibrium found by the smallest increment");
+    }
     // A cap below the default makes increments fail that more steps would converge.
     match path.map(|p| p.increment_steps) {
         Some(steps) if steps < crate::solvers::INCREMENT_MAX_STEPS => reason.push_str(&format!(
@@ -231,14 +245,13 @@ fn no_equilibrium_advice(advice: &Advice) -> String {
     text
 }
 
-/// The failure line of a row that did not converge: how it ended, and for no equilibrium the
-/// cables that went slack and the nodes of the mode.
+/// The failure line of a row that did not converge, after its head (`{solver} at alpha = {α}: `):
+/// how it ended, and for no equilibrium the cables that went slack and the nodes of the mode.
 pub(super) fn not_converged_message(
     row: &SummaryRow,
     solution: &Solution,
     verdict: &Verdict,
 ) -> String {
-    let head = format!("{} at alpha = {}", row.solver, alpha_label(row.alpha));
     let ids = |ids: &[u64]| {
         ids.iter()
             .map(|i| i.to_string())
@@ -247,7 +260,7 @@ pub(super) fn not_converged_message(
     };
     match (&verdict.no_equilibrium, row.status) {
         (Some(none), _) => format!(
-            "{head}: no equilibrium: with cable(s) {} slack, a mechanism is left that the load \
+            "no equilibrium: with cable(s) {} slack, a mechanism is left that the load \
              works on (it moves nodes {}), so the energy decreases without bound; no \
              displacement or tension file is written, and its row says converged = false, \
              status = no_equilibrium. {}",
@@ -260,14 +273,14 @@ pub(super) fn not_converged_message(
             no_equilibrium_advice(&verdict.advice)
         ),
         (None, Status::LimitPoint) => format!(
-            "{head}: limit point: {}; no displacement or tension file is written, and its row \
+            "limit point: {}; no displacement or tension file is written, and its row \
              says converged = false, status = limit_point. Loads up to the limit stay on the \
              path; beyond it the structure snaps through or collapses (no static answer on \
              its path)",
             limit_point_reason(row, solution)
         ),
         (None, Status::BeyondModel) => format!(
-            "{head}: beyond the model: the answer moves a node by {:.3e} m, more than the \
+            "beyond the model: the answer moves a node by {:.3e} m, more than the \
              structure's own size ({:.3e} m); a model on the initial geometry does not describe \
              that: {}; no displacement or tension file is written, and its row says \
              converged = false, status = beyond_model",
@@ -295,7 +308,7 @@ pub(super) fn not_converged_message(
             ) =>
         {
             format!(
-                "{head}: an unstable equilibrium: the residual criterion holds, but the load \
+                "an unstable equilibrium: the residual criterion holds, but the load \
                  works on a motion that the tangent with the answer's own tensions, \
                  K + K_G(τ), does not resist (it moves nodes {}): no equilibrium of that tangent \
                  is there (the solve's K + K_G(t0) keeps the slack cables' share of the \
@@ -316,7 +329,7 @@ pub(super) fn not_converged_message(
                 _ => f64::NAN,
             };
             format!(
-                "{head}: an unstable equilibrium: the residual criterion of the {} model holds, \
+                "an unstable equilibrium: the residual criterion of the {} model holds, \
                  but the large-displacement equilibrium next to its answer is a saddle of the \
                  energy (large's tangent there has the eigenvalue {eigenvalue:.3e} N/m: a \
                  compressed member past its buckling load, say), which a load path would not \
@@ -326,14 +339,14 @@ pub(super) fn not_converged_message(
             )
         }
         (None, Status::Unstable) => format!(
-            "{head}: an unstable equilibrium: the residual criterion holds, but the tangent \
+            "an unstable equilibrium: the residual criterion holds, but the tangent \
              stiffness has a negative eigenvalue ({:.3e} N/m): a saddle of the energy, which a \
              load path would not stay on; its row says converged = false, status = unstable",
             row.min_tangent_eigenvalue.unwrap_or(f64::NAN)
         ),
         _ => format!(
-            "{head}: not converged after {} iterations ({:?}), {}; its row says \
-             converged = false{}",
+            "not converged after {} iterations ({:?}), {}; no displacement or tension file \
+             is written, and its row says converged = false{}",
             row.iterations,
             solution.info.status,
             stopping_values(row, solution.info.measure),

@@ -14,9 +14,12 @@
 use super::{LargeState, TangentStep};
 use crate::decomposition::{Exchange, Partition};
 use crate::model::{CurrentGeometry, Model};
-use crate::solvers::latin::{Latin, LatinSettings};
+use crate::solvers::latin::{Latin, LatinSettings, StopOn};
 use crate::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
-use crate::solvers::{drive, Silent, Solution, Status, TautStiffness};
+use crate::solvers::{
+    drive, no_equilibrium_along, no_equilibrium_of_slack_set, BalanceTolerances, SetupError,
+    Silent, Solution, Status, TautStiffness, PRESTRESS_ROUND_OFF,
+};
 use std::time::Instant;
 
 /// The loosest tolerance a linearised problem is solved to (far from the answer).
@@ -62,8 +65,8 @@ pub struct LinearisedWork {
 /// The direction from the solver's own method on the linearised problem.
 pub struct LinearisedStep<'s> {
     solver: LinearisedSolver<'s>,
-    /// The large solve's tolerance on r(U).
-    tolerance: f64,
+    /// The large solve's tolerances on r(U) and r_F(U).
+    tolerances: BalanceTolerances,
     /// The linearised problems keep `K_G(τ)` (see [`LinearisedStep::latin`]).
     geometric_stiffness: bool,
     /// A linearised problem since the last [`TangentStep::forget`] was not solved.
@@ -76,7 +79,7 @@ impl<'s> LinearisedStep<'s> {
     pub fn pcg_lcp(settings: PcgLcpSettings) -> Self {
         LinearisedStep {
             solver: LinearisedSolver::PcgLcp(settings),
-            tolerance: settings.tolerance,
+            tolerances: BalanceTolerances::both(settings.tolerance),
             geometric_stiffness: true,
             failed: false,
             work: LinearisedWork::default(),
@@ -84,7 +87,8 @@ impl<'s> LinearisedStep<'s> {
     }
 
     /// A LATIN solver on the linearised problems of `model`, on the partition `settings`
-    /// ask for (of the initial geometry); the large solve stops at its r(U) tolerance.
+    /// ask for (of the initial geometry); the large solve stops where r(U) is within its
+    /// tolerance and r_F(U) within η's, as the LATIN solvers do under the other models.
     ///
     /// On a structure that is rigid without geometric stiffness the linearised problems
     /// leave `K_G(τ)` out (modified Newton steps): with it, a floating substructure's rigid
@@ -93,11 +97,23 @@ impl<'s> LinearisedStep<'s> {
     /// prestress), and on the paper's grid at α = 1 mono-latin took 34 steps and 5.5 s with it
     /// against 30 steps and 0.86 s without. A prestress-stable mechanism keeps it (without it
     /// the linearised problem has no answer).
-    pub fn latin(model: &Model, settings: LatinSettings, exchange: &'s dyn Exchange) -> Self {
+    ///
+    /// The LATIN solver is set up once here on the first problem, the one linearised at the
+    /// prestressed state ([`latin_problem_at_rest`], what `check` reports): a partition whose
+    /// operators that problem refuses is refused at set-up, as `check` refuses it, instead of
+    /// failing at the first step and ending every row stalled (N-D2).
+    pub fn latin(
+        model: &Model,
+        settings: LatinSettings,
+        exchange: &'s dyn Exchange,
+    ) -> Result<Self, SetupError> {
         let partition = Partition::new(&model.structure, settings.subdomains, settings.weak);
-        LinearisedStep {
-            tolerance: settings.residual_tolerance(),
-            geometric_stiffness: !rigid_without_geometric_stiffness(model),
+        let geometric_stiffness = !rigid_without_geometric_stiffness(model);
+        let at_rest = problem_at_rest(model, geometric_stiffness);
+        Latin::on_partition(&at_rest, &partition, settings, exchange)?;
+        Ok(LinearisedStep {
+            tolerances: settings.balance_tolerances(),
+            geometric_stiffness,
             failed: false,
             solver: LinearisedSolver::Latin {
                 settings,
@@ -105,12 +121,12 @@ impl<'s> LinearisedStep<'s> {
                 exchange,
             },
             work: LinearisedWork::default(),
-        }
+        })
     }
 
-    /// The tolerance the large solve stops at: the inner solver's own on r(U).
-    pub(super) fn tolerance(&self) -> f64 {
-        self.tolerance
+    /// The tolerances the large solve stops at: the inner solver's own.
+    pub(super) fn tolerances(&self) -> BalanceTolerances {
+        self.tolerances
     }
 
     /// What the linearised solves cost so far.
@@ -141,9 +157,14 @@ impl<'s> LinearisedStep<'s> {
                 partition,
                 exchange,
             } => {
-                // η's tolerance loosened as r(U)'s is (docs/method.md §4: both must hold).
-                let loosened = forcing / self.tolerance;
+                // η's tolerance loosened as r(U)'s is (docs/method.md §4: both must hold), and
+                // both held whatever the case's `stop_on`: the direction must be the
+                // linearised problem's answer to the forcing term (a LATIN fixed point off
+                // equilibrium, which η alone can pass on one-module strips, made the path
+                // halve to a false limit point: R5-7).
+                let loosened = forcing / self.tolerances.residual;
                 let settings = LatinSettings {
+                    stop_on: StopOn::Both,
                     residual_tolerance: Some(forcing),
                     tolerance: (settings.tolerance * loosened)
                         .min(LATIN_INDICATOR_LOOSEST)
@@ -165,7 +186,9 @@ impl<'s> LinearisedStep<'s> {
 
 impl TangentStep for LinearisedStep<'_> {
     /// ΔU: the displacements of the linearised problem at U, solved to the forcing term
-    /// `r(U)²` (clamped to `FORCING_FLOOR` × tolerance and `FORCING_LOOSEST`).
+    /// `r(U)²`, clamped to `FORCING_LOOSEST` and to `FORCING_FLOOR` × the r(U) that meets
+    /// the stop (r_F's tolerance times the load's share of r(U)'s scale, `r / r_F`), never
+    /// below the prestress's round-off.
     fn direction(&mut self, model: &Model, state: &LargeState) -> Option<Vec<f64>> {
         let eval = &state.eval;
         let linearised = eval.current.linearised(
@@ -174,15 +197,41 @@ impl TangentStep for LinearisedStep<'_> {
             &eval.trial,
             self.geometric_stiffness,
         );
+        let load_share = match eval.load_residual > 0.0 {
+            true => (eval.residual / eval.load_residual).min(1.0),
+            false => 1.0,
+        };
+        let needed = self
+            .tolerances
+            .residual
+            .min(self.tolerances.load_residual * load_share);
         let forcing = (eval.residual * eval.residual)
             .min(FORCING_LOOSEST)
-            .max(FORCING_FLOOR * self.tolerance);
+            .max(FORCING_FLOOR * needed)
+            .max(PRESTRESS_ROUND_OFF);
         let solution = self.solve(&linearised, &state.load, forcing)?;
         self.work.steps += 1;
         self.work.inner_iterations += solution.info.iterations;
-        if solution.info.status != Status::Converged {
-            self.work.inner_unconverged += 1;
-            self.failed = true;
+        let eq = &solution.equilibrium;
+        match solution.info.status {
+            Status::Converged => {}
+            // The linearised problem has no equilibrium (its slack cables leave a mechanism
+            // the load works on): no direction, and the structure's verdict, not the inner
+            // solver's failure, as newton's Hessian that no shift makes a descent finds it
+            // (the bracket under uplift: a limit point for every solver, D10). An inner
+            // solve that stalled is asked too: a LATIN iteration on such a problem stalls at
+            // a fixed point off equilibrium (η 1e-16, r(U) 0.9) before its runaway shows.
+            Status::NoEquilibrium => return None,
+            _ if no_equilibrium_along(&linearised, &eq.displacements, &state.load)
+                .or_else(|| no_equilibrium_of_slack_set(&linearised, &eq.slack, &state.load))
+                .is_some() =>
+            {
+                return None
+            }
+            _ => {
+                self.work.inner_unconverged += 1;
+                self.failed = true;
+            }
         }
         Some(solution.equilibrium.displacements)
     }
@@ -195,14 +244,6 @@ impl TangentStep for LinearisedStep<'_> {
     /// Some linearised problem of the increment was not solved to its forcing term.
     fn failed_on_its_own(&self) -> bool {
         self.failed
-    }
-
-    /// pcg-lcp stops as newton does; the LATIN solvers on r(U) alone, as under the other
-    /// models (their inner solves stop on r(U): at a small α, tiny against the prestress, the
-    /// load-relative form stays above their tolerance — the paper's grid at α = 0.03 stalled
-    /// at 2.4e-9 in r(U) with micro-macro).
-    fn stops_on_load_residual(&self) -> bool {
-        matches!(self.solver, LinearisedSolver::PcgLcp(_))
     }
 }
 
@@ -218,9 +259,14 @@ fn rigid_without_geometric_stiffness(model: &Model) -> bool {
 /// the prestressed state (U = 0), with or without `K_G(t0)` as [`LinearisedStep::latin`]
 /// takes it. `check` sets the solver up on it to report its partition.
 pub fn latin_problem_at_rest(model: &Model) -> Model {
+    problem_at_rest(model, !rigid_without_geometric_stiffness(model))
+}
+
+/// The problem linearised at the prestressed state, with `K_G(t0)` when `geometric_stiffness`.
+fn problem_at_rest(model: &Model, geometric_stiffness: bool) -> Model {
     let s = &model.structure;
     let zero = vec![0.0; s.n_free];
     let current = CurrentGeometry::of(s, &zero);
     let trial = current.trial_tensions(s);
-    current.linearised(s, &zero, &trial, !rigid_without_geometric_stiffness(model))
+    current.linearised(s, &zero, &trial, geometric_stiffness)
 }

@@ -29,7 +29,8 @@ use crate::linalg::dot;
 use crate::model::material::{self, SlackRule};
 use crate::model::{CurrentGeometry, Model};
 use crate::solvers::{
-    stop_when, Equilibrium, Measure, PathPoint, PathSolver, Progress, Solver, TautStiffness,
+    residual_stop, Balance, BalanceTolerances, Equilibrium, Measure, PathPoint, PathSolver,
+    Progress, Solver, TautStiffness,
 };
 use crate::structure::Structure;
 
@@ -56,12 +57,6 @@ pub trait TangentStep {
     fn failed_on_its_own(&self) -> bool {
         false
     }
-
-    /// Whether the solve stops only when the load-relative residual is at the tolerance too
-    /// (newton's stop), not r(U) alone.
-    fn stops_on_load_residual(&self) -> bool {
-        true
-    }
 }
 
 /// newton on the exact-length law: Newton steps on the factorized Hessian.
@@ -71,23 +66,25 @@ impl<'s> LargeNewton<'s> {
     /// Set up on a model whose `K + K_G(t0)` (the tangent at the prestressed state) is
     /// known to be positive definite: its pattern and symbolic analysis serve every tangent.
     pub fn new(model: &'s Model, taut: &'s TautStiffness, settings: NewtonSettings) -> Self {
-        Large::with_step(model, HessianStep::new(taut), settings)
+        let tolerances = BalanceTolerances::both(settings.tolerance);
+        Large::with_step(
+            model,
+            HessianStep::new(taut),
+            tolerances,
+            settings.max_iterations,
+        )
     }
 }
 
 impl<'s> Large<'s, LinearisedStep<'s>> {
     /// pcg-lcp, mono-latin or micro-macro on the `large` model: Newton steps whose directions
     /// the solver finds on the problem linearised at each step (`step`); the solve stops at
-    /// the solver's own tolerance on r(U), each load increment after at most
-    /// [`crate::solvers::INCREMENT_MAX_STEPS`] steps (`solver.max_iterations` caps each
-    /// linearised solve instead).
+    /// the solver's own tolerances on r(U) and r_F(U) ([`LinearisedStep::tolerances`]), each
+    /// load increment after at most [`crate::solvers::INCREMENT_MAX_STEPS`] steps
+    /// (`solver.max_iterations` caps each linearised solve instead).
     pub fn linearised(model: &'s Model, step: LinearisedStep<'s>) -> Self {
-        let settings = NewtonSettings {
-            tolerance: step.tolerance(),
-            max_iterations: crate::solvers::INCREMENT_MAX_STEPS,
-            ..NewtonSettings::default()
-        };
-        Large::with_step(model, step, settings)
+        let tolerances = step.tolerances();
+        Large::with_step(model, step, tolerances, crate::solvers::INCREMENT_MAX_STEPS)
     }
 }
 
@@ -95,8 +92,10 @@ impl<'s> Large<'s, LinearisedStep<'s>> {
 pub struct Large<'s, R> {
     model: &'s Model,
     structure: &'s Structure,
-    /// The residual to reach and the steps per increment.
-    settings: NewtonSettings,
+    /// The residuals to reach (the stop every solver shares).
+    tolerances: BalanceTolerances,
+    /// Steps per solve (per increment along the load path).
+    max_iterations: usize,
     step: R,
 }
 
@@ -130,12 +129,19 @@ pub struct LargeState {
 }
 
 impl<'s, R: TangentStep> Large<'s, R> {
-    /// Newton's method on `model` (which must be `large`) with directions from `step`.
-    pub fn with_step(model: &'s Model, step: R, settings: NewtonSettings) -> Self {
+    /// Newton's method on `model` (which must be `large`) with directions from `step`,
+    /// stopping at `tolerances` or after `max_iterations` steps.
+    pub fn with_step(
+        model: &'s Model,
+        step: R,
+        tolerances: BalanceTolerances,
+        max_iterations: usize,
+    ) -> Self {
         Large {
             model,
             structure: &model.structure,
-            settings,
+            tolerances,
+            max_iterations,
             step,
         }
     }
@@ -209,16 +215,12 @@ impl<'s, R: TangentStep> Large<'s, R> {
         best
     }
 
-    /// r(U) and, where the direction rule stops so ([`TangentStep::stops_on_load_residual`]),
-    /// its load-relative form both at or below the tolerance (with every cable slack the
-    /// load-relative scale holds the released prestress and alone could pass a state far from
-    /// equilibrium).
-    fn converged(&self, eval: &Evaluation) -> bool {
-        let load_residual = match self.step.stops_on_load_residual() {
-            true => eval.load_residual,
-            false => 0.0,
-        };
-        load_residual.max(eval.residual) <= self.settings.tolerance
+    /// Where `eval` stands against the stop every solver shares: r(U) and r_F(U) within
+    /// their tolerances (with every cable slack the load-relative scale holds the released
+    /// prestress and alone could pass a state far from equilibrium; r(U) alone passes U = 0
+    /// under a small load).
+    fn balance(&self, eval: &Evaluation) -> Balance {
+        self.tolerances.balance(eval.residual, eval.load_residual)
     }
 }
 
@@ -236,7 +238,7 @@ impl<R: TangentStep> Solver for Large<'_, R> {
 
     /// `solver.max_iterations` (per increment along the load path).
     fn max_iterations(&self) -> usize {
-        self.settings.max_iterations
+        self.max_iterations
     }
 
     /// U = 0, the prestressed state.
@@ -274,6 +276,7 @@ impl<R: TangentStep> Solver for Large<'_, R> {
     }
 
     fn progress(&self, state: &LargeState) -> Progress {
+        let (stop, at_roundoff) = residual_stop(self.balance(&state.eval), state.failed);
         Progress {
             iteration: state.iteration,
             stopping_value: state.eval.residual,
@@ -287,8 +290,8 @@ impl<R: TangentStep> Solver for Large<'_, R> {
             .iter()
             .filter(|&&x| x)
             .count(),
-            at_roundoff: false,
-            stop: stop_when(self.converged(&state.eval), state.failed),
+            at_roundoff,
+            stop,
         }
     }
 
@@ -327,7 +330,7 @@ impl<R: TangentStep> PathSolver for Large<'_, R> {
     }
 
     fn tolerance(&self) -> f64 {
-        self.settings.tolerance
+        self.tolerances.residual
     }
 
     fn failed_on_its_own(&self) -> bool {
@@ -341,7 +344,7 @@ impl<R: TangentStep> PathSolver for Large<'_, R> {
             trial: &state.eval.trial,
             residual: state.eval.residual,
             scale: state.eval.scale,
-            converged: self.converged(&state.eval),
+            balance: self.balance(&state.eval),
             failed: state.failed,
         }
     }

@@ -14,9 +14,17 @@ const ROUNDOFF: f64 = 1e-12;
 /// grid) still iterates to its tolerance above it.
 const LOADED_ROUNDOFF: f64 = 1e-15;
 
-/// r(U), and with inexact Newton status steps the residual under the law linearised at the
-/// status.
-pub(super) type Residuals = (f64, Option<f64>);
+/// r(U) and r_F(U) of the exact law, and with inexact Newton status steps the residual under
+/// the law linearised at the status.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Residuals {
+    /// r(U), relative to all the forces meeting at the nodes.
+    pub exact: f64,
+    /// r_F(U), relative to the forces the load brings into play.
+    pub load_relative: f64,
+    /// With status steps: the residual under the law linearised at the status.
+    pub frozen: Option<f64>,
+}
 
 impl Latin<'_> {
     /// `(Δη, η̃)`: η = Δη/η̃ between s and ŝ (docs/method.md §4 "Indicator", §5.3). The distance is
@@ -81,13 +89,26 @@ impl Latin<'_> {
     /// It reads only U, so it may run beside the local stage.
     pub(super) fn residuals(&self, u: &[f64], load: &[f64], law_slack: &[bool]) -> Residuals {
         if self.model.prestress_stiffness().is_none() {
-            let (exact, frozen) = self.residuals_by_substructure(u, load, law_slack);
-            (exact, self.newton_steps().then_some(frozen))
+            let (exact, load_relative, frozen) = self.residuals_by_substructure(u, load, law_slack);
+            Residuals {
+                exact,
+                load_relative,
+                frozen: self.newton_steps().then_some(frozen),
+            }
         } else if self.newton_steps() {
             let (exact, frozen) = self.model.exact_and_frozen_residuals(u, load, law_slack);
-            (exact, Some(frozen))
+            Residuals {
+                exact: exact.relative,
+                load_relative: exact.load_relative,
+                frozen: Some(frozen),
+            }
         } else {
-            (self.model.residual(u, load), None)
+            let exact = self.model.unbalance_sizes(u, load);
+            Residuals {
+                exact: exact.relative,
+                load_relative: exact.load_relative,
+                frozen: None,
+            }
         }
     }
 
@@ -111,8 +132,9 @@ impl Latin<'_> {
             let u = self.displacements(&state.subs);
             self.residuals(&u, &state.load, &state.steps.law_slack)
         });
-        state.residual = residuals.0;
-        if let Some(frozen) = residuals.1 {
+        state.residual = residuals.exact;
+        state.load_residual = residuals.load_relative;
+        if let Some(frozen) = residuals.frozen {
             state.steps.frozen_residual = frozen;
         }
 

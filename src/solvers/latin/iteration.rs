@@ -11,7 +11,8 @@ use super::{Latin, SearchPolicy, StopOn};
 use crate::model::material;
 use crate::model::Model;
 use crate::solvers::{
-    unit_direction, Equilibrium, LinksAlong, Measure, NoEquilibrium, Progress, Solver, Status,
+    unit_direction, Balance, Equilibrium, LinksAlong, Measure, NoEquilibrium, Progress, Solver,
+    Status,
 };
 use rayon::prelude::*;
 
@@ -265,6 +266,7 @@ impl Solver for Latin<'_> {
             iteration: 0,
             eta: f64::INFINITY,
             residual: f64::INFINITY,
+            load_residual: f64::INFINITY,
             slack_cables: 0,
             rebuilds: 0,
             at_roundoff: false,
@@ -325,7 +327,13 @@ impl Solver for Latin<'_> {
 
     fn progress(&self, state: &LatinState) -> Progress {
         let eta_met = state.eta <= self.settings.tolerance;
-        let residual_met = state.residual <= self.settings.residual_tolerance();
+        // The stop every solver shares: r(U) and r_F(U) within their tolerances, or at the
+        // round-off of the prestress's balance (a load below what the tolerance resolves).
+        let balance = self
+            .settings
+            .balance_tolerances()
+            .balance(state.residual, state.load_residual);
+        let residual_met = balance == Balance::Met;
         // η ≤ tolerance with r(U) above EQUILIBRIUM_CHECK × tolerance: a fixed point of the
         // iteration that is not the equilibrium (one-module-wide substructures: η 5e-11 at
         // r(U) 1e-2, 44 % off, issue 42 T5). Never converged, even on η alone.
@@ -337,12 +345,17 @@ impl Solver for Latin<'_> {
             StopOn::Residual => residual_met,
             StopOn::Both => eta_met && residual_met,
         };
+        // Δη at round-off: nothing left to gain. Converged with no load (η is then a ratio of
+        // round-off to round-off), or where the balance is at round-off too (the answer at
+        // round-off, said so: α = 1e-12 on a grid stalled at r(U) 3e-17 before, E2).
+        let at_roundoff_answer =
+            state.at_roundoff && (state.unloaded || balance == Balance::AtRoundOff);
         let stop = if self.operators_lost
             || !(state.eta.is_finite() && state.residual.is_finite())
             || (self.settings.stop_on == StopOn::Eta && off_equilibrium && !state.unloaded)
         {
             Some(Status::Stalled)
-        } else if criterion || (state.at_roundoff && state.unloaded) {
+        } else if criterion || at_roundoff_answer {
             Some(Status::Converged)
         } else if state.at_roundoff {
             // Under a load, Δη at round-off with the criterion unmet: nothing left to gain.

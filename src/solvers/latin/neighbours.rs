@@ -18,7 +18,7 @@ use super::{block, Exchange, Interface, Substructure};
 use std::ops::Range;
 
 /// r(U)'s pieces per shared dof: `Bᵀτ`, `|B|ᵀ|τ|` and `Bᵀ(τ_frozen − τ)`.
-pub(super) const PIECES_PER_DOF: usize = 3;
+pub(super) const PIECES_PER_DOF: usize = 4;
 
 /// One substructure's values for a neighbouring rank.
 #[derive(Debug, Clone, PartialEq, Eq)]

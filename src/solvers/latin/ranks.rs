@@ -16,9 +16,9 @@ use crate::decomposition::interfaces::Interfaces;
 use crate::structure::Structure;
 use std::ops::Range;
 
-/// Values sent per shared dof and iteration: U and r(U)'s three pieces (`Bᵀτ`, `|B|ᵀ|τ|`,
-/// `Bᵀ(τ_frozen − τ)`).
-pub const VALUES_PER_SHARED_DOF: usize = 4;
+/// Values sent per shared dof and iteration: U and r(U)'s four pieces (`Bᵀτ`, `|B|ᵀ|τ|`,
+/// `Bᵀ(τ_frozen − τ)`, `|B|ᵀ|τ − t0|`).
+pub const VALUES_PER_SHARED_DOF: usize = 5;
 
 /// Values sent per interface row and iteration: the side's U and F.
 pub const VALUES_PER_ROW: usize = 2;
@@ -179,7 +179,7 @@ impl RankLayout {
         }
         out += &format!(
             "  per iteration, point to point between neighbouring ranks: {} values ({:.1} KiB) \
-             over {} of {} interfaces (U and F per interface row, U and r(U)'s 3 pieces per \
+             over {} of {} interfaces (U and F per interface row, U and r(U)'s 4 pieces per \
              shared dof); gathered from every rank: the macro right-hand side ({} values, \
              solved on every rank) and per substructure the parts of η, r(U) and Anderson's \
              inner products (at a status step, its line search's parts); the answer is gathered whole \

@@ -20,6 +20,8 @@ struct LinkForces {
     exact: Vec<f64>,
     /// `Σ |B_E| |τ|`, the scale of r(U).
     size: Vec<f64>,
+    /// `Σ |B_E| |τ − t0|`, the scale of r_F(U) (the forces the load brings into play).
+    added: Vec<f64>,
     /// `B_Eᵀ (τ_frozen − τ)`: what the law linearised at the status changes (mostly zero).
     frozen_change: Vec<f64>,
 }
@@ -33,6 +35,7 @@ impl Substructure {
         let mut out = LinkForces {
             exact: vec![0.0; n],
             size: vec![0.0; n],
+            added: vec![0.0; n],
             frozen_change: vec![0.0; n],
         };
         for (row, &i) in self.link_dofs.iter().zip(&self.links) {
@@ -45,6 +48,7 @@ impl Substructure {
             for (d, c) in row.iter() {
                 out.exact[d] += c * t;
                 out.size[d] += (c * t).abs();
+                out.added[d] += (c * (t - link.prestress)).abs();
             }
             if frozen != t {
                 row.scatter(frozen - t, &mut out.frozen_change);
@@ -55,9 +59,9 @@ impl Substructure {
 }
 
 impl Latin<'_> {
-    /// `(r(U), r_frozen(U))` as [`crate::solvers::exact_and_frozen_residuals`] defines them
-    /// (the exact law, and the law linearised at `slack`, both relative to
-    /// `‖F‖ + ‖|B|ᵀ|τ|‖`), with the links' forces computed substructure by substructure, each
+    /// `(r(U), r_F(U), r_frozen(U))` as [`crate::model::Model::exact_and_frozen_residuals`]
+    /// defines them (the exact law relative to `‖F‖ + ‖|B|ᵀ|τ|‖` and to the load's forces
+    /// `‖F‖ + ‖|B|ᵀ|τ − t0|‖`, the law linearised at `slack`), with the links' forces computed substructure by substructure, each
     /// on the rank that holds it. A dof's forces are summed over the substructures holding it
     /// in their order (the values at shared dofs gathered from every rank), and each norm
     /// over the substructures in their order, each adding the dofs it owns: the same numbers
@@ -68,7 +72,7 @@ impl Latin<'_> {
         u: &[f64],
         load: &[f64],
         slack: &[bool],
-    ) -> (f64, f64) {
+    ) -> (f64, f64, f64) {
         let s = self.structure;
         let own = &self.dof_ownership;
         let held = self.held.clone();
@@ -81,7 +85,7 @@ impl Latin<'_> {
         // substructures' order.
         let at_shared = self.pieces_at_shared_dofs(&pieces);
         // Per held substructure, the squares of the dofs it owns: r = Bᵀτ − F,
-        // r_frozen = r + Bᵀ(τ_frozen − τ), and |B|ᵀ|τ|.
+        // r_frozen = r + Bᵀ(τ_frozen − τ), |B|ᵀ|τ| and |B|ᵀ|τ − t0|.
         let squares: Vec<f64> = self.substructures[held.clone()]
             .par_iter()
             .zip(&pieces)
@@ -89,13 +93,18 @@ impl Latin<'_> {
             .with_min_len(self.chunk)
             .flat_map_iter(|(i, (sub, piece))| {
                 let e = (held.start + i) as u32;
-                let mut sums = [0.0; 3];
+                let mut sums = [0.0; 4];
                 for (k, &d) in sub.dof_global.iter().enumerate() {
                     if own.owner[d] != e {
                         continue;
                     }
-                    let [force, scale, frozen_change] = match own.shared_slot[d] {
-                        NOT_SHARED => [piece.exact[k], piece.size[k], piece.frozen_change[k]],
+                    let [force, scale, frozen_change, added] = match own.shared_slot[d] {
+                        NOT_SHARED => [
+                            piece.exact[k],
+                            piece.size[k],
+                            piece.frozen_change[k],
+                            piece.added[k],
+                        ],
                         slot => at_shared[slot as usize],
                     };
                     let exact = force - load[d];
@@ -103,6 +112,7 @@ impl Latin<'_> {
                     sums[0] += exact * exact;
                     sums[1] += frozen * frozen;
                     sums[2] += scale * scale;
+                    sums[3] += added * added;
                 }
                 sums
             })
@@ -110,10 +120,12 @@ impl Latin<'_> {
         let total = self
             .exchange
             .all_gather(&squares)
-            .chunks(3)
-            .fold([0.0; 3], |t, p| [t[0] + p[0], t[1] + p[1], t[2] + p[2]]);
-        let scale = norm(load) + total[2].sqrt();
-        let relative = |square: f64| {
+            .chunks(4)
+            .fold([0.0; 4], |t, p| {
+                [t[0] + p[0], t[1] + p[1], t[2] + p[2], t[3] + p[3]]
+            });
+        let load_norm = norm(load);
+        let relative = |square: f64, scale: f64| {
             let v = square.sqrt();
             if scale > 0.0 {
                 v / scale
@@ -121,7 +133,18 @@ impl Latin<'_> {
                 v
             }
         };
-        (relative(total[0]), relative(total[1]))
+        let scale = load_norm + total[2].sqrt();
+        // r_F's scale; where load and deformation both vanish, the prestress's (as
+        // `crate::model::unbalances` takes it).
+        let load_scale = match load_norm + total[3].sqrt() {
+            0.0 => total[2].sqrt(),
+            added => added,
+        };
+        (
+            relative(total[0], scale),
+            relative(total[0], load_scale),
+            relative(total[1], scale),
+        )
     }
 
     /// Per shared dof (by its slot), `Bᵀτ`, `|B|ᵀ|τ|` and `Bᵀ(τ_frozen − τ)` summed over the
@@ -140,7 +163,12 @@ impl Latin<'_> {
                     .iter()
                     .flat_map(|&k| {
                         let k = k as usize;
-                        [piece.exact[k], piece.size[k], piece.frozen_change[k]]
+                        [
+                            piece.exact[k],
+                            piece.size[k],
+                            piece.frozen_change[k],
+                            piece.added[k],
+                        ]
                     })
                     .collect()
             })
@@ -165,7 +193,7 @@ impl Latin<'_> {
                 let mut all = plan.share_pieces(self.exchange, |e| &mine[e - held.start]);
                 for (e, values) in held.clone().zip(&mine) {
                     for (position, v) in values.chunks_exact(PIECES_PER_DOF).enumerate() {
-                        all.push((e, position as u32, [v[0], v[1], v[2]]));
+                        all.push((e, position as u32, [v[0], v[1], v[2], v[3]]));
                     }
                 }
                 all.sort_by_key(|c| c.0);

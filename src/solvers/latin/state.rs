@@ -99,6 +99,8 @@ pub struct LatinState {
     pub eta: f64,
     /// r(U): the equilibrium residual of the linear stage's U under the exact law.
     pub residual: f64,
+    /// r_F(U): the same unbalance relative to the forces the load brings into play.
+    pub load_residual: f64,
     /// Slack cables of ŝ.
     pub slack_cables: usize,
     /// Operator rebuilds (status-following l) so far in this solve.

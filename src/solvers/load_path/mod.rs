@@ -7,36 +7,57 @@
 //! under no load, at first) and walks to its load in increments, first the whole way, started
 //! from the extrapolation of the last equilibria ([`prediction`]). An increment that does not
 //! converge within [`INCREMENT_MAX_STEPS`] steps is halved and retried from the last
-//! equilibrium, down to [`MIN_INCREMENT`] of the path, below which the solve ends at a limit
-//! point ([`Status::LimitPoint`]), never as converged. A retry has the solver forget the
-//! tangent it factorized (nearly singular near a limit point, it is no chord for the retry). An
-//! increment's equilibrium is accepted only when it lies on the path: the energy at the
-//! increment's load is convex along the segment from the last equilibrium to it
-//! (`LoadPath::on_the_path`); one reached across a region where it is not (past a limit point,
-//! on a snapped-through branch) is rejected and the increment halved, so that a solve's verdict
-//! depends on its load alone, not on the α before it. Loads beyond a limit point of the path
-//! end `LimitPoint`, whatever the α list.
+//! equilibrium; one that converged in at most [`GROWTH_STEPS`] steps is followed by one twice
+//! its size. The smallest increment is a load, not a fraction of the path: [`SMALLEST_INCREMENT`]
+//! of the structure's unit load, or [`LIMIT_TOLERANCE`] of the load reached when that is
+//! larger — the same whatever α a solve is asked for and whatever α came before it (N-D1: a
+//! fraction of the path made α = 0.25 asked alone end at a limit point at α = 0 that a sweep of
+//! small steps passed). An increment that fails at that size ends the solve at a limit point
+//! ([`Status::LimitPoint`]), never as converged: the limit lies between the last equilibrium
+//! and that increment's load, located to [`LIMIT_TOLERANCE`] of its load. The limit located is
+//! kept: a later solve beyond it from the same equilibrium ends there at once, with the same
+//! limit (L1: it was located anew, 2.1289 to 2.1338, for every α past the arch's 2.13409).
+//!
+//! A retry has the solver forget the tangent it factorized (nearly singular near a limit point,
+//! it is no chord for the retry). An increment's equilibrium is accepted only when it lies on
+//! the path: the energy at the increment's load is convex along the segment from the last
+//! equilibrium to it (`LoadPath::on_the_path`); one reached across a region where it is not
+//! (past a limit point, on a snapped-through branch) is rejected and the increment halved, so
+//! that a solve's verdict depends on its load alone, not on the α before it. An iterate at the
+//! round-off of the prestress's balance ([`Balance::AtRoundOff`]: a load too small for the
+//! tolerance to resolve) is accepted once the solver can go no further there: the answer at
+//! round-off, said so, never a limit point (R5-5).
 
+mod branch;
 mod prediction;
 
-use super::{Equilibrium, LoadPathEnd, Measure, NoEquilibrium, Progress, Solver, Status};
-use crate::linalg::{dot, norm};
+use super::{Balance, Equilibrium, LoadPathEnd, Measure, NoEquilibrium, Progress, Solver, Status};
+use crate::linalg::norm;
 use crate::model::material::{slack_flags, SlackRule};
 use crate::model::Model;
-use prediction::Reached;
+use branch::distance;
+use prediction::{ray_parameter, LocatedLimit, Reached};
 
 /// Steps one load increment may take before it is halved (fewer when the solver's own cap,
 /// `solver.max_iterations`, is smaller: along a path the cap is per increment).
 pub const INCREMENT_MAX_STEPS: usize = 30;
-/// Points (besides the last equilibrium) at which the slope of the energy along an
-/// increment's segment is sampled for `LoadPath::on_the_path`.
-const SEGMENT_SAMPLES: usize = 4;
+/// An increment that converged in at most this many steps is followed by one twice its size.
+pub const GROWTH_STEPS: usize = 6;
 /// An increment whose r(U) is at or below this after [`INCREMENT_MAX_STEPS`] steps without
 /// meeting the tolerance sits at round-off: the solve ends `Stalled` rather than halving.
 const ROUNDOFF_RESIDUAL: f64 = 1e-12;
-/// The smallest load increment tried, as a fraction of the path from the last equilibrium to
-/// the solve's load: below it the solve stops at a limit point.
-pub const MIN_INCREMENT: f64 = 1.0 / 1024.0;
+/// The smallest load increment tried, as a fraction of the structure's unit load (its load
+/// at α = 1, `‖F‖`): below it the solve stops at a limit point.
+pub const SMALLEST_INCREMENT: f64 = 1e-6;
+/// How closely a limit point is located: an increment is not halved below this fraction of the
+/// load of the last equilibrium (when larger than [`SMALLEST_INCREMENT`]), so the last
+/// equilibrium found and the load where none was are this close.
+pub const LIMIT_TOLERANCE: f64 = 1e-4;
+/// The smallest increment, as a fraction of the path, after a failure of the solver's own.
+const OWN_FAILURE_INCREMENT: f64 = 1.0 / 64.0;
+/// Increments (accepted, halved or rejected) one solve may try: a cap that ends a path that
+/// does not end otherwise as [`Status::MaxIterations`].
+const MAX_INCREMENTS: usize = 4000;
 
 /// A solver that can sit in a [`LoadPath`]: it solves one load from given displacements, and
 /// says of its iterate what the path reads.
@@ -76,8 +97,9 @@ pub struct PathPoint<'a> {
     pub residual: f64,
     /// r(U)'s scale, `‖F‖ + ‖|B|ᵀ|τ|‖`, N.
     pub scale: f64,
-    /// The state is an equilibrium at its load to the solver's tolerance.
-    pub converged: bool,
+    /// Where the state stands against the solver's stop: an equilibrium at its load to the
+    /// solver's tolerances, at round-off, or neither.
+    pub balance: Balance,
     /// The last step failed (no descent, or no factorisable tangent): the state is the one
     /// before it.
     pub failed: bool,
@@ -92,6 +114,8 @@ pub struct PathWork {
     pub predicted_starts: usize,
     /// Increments whose equilibrium lay on another branch (rejected, the increment halved).
     pub branch_jumps: usize,
+    /// Solves ended at once at a limit point located by an earlier solve of the path.
+    pub limits_reused: usize,
 }
 
 /// The solver `S` driven along the load path from one solve's load to the next.
@@ -112,6 +136,13 @@ pub struct PathState<T> {
     /// The increment being solved: the path fraction `done + increment`, its load.
     increment: f64,
     load: Vec<f64>,
+    /// The smallest increment tried that found no equilibrium (path fraction): at a limit
+    /// point, the limit lies in `(done, done + failed]`.
+    failed: Option<f64>,
+    /// Increments tried.
+    increments: usize,
+    /// The equilibrium at the solve's load is one at round-off ([`Balance::AtRoundOff`]).
+    at_roundoff: bool,
     /// The solver's state at the increment's load.
     step: T,
     iteration: usize,
@@ -155,82 +186,66 @@ impl<S: PathSolver> LoadPath<S> {
         INCREMENT_MAX_STEPS.min(self.solver.max_iterations()).max(1)
     }
 
-    /// Whether the equilibrium of `state` at the increment's load lies on the path from the
-    /// last one, `state.u_done`: the energy Π at that load is convex along the segment
-    /// between them, its slope `ψ(s) = ∇Π(U_done + s d)·d` (`d = U − U_done`) never
-    /// decreasing, sampled at [`SEGMENT_SAMPLES`] points. An equilibrium reached across a
-    /// region where Π is concave along d (a snap-through past a limit point: a von Mises arch
-    /// passing flat) is not on the path. Near an equilibrium of the path Π is convex (its
-    /// tangent is positive definite), so a short enough increment along the path passes.
-    fn on_the_path(&self, state: &PathState<S::State>) -> bool {
-        let point = self.solver.point(&state.step);
-        let d: Vec<f64> = point
-            .displacements
-            .iter()
-            .zip(&state.u_done)
-            .map(|(u, v)| u - v)
+    /// The smallest increment at the last equilibrium, as a fraction of the path:
+    /// [`SMALLEST_INCREMENT`] of the unit load, or [`LIMIT_TOLERANCE`] of the load reached when
+    /// that is larger (1 when the path has no length).
+    fn smallest_increment(&self, state: &PathState<S::State>) -> f64 {
+        let span = distance(&state.target, &state.start);
+        if span == 0.0 || !span.is_finite() {
+            return 1.0;
+        }
+        let reached: Vec<f64> = (state.start.iter().zip(&state.target))
+            .map(|(a, b)| a + state.done * (b - a))
             .collect();
-        let size = norm(&d);
-        if size == 0.0 || !size.is_finite() {
-            return size == 0.0;
-        }
-        let load_work = dot(&state.load, &d);
-        let model: &Model = self.solver.model();
-        // ψ(s) = Σ τ ∇ℓ·d − F·d at U_done + s d.
-        let slope_at = |fraction: f64| {
-            let u: Vec<f64> = state
-                .u_done
-                .iter()
-                .zip(&d)
-                .map(|(v, d)| v + fraction * d)
-                .collect();
-            model.internal_slope(&u, &d) - load_work
+        // The unit load; a structure loaded by settlements alone has none: the path's end.
+        let unit = match norm(&self.solver.structure().unit_load) {
+            0.0 => norm(&state.start).max(norm(&state.target)),
+            unit => unit,
         };
-        let mut previous = slope_at(0.0);
-        // Round-off of ψ: each end is an equilibrium to the tolerance only (|∇Π| up to
-        // tolerance × scale there), and ψ(0) is −ΔF·d up to that.
-        let noise =
-            10.0 * (self.solver.tolerance() + 1e-12) * point.scale * size + 1e-6 * previous.abs();
-        for k in 1..=SEGMENT_SAMPLES {
-            let slope = match k {
-                SEGMENT_SAMPLES => dot(point.gradient, &d),
-                _ => slope_at(k as f64 / SEGMENT_SAMPLES as f64),
-            };
-            if !slope.is_finite() || slope < previous - noise {
-                return false;
-            }
-            previous = slope;
-        }
-        true
+        (SMALLEST_INCREMENT * unit).max(LIMIT_TOLERANCE * norm(&reached)) / span
     }
 
-    /// Go on from the equilibrium reached on the path: the next increment, the same size (or
-    /// what is left of the path).
+    /// Go on from the equilibrium reached on the path: the next increment, twice the size when
+    /// this one converged in at most [`GROWTH_STEPS`] steps, at most what is left of the path.
     fn advance(&mut self, state: &mut PathState<S::State>) {
         state.done = (state.done + state.increment).min(1.0);
         state.u_done = self.solver.point(&state.step).displacements.to_vec();
+        if state.increment_steps <= GROWTH_STEPS {
+            state.increment *= 2.0;
+        }
         state.increment = state.increment.min(1.0 - state.done);
         let u = state.u_done.clone();
         self.begin_increment(state, u);
     }
 
-    /// Halve the increment and retry it from the last equilibrium, or stop at a limit point.
+    /// Halve the increment and retry it from the last equilibrium, or stop at a limit point
+    /// when the increment that failed was already the smallest. An increment that failed for
+    /// the solver's own reason (an inner solve short of its forcing term) is not halved below
+    /// [`OWN_FAILURE_INCREMENT`] of the path: the solve has stalled, and halving on to the
+    /// smallest increment only spent time (the tower of N-D3 under mono-latin: 3 710 steps).
     fn halve(&mut self, state: &mut PathState<S::State>) {
         self.work.halvings += 1;
         let own_failure = self.solver.failed_on_its_own();
         // The retry assembles its tangent: the failed attempt's factor, nearly singular near a
         // limit point, would steer every retry off the path as a chord.
         self.solver.forget_tangent();
-        state.increment *= 0.5;
-        if state.increment < MIN_INCREMENT {
+        state.failed = Some(state.increment);
+        let smallest = match own_failure {
+            true => self.smallest_increment(state).max(OWN_FAILURE_INCREMENT),
+            false => self.smallest_increment(state),
+        };
+        if state.increment <= smallest || state.increments >= MAX_INCREMENTS {
             // The halvings found no equilibrium: a limit point of the structure, unless the
-            // solver's own steps failed on the way (it cannot tell).
-            state.stop = Some(match own_failure {
-                true => Status::Stalled,
-                false => Status::LimitPoint,
+            // solver's own steps failed on the way (it cannot tell), or the path ran out of
+            // increments before locating anything.
+            state.stop = Some(match (own_failure, state.increments >= MAX_INCREMENTS) {
+                (_, true) => Status::MaxIterations,
+                (true, false) => Status::Stalled,
+                (false, false) => Status::LimitPoint,
             });
             // The answer is the last equilibrium; its stopping value is measured at the
             // solve's load, the α of its row, not at the load where it is an equilibrium.
+            let beyond = self.fraction_of(state, state.done + state.increment);
             state.load = state.target.clone();
             state.step = self.solver.state_at(&state.load, state.u_done.clone());
             // Cables that went slack on the way of an increment that found no equilibrium (one
@@ -247,28 +262,49 @@ impl<S: PathSolver> LoadPath<S> {
                     .map(|(link, _)| link.id)
                     .collect();
             }
+            if state.stop == Some(Status::LimitPoint) {
+                self.reached.limit = Some(LocatedLimit {
+                    from: state.start.clone(),
+                    equilibrium: self.fraction_of(state, state.done),
+                    beyond,
+                    u: state.u_done.clone(),
+                    branch_jumps: state.branch_jumps,
+                    slackened: state.slackened.clone(),
+                });
+            }
             return;
         }
+        state.increment *= 0.5;
         let u = state.u_done.clone();
         self.begin_increment(state, u);
+    }
+
+    /// The load at fraction `theta` of the path of `state`: `F_start + θ (F_target − F_start)`.
+    fn fraction_of(&self, state: &PathState<S::State>, theta: f64) -> Vec<f64> {
+        (state.start.iter().zip(&state.target))
+            .map(|(a, b)| a + theta * (b - a))
+            .collect()
     }
 
     /// The load of `done + increment`, the solver's state there at displacements `u`.
     fn begin_increment(&mut self, state: &mut PathState<S::State>, u: Vec<f64>) {
         state.increment_steps = 0;
+        state.increments += 1;
         state.slack_on_the_way.iter_mut().for_each(|x| *x = false);
-        // The load at fraction θ of the path: F_start + θ (F_target − F_start).
-        let theta = state.done + state.increment;
-        state.load = (state.start.iter().zip(&state.target))
-            .map(|(a, b)| a + theta * (b - a))
-            .collect();
+        state.load = self.fraction_of(state, state.done + state.increment);
         state.step = self.solver.state_at(&state.load, u);
     }
 
     /// After a step or a new increment: an equilibrium at the increment's load either ends the
-    /// solve (at the target) or moves the path on.
-    fn settle(&mut self, state: &mut PathState<S::State>) {
-        while state.stop.is_none() && self.solver.point(&state.step).converged {
+    /// solve (at the target) or moves the path on. With `can_go_no_further` (the step failed,
+    /// or the increment's steps are spent), an iterate at round-off is one.
+    fn settle(&mut self, state: &mut PathState<S::State>, can_go_no_further: bool) {
+        loop {
+            let balance = self.solver.point(&state.step).balance;
+            let at_roundoff = balance == Balance::AtRoundOff && can_go_no_further;
+            if state.stop.is_some() || !(balance == Balance::Met || at_roundoff) {
+                return;
+            }
             if !self.on_the_path(state) {
                 // An equilibrium on another branch: the path is not followed across.
                 state.branch_jumps += 1;
@@ -279,11 +315,12 @@ impl<S: PathSolver> LoadPath<S> {
             }
             if state.done + state.increment >= 1.0 {
                 state.stop = Some(Status::Converged);
+                state.at_roundoff = at_roundoff;
                 let u = self.solver.point(&state.step).displacements.to_vec();
                 self.reached.record(state.target.clone(), u);
-            } else {
-                self.advance(state);
+                return;
             }
+            self.advance(state);
         }
     }
 
@@ -298,12 +335,13 @@ impl<S: PathSolver> LoadPath<S> {
             .iter_mut()
             .zip(slack)
             .for_each(|(seen, now)| *seen |= now);
-        self.settle(state);
-        if state.stop.is_none() && state.increment_steps >= self.increment_max_steps() {
+        let spent = state.increment_steps >= self.increment_max_steps();
+        self.settle(state, spent);
+        if state.stop.is_none() && spent {
             if self.solver.point(&state.step).residual <= ROUNDOFF_RESIDUAL {
-                // At round-off (a load tiny against the prestress, or a tolerance f64 does
-                // not resolve): no smaller increment would do better. On the way, the path
-                // goes on from here; at the load, the solve has stalled.
+                // At round-off for a tolerance f64 does not resolve (below the prestress's
+                // round-off itself): no smaller increment would do better. On the way, the
+                // path goes on from here; at the load, the solve has stalled.
                 if state.done + state.increment >= 1.0 {
                     state.stop = Some(Status::Stalled);
                 } else {
@@ -312,9 +350,44 @@ impl<S: PathSolver> LoadPath<S> {
             } else {
                 state.jumped = false;
                 self.halve(state);
-                self.settle(state);
+                self.settle(state, false);
             }
         }
+    }
+
+    /// A solve to `load` that ends at once at the limit point an earlier solve located, when
+    /// `load` lies beyond it on the same path from the same last equilibrium.
+    fn beyond_located_limit(&mut self, load: &[f64]) -> Option<PathState<S::State>> {
+        let limit = self.reached.limit.as_ref()?;
+        let (start, _) = &self.reached.last;
+        if start != &limit.from || ray_parameter(start, &limit.beyond, load)? < 1.0 {
+            return None;
+        }
+        let span = distance(load, start);
+        let done = distance(&limit.equilibrium, start) / span;
+        let increment = distance(&limit.beyond, start) / span - done;
+        let limit = limit.clone();
+        self.work.limits_reused += 1;
+        let step = self.solver.state_at(load, limit.u.clone());
+        Some(PathState {
+            start: start.clone(),
+            target: load.to_vec(),
+            done,
+            u_done: limit.u,
+            increment,
+            load: load.to_vec(),
+            failed: Some(increment),
+            increments: 0,
+            at_roundoff: false,
+            step,
+            iteration: 0,
+            increment_steps: 0,
+            stop: Some(Status::LimitPoint),
+            branch_jumps: limit.branch_jumps,
+            slackened: limit.slackened,
+            slack_on_the_way: Vec::new(),
+            jumped: limit.branch_jumps > 0,
+        })
     }
 }
 
@@ -331,12 +404,11 @@ impl<S: PathSolver> Solver for LoadPath<S> {
     }
 
     /// The path's own limits end every solve first (at most [`INCREMENT_MAX_STEPS`] steps
-    /// for each of at most `1 / MIN_INCREMENT` increments and their halvings): the solver's
-    /// cap (`solver.max_iterations`) bounds each increment instead
+    /// for each of at most `MAX_INCREMENTS` increments): the solver's cap
+    /// (`solver.max_iterations`) bounds each increment instead
     /// (`LoadPath::increment_max_steps`), so a limit point is never reported as a cap.
     fn max_iterations(&self) -> usize {
-        let halvings = MIN_INCREMENT.recip().log2() as usize + 1;
-        (MIN_INCREMENT.recip() as usize + halvings + 1) * INCREMENT_MAX_STEPS
+        (MAX_INCREMENTS + 1) * INCREMENT_MAX_STEPS
     }
 
     /// From the last equilibrium reached, the whole path in one increment first, started from
@@ -345,6 +417,9 @@ impl<S: PathSolver> Solver for LoadPath<S> {
     /// answer, though the secant's residual is often the larger; with chord steps, 3.41 steps
     /// per α through three points against 3.95 with the secant).
     fn init(&mut self, load: &[f64]) -> Self::State {
+        if let Some(state) = self.beyond_located_limit(load) {
+            return state;
+        }
         let (start, u_done) = self.reached.last.clone();
         // The prediction when it evaluates to finite numbers, else the last equilibrium.
         let predicted = self
@@ -366,6 +441,9 @@ impl<S: PathSolver> Solver for LoadPath<S> {
             u_done,
             increment: 1.0,
             load: load.to_vec(),
+            failed: None,
+            increments: 1,
+            at_roundoff: false,
             step,
             iteration: 0,
             increment_steps: 0,
@@ -375,7 +453,7 @@ impl<S: PathSolver> Solver for LoadPath<S> {
             slack_on_the_way: vec![false; self.solver.structure().links.len()],
             jumped: false,
         };
-        self.settle(&mut state);
+        self.settle(&mut state, false);
         state
     }
 
@@ -391,11 +469,16 @@ impl<S: PathSolver> Solver for LoadPath<S> {
         state.iteration += 1;
         state.increment_steps += 1;
         self.solver.next_iter(&mut state.step);
-        if self.solver.point(&state.step).failed {
+        let point = self.solver.point(&state.step);
+        if point.failed && point.balance == Balance::AtRoundOff {
+            // No step does better than round-off: the answer there, when on the path.
+            self.settle(state, true);
+        }
+        if state.stop.is_none() && self.solver.point(&state.step).failed {
             state.jumped = false;
             self.halve(state);
-            self.settle(state);
-        } else {
+            self.settle(state, false);
+        } else if state.stop.is_none() {
             self.after_step(state);
         }
     }
@@ -405,6 +488,7 @@ impl<S: PathSolver> Solver for LoadPath<S> {
         Progress {
             iteration: state.iteration,
             stop: state.stop,
+            at_roundoff: state.at_roundoff,
             ..self.solver.progress(&state.step)
         }
     }
@@ -418,6 +502,10 @@ impl<S: PathSolver> Solver for LoadPath<S> {
             branch_jumps: state.branch_jumps,
             slackened: state.slackened.clone(),
             increment_steps: self.increment_max_steps(),
+            limit_bracket: match state.stop {
+                Some(Status::LimitPoint) => state.failed,
+                _ => None,
+            },
         })
     }
 

@@ -11,6 +11,43 @@ pub(super) struct Reached {
     pub last: (Vec<f64>, Vec<f64>),
     /// The equilibria reached before it (the latest last, at most two).
     before: Vec<(Vec<f64>, Vec<f64>)>,
+    /// The limit point the last solve from `last` located, when it ended at one.
+    pub limit: Option<LocatedLimit>,
+}
+
+/// A limit point located on the path from an equilibrium: the last equilibrium found on it,
+/// and the load beyond which none was, [`super::LIMIT_TOLERANCE`] of its load apart.
+#[derive(Debug, Clone)]
+pub(super) struct LocatedLimit {
+    /// The load of the equilibrium the path started from.
+    pub from: Vec<f64>,
+    /// The load of the last equilibrium found on the path, and its displacements.
+    pub equilibrium: Vec<f64>,
+    pub u: Vec<f64>,
+    /// The load of the smallest increment that found no equilibrium.
+    pub beyond: Vec<f64>,
+    /// Increments rejected for an equilibrium on another branch on the way.
+    pub branch_jumps: usize,
+    /// The cables that went slack in the last increment tried (ids).
+    pub slackened: Vec<u64>,
+}
+
+/// The parameter t of `point = from + t (through − from)` when `point` lies on that line (to
+/// 1e-12 of the distances), else `None`.
+pub(super) fn ray_parameter(from: &[f64], through: &[f64], point: &[f64]) -> Option<f64> {
+    let step: Vec<f64> = through.iter().zip(from).map(|(a, b)| a - b).collect();
+    let ahead: Vec<f64> = point.iter().zip(from).map(|(a, b)| a - b).collect();
+    let squared = dot(&step, &step);
+    if squared.is_nan() || squared <= 0.0 {
+        return None;
+    }
+    let t = dot(&ahead, &step) / squared;
+    let off: f64 = ahead
+        .iter()
+        .zip(&step)
+        .map(|(a, b)| (a - t * b).powi(2))
+        .sum();
+    (off <= 1e-12 * dot(&ahead, &ahead).max(squared)).then_some(t)
 }
 
 impl Reached {
@@ -19,11 +56,13 @@ impl Reached {
         Reached {
             last: (vec![0.0; n], vec![0.0; n]),
             before: Vec::new(),
+            limit: None,
         }
     }
 
     /// A new equilibrium reached: displacements `u` at `load`.
     pub fn record(&mut self, load: Vec<f64>, u: Vec<f64>) {
+        self.limit = None;
         let previous = std::mem::replace(&mut self.last, (load, u));
         if self.before.len() == 2 {
             self.before.remove(0);
@@ -38,22 +77,8 @@ impl Reached {
     pub fn predict(&self, load: &[f64]) -> Option<Vec<f64>> {
         let (l2, u2) = &self.last;
         let (l1, u1) = self.before.last()?;
-        let step: Vec<f64> = l2.iter().zip(l1).map(|(a, b)| a - b).collect();
-        let squared = dot(&step, &step);
-        if squared.is_nan() || squared <= 0.0 {
-            return None;
-        }
         // The path parameter of a load: 0 at the last equilibrium, −1 at the one before.
-        let parameter = |l: &[f64]| -> Option<f64> {
-            let ahead: Vec<f64> = l.iter().zip(l2).map(|(a, b)| a - b).collect();
-            let t = dot(&ahead, &step) / squared;
-            let off: f64 = ahead
-                .iter()
-                .zip(&step)
-                .map(|(a, b)| (a - t * b).powi(2))
-                .sum();
-            (off <= 1e-12 * dot(&ahead, &ahead).max(squared)).then_some(t)
-        };
+        let parameter = |l: &[f64]| ray_parameter(l2, l1, l).map(|t| -t);
         let t = parameter(load).filter(|&t| t > 0.0 && t <= 4.0)?;
         let mut points: Vec<(f64, &Vec<f64>)> = vec![(-1.0, u1), (0.0, u2)];
         if self.before.len() == 2 {

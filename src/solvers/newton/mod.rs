@@ -19,7 +19,10 @@
 
 mod line_search;
 
-use super::{residual_stop, Equilibrium, Measure, Progress, SetupError, Solver, TautStiffness};
+use super::{
+    residual_stop, BalanceTolerances, Equilibrium, Measure, Progress, SetupError, Solver,
+    TautStiffness,
+};
 use crate::linalg::{
     dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern, CHUNK,
 };
@@ -441,12 +444,9 @@ impl Solver for Newton<'_> {
         // r(U) ≤ tol, and the same unbalance relative to the forces the load brings into play
         // (the prestress left out): the second is the stricter, and keeps U = 0 from passing
         // at a huge prestress (issue 13, D5a).
-        let (stop, at_roundoff) = residual_stop(
-            state.residual,
-            state.load_residual,
-            self.settings.tolerance,
-            state.stalled,
-        );
+        let balance = BalanceTolerances::both(self.settings.tolerance)
+            .balance(state.residual, state.load_residual);
+        let (stop, at_roundoff) = residual_stop(balance, state.stalled);
         Progress {
             iteration: state.iteration,
             stopping_value: state.residual,

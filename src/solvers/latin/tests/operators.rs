@@ -167,14 +167,20 @@ fn r_u_by_substructure_is_the_global_r_u() {
     );
     let law_slack = slack_every(s, 3);
     let f = load(s, 1.0);
-    let (exact, frozen) = model.exact_and_frozen_residuals(&u, &f, &law_slack);
+    let (sizes, frozen) = model.exact_and_frozen_residuals(&u, &f, &law_slack);
+    let (exact, load_relative) = (sizes.relative, sizes.load_relative);
     assert!((exact - frozen).abs() > 1e-3 * exact, "{exact} {frozen}");
     for subdomains in [[4, 4], [3, 5], [1, 1]] {
         let latin = Latin::new(&model, settings(subdomains, WeakInterfaces::Macro)).unwrap();
-        let (by_sub, frozen_by_sub) = latin.residuals_by_substructure(&u, &f, &law_slack);
+        let (by_sub, load_by_sub, frozen_by_sub) =
+            latin.residuals_by_substructure(&u, &f, &law_slack);
         assert!(
             (by_sub - exact).abs() <= 1e-13 * exact,
             "{subdomains:?}: {by_sub} {exact}"
+        );
+        assert!(
+            (load_by_sub - load_relative).abs() <= 1e-13 * load_relative,
+            "{subdomains:?}: {load_by_sub} {load_relative}"
         );
         assert!(
             (frozen_by_sub - frozen).abs() <= 1e-13 * frozen,
