@@ -522,3 +522,63 @@ fn links_into_performance_name_its_headings() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+/// N-D5 (issue 57): the README's key table says which `prestress.from` each of the prestress
+/// source's keys belongs to, as the loader takes them: `member` and `force` were "required
+/// with `from`" while `from = "design"` refuses them.
+#[test]
+fn readme_says_which_prestress_source_each_key_belongs_to() {
+    let readme = read("README.md");
+    let rows = readme_key_rows(&readme);
+    let tables = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tower3q");
+    let sources = ["self-stress", "design", "force-density"];
+    let keys = [
+        ("member", "0"),
+        ("force", "1000.0"),
+        ("targets", "{ bars0 = -5000.0 }"),
+        ("min_cable", "10.0"),
+        ("force_density", "{ bars0 = -10.0 }"),
+    ];
+    for (key, value) in keys {
+        let belongs: Vec<&str> = sources
+            .iter()
+            .copied()
+            .filter(|from| {
+                let text = format!(
+                    "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
+                     [[supports.fix]]\nnodes = [0, 1, 2, 3]\n[prestress]\nfrom = \"{from}\"\n\
+                     {key} = {value}\n[load]\nalpha = [1.0]\n"
+                );
+                let refused = match tensolve::case::parse_in(&text, &tables) {
+                    Ok(_) => false,
+                    Err(e) => {
+                        e.to_string().contains(&format!("prestress.{key}"))
+                            && e.to_string().contains("it belongs to")
+                    }
+                };
+                !refused
+            })
+            .collect();
+        assert_eq!(belongs.len(), 1, "prestress.{key}: taken with {belongs:?}");
+        let (_, default, _) = rows
+            .iter()
+            .find(|(k, _, _)| *k == format!("prestress.{key}"))
+            .unwrap_or_else(|| panic!("no README row for prestress.{key}"));
+        assert!(
+            default.contains(&format!("from = \"{}\"", belongs[0])),
+            "the README's default of prestress.{key} is `{default}`: it belongs to \
+             `from = \"{}\"`",
+            belongs[0]
+        );
+        for other in sources.iter().filter(|s| **s != belongs[0]) {
+            assert!(
+                !default.contains(&format!("required with `from = \"{other}\"`")),
+                "prestress.{key}: `{default}`"
+            );
+        }
+        assert!(
+            !default.ends_with("with `from`"),
+            "prestress.{key}: `{default}`"
+        );
+    }
+}

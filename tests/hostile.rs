@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{code, stderr, tensolve, Temp};
+use common::{code, manifest_path, stderr, tensolve, Temp};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -1219,6 +1219,27 @@ fn t11_a_bad_override_is_named_alone() {
     );
 }
 
+/// N-D4 (issue 57): a mistake in the case file itself is the file's, with its line and column,
+/// whatever `--set` is given beside it: a misspelt `alpah` was blamed on `--set output.vtk=false`.
+#[test]
+fn a_files_own_mistake_is_not_blamed_on_an_override() {
+    let case = Temp::file(
+        "nd4",
+        "[grid]\nmodules = [2, 2]\n[load]\nalpah = [1.0]\n[solver]\nmethods = [\"newton\"]\n",
+    );
+    let alone = tensolve(&["check", case.arg()]);
+    let with_set = tensolve(&["check", case.arg(), "--set", "output.vtk=false"]);
+    for out in [&alone, &with_set] {
+        assert_eq!(code(out), 2, "{}", stderr(out));
+        let message = stderr(out);
+        assert!(
+            message.contains("line 4, column 1") && message.contains("unknown field `alpah`"),
+            "{message}"
+        );
+        assert!(!message.contains("--set"), "{message}");
+    }
+}
+
 /// N11: `output.homogenised` with no micro-macro solve is refused by name (it wrote nothing
 /// and said nothing, exit 0); with micro-macro it is written.
 #[test]
@@ -1308,4 +1329,46 @@ fn n14_a_newline_inside_an_override_is_refused() {
     // A list written over two lines is one value.
     let out = tensolve(&["check", case.arg(), "--set", "load.alpha=[0.5,\n1.0]"]);
     assert_eq!(code(&out), 0, "{}", stderr(&out));
+}
+
+/// N-D7 (issue 57): sections in mm² (523 and 100 for 5.23e-4 and 1e-4 m²) passed `check`
+/// silently (the GPa slip is warned about): a member thicker than it is long is now named.
+#[test]
+fn sections_in_mm2_are_warned_about_by_check() {
+    let tables = manifest_path("tests/data/tower3q");
+    let members = std::fs::read_to_string(tables.join("members.csv")).unwrap();
+    for (scale, warned) in [(1.0, false), (1e6, true)] {
+        let dir = Temp::dir("nd7");
+        std::fs::create_dir_all(&dir.0).unwrap();
+        std::fs::copy(tables.join("nodes.csv"), dir.0.join("nodes.csv")).unwrap();
+        let scaled: String = members
+            .lines()
+            .enumerate()
+            .map(|(i, line)| {
+                let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+                if i > 0 {
+                    cells[5] = (cells[5].parse::<f64>().unwrap() * scale).to_string();
+                }
+                cells.join(",") + "\n"
+            })
+            .collect();
+        std::fs::write(dir.0.join("members.csv"), scaled).unwrap();
+        let case = dir.0.join("case.toml");
+        std::fs::write(
+            &case,
+            "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n[[supports.fix]]\n\
+             nodes = [0, 1, 2, 3]\n[prestress]\nfrom = \"design\"\n\
+             targets = { bars0 = -5000.0, bars1 = -4000.0, bars2 = -3000.0 }\n[load]\n\
+             alpha = [1.0]\n",
+        )
+        .unwrap();
+        let out = tensolve(&["check", case.to_str().unwrap()]);
+        assert_eq!(code(&out), 0, "{}", stderr(&out));
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(
+            text.contains("is thicker than it is long") && text.contains("not mm² or cm²"),
+            warned,
+            "scale {scale}: {text}"
+        );
+    }
 }

@@ -47,6 +47,9 @@ pub struct Design {
     /// Re-balanced (`design --rebalance`): the largest change of a member's prestress, N,
     /// and that member's id.
     pub rebalanced: Option<(f64, u64)>,
+    /// Under `"force-density"`: the form found is flat, every node in one plane (the
+    /// anchors' plane), and the spread of the nodes off it, relative to the form's size.
+    pub flat: Option<f64>,
 }
 
 /// Where the design is asked for.
@@ -145,6 +148,7 @@ pub(super) fn apply(
     }
     let target_of: BTreeMap<usize, f64> = targets.iter().copied().collect();
     Ok(Design {
+        flat: None,
         counts: equilibrium_counts(&structure),
         grouped_states: states.count(),
         gap: states.gap,

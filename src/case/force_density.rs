@@ -224,5 +224,34 @@ fn report(
             .collect(),
         min_cable: 0.0,
         rebalanced: None,
+        flat: flatness(&geometry.nodes).filter(|&spread| spread <= FLAT_RELATIVE),
     }
+}
+
+/// A form whose nodes lie within this fraction of its size of one plane is flat.
+const FLAT_RELATIVE: f64 = 1e-9;
+
+/// The spread of `nodes` off their best plane, relative to their extent: the square root of
+/// the smallest eigenvalue of their covariance over that of the largest. A form found by
+/// force densities places each free node at a weighted mean of its neighbours, so anchors in
+/// one plane give a form in that plane, whatever the densities (issue 57, N-D11: a prism and a
+/// net came back flat, called stable, without a word).
+fn flatness(nodes: &[[f64; 3]]) -> Option<f64> {
+    if nodes.len() < 4 {
+        return None;
+    }
+    let n = nodes.len() as f64;
+    let mean: Vec<f64> = (0..3)
+        .map(|k| nodes.iter().map(|p| p[k]).sum::<f64>() / n)
+        .collect();
+    let covariance = nalgebra::Matrix3::from_fn(|i, j| {
+        nodes
+            .iter()
+            .map(|p| (p[i] - mean[i]) * (p[j] - mean[j]))
+            .sum::<f64>()
+            / n
+    });
+    let values = covariance.symmetric_eigenvalues();
+    let largest = values.max();
+    (largest > 0.0).then(|| (values.min().max(0.0) / largest).sqrt())
 }

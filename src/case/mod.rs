@@ -166,11 +166,17 @@ pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Ca
     for set in overrides {
         apply_override(&mut table, set)?;
     }
-    let raw =
-        raw::RawCase::deserialize(toml::Value::Table(table)).map_err(|e| CaseError::Override {
-            set: culprits(text, overrides).join(" "),
-            reason: e.to_string().trim_end().to_string(),
-        })?;
+    let raw = raw::RawCase::deserialize(toml::Value::Table(table)).map_err(|e| {
+        // The file's own mistake is the file's, with its line and column, whatever the
+        // overrides (N-D4: a misspelt key was blamed on an unrelated --set).
+        match toml::from_str::<raw::RawCase>(text) {
+            Err(own) => CaseError::from_toml(own),
+            Ok(_) => CaseError::Override {
+                set: culprits(text, overrides).join(" "),
+                reason: e.to_string().trim_end().to_string(),
+            },
+        }
+    })?;
     convert::convert(raw, base).map_err(|e| match e {
         // A value an override set: say so.
         CaseError::Invalid { key, value, fix } => {
@@ -189,25 +195,22 @@ pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Ca
     })
 }
 
-/// The overrides a failed deserialisation is due to: those that each make the case file,
-/// which reads alone, fail on their own; every override when that does not single any out.
+/// The overrides a failed deserialisation of a case file that reads alone is due to: those
+/// that each make it fail on their own; every override when that does not single any out.
 fn culprits<'o>(text: &str, overrides: &'o [String]) -> Vec<&'o str> {
-    // Whether the case file reads with `set` alone (none: the file as written).
-    let reads = |set: Option<&str>| -> bool {
+    // Whether the case file reads with `set` alone.
+    let reads = |set: &str| -> bool {
         let Ok(mut table) = toml::from_str::<toml::Table>(text) else {
             return false;
         };
-        set.is_none_or(|set| apply_override(&mut table, set).is_ok())
+        apply_override(&mut table, set).is_ok()
             && raw::RawCase::deserialize(toml::Value::Table(table)).is_ok()
     };
     let all = || overrides.iter().map(String::as_str).collect();
-    if !reads(None) {
-        return all();
-    }
     let bad: Vec<&str> = overrides
         .iter()
         .map(String::as_str)
-        .filter(|set| !reads(Some(set)))
+        .filter(|set| !reads(set))
         .collect();
     if bad.is_empty() {
         all()

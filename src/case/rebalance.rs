@@ -39,6 +39,7 @@ pub(super) fn apply(geometry: &mut Geometry, fixes: &[NodeFix]) -> Result<Design
     }
     let groups = groups(geometry)?;
     Ok(Design {
+        flat: None,
         counts: equilibrium_counts(&structure),
         grouped_states: 0,
         gap: (None, None),

@@ -4,12 +4,8 @@
 //! [`DENSE_LIMIT`] free dofs (real tensegrities are small; a grid's mechanisms are refused
 //! without it).
 
-use crate::structure::{Structure, CLAMPED, DENSE_LIMIT};
+use crate::structure::{mechanism_basis, Structure, CLAMPED, DENSE_LIMIT};
 use nalgebra::{DMatrix, SymmetricEigen};
-
-/// Eigenvalues of `BᵀB` (unit member stiffness) below this fraction of the largest span the
-/// mechanisms.
-const NULL_RELATIVE: f64 = 1e-10;
 
 /// Eigenvalues of `Mᵀ K_G M` at or below this fraction of the largest `|t0 / L|` of a member
 /// are not a stiffening (round-off of the projection is ≈ 1e-14 of it).
@@ -90,20 +86,8 @@ pub fn prestress_stability(s: &Structure) -> Option<PrestressStability> {
         return None;
     }
     // BᵀB with unit member stiffness: its null space is the mechanisms'.
-    let mut btb = DMatrix::<f64>::zeros(n, n);
-    for row in &s.link_dofs {
-        for (p, cp) in row.iter() {
-            for (q, cq) in row.iter() {
-                btb[(p, q)] += cp * cq;
-            }
-        }
-    }
-    let eig = SymmetricEigen::new(btb);
-    let largest = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let null: Vec<usize> = (0..n)
-        .filter(|&i| eig.eigenvalues[i] <= NULL_RELATIVE * largest)
-        .collect();
-    let m = null.len();
+    let basis = mechanism_basis(s);
+    let m = basis.len();
     let geometric = super::GeometricStiffness::of_prestress(s);
     let threshold = STIFFENED_RELATIVE
         * geometric
@@ -117,10 +101,6 @@ pub fn prestress_stability(s: &Structure) -> Option<PrestressStability> {
             threshold,
         });
     }
-    let basis: Vec<Vec<f64>> = null
-        .iter()
-        .map(|&i| eig.eigenvectors.column(i).iter().copied().collect())
-        .collect();
     let kg_basis: Vec<Vec<f64>> = basis.iter().map(|v| geometric.product(v)).collect();
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     // Mᵀ K_G M, symmetrised.

@@ -49,6 +49,22 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// The member whose section is widest against its length, when its equivalent diameter
+    /// `√(4S/π)` reaches its length: its id, section (m²), diameter and length (m). No member
+    /// is thicker than it is long: such a section is a unit slip (mm² or cm² for m²: issue 57,
+    /// N-D7, sections of 523 and 100 passed `check` silently).
+    pub fn thickest_member(&self) -> Option<(u64, f64, f64, f64)> {
+        self.members
+            .iter()
+            .map(|m| {
+                let (length, _) = super::length_and_direction(self.nodes[m.a], self.nodes[m.b]);
+                let diameter = (4.0 * m.section / std::f64::consts::PI).sqrt();
+                (m.id, m.section, diameter, length)
+            })
+            .filter(|&(_, _, d, l)| d >= l)
+            .max_by(|a, b| (a.2 / a.3).total_cmp(&(b.2 / b.3)))
+    }
+
     /// Drop the members (and their grid roles), once a structure has been built of them: a
     /// run keeps its structure, not the description it was built from.
     pub fn release_members(&mut self) {

@@ -24,8 +24,9 @@ pub use grouped::{
 pub use nearest_state::{nearest_state, Bounds, Fit, MET_RELATIVE};
 pub use spec::{CableSpec, Clamp, GridSpec, LoadPattern, Material, ModuleKind};
 pub use statics::{
-    equilibrium_counts, project_on_self_stress, self_stress_dense, self_stress_through,
-    DenseSelfStress, DenseSelfStressRefusal, EquilibriumCounts, SelfStressRefusal, DENSE_LIMIT,
+    equilibrium_counts, mechanism_basis, project_on_self_stress, self_stress_dense,
+    self_stress_through, DenseSelfStress, DenseSelfStressRefusal, EquilibriumCounts,
+    SelfStressRefusal, DENSE_LIMIT,
 };
 pub use storage::{StructureSize, BASE_BYTES, BYTES_PER_LINK};
 

@@ -3,7 +3,9 @@
 //! when s = 1 and m = 0, the self-stress state itself.
 
 use super::Structure;
-use crate::linalg::{factorize_counting_zero_modes, SparseCholesky, StiffnessPattern};
+use crate::linalg::{
+    factorize_counting_zero_modes, SparseCholesky, StiffnessPattern, ZERO_MODES_COUNTED,
+};
 use faer::Par;
 
 /// The most free dofs a dense test takes (an eigen-decomposition of `BᵀB` or `B Bᵀ`, n × n:
@@ -33,7 +35,11 @@ pub fn equilibrium_counts(structure: &Structure) -> EquilibriumCounts {
     counts_and_factor(structure).0
 }
 
-/// The counts, and `A Aᵀ = Bᵀ B` factorized when it is regular (m = 0).
+/// The counts, and `A Aᵀ = Bᵀ B` factorized when it is regular (m = 0). The sparse count
+/// stops at [`ZERO_MODES_COUNTED`] (a lower bound): there, up to [`DENSE_LIMIT`] free dofs the
+/// mechanisms are counted densely; above it m is at least `free dofs − members` (r ≤ members).
+/// A flat net form-found from coplanar anchors has 88 mechanisms: it was reported with 64 and
+/// a rank of 167 for 144 members (issue 57, N-D6).
 fn counts_and_factor(structure: &Structure) -> (EquilibriumCounts, Option<SparseCholesky>) {
     let n = structure.n_free;
     let (mechanisms, factor) = if n == 0 {
@@ -43,10 +49,39 @@ fn counts_and_factor(structure: &Structure) -> (EquilibriumCounts, Option<Sparse
         let mut values = vec![0.0; pattern.nnz()];
         pattern.assemble(&structure.link_dofs, |_| 1.0, &mut values);
         let mut factor = SparseCholesky::analyse(&pattern, Par::Seq);
-        let m = factorize_counting_zero_modes(&pattern, &values, &mut factor);
+        let m = match factorize_counting_zero_modes(&pattern, &values, &mut factor) {
+            m if m < ZERO_MODES_COUNTED => m,
+            _ if n <= DENSE_LIMIT => mechanism_basis(structure).len(),
+            m => m.max(n.saturating_sub(structure.links.len())),
+        };
         (m, (m == 0).then_some(factor))
     };
     (EquilibriumCounts::new(structure, mechanisms), factor)
+}
+
+/// Eigenvalues of `BᵀB` (unit member stiffness) at or below this fraction of the largest span
+/// the mechanisms.
+const NULL_RELATIVE: f64 = 1e-10;
+
+/// An orthonormal basis of the mechanisms, `B M = 0` on the free dofs (dense: for at most
+/// [`DENSE_LIMIT`] free dofs): the eigenvectors of `BᵀB` (unit member stiffness) whose
+/// eigenvalues are at most [`NULL_RELATIVE`] of the largest.
+pub fn mechanism_basis(structure: &Structure) -> Vec<Vec<f64>> {
+    let n = structure.n_free;
+    let mut btb = nalgebra::DMatrix::<f64>::zeros(n, n);
+    for row in &structure.link_dofs {
+        for (p, cp) in row.iter() {
+            for (q, cq) in row.iter() {
+                btb[(p, q)] += cp * cq;
+            }
+        }
+    }
+    let eig = nalgebra::SymmetricEigen::new(btb);
+    let largest = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    (0..n)
+        .filter(|&i| eig.eigenvalues[i] <= NULL_RELATIVE * largest)
+        .map(|i| eig.eigenvectors.column(i).iter().copied().collect())
+        .collect()
 }
 
 impl EquilibriumCounts {

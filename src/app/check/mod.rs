@@ -77,6 +77,10 @@ pub struct ModelReport {
     pub mechanisms_at_least: bool,
     /// The member with a prestress strain `|t0|/(E·S)` no material takes, and that strain.
     pub prestress_strain: Option<(u64, f64)>,
+    /// The member thicker than it is long ([`crate::structure::Geometry::thickest_member`]).
+    pub thick_member: Option<(u64, f64, f64, f64)>,
+    /// A form found by force densities that is flat: its spread off its plane.
+    pub flat_form: Option<f64>,
     /// The load factors.
     pub alphas: Vec<f64>,
     /// The solvers.
@@ -216,6 +220,8 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         geometric_regular: None,
         mechanisms_at_least: false,
         prestress_strain: crate::model::unit_slip_strain(s),
+        thick_member: case.geometry.thickest_member(),
+        flat_form: case.design.as_ref().and_then(|d| d.flat),
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
     };

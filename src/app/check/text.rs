@@ -89,6 +89,21 @@ impl CheckReport {
                 crate::model::unit_slip_sentence(id, strain)
             )?;
         }
+        if let Some(spread) = m.flat_form {
+            writeln!(
+                f,
+                "  warning: {}",
+                crate::app::design::flat_form_sentence(spread)
+            )?;
+        }
+        if let Some((id, section, diameter, length)) = m.thick_member {
+            writeln!(
+                f,
+                "  warning: member {id} is thicker than it is long: its section {section:.4e} m² \
+                 has the diameter {diameter:.3e} m of a disc, for a length of {length:.3e} m: \
+                 are the sections in m² (not mm² or cm²)?"
+            )?;
+        }
         if m.lengths[1] > LENGTH_WARNING {
             writeln!(
                 f,

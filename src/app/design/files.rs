@@ -88,20 +88,21 @@ fn members_csv(w: &mut dyn Write, case: &Case) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Per group: `group,kind,members,force_N,q_min_N_per_m,q_max_N_per_m,rest_length_min_m,rest_length_max_m,given`.
+/// Per group: `group,kind,members,force_min_N,force_max_N,q_min_N_per_m,q_max_N_per_m,rest_length_min_m,rest_length_max_m,given`.
 fn groups_csv(w: &mut dyn Write, report: &DesignReport) -> std::io::Result<()> {
     writeln!(
         w,
-        "group,kind,members,force_N,q_min_N_per_m,q_max_N_per_m,rest_length_min_m,rest_length_max_m,given"
+        "group,kind,members,force_min_N,force_max_N,q_min_N_per_m,q_max_N_per_m,rest_length_min_m,rest_length_max_m,given"
     )?;
     for g in &report.groups {
         writeln!(
             w,
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}",
             g.name,
             g.kind.name(),
             g.members,
-            g.force,
+            g.force[0],
+            g.force[1],
             g.force_density[0],
             g.force_density[1],
             g.rest_length[0],

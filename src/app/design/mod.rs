@@ -53,8 +53,9 @@ pub struct GroupRow {
     pub kind: LinkKind,
     /// Its members.
     pub members: usize,
-    /// Force, N: every member's (`design`), the largest in magnitude (`force-density`).
-    pub force: f64,
+    /// Force over its members, N: `[min, max]` (one value under `design`; `t = qℓ` varies
+    /// along a group under `force-density`).
+    pub force: [f64; 2],
     /// Force density `t/ℓ` over its members, N/m: `[min, max]`.
     pub force_density: [f64; 2],
     /// Rest length `ℓ·ES/(ES + t)` over its members, m: `[min, max]`.
@@ -180,6 +181,7 @@ fn report(path: &Path, case: &Case, design: Design) -> DesignReport {
 fn group_row(geometry: &Geometry, g: &case::GroupForce) -> GroupRow {
     let mut q = [f64::INFINITY, f64::NEG_INFINITY];
     let mut rest = q;
+    let mut force = q;
     for &j in &g.members {
         let m = &geometry.members[j];
         let (length, _) =
@@ -189,12 +191,13 @@ fn group_row(geometry: &Geometry, g: &case::GroupForce) -> GroupRow {
         let (qj, rj) = (m.prestress / length, length * es / (es + m.prestress));
         q = [q[0].min(qj), q[1].max(qj)];
         rest = [rest[0].min(rj), rest[1].max(rj)];
+        force = [force[0].min(m.prestress), force[1].max(m.prestress)];
     }
     GroupRow {
         name: g.name.clone(),
         kind: g.kind,
         members: g.members.len(),
-        force: g.force,
+        force,
         force_density: q,
         rest_length: rest,
         given: g.given,
@@ -231,6 +234,24 @@ fn given_label(v: f64) -> String {
     match v != 0.0 && !(1e-4..1e15).contains(&v.abs()) {
         true => format!("{v:e}"),
         false => format!("{v}"),
+    }
+}
+
+/// The warning of a flat form found by force densities (issue 57, N-D11).
+pub fn flat_form_sentence(spread: f64) -> String {
+    format!(
+        "the form found is flat: every node lies in one plane (off it by {spread:.1e} of the \
+         form's size), the plane of the anchors, since force densities place each free node at \
+         a weighted mean of its neighbours; out of that plane it is stiff by its prestress \
+         alone. For a curved form (a saddle, a dome) put the anchors out of one plane"
+    )
+}
+
+/// `[min, max]` as one value when they agree to 1e-12, else `min..max`.
+fn range_label(range: [f64; 2], show: impl Fn(f64) -> String) -> String {
+    match (range[1] - range[0]).abs() <= 1e-12 * range[0].abs().max(range[1].abs()) {
+        true => show(range[0]),
+        false => format!("{}..{}", show(range[0]), show(range[1])),
     }
 }
 
@@ -275,21 +296,32 @@ impl fmt::Display for DesignReport {
             writeln!(f, "  min_cable = {} N", d.min_cable)?;
         }
         writeln!(f, "  stability: {}", self.verdict())?;
+        if let Some(spread) = d.flat {
+            writeln!(f, "  warning: {}", flat_form_sentence(spread))?;
+        }
+        // Each figure over the group's members: one value where they all carry it, else
+        // `min..max` (under force densities t = qℓ and the rest length vary along a group).
         writeln!(
             f,
-            "  {:<16} {:<6} {:>7} {:>14} {:>14} {:>14} {:>12}",
-            "group", "kind", "members", "force_N", "q_N_per_m", "rest_length_m", "given"
+            "  {:<16} {:<6} {:>7} {:>27} {:>27} {:>25} {:>12}",
+            "group",
+            "kind",
+            "members",
+            "force_N (min..max)",
+            "q_N_per_m (min..max)",
+            "rest_length_m (min..max)",
+            "given"
         )?;
         for g in &self.groups {
             writeln!(
                 f,
-                "  {:<16} {:<6} {:>7} {:>14.6e} {:>14.6e} {:>14.9} {:>12}",
+                "  {:<16} {:<6} {:>7} {:>27} {:>27} {:>25} {:>12}",
                 g.name,
                 g.kind.name(),
                 g.members,
-                g.force,
-                g.force_density[1],
-                g.rest_length[0],
+                range_label(g.force, |x| format!("{x:.6e}")),
+                range_label(g.force_density, |x| format!("{x:.6e}")),
+                range_label(g.rest_length, |x| format!("{x:.9}")),
                 g.given.map_or(String::new(), given_label)
             )?;
         }
@@ -299,6 +331,15 @@ impl fmt::Display for DesignReport {
 
 #[cfg(test)]
 mod tests {
+    /// A group's figure is one value where its members agree, else labelled as a range
+    /// (issue 57, N-D6: one unlabelled force and rest length was printed per group).
+    #[test]
+    fn a_range_is_one_value_or_min_to_max() {
+        let show = |x: f64| format!("{x}");
+        assert_eq!(super::range_label([2.0, 2.0], show), "2");
+        assert_eq!(super::range_label([1.5, 2.0], show), "1.5..2");
+    }
+
     /// A target of −1e-300 printed its 300 zeros (issue 57, R5-10); ordinary ones stay plain.
     #[test]
     fn a_given_value_is_printed_short() {
