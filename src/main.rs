@@ -8,6 +8,7 @@ mod cli {
     pub mod progress;
 }
 
+use anyhow::Context;
 use clap::{Parser, Subcommand};
 use cli::progress::{report_bench, Reporter};
 use std::path::{Path, PathBuf};
@@ -16,7 +17,7 @@ use tensolve::app::against_large::large_answer;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
-use tensolve::app::design::design;
+use tensolve::app::design::{design, DesignError};
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
 use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions, Sharing};
@@ -151,31 +152,48 @@ fn parse_method(name: &str) -> Result<Method, String> {
     })
 }
 
-/// A command's error message and the exit status it maps to.
-struct Failure {
+/// A refusal of the command line's own (bad tolerances, bench under mpirun, runs that differ),
+/// and the exit status it maps to; the library's errors carry theirs.
+#[derive(Debug)]
+struct Refusal {
     message: String,
-    exit_code: i32,
+    exit_code: u8,
 }
 
-impl From<RunError> for Failure {
-    /// A failure on another MPI rank says nothing here: that rank says why.
-    fn from(e: RunError) -> Self {
-        Failure {
-            message: match e {
-                RunError::OnAnotherRank => String::new(),
-                _ => e.to_string(),
-            },
-            exit_code: e.exit_code(),
-        }
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
     }
 }
 
-impl From<BenchError> for Failure {
-    fn from(e: BenchError) -> Self {
-        Failure {
-            message: e.to_string(),
-            exit_code: e.exit_code(),
-        }
+impl std::error::Error for Refusal {}
+
+/// The exit status of `error`: that of the first error of its chain that has one (2 bad input,
+/// 3 output directory in use, 1 a run that could not produce what was asked), else 1.
+fn exit_code_of(error: &anyhow::Error) -> u8 {
+    error
+        .chain()
+        .find_map(|cause| {
+            let code = if let Some(e) = cause.downcast_ref::<RunError>() {
+                e.exit_code()
+            } else if let Some(e) = cause.downcast_ref::<BenchError>() {
+                e.exit_code()
+            } else if let Some(e) = cause.downcast_ref::<DesignError>() {
+                e.exit_code()
+            } else {
+                return cause.downcast_ref::<Refusal>().map(|r| r.exit_code);
+            };
+            Some(code as u8)
+        })
+        .unwrap_or(1)
+}
+
+/// What `error` says, the step and file first (`run `case.toml`: …`); nothing for a failure on
+/// another MPI rank, which that rank says.
+fn message_of(error: &anyhow::Error) -> String {
+    match error.root_cause().downcast_ref::<RunError>() {
+        Some(RunError::OnAnotherRank) => String::new(),
+        _ => format!("{error:#}"),
     }
 }
 
@@ -195,60 +213,12 @@ fn main() -> ExitCode {
     tensolve::app::allocator::retain_freed_memory();
     let cli = Cli::parse();
     let ranks = Ranks::init();
-    let result = match cli.command {
-        Command::Bench { case, set, .. } if ranks.size() > 1 => {
-            refuse_on_ranks(&ranks, "bench", &case, &set)
-        }
-        Command::Run {
-            case,
-            out,
-            solvers,
-            quiet,
-            set,
-        } => run_command(&ranks, case, out, solvers, quiet, &set).map_err(Failure::from),
-        Command::Check { case, set } => check_command(&ranks, case, &set),
-        Command::Design {
-            case,
-            out,
-            set,
-            rebalance,
-        } => root_only(&ranks, || {
-            let report = design(&case, &set, out.as_deref(), rebalance).map_err(|e| Failure {
-                message: e.to_string(),
-                exit_code: e.exit_code(),
-            })?;
-            print_ignoring_closed_pipe(&report.to_string());
-            Ok(())
-        }),
-        Command::Bench {
-            case,
-            out,
-            quiet,
-            set,
-        } => bench_command(&case, out, quiet, &set).map_err(Failure::from),
-        Command::Compare {
-            run,
-            golden,
-            rtol,
-            atol,
-            slack_tolerance,
-        } => root_only(&ranks, || {
-            compare_command(
-                &run,
-                &golden,
-                CompareSettings {
-                    rtol,
-                    atol,
-                    slack_tolerance,
-                },
-            )
-        }),
-    };
+    let result = dispatch(cli.command, &ranks);
     // Every rank exits with the worst status of any. Rank 0 says why; where it has nothing to
     // say (it did not fail, or failed only because another rank did), the rank that failed.
     let (code, message) = match &result {
-        Ok(()) => (0u8, ""),
-        Err(e) => (e.exit_code as u8, e.message.as_str()),
+        Ok(()) => (0u8, String::new()),
+        Err(e) => (exit_code_of(e), message_of(e)),
     };
     let root_said = ranks.broadcast(vec![u8::from(!message.is_empty())]).first() == Some(&1);
     let worst = ranks.max(u64::from(code)) as u8;
@@ -262,9 +232,65 @@ fn main() -> ExitCode {
     ExitCode::from(worst)
 }
 
+/// The command asked for, with the step and file it was on as the context of its error.
+fn dispatch(command: Command, ranks: &Ranks) -> anyhow::Result<()> {
+    let step = |verb: &str, path: &Path| format!("{verb} `{}`", path.display());
+    match command {
+        Command::Bench { case, set, .. } if ranks.size() > 1 => {
+            refuse_on_ranks(ranks, "bench", &case, &set).context(step("bench", &case))
+        }
+        Command::Run {
+            case,
+            out,
+            solvers,
+            quiet,
+            set,
+        } => {
+            let context = step("run", &case);
+            run_command(ranks, case, out, solvers, quiet, &set).context(context)
+        }
+        Command::Check { case, set } => {
+            let context = step("check", &case);
+            check_command(ranks, case, &set).context(context)
+        }
+        Command::Design {
+            case,
+            out,
+            set,
+            rebalance,
+        } => root_only(ranks, || {
+            let report = design(&case, &set, out.as_deref(), rebalance)
+                .with_context(|| step("design", &case))?;
+            print_ignoring_closed_pipe(&report.to_string());
+            Ok(())
+        }),
+        Command::Bench {
+            case,
+            out,
+            quiet,
+            set,
+        } => bench_command(&case, out, quiet, &set).with_context(|| step("bench", &case)),
+        Command::Compare {
+            run,
+            golden,
+            rtol,
+            atol,
+            slack_tolerance,
+        } => root_only(ranks, || {
+            let settings = CompareSettings {
+                rtol,
+                atol,
+                slack_tolerance,
+            };
+            compare_command(&run, &golden, settings)
+                .with_context(|| format!("compare `{}` with `{}`", run.display(), golden.display()))
+        }),
+    }
+}
+
 /// `command` on rank 0 alone; the other ranks exit with its status (`main` shares the worst
 /// status of all ranks).
-fn root_only(ranks: &Ranks, command: impl FnOnce() -> Result<(), Failure>) -> Result<(), Failure> {
+fn root_only(ranks: &Ranks, command: impl FnOnce() -> anyhow::Result<()>) -> anyhow::Result<()> {
     if ranks.is_root() {
         command()
     } else {
@@ -279,9 +305,9 @@ fn refuse_on_ranks(
     command: &str,
     path: &Path,
     set: &[String],
-) -> Result<(), Failure> {
+) -> anyhow::Result<()> {
     load_case(ranks, path, set).map_err(RunError::from)?;
-    Err(Failure {
+    Err(anyhow::Error::new(Refusal {
         message: format!(
             "`tensolve {command}` on {} MPI ranks: bench measures one process; run it \
              without mpirun (or `mpirun -n 1`), and `tensolve run` under mpirun for the \
@@ -289,7 +315,7 @@ fn refuse_on_ranks(
             ranks.size()
         ),
         exit_code: 2,
-    })
+    }))
 }
 
 fn run_command(
@@ -428,19 +454,19 @@ fn bench_title(path: &Path, alphas: &[f64]) -> String {
     format!("{stem}: e against wall time, α = {}", alphas.join(", "))
 }
 
-fn check_command(ranks: &Ranks, path: PathBuf, set: &[String]) -> Result<(), Failure> {
+fn check_command(ranks: &Ranks, path: PathBuf, set: &[String]) -> anyhow::Result<()> {
     // Every rank loads the same case (rank 0's bytes); rank 0 alone checks and prints.
     let case = load_case(ranks, &path, set).map_err(RunError::from)?;
     if !ranks.same_on_every_rank(case_digest(&case)) {
-        return Err(Failure {
+        return Err(anyhow::Error::new(Refusal {
             message: "the MPI ranks loaded different cases from rank 0's bytes (a defect: \
                       please report it)"
                 .into(),
             exit_code: 1,
-        });
+        }));
     }
     root_only(ranks, || {
-        check_case(ranks, case, path).map_err(Failure::from)
+        check_case(ranks, case, path).map_err(anyhow::Error::from)
     })
 }
 
@@ -491,10 +517,12 @@ fn print_ignoring_closed_pipe(text: &str) {
 }
 
 /// `compare`: the report on stdout; exit 1 when the runs differ, 2 when they cannot be compared.
-fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Result<(), Failure> {
-    let bad = |message: String| Failure {
-        message,
-        exit_code: 2,
+fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> anyhow::Result<()> {
+    let bad = |message: String| {
+        anyhow::Error::new(Refusal {
+            message,
+            exit_code: 2,
+        })
     };
     if !(settings.rtol.is_finite() && settings.rtol >= 0.0) {
         return Err(bad(format!(
@@ -514,7 +542,7 @@ fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Resu
     if report.agree() {
         Ok(())
     } else {
-        Err(Failure {
+        Err(anyhow::Error::new(Refusal {
             message: format!(
                 "{} file(s) and {} column(s) differ between {} and {}",
                 report.files_differ.len(),
@@ -523,6 +551,6 @@ fn compare_command(run: &Path, golden: &Path, settings: CompareSettings) -> Resu
                 golden.display()
             ),
             exit_code: 1,
-        })
+        }))
     }
 }

@@ -913,7 +913,8 @@ fn m3_write_errors_name_the_file() {
         assert_eq!(code(&out), 1, "{}", stderr(&out));
         let file = dir.0.join(planted);
         assert!(
-            stderr(&out).starts_with(&format!("error: could not write `{}`:", file.display())),
+            stderr(&out).starts_with("error: run `")
+                && stderr(&out).contains(&format!("`: could not write `{}`:", file.display())),
             "{}",
             stderr(&out)
         );
@@ -1151,7 +1152,8 @@ fn t7_a_summary_that_cannot_be_created_leaves_no_file_without_its_row() {
     assert_eq!(code(&out), 1, "{}", stderr(&out));
     let summary = dir.0.join("summary.csv");
     assert!(
-        stderr(&out).starts_with(&format!("error: could not write `{}`:", summary.display())),
+        stderr(&out).starts_with("error: run `")
+            && stderr(&out).contains(&format!("`: could not write `{}`:", summary.display())),
         "{}",
         stderr(&out)
     );
@@ -1185,7 +1187,8 @@ fn t10_a_file_size_limit_is_a_write_error_naming_the_file() {
     );
     let message = stderr(&out);
     assert!(
-        message.starts_with(&format!("error: could not write `{}/", dir.arg()))
+        message.starts_with("error: run `")
+            && message.contains(&format!("`: could not write `{}/", dir.arg()))
             && message.contains("ulimit -f"),
         "{message}"
     );
@@ -1210,7 +1213,8 @@ fn t11_a_bad_override_is_named_alone() {
     assert_eq!(code(&out), 2, "{}", stderr(&out));
     let message = stderr(&out);
     assert!(
-        message.starts_with("error: --set solver.search_direction=\"Newton\": unknown variant"),
+        message.starts_with("error: check `")
+            && message.contains("`: --set solver.search_direction=\"Newton\": unknown variant"),
         "{message}"
     );
     assert!(

@@ -253,12 +253,16 @@ fn run_refuses_at_set_up_the_partition_check_refuses() {
     args.extend(sets);
     let run = tensolve(&args);
     assert_eq!(code(&run), 2, "{}", stderr(&run));
+    // The error line after its step and file (`error: run `…`: `).
     let reason = |o: &std::process::Output| {
-        stderr(o)
+        let line = stderr(o)
             .lines()
             .find(|l| l.starts_with("error:"))
             .unwrap_or_default()
-            .to_string()
+            .to_string();
+        line.split_once("`: ")
+            .map(|(_, r)| r.to_string())
+            .unwrap_or(line)
     };
     assert_eq!(reason(&run), reason(&check));
     assert!(
