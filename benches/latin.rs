@@ -27,7 +27,7 @@
 //! (medians of 3); then two whole factorizations at once on one thread each against one
 //! alone, the most that factoring the two halves of the elimination tree side by side could
 //! gain; and the factor in the two halves of the nested dissection's top level side by side,
-//! as newton's Hessian on two threads (docs/performance.md, "newton on two threads").
+//! as newton's Hessian on two threads (docs/performance.md, "newton at scale, and on two threads").
 
 use criterion::{criterion_group, Criterion};
 use std::path::Path;

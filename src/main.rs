@@ -4,20 +4,22 @@
 
 /// The command line's own modules.
 mod cli {
+    pub mod failure;
     pub mod model_warning;
     pub mod progress;
 }
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use cli::failure::{exit_code_of, message_of, Refusal};
 use cli::progress::{report_bench, Reporter};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use tensolve::app::against_large::large_answer;
+use tensolve::app::auto::against_large::large_answer;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
-use tensolve::app::design::{design, DesignError};
+use tensolve::app::design::design;
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
 use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions, Sharing};
@@ -150,51 +152,6 @@ fn parse_method(name: &str) -> Result<Method, String> {
         let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
         format!("unknown solver `{name}`; use one of: {}", names.join(", "))
     })
-}
-
-/// A refusal of the command line's own (bad tolerances, bench under mpirun, runs that differ),
-/// and the exit status it maps to; the library's errors carry theirs.
-#[derive(Debug)]
-struct Refusal {
-    message: String,
-    exit_code: u8,
-}
-
-impl std::fmt::Display for Refusal {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.message)
-    }
-}
-
-impl std::error::Error for Refusal {}
-
-/// The exit status of `error`: that of the first error of its chain that has one (2 bad input,
-/// 3 output directory in use, 1 a run that could not produce what was asked), else 1.
-fn exit_code_of(error: &anyhow::Error) -> u8 {
-    error
-        .chain()
-        .find_map(|cause| {
-            let code = if let Some(e) = cause.downcast_ref::<RunError>() {
-                e.exit_code()
-            } else if let Some(e) = cause.downcast_ref::<BenchError>() {
-                e.exit_code()
-            } else if let Some(e) = cause.downcast_ref::<DesignError>() {
-                e.exit_code()
-            } else {
-                return cause.downcast_ref::<Refusal>().map(|r| r.exit_code);
-            };
-            Some(code as u8)
-        })
-        .unwrap_or(1)
-}
-
-/// What `error` says, the step and file first (`run `case.toml`: …`); nothing for a failure on
-/// another MPI rank, which that rank says.
-fn message_of(error: &anyhow::Error) -> String {
-    match error.root_cause().downcast_ref::<RunError>() {
-        Some(RunError::OnAnotherRank) => String::new(),
-        _ => format!("{error:#}"),
-    }
 }
 
 /// A write past a file-size limit (`ulimit -f`) raises SIGXFSZ, whose default action ends the

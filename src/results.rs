@@ -13,7 +13,7 @@ pub use geometric_term::{
 
 use crate::linalg::{norm, smallest_eigenvalues};
 use crate::model::material::{tension, trial_tension};
-use crate::model::{geometric_force_on, relative_unbalance, MemberStates, Model};
+use crate::model::{geometric_force_on, relative_unbalance, GeometricModel, MemberStates, Model};
 use crate::solvers::{Equilibrium, Solution, TautStiffness};
 use crate::structure::{GridRole, Structure};
 
@@ -129,6 +129,8 @@ pub struct AnswerMeasures {
     pub max_member_rotation: f64,
     /// Whether the model updates the geometry (`large`).
     pub updates_geometry: bool,
+    /// The model the answer is of.
+    pub geometry: GeometricModel,
 }
 
 impl AnswerMeasures {
@@ -143,6 +145,7 @@ impl AnswerMeasures {
             slack_by_kind: slack_by_kind(s, eq),
             max_member_rotation: max_member_rotation(s, eq),
             updates_geometry: model.updates_geometry(),
+            geometry: model.geometry(),
         }
     }
 
@@ -154,13 +157,14 @@ impl AnswerMeasures {
     /// may differ from [`AnswerMeasures::of`]'s in its last bits. Every process calls it alike.
     /// The small-displacement models only.
     pub fn over_shares(
-        s: &Structure,
+        model: &Model,
         world: &[usize],
         cables: usize,
         eq: &Equilibrium,
         load: &[f64],
         exchange: &dyn crate::decomposition::Exchange,
     ) -> AnswerMeasures {
+        let s = &model.structure;
         let full = s.full_displacements(&eq.displacements);
         // Per share: the largest cable tension and member rotation, the slack counts.
         let mut mine = vec![0.0; 2 + SLACK_FAMILIES.len()];
@@ -211,7 +215,8 @@ impl AnswerMeasures {
             equilibrium_residual: if scale > 0.0 { r_norm / scale } else { r_norm },
             slack_by_kind: std::array::from_fn(|k| out[2 + k] as usize),
             max_member_rotation: out[1],
-            updates_geometry: false,
+            updates_geometry: model.updates_geometry(),
+            geometry: model.geometry(),
         }
     }
 }
@@ -415,25 +420,13 @@ mod tests {
         assert_eq!(whole.slack_by_kind.iter().sum::<usize>(), 408);
         let identity: Vec<usize> = (0..s.links.len()).collect();
         let all = model.keeping_links(&identity).unwrap();
-        let one = AnswerMeasures::over_shares(
-            &all.structure,
-            &identity,
-            s.n_cables(),
-            &eq,
-            &load,
-            &OneProcess,
-        );
+        let one =
+            AnswerMeasures::over_shares(&all, &identity, s.n_cables(), &eq, &load, &OneProcess);
         assert_eq!(one, whole);
         let reversed: Vec<usize> = identity.iter().rev().copied().collect();
         let kept = model.keeping_links(&reversed).unwrap();
-        let other = AnswerMeasures::over_shares(
-            &kept.structure,
-            &reversed,
-            s.n_cables(),
-            &eq,
-            &load,
-            &OneProcess,
-        );
+        let other =
+            AnswerMeasures::over_shares(&kept, &reversed, s.n_cables(), &eq, &load, &OneProcess);
         let close = (other.equilibrium_residual - whole.equilibrium_residual).abs()
             <= 1e-6 * whole.equilibrium_residual;
         assert!(

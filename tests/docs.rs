@@ -1,8 +1,10 @@
 //! The documents kept true by the code: the README's table of case keys lists exactly the keys
-//! the case loader reads, with their defaults; docs/guide.md's source layout names every file of
-//! `src/` and no file that is gone; docs/performance.md's contents list every section, and every
-//! link into it names one of its headings. Each failure says what to add or remove, and where.
-
+//! the case loader reads, with their defaults, and docs/guide.md gives in full only keys of that
+//! table; docs/guide.md's source layout names every file of `src/` and no file that is gone;
+//! docs/performance.md's contents list every section, and every link into it names one of its
+//! headings; every link of the documents names a file and a heading there, none leaves the
+//! repository, and README.md and docs/performance.md stay within 400 lines (issue 58). Each
+//! failure says what to add or remove, and where.
 use std::collections::BTreeSet;
 use std::path::Path;
 
@@ -581,4 +583,279 @@ fn readme_says_which_prestress_source_each_key_belongs_to() {
             "prestress.{key}: `{default}`"
         );
     }
+}
+
+// The documents as references (issue 58): short, inside the repository, their links whole.
+
+/// README.md and every Markdown file under docs/, by their paths from the repository.
+fn markdown_files() -> Vec<String> {
+    fn walk(root: &Path, dir: &str, out: &mut Vec<String>) {
+        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+            let entry = entry.unwrap();
+            let path = format!("{dir}/{}", entry.file_name().to_string_lossy());
+            if entry.file_type().unwrap().is_dir() {
+                walk(root, &path, out);
+            } else if path.ends_with(".md") {
+                out.push(path);
+            }
+        }
+    }
+    let mut files = vec!["README.md".to_string()];
+    walk(Path::new(env!("CARGO_MANIFEST_DIR")), "docs", &mut files);
+    files.sort();
+    files
+}
+
+/// The text of `text` outside fenced code blocks, and the lines inside them.
+fn prose_and_code(text: &str) -> (String, Vec<&str>) {
+    let (mut prose, mut code, mut fenced) = (String::new(), Vec::new(), false);
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+        } else if fenced {
+            code.push(line);
+        } else {
+            prose.push_str(line);
+            prose.push('\n');
+        }
+    }
+    (prose, code)
+}
+
+/// The code spans of `prose` as Markdown reads them: a run of n backticks opens one, the next
+/// run of exactly n closes it (a span may go on over a line end).
+fn markdown_code_spans(prose: &str) -> Vec<String> {
+    let bytes = prose.as_bytes();
+    let run_at = |i: usize| bytes[i..].iter().take_while(|&&b| b == b'`').count();
+    let (mut spans, mut i) = (Vec::new(), 0);
+    while i < bytes.len() {
+        if bytes[i] != b'`' {
+            i += 1;
+            continue;
+        }
+        let n = run_at(i);
+        let start = i + n;
+        let mut j = start;
+        let mut close = None;
+        while j < bytes.len() {
+            if bytes[j] == b'`' {
+                let m = run_at(j);
+                if m == n {
+                    close = Some(j);
+                    break;
+                }
+                j += m;
+            } else {
+                j += 1;
+            }
+        }
+        match close {
+            Some(end) => {
+                spans.push(prose[start..end].replace('\n', " ").trim().to_string());
+                i = end + n;
+            }
+            None => i = start,
+        }
+    }
+    spans
+}
+
+/// The targets of the inline links and images `](target)` of `prose`.
+fn markdown_link_targets(prose: &str) -> Vec<&str> {
+    prose
+        .split("](")
+        .skip(1)
+        .filter_map(|rest| rest.split([')', ' ']).next())
+        .collect()
+}
+
+/// Absolute paths a document may name: the machine's tools and kernel interfaces
+/// (`/usr/bin/time`, `/proc/meminfo`, `/dev/zero`), which are no file of a checkout.
+const SYSTEM_PATHS: &[&str] = &["/usr/", "/proc", "/sys", "/dev/"];
+
+/// Whether `word`, a path a document names, lies outside the repository: above it (`../`),
+/// in a home (`~/`) or absolute, other than the machine's own.
+fn outside_the_repository(word: &str) -> bool {
+    let word = word.trim_matches(|c: char| "'\"(),;:".contains(c));
+    word.starts_with("../")
+        || word.starts_with("~/")
+        || (word.starts_with('/')
+            && word.len() > 1
+            && !SYSTEM_PATHS.iter().any(|p| word.starts_with(p)))
+}
+
+/// Issue 58: "No link outside the repository." Every link of the README and of docs/ stays in
+/// the repository (no address, no absolute path, no `..` that climbs out of it), and no path a
+/// document names in backquotes or in a code block starts with `../` or is absolute (a script
+/// of another checkout, `../shared/tools/…`, is described, not named).
+#[test]
+fn no_link_or_path_leaves_the_repository() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut problems = Vec::new();
+    for file in markdown_files() {
+        let text = read(&file);
+        let (prose, code) = prose_and_code(&text);
+        let depth = file.matches('/').count();
+        for target in markdown_link_targets(&prose) {
+            let path = target.split('#').next().unwrap_or("");
+            let climbs = path
+                .split('/')
+                .try_fold(depth as i64, |d, part| match part {
+                    ".." if d == 0 => None,
+                    ".." => Some(d - 1),
+                    "" | "." => Some(d),
+                    _ => Some(d + 1),
+                })
+                .is_none();
+            if target.contains("://")
+                || target.starts_with("mailto:")
+                || path.starts_with('/')
+                || climbs
+            {
+                problems.push(format!("{file}: the link ({target}) leaves the repository"));
+            }
+        }
+        let words = markdown_code_spans(&prose)
+            .into_iter()
+            .filter_map(|span| span.split_whitespace().next().map(String::from))
+            .chain(
+                code.iter()
+                    .flat_map(|l| l.split_whitespace())
+                    .map(String::from),
+            );
+        for word in words.filter(|w| outside_the_repository(w)) {
+            problems.push(format!(
+                "{file}: `{word}` is a path outside the repository: describe what it is instead"
+            ));
+        }
+    }
+    assert!(root.join("docs").is_dir());
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// Issue 58: the README is a front door and docs/performance.md the current state, each at
+/// most 400 lines; the long tables go to docs/guide.md, the dated history to docs/journal/.
+#[test]
+fn the_readme_and_performance_are_at_most_400_lines() {
+    let mut problems = Vec::new();
+    for (file, elsewhere) in [
+        ("README.md", "docs/guide.md"),
+        ("docs/performance.md", "docs/journal/"),
+    ] {
+        let lines = read(file).lines().count();
+        if lines > 400 {
+            problems.push(format!(
+                "{file} has {lines} lines, more than 400: move what is long to {elsewhere}"
+            ));
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// GitHub's anchor of every heading of `text` (any level, outside code blocks), a repeated one
+/// numbered as GitHub numbers it (`-1`, `-2`, …).
+fn all_heading_anchors(text: &str) -> BTreeSet<String> {
+    let (prose, _) = prose_and_code(text);
+    let mut seen: Vec<String> = Vec::new();
+    let mut out = BTreeSet::new();
+    for line in prose.lines() {
+        let hashes = line.chars().take_while(|&c| c == '#').count();
+        if !(1..=6).contains(&hashes) || !line[hashes..].starts_with(' ') {
+            continue;
+        }
+        let a = anchor(&line[hashes + 1..]);
+        let n = seen.iter().filter(|s| **s == a).count();
+        out.insert(if n == 0 {
+            a.clone()
+        } else {
+            format!("{a}-{n}")
+        });
+        seen.push(a);
+    }
+    out
+}
+
+/// Every relative link of the README and of docs/ names a file of the repository, and, with
+/// `#…`, one of that Markdown file's headings: a section that moved (to docs/guide.md, to
+/// docs/journal/) takes its links with it.
+#[test]
+fn every_link_names_a_file_and_a_heading_there() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut problems = Vec::new();
+    let mut checked = 0;
+    for file in markdown_files() {
+        let (prose, _) = prose_and_code(&read(&file));
+        let dir = Path::new(&file).parent().unwrap_or(Path::new(""));
+        for target in markdown_link_targets(&prose) {
+            if target.contains("://") || target.starts_with("mailto:") {
+                continue; // the test above refuses these
+            }
+            let (path, fragment) = target.split_once('#').unwrap_or((target, ""));
+            let linked = if path.is_empty() {
+                root.join(&file)
+            } else {
+                root.join(dir).join(path)
+            };
+            checked += 1;
+            if !linked.exists() {
+                problems.push(format!("{file}: ({target}) names no file"));
+                continue;
+            }
+            if fragment.is_empty() {
+                continue;
+            }
+            let text = std::fs::read_to_string(&linked).unwrap_or_default();
+            if !all_heading_anchors(&text).contains(fragment) {
+                problems.push(format!(
+                    "{file}: ({target}) names no heading of {}",
+                    linked.display()
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert!(checked > 100, "checked only {checked} links");
+}
+
+/// The guide's "Case keys in detail" gives in full the keys whose README cell is short, by
+/// the README's own names: every key it names is a row of the README's key table, and every
+/// row that sends the reader there (`[more](docs/guide.md#keys-of-…)`) has its key in the
+/// section it names.
+#[test]
+fn guide_key_details_match_the_readme_key_table() {
+    let readme = read("README.md");
+    let guide = read("docs/guide.md");
+    let rows = readme_key_rows(&readme);
+    let mut problems = Vec::new();
+    let details = section(&guide, "## Case keys in detail");
+    let mut by_section: Vec<(String, String)> = Vec::new(); // (anchor, key)
+    let mut current = String::new();
+    for line in &details {
+        if let Some(h) = line.strip_prefix("### ") {
+            current = anchor(h);
+        } else if let Some(rest) = line.strip_prefix("| `") {
+            let key = rest.split('`').next().unwrap_or("").to_string();
+            if !rows.iter().any(|(k, _, _)| *k == key) {
+                problems.push(format!(
+                    "docs/guide.md's Case keys in detail has `{key}`, which the README's key table does not"
+                ));
+            }
+            by_section.push((current.clone(), key));
+        }
+    }
+    for (key, _, row) in &rows {
+        for a in link_targets(row, "](docs/guide.md#") {
+            if a.starts_with("keys-of-") && !by_section.iter().any(|(s, k)| s == a && k == key) {
+                problems.push(format!(
+                    "the README's row of `{key}` links docs/guide.md#{a}, whose table has no row for it"
+                ));
+            }
+        }
+    }
+    assert!(
+        by_section.len() > 30,
+        "found only {} keys",
+        by_section.len()
+    );
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }

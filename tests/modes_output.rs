@@ -389,9 +389,9 @@ fn the_modes_figure_draws_the_lowest_four() {
         );
     }
     assert!(!svg.contains("mode 5:"));
-    assert!(svg.contains("mode 1: ") && svg.contains("Hz, prestress-governed</text>"));
+    assert!(svg.contains("mode 1: ") && svg.contains("Hz, prestress-governed\n</text>"));
     // The simplex's 9 members (3 bars, 3 side cables, the top ring).
-    assert_eq!(svg.matches("<line ").count(), 4 * 2 * 9);
+    assert_eq!(svg.matches("<polyline ").count(), 4 * 2 * 9);
     let plain = dir.path().join("plain");
     let o = run(
         &case,

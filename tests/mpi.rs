@@ -174,7 +174,7 @@ fn without_times(path: &std::path::Path) -> Vec<Vec<String>> {
 /// The CSV files `got` and `want` hold the same results ([`without_times`]) bit for bit, but
 /// for the summary's `equilibrium_residual` where the ranks each keep a share of the links: they
 /// add r(U)'s nodal forces share by share, so it may differ by round-off (1e-9 of itself); and
-/// `unique`, which ranks keeping shares leave empty (not checked: README, summary.csv).
+/// `unique`, which ranks keeping shares leave empty (not checked: docs/guide.md, summary.csv).
 fn assert_same_results(got: &std::path::Path, want: &std::path::Path, what: &str) {
     let (got, want) = (without_times(got), without_times(want));
     assert_eq!(got.len(), want.len(), "{what}: rows");

@@ -3,7 +3,6 @@
 //! report what a case describes ([`check`]), each after estimating the memory it needs
 //! ([`memory`]).
 
-pub mod against_large;
 pub mod allocator;
 pub mod auto;
 pub mod bench;

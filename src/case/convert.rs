@@ -17,14 +17,7 @@ use std::path::Path;
 /// The typed case of a raw one, checked in file order; `[structure]` tables are read
 /// relative to `base`.
 pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
-    // `auto` (the default) starts on the initial geometry; the run moves to `large` where
-    // the scene calls for it.
-    let (model, model_auto) = match raw.model.geometry.unwrap_or(GeometryKey::Auto) {
-        GeometryKey::Auto => (GeometricModel::Linear, true),
-        GeometryKey::Linear => (GeometricModel::Linear, false),
-        GeometryKey::Prestress => (GeometricModel::Prestress, false),
-        GeometryKey::Large => (GeometricModel::Large, false),
-    };
+    let (model, model_auto) = geometric_model(raw.model.geometry);
     let model_tolerance = model_tolerance(raw.model.tolerance)?;
     // 1. The structure: a [grid]'s generated geometry and clamps, or a [structure]'s tables.
     let (grid, mut geometry, mut fixes) = structure(&raw, base)?;
@@ -79,6 +72,17 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         design,
         point_masses,
     })
+}
+
+/// `model.geometry`: the model and whether it is `auto`, which (the default) starts on the
+/// initial geometry; the run moves to `large` where the scene calls for it.
+fn geometric_model(key: Option<GeometryKey>) -> (GeometricModel, bool) {
+    match key.unwrap_or(GeometryKey::Auto) {
+        GeometryKey::Auto => (GeometricModel::Linear, true),
+        GeometryKey::Linear => (GeometricModel::Linear, false),
+        GeometryKey::Prestress => (GeometricModel::Prestress, false),
+        GeometryKey::Large => (GeometricModel::Large, false),
+    }
 }
 
 /// `model.tolerance`: a fraction in (0, 1); default [`crate::results::DEFAULT_MODEL_TOLERANCE`].

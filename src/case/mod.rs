@@ -3,11 +3,10 @@
 //! into a fully typed `Case` (`convert`) whose numbers are known to be finite and physical;
 //! every other module receives that.
 //!
-//! Inside, one way only: `numbers` (the checks of a number), `typed` (the case as the program
-//! uses it, whose `OutputChoice` `raw` reads as it is) and `raw` under everything;
-//! `tables`, `nodes`, `grid`, `prestress`, `load`, `solver` and `output` each
-//! convert one part of the file; `convert` calls them in file order. Every file is read
-//! through `read_text`, whose bytes `sources` can record (MPI rank 0) or replay (the others).
+//! Inside, one way only: the checks of a number, the typed case and the raw structs under
+//! everything; one file per part of the case file converts it, and `convert` calls them in file
+//! order (docs/guide.md's source layout lists them). Every file is read through `read_text`,
+//! whose bytes `sources` can record (MPI rank 0) or replay (the others).
 
 mod convert;
 mod design;

@@ -194,7 +194,7 @@ fn macro_basis_settings(raw: &RawSolver, latin: &mut LatinSettings) -> Result<()
 
 /// Modules along a side of the substructure the default partition aims at: at 16 × 16
 /// micro-macro's iterations stay near twice the bilateral floor while each substructure's
-/// factor stays small (docs/performance.md, "micro-macro at scale").
+/// factor stays small (docs/performance.md, "Iterations against the bilateral floor").
 pub const DEFAULT_SUBSTRUCTURE_SIDE: usize = 16;
 
 /// Substructures along each axis the default partition never goes below (where the grid has

@@ -2,7 +2,7 @@
 //! `model.tolerance`: the distance measured (`geometric_term`) and, where `large` was solved at
 //! the worst row's α, what it gives there.
 
-use tensolve::app::against_large::LargeAnswer;
+use tensolve::app::auto::against_large::LargeAnswer;
 
 /// The warning of a run whose rows leave out more than `tolerance` of the geometry (`count` of
 /// them, `worst` the largest), with what `large` gives at the worst row's α when `measured`.

@@ -62,6 +62,12 @@ impl Model {
         }
     }
 
+    /// The members' lengths on the current geometry at U with `large`; `None` on the initial
+    /// geometry (`linear`, `prestress`: the initial lengths are the ones that count).
+    pub fn current_lengths(&self, u: &[f64]) -> Option<Vec<f64>> {
+        matches!(self.kinematics, Kinematics::Large).then(|| self.member_states(u).lengths)
+    }
+
     /// [`MemberStates`] at displacements U (free dofs).
     pub fn member_states(&self, u: &[f64]) -> MemberStates {
         let s = &self.structure;

@@ -104,4 +104,26 @@ impl Model {
             Kinematics::Linear => self.assemble_tangent(pattern, carrying, values),
         }
     }
+
+    /// The tangent a natural mode is taken on, at an answer (`u`, `tensions`) over the members
+    /// `carrying` force: with `large` the exact energy's Hessian there
+    /// ([`Model::assemble_answer_tangent`]), on the initial geometry the model's own
+    /// ([`Model::assemble_tangent`]: `K`, plus `K_G(t0)` with `prestress`).
+    pub fn assemble_modal_tangent(
+        &self,
+        u: &[f64],
+        tensions: &[f64],
+        carrying: impl Fn(usize) -> bool,
+        pattern: &StiffnessPattern,
+        values: &mut [f64],
+    ) {
+        match self.kinematics {
+            Kinematics::Large => {
+                self.assemble_answer_tangent(u, tensions, carrying, pattern, values)
+            }
+            Kinematics::Linear | Kinematics::Prestress(_) => {
+                self.assemble_tangent(pattern, carrying, values)
+            }
+        }
+    }
 }

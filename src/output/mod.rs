@@ -8,7 +8,6 @@ mod groups;
 mod history;
 mod homogenised;
 pub mod modes;
-mod modes_svg;
 mod modes_vtk;
 pub mod plots;
 pub mod publish;

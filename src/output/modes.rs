@@ -3,8 +3,8 @@
 //! [`crate::results::modes::natural_modes`] and written atomically into the staging directory,
 //! like the other per-solve files.
 
-use super::modes_svg::write_modes_svg;
 use super::modes_vtk::{modal_positions, modes_vtu_path, write_modes_vtu};
+use super::plots::write_modes_svg;
 use super::sinks::{Sink, SolveEnd, SolveKey, WriteError};
 use super::{result_path, write_atomic};
 use crate::labels::alpha_label;

@@ -9,7 +9,7 @@ use crate::solvers::{Equilibrium, Measure, Solution, Status};
 use crate::structure::Structure;
 use std::path::{Path, PathBuf};
 
-/// One row of `summary.csv` (the README describes each column).
+/// One row of `summary.csv` (docs/guide.md describes each column).
 #[derive(Debug, Clone)]
 pub struct SummaryRow {
     /// Solver name.
@@ -124,10 +124,7 @@ impl SummaryRow {
             path_reached: None,
             path_restarted: false,
             governing: None,
-            model: match measures.updates_geometry {
-                true => GeometricModel::Large,
-                false => GeometricModel::Linear,
-            },
+            model: measures.geometry,
             model_reason: String::new(),
             model_pinned: true,
         }

@@ -2,7 +2,7 @@
 //! strength, for a bar its Euler load and the utilisation of that by its compression, for a
 //! cable its slack margin; and the largest utilisation of a solve with its member.
 
-use crate::model::{Kinematics, Model};
+use crate::model::Model;
 use crate::solvers::Equilibrium;
 use crate::structure::{LinkKind, MemberChecks, Structure};
 
@@ -69,8 +69,7 @@ pub fn member_check(
 pub fn member_checks(model: &Model, eq: &Equilibrium) -> Option<Vec<MemberCheck>> {
     let s = &model.structure;
     let checks = s.checks.as_ref()?;
-    let current = matches!(model.kinematics, Kinematics::Large)
-        .then(|| model.member_states(&eq.displacements).lengths);
+    let current = model.current_lengths(&eq.displacements);
     Some(
         (0..s.links.len())
             .map(|i| {

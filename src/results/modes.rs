@@ -9,7 +9,7 @@
 use crate::linalg::{
     lowest_generalized_modes, NoShiftFactorizes, SparseCholesky, StiffnessPattern,
 };
-use crate::model::{CurrentGeometry, Kinematics, MassKind, Model};
+use crate::model::{MassKind, Model};
 
 /// A mode is prestress-governed when `φᵀ K_E φ < PRESTRESS_GOVERNED · φᵀ K_T φ`.
 pub const PRESTRESS_GOVERNED: f64 = 0.01;
@@ -58,26 +58,12 @@ pub fn natural_modes(
 ) -> Result<Vec<NaturalMode>, NoShiftFactorizes> {
     let s = &model.structure;
     let mut tangent = vec![0.0; pattern.nnz()];
-    match model.kinematics {
-        Kinematics::Large => {
-            model.assemble_answer_tangent(u, tensions, |i| carrying[i], pattern, &mut tangent)
-        }
-        Kinematics::Linear | Kinematics::Prestress(_) => {
-            model.assemble_tangent(pattern, |i| carrying[i], &mut tangent)
-        }
-    }
+    model.assemble_modal_tangent(u, tensions, |i| carrying[i], pattern, &mut tangent);
     // K_E on the geometry the tangent is taken on: the current one under `large`.
-    let current_rows;
-    let rows = match model.kinematics {
-        Kinematics::Large => {
-            current_rows = CurrentGeometry::of(s, u).rows;
-            &current_rows
-        }
-        Kinematics::Linear | Kinematics::Prestress(_) => &s.link_dofs,
-    };
+    let rows = model.member_rows(u);
     let mut elastic = vec![0.0; pattern.nnz()];
     pattern.assemble(
-        rows,
+        &rows,
         |i| match carrying[i] {
             true => s.links[i].stiffness,
             false => 0.0,

@@ -101,10 +101,10 @@ fn auto_large_start(
     if !case.model_auto || !matches!(regular, Err(SetupError::Mechanism { .. })) {
         return None;
     }
-    let large = case.model_with(GeometricModel::Large);
+    let large = crate::app::auto::large_model(case);
     TautStiffness::new(&large).ok()?;
     *regular = Ok(());
-    report.model.geometry = GeometricModel::Large;
+    report.model.geometry = large.geometry();
     report.model.auto = Some(mechanism_start());
     Some(large)
 }

@@ -5,14 +5,9 @@
 //!
 //! The estimate is a formula in the structure's size, calibrated against the peak resident
 //! memory of `tensolve run` (`/usr/bin/time -v`) on 16 × 16 to 256 × 256 grids, one solver at
-//! a time (README, "Limits and diagnostics"). It counts the structure
+//! a time (docs/performance.md, "Memory: the estimate against measurement"). It counts the structure
 //! ([`StructureSize::bytes`]) and the sparse factors each solver holds; nothing else grows
 //! with the structure.
-//!
-//! | file | what |
-//! |---|---|
-//! | `mod.rs` | [`Workload`], what a command does; [`MemoryEstimate`], what it needs |
-//! | `fit.rs` | [`ensure_fits`]: refuse, or fewer rayon workers |
 
 mod fit;
 

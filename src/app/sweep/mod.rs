@@ -451,7 +451,7 @@ impl<'s> Sweep<'s> {
             let eq = &solution.equilibrium;
             let measures = match together {
                 Some(share) => AnswerMeasures::over_shares(
-                    &model.structure,
+                    model,
                     &share.kept_world_links(),
                     share.world_cables(),
                     eq,

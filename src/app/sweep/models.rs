@@ -8,7 +8,6 @@ use crate::app::reference::ReferenceSource;
 use crate::app::setup::{AnswerChecks, Prepared};
 use crate::case::Case;
 use crate::labels::alpha_label;
-use crate::model::GeometricModel;
 use crate::solvers::Method;
 use std::cell::OnceCell;
 
@@ -37,10 +36,7 @@ impl<'s> Models<'s> {
         prepared: &'s Prepared,
         large: &'s OnceCell<Prepared>,
     ) -> Result<Models<'s>, RunError> {
-        let auto = match case.model_auto && start.model == GeometricModel::Linear {
-            true => Some(AutoModel::new(case, prepared)?),
-            false => None,
-        };
+        let auto = AutoModel::starting(case, &start, prepared)?;
         Ok(Models {
             row: start,
             auto,
@@ -77,7 +73,7 @@ impl Sweep<'_> {
         )));
         let load = self.prepared.model.load(alpha);
         let chosen = auto.choose(alpha, &load);
-        if chosen.row.model == GeometricModel::Large {
+        if chosen.moves_to_large() {
             self.models.auto = None;
             self.move_to_large(events)?;
             self.models.since = Some((alpha, chosen.measured.clone()));
@@ -94,9 +90,7 @@ impl Sweep<'_> {
         let case = large_case(self.models.case);
         let prepared = super::on_every_rank(
             self.exchange,
-            self.prepared
-                .under(GeometricModel::Large)
-                .map_err(RunError::from),
+            self.prepared.under(case.model).map_err(RunError::from),
         )?;
         let prepared = self.models.large.get_or_init(|| prepared);
         // The linear solvers go before the large ones are set up.

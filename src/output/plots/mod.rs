@@ -1,8 +1,8 @@
-//! SVG figures under `plots/` (the paper's Figures 6–11), drawn with plotters' SVG backend
+//! SVG figures under `plots/` (the paper's Figures 6–12) and `modes/`, drawn with plotters' SVG backend
 //! (text as SVG `<text>`, no fonts needed). The run hands each solve and each LATIN history to
 //! a [`FigureData`] and writes the figures once the sweep is done; nothing here solves.
 //!
-//! | file | figure |
+//! | figure | what it draws |
 //! |---|---|
 //! | `tensions.svg` | sorted cable tensions, one series per α (first solver), α = 0 among them whenever its answer is known — Figure 6; not for a general structure under 100 members, which has `member_forces.svg` |
 //! | `member_forces.svg` | a general structure under 100 members: every member's force at the figure's α, one labelled bar each |
@@ -11,6 +11,7 @@
 //! | `error_{solver}.svg`, `eta_{solver}.svg` | e and η per iteration up to `output.max_plot_iterations`, one series per α — Figures 9, 10 |
 //! | `error_all.svg` | e per iteration of every LATIN solver at the largest α — Figure 11 |
 //! | `error_modules.svg` | e per iteration at the largest α, one series per module kind of `output.compare_modules` and LATIN solver — Figure 12 |
+//! | `modes/{solver}_alpha{α}.svg` | the lowest natural modes of one answer, each in the oblique view (`output.modes`) |
 //!
 //! In the line charts each series is one `<polyline>` of stroke width [`SERIES_STROKE_WIDTH`],
 //! and nothing else has that width.
@@ -24,6 +25,7 @@ mod deformed;
 mod legend;
 mod marker;
 mod member_forces;
+mod modes;
 mod palette;
 mod series;
 mod slack;
@@ -32,6 +34,7 @@ mod tensions;
 mod views;
 
 pub use chart::LineChart;
+pub use modes::write_modes_svg;
 pub use series::{Frame, Scale, Series};
 
 use super::{alpha_label, write_atomic};

@@ -10,18 +10,8 @@
 //! stops when η ≤ `tolerance` (or, with no load, when Δη is at round-off against the prestress;
 //! under a load that is a stall).
 //!
-//! | file | what |
-//! |---|---|
-//! | `settings` | [`LatinSettings`], search directions |
-//! | `substructure` | one substructure's operators (K_E, Z_E, K*_E, L_E) |
-//! | `macro_problem` | the homogenised macro problem, factorized once |
-//! | `state` | s and ŝ per substructure |
-//! | `linear_stage`, `local_stage`, `indicator` | the two stages and η |
-//! | `iteration` | the two iteration orders and the `Solver` state machine |
-//! | `anderson` | Anderson acceleration of the fixed point ŝ ↦ local(linear(ŝ)) |
-//! | `neighbours`, `operators`, `ranks` | a solve shared by MPI ranks: what passes point to point, the set-up of each rank's operators, the layout |
-//! | `search` | status-following search directions and operator rebuilds |
-//! | `residual`, `dof_ownership` | r(U) of the linear stage's U, substructure by substructure; which substructure owns each dof |
+//! Its files, one role each, are listed in docs/guide.md's source layout (kept true by
+//! `tests/docs.rs`).
 
 mod anderson;
 mod dof_ownership;

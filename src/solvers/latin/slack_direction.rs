@@ -12,7 +12,7 @@ use std::collections::{HashMap, HashSet};
 
 /// ε_soft: a slack cable's search direction, relative to its k, where both its nodes stay
 /// held without it. 1e-3 took the default partition's 256 × 256 / 512 × 512 cases from 100 /
-/// 157 to 92 / 132 iterations (docs/performance.md, 2026-11-29).
+/// 157 to 92 / 132 iterations (docs/journal/2026-11.md, 2026-11-29).
 pub(super) const SOFT_SLACK_SEARCH_FACTOR: f64 = 1e-3;
 
 /// ε_soft only in substructures of at least this many links (2 × 2 modules of the paper's

@@ -126,7 +126,7 @@ const STALL_ITERATIONS: usize = 10;
 
 /// The Hessian is factored in two halves side by side from this many free dofs, with a second
 /// thread: on 256 × 256 modules (590 k dofs, a separator of 2 301) measured in
-/// docs/performance.md ("newton on two threads"); below, the separator's dense work weighs more.
+/// docs/performance.md ("newton at scale, and on two threads"); below, the separator's dense work weighs more.
 pub const SPLIT_MIN_DOFS: usize = 100_000;
 
 /// The newton solver, set up for one structure.

@@ -12,6 +12,8 @@
 //!   positive definite (a column past its Euler load): however close, linear's answer there
 //!   sits next to a saddle of the energy, which only `large` can say (it reports `unstable`).
 
+pub mod against_large;
+
 use super::setup::{prepare_keeping, set_up, Prepared, SetUpSolver};
 use crate::case::Case;
 use crate::labels::alpha_label;
@@ -71,6 +73,11 @@ pub fn prepare_start(
     }
 }
 
+/// The model of `case` under `large` (what `auto` moves to), its structure built anew.
+pub fn large_model(case: &Case) -> crate::model::Model {
+    case.model_with(GeometricModel::Large)
+}
+
 /// `case` under `large` (what `auto` moves to).
 pub fn large_case(case: &Case) -> Case {
     let mut large = case.clone();
@@ -115,6 +122,13 @@ pub struct Chosen {
     pub measured: String,
 }
 
+impl Chosen {
+    /// Whether `auto` moves to `large` here (for this α and every later one).
+    pub fn moves_to_large(&self) -> bool {
+        self.row.model == GeometricModel::Large
+    }
+}
+
 /// The choice along a sweep under `auto` while it is `linear`: newton's linear answer at each α
 /// and its distance to `large`.
 pub struct AutoModel<'s> {
@@ -127,6 +141,19 @@ pub struct AutoModel<'s> {
 }
 
 impl<'s> AutoModel<'s> {
+    /// The choice along a sweep of `case` that starts with `start` on `prepared`: under `auto`
+    /// when it starts `linear`; `None` for a pinned model and for `auto` started `large`.
+    pub fn starting(
+        case: &Case,
+        start: &RowModel,
+        prepared: &'s Prepared,
+    ) -> Result<Option<AutoModel<'s>>, SetupError> {
+        match case.model_auto && start.model == GeometricModel::Linear {
+            true => AutoModel::new(case, prepared).map(Some),
+            false => Ok(None),
+        }
+    }
+
     /// The choice for a sweep of `case` on `prepared` (`linear`, K's factor kept).
     pub fn new(case: &Case, prepared: &'s Prepared) -> Result<AutoModel<'s>, SetupError> {
         Ok(AutoModel {

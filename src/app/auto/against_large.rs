@@ -2,9 +2,9 @@
 //! case solved at that α with `large` (newton along its load path), its largest deflection,
 //! largest cable tension and slack count, to set beside the row's.
 
-use super::setup::{prepare, set_up};
+use super::large_case;
+use crate::app::setup::{prepare, set_up};
 use crate::case::Case;
-use crate::model::GeometricModel;
 use crate::results::{uniqueness::CHECKED_UP_TO_DOFS, AnswerMeasures};
 use crate::solvers::{Method, Silent};
 
@@ -30,8 +30,7 @@ pub fn large_answer(case: &Case, alpha: f64) -> Option<LargeAnswer> {
     if case.model.updates_geometry() {
         return None;
     }
-    let mut large = case.clone();
-    large.model = GeometricModel::Large;
+    let mut large = large_case(case);
     large.load.alphas = vec![alpha];
     if large.structure().n_free > MEASURED_UP_TO_DOFS {
         return None;
