@@ -447,3 +447,65 @@ fn a_low_cap_under_large_is_named_in_the_limit_point_message() {
         stderr(&run)
     );
 }
+
+/// Adversarial pass H2: under `large` a loose `solver.tolerance` is held to the path's own
+/// (r(U) ≤ 1e-8, r_F ≤ 1e-6): at 1e-2 newton said converged at α = 3 on the arch's inverted
+/// branch, and at 1e-3 located its limit 2 % off. Now both newton and pcg-lcp stop at the
+/// limit, located to LIMIT_TOLERANCE.
+#[test]
+fn a_loose_tolerance_never_passes_a_snap_through() {
+    let arch = von_mises_arch();
+    let (limit, _) = arch_limit();
+    for tolerance in ["1e-2", "1e-3"] {
+        let out = arch.dir.0.join(format!("out-loose-{tolerance}"));
+        let run = tensolve(&[
+            "run",
+            arch.dir.0.join("case.toml").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--solver",
+            "newton,pcg-lcp",
+            "--set",
+            &format!("solver.tolerance={tolerance}"),
+            "--set",
+            "load.alpha=[3.0]",
+        ]);
+        assert_eq!(code(&run), 1, "{}", stderr(&run));
+        for row in csv_rows(&out.join("summary.csv")) {
+            assert_eq!(row["status"], "limit_point", "{tolerance}: {row:?}");
+            let reached = number(&row, "path_reached");
+            assert!(
+                reached <= limit && reached >= limit * (1.0 - LIMIT_TOLERANCE),
+                "{tolerance}: {row:?}"
+            );
+        }
+    }
+}
+
+/// Adversarial pass M2: a LATIN solver's load path that gives out near a limit point is its
+/// own stall, not the structure's limit: mono-latin and micro-macro said "limit point at
+/// 2.1194" at α = 2.125 on the arch, where newton and pcg-lcp converge (the limit is 2.13409).
+#[test]
+fn latin_near_the_arch_limit_claims_no_limit_point() {
+    let arch = von_mises_arch();
+    let out = arch.dir.0.join("out-latin-near");
+    let run = tensolve(&[
+        "run",
+        arch.dir.0.join("case.toml").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--solver",
+        "newton,pcg-lcp,mono-latin,micro-macro",
+        "--set",
+        "load.alpha=[2.125]",
+    ]);
+    for row in csv_rows(&out.join("summary.csv")) {
+        match row["solver"].as_str() {
+            "newton" | "pcg-lcp" => assert_eq!(row["status"], "converged", "{row:?}"),
+            _ => assert_ne!(row["status"], "limit_point", "{row:?}"),
+        }
+    }
+    assert!(!stderr(&run).contains("limit point"), "{}", stderr(&run));
+}

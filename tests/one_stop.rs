@@ -272,3 +272,120 @@ fn run_refuses_at_set_up_the_partition_check_refuses() {
     );
     assert!(!out.0.join("summary.csv").exists());
 }
+
+/// Adversarial pass H1: r_F's tolerance never reaches 1, whatever r(U)'s. With
+/// `solver.residual_tolerance = 0.02` (r_F's was 100 times it) mono-latin under `large` said
+/// converged at U = 0 on the simplex, and mono-latin and micro-macro on a grid.
+#[test]
+fn a_loose_latin_tolerance_never_passes_u_zero() {
+    let simplex = manifest_path("cases/simplex.toml");
+    let paper = manifest_path("cases/paper.toml");
+    for (case, sets, agreement) in [
+        (
+            &simplex,
+            vec!["model.geometry=\"large\"", "load.alpha=[0.1]"],
+            1e-6,
+        ),
+        (
+            &paper,
+            vec![
+                "grid.modules=[4, 4]",
+                "solver.subdomains=[2, 2]",
+                "load.alpha=[0.05, 0.5]",
+            ],
+            1e-2,
+        ),
+    ] {
+        let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        sets.push("solver.residual_tolerance=0.02".into());
+        sets.push("output.plots=false".into());
+        sets.push("output.modes=0".into());
+        let (run, rows, _out) = run("loose-latin", case.to_str().unwrap(), &sets);
+        assert_eq!(code(&run), 0, "{}", stderr(&run));
+        for alpha in rows
+            .iter()
+            .map(|r| r["alpha"].clone())
+            .collect::<std::collections::BTreeSet<_>>()
+        {
+            let at: Vec<&Row> = rows.iter().filter(|r| r["alpha"] == alpha).collect();
+            let newton = number(at[0], "max_deflection");
+            for row in &at[1..] {
+                let got = number(row, "max_deflection");
+                assert!(
+                    (got - newton).abs() <= agreement * newton,
+                    "{}: {got} against newton's {newton}",
+                    row["solver"]
+                );
+            }
+        }
+    }
+}
+
+/// Adversarial pass M1, M4: a path shorter than the smallest increment cannot be halved to
+/// locate anything, so its failure is no limit point: a braced 2 × 2 grid without prestress
+/// under `large` said `limit_point` at α = 1e-9 (newton's own difficulty at a load that small
+/// on slack-at-rest cables) and then, reusing that limit, at α = 1, which alone converges.
+#[test]
+fn a_path_shorter_than_the_smallest_increment_is_no_limit_point() {
+    let case = manifest_path("cases/paper-braced.toml");
+    let sets = |alphas: &str| {
+        vec![
+            "prestress.lower_cable=0.0".to_string(),
+            "grid.modules=[2, 2]".into(),
+            "model.geometry=\"large\"".into(),
+            "output.plots=false".into(),
+            format!("load.alpha={alphas}"),
+        ]
+    };
+    let (_, after, _o1) = run("short-path", case.to_str().unwrap(), &sets("[1e-9, 1.0]"));
+    let (_, alone, _o2) = run("short-path-alone", case.to_str().unwrap(), &sets("[1.0]"));
+    for row in after.iter().filter(|r| r["solver"] == "newton") {
+        assert_ne!(row["status"], "limit_point", "{row:?}");
+    }
+    let newton_at = |rows: &[Row]| {
+        let row = rows
+            .iter()
+            .find(|r| r["solver"] == "newton" && r["alpha"] == "1")
+            .unwrap();
+        assert_eq!(row["status"], "converged", "{row:?}");
+        number(row, "max_deflection")
+    };
+    let (a, b) = (newton_at(&after), newton_at(&alone));
+    assert!((a - b).abs() <= 1e-9 * b, "{a} after α = 1e-9, {b} alone");
+}
+
+/// Adversarial pass M3: mono-latin on the paper's grid at α = 1e-10 stalled at iteration 0
+/// (r(U) 2.5e-17, η 1.6e-6): with Δη at round-off and the balance met it has converged, to
+/// what round-off allows at that load (7.6e-6 of newton's deflection when written).
+#[test]
+fn latin_at_a_load_its_eta_cannot_resolve_converges() {
+    let case = manifest_path("cases/paper.toml");
+    let sets = [
+        "load.alpha=[1e-10]".to_string(),
+        "output.plots=false".into(),
+        "output.history=false".into(),
+    ];
+    let out = Temp::dir("tiny-paper");
+    let mut args = vec![
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.arg(),
+        "--solver",
+        "newton,mono-latin",
+    ];
+    for set in &sets {
+        args.extend(["--set", set]);
+    }
+    let run = tensolve(&args);
+    assert_eq!(code(&run), 0, "{}", stderr(&run));
+    let rows = csv_rows(&out.0.join("summary.csv"));
+    let (newton, latin) = (
+        number(&rows[0], "max_deflection"),
+        number(&rows[1], "max_deflection"),
+    );
+    assert!(
+        (newton - latin).abs() <= 1e-4 * newton,
+        "{newton} vs {latin}"
+    );
+}

@@ -166,12 +166,17 @@ pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Ca
         apply_override(&mut table, set)?;
     }
     let raw = raw::RawCase::deserialize(toml::Value::Table(table)).map_err(|e| {
-        // The file's own mistake is the file's, with its line and column, whatever the
-        // overrides (N-D4: a misspelt key was blamed on an unrelated --set).
-        match toml::from_str::<raw::RawCase>(text) {
-            Err(own) => CaseError::from_toml(own),
-            Ok(_) => CaseError::Override {
-                set: culprits(text, overrides).join(" "),
+        // The overrides it is due to; where none is, the file's own mistake, with its line and
+        // column (N-D4: a misspelt key was blamed on an unrelated --set), or every override.
+        let blamed = culprits(text, overrides);
+        match (blamed.is_empty(), toml::from_str::<raw::RawCase>(text)) {
+            (true, Err(own)) => CaseError::from_toml(own),
+            (true, Ok(_)) => CaseError::Override {
+                set: overrides.join(" "),
+                reason: e.to_string().trim_end().to_string(),
+            },
+            (false, _) => CaseError::Override {
+                set: blamed.join(" "),
                 reason: e.to_string().trim_end().to_string(),
             },
         }
@@ -194,28 +199,25 @@ pub fn parse_with_in(text: &str, overrides: &[String], base: &Path) -> Result<Ca
     })
 }
 
-/// The overrides a failed deserialisation of a case file that reads alone is due to: those
-/// that each make it fail on their own; every override when that does not single any out.
+/// The overrides a failed deserialisation is due to: those without which the case file, with
+/// the others, reads (an override may also mend the file's own mistake at its key).
 fn culprits<'o>(text: &str, overrides: &'o [String]) -> Vec<&'o str> {
-    // Whether the case file reads with `set` alone.
-    let reads = |set: &str| -> bool {
+    // Whether the case file reads with every override but `left_out`.
+    let reads_without = |left_out: usize| -> bool {
         let Ok(mut table) = toml::from_str::<toml::Table>(text) else {
             return false;
         };
-        apply_override(&mut table, set).is_ok()
+        overrides
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| k != left_out)
+            .all(|(_, set)| apply_override(&mut table, set).is_ok())
             && raw::RawCase::deserialize(toml::Value::Table(table)).is_ok()
     };
-    let all = || overrides.iter().map(String::as_str).collect();
-    let bad: Vec<&str> = overrides
-        .iter()
-        .map(String::as_str)
-        .filter(|set| !reads(set))
-        .collect();
-    if bad.is_empty() {
-        all()
-    } else {
-        bad
-    }
+    (0..overrides.len())
+        .filter(|&k| reads_without(k))
+        .map(|k| overrides[k].as_str())
+        .collect()
 }
 
 /// Set one `key=value` (dotted key, TOML value) in the case's table, creating tables on the way.

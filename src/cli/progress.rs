@@ -201,14 +201,14 @@ fn format_row(r: &SummaryRow) -> String {
         match (r.converged, r.at_roundoff) {
             // A LATIN stop on Δη at round-off of the prestress: η is then a ratio of round-off
             // to round-off (no load), not a measure of anything.
-            (true, true) if r.alpha == 0.0 => {
+            (true, true) if r.alpha == 0.0 && r.measure == Measure::Indicator => {
                 "converged (no load: Δη at round-off of the prestress)".to_string()
             }
-            // Every solver (issue 57, E2, R5-5, R5-6): r(U) at round-off, the load below the
-            // prestress's.
-            (true, true) => "converged at round-off (the load is below the round-off of the \
-                             prestress's balance: the answer is the prestressed state to \
-                             round-off)"
+            // Every solver (issue 57, E2, R5-5, R5-6): r(U) at round-off, the load too small
+            // beside the prestress for r_F to reach the tolerance.
+            (true, true) => "converged at round-off (r(U) is at the round-off of the \
+                             prestress's balance, where the load is too small beside the \
+                             prestress for its own residual r_F to reach the tolerance)"
                 .to_string(),
             (true, false) => "converged".to_string(),
             (false, _) => format!("NOT converged ({})", r.status),
@@ -221,7 +221,8 @@ fn format_row(r: &SummaryRow) -> String {
             _ if r.converged && r.at_roundoff => String::new(),
             Measure::EquilibriumResidual => String::new(),
             Measure::ComplementarityResidual =>
-                format!("complementarity {:.1e}, ", r.stopping_value),
+            // `+ 0.0`: a −0 reads 0.
+                format!("complementarity {:.1e}, ", r.stopping_value + 0.0),
             Measure::Indicator => format!("eta {:.1e}, ", r.stopping_value),
         },
         r.equilibrium_residual,

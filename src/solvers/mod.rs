@@ -92,9 +92,10 @@ pub enum SetupError {
         "substructure {index} has a singular operator (K_E or K*_E + QQᵀ): change \
          `solver.subdomains`, `solver.dm` or `solver.l`{}",
         if *prestress {
-            "; with `model.geometry = \"prestress\"`, the prestress's geometric stiffness gives a \
-             floating substructure's rotations a small stiffness its kernel test cannot \
-             classify: fewer subdomains, or mono-latin (one substructure)"
+            "; with the prestress's geometric stiffness (`model.geometry = \"prestress\"`, or the \
+             problems `large` linearises), a floating substructure's rotations get a small \
+             stiffness its kernel test cannot classify: fewer subdomains, or mono-latin (one \
+             substructure)"
         } else {
             ""
         }

@@ -48,11 +48,16 @@ pub struct Geometry {
     pub groups: Option<Vec<String>>,
 }
 
+/// A member whose section's equivalent diameter reaches this fraction of its length is named
+/// by `check` ([`Geometry::thickest_member`]): a third (a strut of length/diameter 3; cm²
+/// for m² makes a 2.8e-4 m² strut 1.9 m across).
+pub const STOCKIEST: f64 = 1.0 / 3.0;
+
 impl Geometry {
     /// The member whose section is widest against its length, when its equivalent diameter
-    /// `√(4S/π)` reaches its length: its id, section (m²), diameter and length (m). No member
-    /// is thicker than it is long: such a section is a unit slip (mm² or cm² for m²: issue 57,
-    /// N-D7, sections of 523 and 100 passed `check` silently).
+    /// `√(4S/π)` reaches [`STOCKIEST`] of its length: its id, section (m²), diameter and length
+    /// (m). No member of a tension structure is that stocky: such a section is a unit slip (mm²
+    /// or cm² for m²: issue 57, N-D7, sections of 523 and 100 passed `check` silently).
     pub fn thickest_member(&self) -> Option<(u64, f64, f64, f64)> {
         self.members
             .iter()
@@ -61,7 +66,7 @@ impl Geometry {
                 let diameter = (4.0 * m.section / std::f64::consts::PI).sqrt();
                 (m.id, m.section, diameter, length)
             })
-            .filter(|&(_, _, d, l)| d >= l)
+            .filter(|&(_, _, d, l)| d >= STOCKIEST * l)
             .max_by(|a, b| (a.2 / a.3).total_cmp(&(b.2 / b.3)))
     }
 

@@ -77,7 +77,7 @@ pub struct ModelReport {
     pub mechanisms_at_least: bool,
     /// The member with a prestress strain `|t0|/(E·S)` no material takes, and that strain.
     pub prestress_strain: Option<(u64, f64)>,
-    /// The member thicker than it is long ([`crate::structure::Geometry::thickest_member`]).
+    /// The member too stocky for a tension structure ([`crate::structure::Geometry::thickest_member`]).
     pub thick_member: Option<(u64, f64, f64, f64)>,
     /// A form found by force densities that is flat: its spread off its plane.
     pub flat_form: Option<f64>,

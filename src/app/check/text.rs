@@ -99,8 +99,9 @@ impl CheckReport {
         if let Some((id, section, diameter, length)) = m.thick_member {
             writeln!(
                 f,
-                "  warning: member {id} is thicker than it is long: its section {section:.4e} m² \
-                 has the diameter {diameter:.3e} m of a disc, for a length of {length:.3e} m: \
+                "  warning: member {id} is too stocky for a member of a tension structure: its \
+                 section {section:.4e} m² has the diameter {diameter:.3e} m of a disc, for a \
+                 length of {length:.3e} m: \
                  are the sections in m² (not mm² or cm²)?"
             )?;
         }

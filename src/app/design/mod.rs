@@ -6,6 +6,7 @@
 mod files;
 
 use crate::case::{self, Case, CaseError, Design};
+use crate::linalg::ZERO_MODES_COUNTED;
 use crate::model::{prestress_stability, PrestressStability};
 use crate::structure::{Geometry, LinkKind, DENSE_LIMIT, RANK_RELATIVE};
 use std::fmt;
@@ -260,9 +261,16 @@ impl fmt::Display for DesignReport {
         let d = &self.design;
         let c = &d.counts;
         writeln!(f, "design of {}", self.case.display())?;
+        // Above the dense test's size, m from the sparse count that stops at its cap is a
+        // lower bound (and r an upper one, s a lower one), as `check` says it.
+        let bound = c.free_dofs > DENSE_LIMIT && c.mechanisms >= ZERO_MODES_COUNTED;
+        let (at_most, at_least) = match bound {
+            true => ("at most ", "at least "),
+            false => ("", ""),
+        };
         writeln!(
             f,
-            "  members {}, free dofs {}: rank r = {}, s = {} self-stress state(s), m = {} mechanism(s)",
+            "  members {}, free dofs {}: rank r = {at_most}{}, s = {at_least}{} self-stress state(s), m = {at_least}{} mechanism(s)",
             c.members, c.free_dofs, c.rank, c.self_stress_states, c.mechanisms
         )?;
         let shown = |x: Option<f64>| x.map_or("none".to_string(), |v| format!("{v:.3e}"));

@@ -78,7 +78,7 @@ impl RunError {
     pub(super) fn not_converged(failures: &Failures) -> Self {
         RunError::NotConverged {
             count: failures.count,
-            list: failure_list(&failures.lines()),
+            list: failures.text(),
         }
     }
 }
@@ -114,14 +114,23 @@ impl Failures {
         self.count == 0
     }
 
-    /// One line per failure said.
-    fn lines(&self) -> Vec<String> {
-        self.lines
-            .iter()
-            .map(|(solver, alphas, what)| {
-                format!("{solver} at alpha = {}: {what}", alphas.join(", "))
-            })
-            .collect()
+    /// The first [`LISTED_FAILURES`] lines in full, each with at most [`LISTED_FAILURES`] of
+    /// its α, and the solves of the rest counted.
+    fn text(&self) -> String {
+        let line = |(solver, alphas, what): &(String, Vec<String>, String)| {
+            let mut listed = alphas[..alphas.len().min(LISTED_FAILURES)].join(", ");
+            if alphas.len() > LISTED_FAILURES {
+                listed.push_str(&format!(" and {} more", alphas.len() - LISTED_FAILURES));
+            }
+            format!("{solver} at alpha = {listed}: {what}")
+        };
+        let shown = &self.lines[..self.lines.len().min(LISTED_FAILURES)];
+        let mut text = shown.iter().map(line).collect::<Vec<_>>().join("; ");
+        let said: usize = shown.iter().map(|(_, alphas, _)| alphas.len()).sum();
+        if said < self.count {
+            text.push_str(&format!("; and {} more solve(s)", self.count - said));
+        }
+        text
     }
 }
 
@@ -145,14 +154,6 @@ impl From<OpenError> for RunError {
     }
 }
 
-/// At most this many failed solves are listed in a message; the rest are counted.
+/// At most this many lines of failed solves, and α on one line, are listed in a message; the
+/// rest are counted.
 const LISTED_FAILURES: usize = 10;
-
-/// `list` joined, its first [`LISTED_FAILURES`] items in full and the rest counted.
-fn failure_list(list: &[String]) -> String {
-    let mut text = list[..list.len().min(LISTED_FAILURES)].join("; ");
-    if list.len() > LISTED_FAILURES {
-        text.push_str(&format!("; and {} more", list.len() - LISTED_FAILURES));
-    }
-    text
-}

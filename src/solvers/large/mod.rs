@@ -34,6 +34,23 @@ use crate::solvers::{
 };
 use crate::structure::Structure;
 
+/// The loosest tolerances a load path's equilibria are held to, whatever the solver's: a looser
+/// one passes points near a limit, or on the snapped-through branch, as equilibria of the path
+/// (the arch at `solver.tolerance = 1e-2` was converged at α = 3 on its inverted branch, and at
+/// 1e-3 its limit was located 2 % off), and the branch check's round-off would swamp it.
+pub const PATH_TOLERANCES: BalanceTolerances = BalanceTolerances {
+    residual: 1e-8,
+    load_residual: 1e-6,
+};
+
+/// `tolerances`, at most [`PATH_TOLERANCES`].
+pub(super) fn on_the_path(tolerances: BalanceTolerances) -> BalanceTolerances {
+    BalanceTolerances {
+        residual: tolerances.residual.min(PATH_TOLERANCES.residual),
+        load_residual: tolerances.load_residual.min(PATH_TOLERANCES.load_residual),
+    }
+}
+
 /// Bisections of the line search at most.
 const LINE_SEARCH_BISECTIONS: usize = 40;
 
@@ -130,7 +147,7 @@ pub struct LargeState {
 
 impl<'s, R: TangentStep> Large<'s, R> {
     /// Newton's method on `model` (which must be `large`) with directions from `step`,
-    /// stopping at `tolerances` or after `max_iterations` steps.
+    /// stopping at `tolerances` (at most [`PATH_TOLERANCES`]) or after `max_iterations` steps.
     pub fn with_step(
         model: &'s Model,
         step: R,
@@ -140,7 +157,7 @@ impl<'s, R: TangentStep> Large<'s, R> {
         Large {
             model,
             structure: &model.structure,
-            tolerances,
+            tolerances: on_the_path(tolerances),
             max_iterations,
             step,
         }

@@ -142,6 +142,9 @@ impl Default for LatinSettings {
 
 /// r_F(U)'s tolerance over r(U)'s ([`LatinSettings::balance_tolerances`]).
 pub const LOAD_RESIDUAL_FACTOR: f64 = 100.0;
+/// The loosest r_F(U) tolerance, whatever r(U)'s: at U = 0 r_F is 1, so a tolerance of 1 or
+/// more would pass it (a `residual_tolerance` of 0.02 did, under `large`).
+pub const LOAD_RESIDUAL_LOOSEST: f64 = 1e-2;
 
 /// How far a uniform `solver.l` may be from the links' stiffness: beyond, the stages' round-off
 /// (which scales with `1/√l` and `√l`) swamps the indicator (issue 13, D1: `l = 1e-300`
@@ -187,7 +190,7 @@ impl LatinSettings {
     /// The equilibrium stop every solver shares ([`crate::solvers::Balance`]): r(U) within
     /// [`LatinSettings::residual_tolerance`], and r_F(U), the unbalance relative to the load's
     /// own forces, within [`LOAD_RESIDUAL_FACTOR`] times it (1e-6 at the defaults, η's
-    /// tolerance). r_F is the looser because a LATIN iterate's accuracy is set by its stages'
+    /// tolerance), and never looser than [`LOAD_RESIDUAL_LOOSEST`]. r_F is the looser because a LATIN iterate's accuracy is set by its stages'
     /// round-off on prestress-sized terms: on the paper case the converged rows have r_F from
     /// 3e-14 to 1.2e-8 (mono-latin) and 1.5e-10 to 9.8e-9 (micro-macro, α 0.01 to 1); held to
     /// r(U)'s 1e-8, micro-macro (which settles at r(U) ≈ 1e-10) could not converge below
@@ -196,7 +199,7 @@ impl LatinSettings {
         let residual = self.residual_tolerance();
         crate::solvers::BalanceTolerances {
             residual,
-            load_residual: LOAD_RESIDUAL_FACTOR * residual,
+            load_residual: (LOAD_RESIDUAL_FACTOR * residual).min(LOAD_RESIDUAL_LOOSEST),
         }
     }
 

@@ -225,24 +225,35 @@ impl<S: PathSolver> LoadPath<S> {
     /// smallest increment only spent time (the tower of N-D3 under mono-latin: 3 710 steps).
     fn halve(&mut self, state: &mut PathState<S::State>) {
         self.work.halvings += 1;
-        let own_failure = self.solver.failed_on_its_own();
+        // An equilibrium found on another branch is the structure's answer, whoever found it.
+        let own_failure = self.solver.failed_on_its_own() && !state.jumped;
         // The retry assembles its tangent: the failed attempt's factor, nearly singular near a
         // limit point, would steer every retry off the path as a chord.
         self.solver.forget_tangent();
         state.failed = Some(state.increment);
+        let smallest = self.smallest_increment(state);
+        // A path shorter than the smallest increment cannot be halved to locate anything: its
+        // failure is no limit point (a grid without prestress at α = 1e-9 under `large`, or
+        // a settlement with no load to follow).
+        let unresolved = smallest >= 1.0 && state.done == 0.0;
         let smallest = match own_failure {
-            true => self.smallest_increment(state).max(OWN_FAILURE_INCREMENT),
-            false => self.smallest_increment(state),
+            true => smallest.max(OWN_FAILURE_INCREMENT),
+            false => smallest,
         };
         if state.increment <= smallest || state.increments >= MAX_INCREMENTS {
             // The halvings found no equilibrium: a limit point of the structure, unless the
-            // solver's own steps failed on the way (it cannot tell), or the path ran out of
-            // increments before locating anything.
-            state.stop = Some(match (own_failure, state.increments >= MAX_INCREMENTS) {
-                (_, true) => Status::MaxIterations,
-                (true, false) => Status::Stalled,
-                (false, false) => Status::LimitPoint,
-            });
+            // solver's own steps failed on the way (it cannot tell), the path is too short to
+            // halve, or it ran out of increments before locating anything.
+            state.stop = Some(
+                match (
+                    own_failure || unresolved,
+                    state.increments >= MAX_INCREMENTS,
+                ) {
+                    (_, true) => Status::MaxIterations,
+                    (true, false) => Status::Stalled,
+                    (false, false) => Status::LimitPoint,
+                },
+            );
             // The answer is the last equilibrium; its stopping value is measured at the
             // solve's load, the α of its row, not at the load where it is an equilibrium.
             let beyond = self.fraction_of(state, state.done + state.increment);
