@@ -15,7 +15,6 @@ use cli::failure::{exit_code_of, message_of, Refusal};
 use cli::progress::{report_bench, Reporter};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use tensolve::app::auto::against_large::large_answer;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
 use tensolve::app::compare::{compare, CompareSettings};
@@ -346,17 +345,8 @@ fn run_command(
         ));
     }
     reporter.finish();
-    if let (count, Some(worst)) = &reporter.geometric {
-        // What the model is off by at its worst row, measured: that α solved with `large`
-        // (structures up to MEASURED_UP_TO_DOFS free dofs; the case is read again, the run
-        // having released its own).
-        let measured = (ranks.size() == 1)
-            .then(|| load_case(ranks, &path, set).ok())
-            .flatten()
-            .and_then(|case| large_answer(&case, worst.alpha));
-        reporter.line(&cli::model_warning::off_by_warning(
-            *count, worst, tolerance, measured,
-        ));
+    if let Some(off) = &reporter.model_off_by {
+        reporter.line(&cli::model_warning::off_by_warning(off, tolerance));
     }
     if !matches!(
         result,

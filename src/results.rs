@@ -2,19 +2,18 @@
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
 pub mod checks;
-mod geometric_term;
-pub mod modes;
-pub mod uniqueness;
 
-pub use geometric_term::{
-    distance_to_large, LargeDistance, DISTANCE_FAR, DISTANCE_ROUND_OFF, DISTANCE_SETTLED,
-    DISTANCE_STEPS,
+// The analyses of an answer, where their users have found them.
+pub use crate::analysis::{
+    distance_to_large, largest_motion, largest_node_norm, modes, smallest_assembled_eigenvalue,
+    smallest_tangent_eigenvalue, uniqueness, LargeDistance, DISTANCE_FAR, DISTANCE_ROUND_OFF,
+    DISTANCE_SETTLED, DISTANCE_STEPS, EIGENVALUE_FULL_DOFS, TANGENT_ZERO_RELATIVE,
 };
 
-use crate::linalg::{norm, smallest_eigenvalues};
+use crate::linalg::norm;
 use crate::model::material::{tension, trial_tension};
 use crate::model::{geometric_force_on, relative_unbalance, GeometricModel, MemberStates, Model};
-use crate::solvers::{Equilibrium, Solution, TautStiffness};
+use crate::solvers::{Equilibrium, Solution};
 use crate::structure::{GridRole, Structure};
 
 /// Every number of a solution is finite (displacements, tensions, stopping measure).
@@ -66,20 +65,6 @@ pub fn constitutive_residual(s: &Structure, eq: &Equilibrium) -> f64 {
 /// Largest nodal displacement magnitude, m.
 pub fn max_deflection(s: &Structure, eq: &Equilibrium) -> f64 {
     largest_motion(s, &eq.displacements)
-}
-
-/// Largest nodal magnitude of the free-dof motion `u`, every component (held ones at their
-/// prescribed value), m.
-pub fn largest_motion(s: &Structure, u: &[f64]) -> f64 {
-    largest_node_norm(&s.full_displacements(u))
-}
-
-/// Largest node-wise magnitude of `full`, three components per node.
-pub fn largest_node_norm(full: &[f64]) -> f64 {
-    full.chunks(3)
-        // hypot: no overflow to inf for a large but finite displacement.
-        .map(|u| u[0].hypot(u[1]).hypot(u[2]))
-        .fold(0.0, f64::max)
 }
 
 /// Whether `eq` is beyond the model: a model on the initial geometry (`linear`, `prestress`)
@@ -336,63 +321,6 @@ pub fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
         norm(&d)
     }
 }
-
-/// Free dofs up to which [`smallest_tangent_eigenvalue`] converges a block of 4 Ritz values to
-/// 1e-10; beyond, one to 1e-4 in at most 10 inverse iterations.
-pub const EIGENVALUE_FULL_DOFS: usize = 20_000;
-
-/// Smallest eigenvalue (N/m) of the tangent stiffness at an equilibrium, under the model
-/// (docs/method.md §3, §8): `Bᵀ k B` over the members that carry load there (bars,
-/// bilateral cables, taut unilateral cables), plus with `prestress` the geometric stiffness of
-/// the answer's tensions `K_G(τ)` (slack cables none), or the Hessian of the exact-length energy on the current geometry (`large`).
-/// 0 when the taut members form a mechanism; negative at an unstable equilibrium (below
-/// `−mean diagonal` it is reported as `−mean diagonal`).
-pub fn smallest_tangent_eigenvalue(model: &Model, eq: &Equilibrium, taut: &TautStiffness) -> f64 {
-    let pattern = &taut.pattern;
-    let mut values = vec![0.0; pattern.nnz()];
-    // With `prestress`, the geometric stiffness of the answer's own tensions, K_G(τ): a slack
-    // cable carries no force, so no geometric stiffness, and a loaded member's changes with
-    // its force (docs/method.md §8). K_G(t0) judged a guyed mast whose leeward guys slackened
-    // unstable (−340 N/m) where its one-guy mechanism is neutral (0 N/m with `large`; issue
-    // 42, D6).
-    model.assemble_answer_tangent(
-        &eq.displacements,
-        &eq.tensions,
-        |i| !eq.slack[i],
-        pattern,
-        &mut values,
-    );
-    smallest_assembled_eigenvalue(taut, &values)
-}
-
-/// The smallest eigenvalue (N/m) of a tangent assembled on K's pattern (`values`), as
-/// [`smallest_tangent_eigenvalue`] reports it: 0 within [`TANGENT_ZERO_RELATIVE`] of the mean
-/// diagonal, at least `−mean diagonal`.
-pub fn smallest_assembled_eigenvalue(taut: &TautStiffness, values: &[f64]) -> f64 {
-    let pattern = &taut.pattern;
-    let mut factor = taut.factor.share_symbolic();
-    // Up to 20 000 free dofs, a block of 4 to 1e-10; beyond, where a solve costs 0.1–0.3 s,
-    // a single vector to 1e-4 in at most 10 solves (the sign and two digits).
-    let (block, iterations, tolerance) = if pattern.n <= EIGENVALUE_FULL_DOFS {
-        (4, 60, 1e-10)
-    } else {
-        (1, 10, 1e-4)
-    };
-    let eig = smallest_eigenvalues(pattern, values, &mut factor, block, iterations, tolerance);
-    let scale = pattern.mean_diagonal(values);
-    // Below TANGENT_ZERO_RELATIVE of the mean diagonal an eigenvalue is zero: the Ritz values
-    // carry round-off of about 1e-10 of the scale, which must not decide stable or unstable.
-    let zero = TANGENT_ZERO_RELATIVE * scale;
-    match eig.values.first() {
-        Some(&v) if v.is_finite() && v.abs() > zero => v.max(-scale),
-        Some(&v) if v == f64::NEG_INFINITY => -scale,
-        _ => 0.0,
-    }
-}
-
-/// The smallest tangent eigenvalue is reported as exactly 0 within this fraction of the mean
-/// diagonal (a singular tangent, neither stable nor unstable by round-off).
-pub const TANGENT_ZERO_RELATIVE: f64 = 1e-8;
 
 #[cfg(test)]
 mod tests {

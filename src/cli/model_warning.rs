@@ -2,16 +2,13 @@
 //! `model.tolerance`: the distance measured (`geometric_term`) and, where `large` was solved at
 //! the worst row's α, what it gives there.
 
-use tensolve::app::auto::against_large::LargeAnswer;
+use tensolve::app::auto::against_large::ModelOffBy;
 
-/// The warning of a run whose rows leave out more than `tolerance` of the geometry (`count` of
-/// them, `worst` the largest), with what `large` gives at the worst row's α when `measured`.
-pub fn off_by_warning(
-    count: usize,
-    worst: &tensolve::output::SummaryRow,
-    tolerance: f64,
-    measured: Option<LargeAnswer>,
-) -> String {
+/// The warning of a run whose rows leave out more than `tolerance` of the geometry (`off.count`
+/// of them, `off.worst` the largest), with what `large` gives at the worst row's α when
+/// `off.measured`.
+pub fn off_by_warning(off: &ModelOffBy, tolerance: f64) -> String {
+    let (count, worst, measured) = (off.count, &off.worst, off.measured);
     let at = format!(
         "{}, alpha {}",
         worst.solver,

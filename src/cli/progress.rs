@@ -5,6 +5,7 @@
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
+use tensolve::app::auto::against_large::ModelOffBy;
 use tensolve::app::bench::Progress;
 use tensolve::app::sweep::RunEvent;
 use tensolve::output::{alpha_label, SummaryRow};
@@ -35,9 +36,9 @@ pub struct Reporter {
     shown: Instant,
     /// The last e reported in the solve in progress (LATIN against its reference).
     last_error: Option<f64>,
-    /// Rows whose left-out geometric term is above `model.tolerance`: how many, and the row
-    /// of the largest.
-    pub geometric: (usize, Option<SummaryRow>),
+    /// What the run's rows left out of the geometry, when the run said
+    /// ([`RunEvent::ModelOffBy`]).
+    pub model_off_by: Option<ModelOffBy>,
     /// The links this process kept of the structure's, when set-up said
     /// ([`RunEvent::LinksKept`]).
     pub links_kept: Option<(usize, usize)>,
@@ -66,7 +67,7 @@ impl Reporter {
             stage: None,
             shown: Instant::now(),
             last_error: None,
-            geometric: (0, None),
+            model_off_by: None,
             links_kept: None,
         }
     }
@@ -149,17 +150,8 @@ impl Reporter {
                 }
             }
             RunEvent::LinksKept { kept, whole } => self.links_kept = Some((kept, whole)),
+            RunEvent::ModelOffBy(off) => self.model_off_by = Some(off.clone()),
             RunEvent::Row(row) => {
-                // Rows refused (beyond the model, no equilibrium, unstable, not converged) have no
-                // answer whose geometric term means anything; `auto` measured its own choice.
-                if row.needs_large() && row.converged && row.model_pinned {
-                    let value = row.geometric_term().unwrap_or(f64::INFINITY);
-                    self.geometric.0 += 1;
-                    let largest = |r: &SummaryRow| r.geometric_term().unwrap_or(f64::INFINITY);
-                    if self.geometric.1.as_ref().is_none_or(|r| value > largest(r)) {
-                        self.geometric.1 = Some(row.clone());
-                    }
-                }
                 let mut text = format_row(row);
                 if let Some(e) = self.last_error.take() {
                     // Beside the row's numbers, before the warnings under it.

@@ -7,6 +7,7 @@
 mod buckets;
 mod cholesky;
 mod dense;
+mod estimate;
 mod low_rank;
 mod modal;
 mod nested_dissection;
@@ -22,6 +23,9 @@ mod split_cholesky;
 pub use buckets::buckets;
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
 pub use dense::{gemv, gemv_transposed};
+pub use estimate::{
+    factor_bytes, AMD_FILL_RATIO, BYTES_PER_FACTOR_ENTRY, FACTOR_ENTRIES_PER_DOF_LOG2,
+};
 pub use low_rank::LowRankUpdate;
 pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes, DENSE_MODES_UP_TO};
 pub use nested_dissection::nested_dissection;

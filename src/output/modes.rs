@@ -1,17 +1,15 @@
 //! `modes/{solver}_alpha{α}.csv` and `modes/{solver}_alpha{α}_shapes.csv`: the lowest natural
-//! modes at every answer (`output.modes`, issue 45 item 1), computed by
-//! [`crate::results::modes::natural_modes`] and written atomically into the staging directory,
-//! like the other per-solve files.
+//! modes at every answer (`output.modes`, issue 45 item 1), as the sweep's
+//! [`crate::analysis::modes::ModalAnalysis`] computed them, written atomically into the
+//! staging directory, like the other per-solve files.
 
 use super::modes_vtk::{modal_positions, modes_vtu_path, write_modes_vtu};
 use super::plots::write_modes_svg;
 use super::sinks::{Sink, SolveEnd, SolveKey, WriteError};
 use super::{result_path, write_atomic};
+use crate::analysis::modes::NaturalMode;
 use crate::labels::alpha_label;
-use crate::linalg::{SparseCholesky, StiffnessPattern};
-use crate::model::{MassKind, Model};
-use crate::results::modes::{natural_modes, NaturalMode};
-use crate::solvers::{Equilibrium, TautStiffness};
+use crate::model::Model;
 use crate::structure::CLAMPED;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -22,77 +20,54 @@ pub fn shapes_path(dir: &Path, solver: &str, alpha: f64) -> PathBuf {
         .join(format!("{solver}_alpha{}_shapes.csv", alpha_label(alpha)))
 }
 
-/// The natural modes of every solve with a finite answer (converged or not, as the other
-/// per-solve files), `count` of them under `mass`.
+/// The files of the natural modes of every solve with an answer.
 pub struct ModesSink {
     root: PathBuf,
     dir: PathBuf,
-    count: usize,
-    mass: MassKind,
     /// Whether the modes go to a VTU file (`output.vtk`) and a figure (`output.plots`) too.
     vtk: bool,
     plots: bool,
-    /// The stiffness's pattern and its symbolic analysis, made at the first answer.
-    analysed: Option<(StiffnessPattern, SparseCholesky)>,
 }
 
 impl ModesSink {
-    /// `count` modes of each answer under its model and `mass`, written under `dir/modes`
-    /// (the staging directory), with a VTU file of them when `vtk`; errors name the files
-    /// under `root`.
-    pub fn new(
-        root: &Path,
-        dir: &Path,
-        (count, mass): (usize, MassKind),
-        (vtk, plots): (bool, bool),
-    ) -> Self {
+    /// The modes' files under `dir/modes` (the staging directory), with a VTU file of them when
+    /// `vtk` and a figure when `plots`; errors name the files under `root`.
+    pub fn new(root: &Path, dir: &Path, (vtk, plots): (bool, bool)) -> Self {
         ModesSink {
             root: root.to_path_buf(),
             dir: dir.to_path_buf(),
-            count,
-            mass,
             vtk,
             plots,
-            analysed: None,
         }
-    }
-
-    /// The modes at `eq`: none when `K_T − σM` factorizes for no shift tried.
-    fn modes(&mut self, model: &Model, eq: &Equilibrium) -> Vec<NaturalMode> {
-        let structure = &model.structure;
-        let (pattern, analysed) = self
-            .analysed
-            .get_or_insert_with(|| TautStiffness::analyse(structure));
-        let carrying: Vec<bool> = eq.slack.iter().map(|&s| !s).collect();
-        let at = (&eq.displacements[..], &eq.tensions[..], &carrying[..]);
-        natural_modes(model, at, pattern, analysed, self.count, self.mass).unwrap_or_default()
     }
 }
 
 impl Sink for ModesSink {
     fn end(&mut self, key: &SolveKey, end: SolveEnd) -> Result<(), WriteError> {
         let SolveEnd::Solved {
-            solution, model, ..
+            solution,
+            model,
+            modes,
+            ..
         } = end
         else {
             return Ok(());
         };
-        let modes = self.modes(model, &solution.equilibrium);
         let solver = key.method.name();
         write_atomic(&result_path(&self.dir, "modes", solver, key.alpha), |w| {
-            write_frequencies(w, &modes)
+            write_frequencies(w, modes)
         })
         .map_err(WriteError::at(result_path(
             &self.root, "modes", solver, key.alpha,
         )))?;
         write_atomic(&shapes_path(&self.dir, solver, key.alpha), |w| {
-            write_shapes(w, model, &modes)
+            write_shapes(w, model, modes)
         })
         .map_err(WriteError::at(shapes_path(&self.root, solver, key.alpha)))?;
         let u = &solution.equilibrium.displacements;
         if self.vtk {
             let path = modes_vtu_path(&self.dir, solver, key.alpha);
-            write_modes_vtu(&path, key.alpha, model, u, &modes).map_err(WriteError::at(
+            write_modes_vtu(&path, key.alpha, model, u, modes).map_err(WriteError::at(
                 modes_vtu_path(&self.root, solver, key.alpha),
             ))?;
         }
@@ -100,7 +75,7 @@ impl Sink for ModesSink {
             let figure =
                 |dir: &Path| result_path(dir, "modes", solver, key.alpha).with_extension("svg");
             let at = modal_positions(model, u);
-            write_modes_svg(&figure(&self.dir), model, &at, &modes)
+            write_modes_svg(&figure(&self.dir), model, &at, modes)
                 .map_err(WriteError::at(figure(&self.root)))?;
         }
         Ok(())

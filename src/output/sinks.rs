@@ -86,6 +86,8 @@ pub enum SolveEnd<'a> {
         row: &'a SummaryRow,
         /// The model it was solved with (under `model.geometry = "auto"`, the row's).
         model: &'a Model,
+        /// Its natural modes (`output.modes`; empty when not asked for).
+        modes: &'a [crate::analysis::modes::NaturalMode],
     },
     /// The answer has a non-finite value: no file of it is written.
     NonFinite,
@@ -394,6 +396,7 @@ impl Sink for StabilitySink<'_> {
             solution,
             row,
             model,
+            ..
         } = end
         else {
             return Ok(());

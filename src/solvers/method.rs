@@ -61,7 +61,7 @@ impl Method {
     /// units of the structure's stiffness factor (the memory estimate): newton its Hessian's;
     /// pcg-lcp none (it solves with K's); mono-latin its whole-structure operators (measured
     /// 3.0–3.4 units on 64 × 64 to 256 × 256, rounded up to 4). micro-macro's memory is
-    /// counted from its substructures ([`crate::app::memory::micro_macro_bytes`]); its 2 units
+    /// counted from its substructures ([`Method::own_bytes`]); its 2 units
     /// (1.1–1.6 measured with 4 × 4 substructures on 64 × 64 to 256 × 256) only rank it among
     /// the solvers `bench` sets up one at a time.
     pub fn factor_units(self) -> f64 {
@@ -70,6 +70,34 @@ impl Method {
             Method::PcgLcp => 0.0,
             Method::MonoLatin => 4.0,
             Method::MicroMacro => 2.0,
+        }
+    }
+
+    /// The whole-structure factors the solver holds on a structure of `dofs` dofs, in units of
+    /// its stiffness factor: [`Method::factor_units`], and for newton from
+    /// [`super::newton::SPLIT_MIN_DOFS`] dofs its Hessian in two halves beside their factors
+    /// (the halves' patterns, slots and values and the separator's dense blocks: 256 × 256
+    /// peaked at 3.56 GB on two threads against 2.89 on one, 0.54 of a factor; counted on any
+    /// number of threads).
+    pub fn factor_units_at(self, dofs: usize) -> f64 {
+        let split = match self == Method::Newton && dofs >= super::newton::SPLIT_MIN_DOFS {
+            true => NEWTON_SPLIT_UNITS,
+            false => 0.0,
+        };
+        self.factor_units() + split
+    }
+
+    /// The bytes the solver holds beside its whole-structure factors on a structure of `size`
+    /// with LATIN settings `latin`: micro-macro its substructures' operators, Anderson's history
+    /// and its macro problem ([`super::latin::memory_bytes`]); the others none.
+    pub fn own_bytes(
+        self,
+        size: crate::structure::StructureSize,
+        latin: &super::latin::LatinSettings,
+    ) -> u64 {
+        match self {
+            Method::MicroMacro => super::latin::memory_bytes(size, latin),
+            _ => 0,
         }
     }
 
@@ -114,3 +142,7 @@ impl Settings {
         }
     }
 }
+
+/// What factoring newton's Hessian in two halves adds, in units of K's factor
+/// ([`Method::factor_units_at`]).
+pub const NEWTON_SPLIT_UNITS: f64 = 0.6;

@@ -55,7 +55,7 @@ pub const STOCKIEST: f64 = 1.0 / 3.0;
 
 impl Geometry {
     /// The member whose section is widest against its length, when its equivalent diameter
-    /// `√(4S/π)` reaches [`STOCKIEST`] of its length: its id, section (m²), diameter and length
+    /// `√(4S/π)` reaches `STOCKIEST` (a third) of its length: its id, section (m²), diameter and length
     /// (m). No member of a tension structure is that stocky: such a section is a unit slip (mm²
     /// or cm² for m²: issue 57, N-D7, sections of 523 and 100 passed `check` silently).
     pub fn thickest_member(&self) -> Option<(u64, f64, f64, f64)> {

@@ -65,7 +65,7 @@ const NULL_RELATIVE: f64 = 1e-10;
 
 /// An orthonormal basis of the mechanisms, `B M = 0` on the free dofs (dense: for at most
 /// [`DENSE_LIMIT`] free dofs): the eigenvectors of `BᵀB` (unit member stiffness) whose
-/// eigenvalues are at most [`NULL_RELATIVE`] of the largest.
+/// eigenvalues are at most `NULL_RELATIVE` (1e-10) of the largest.
 pub fn mechanism_basis(structure: &Structure) -> Vec<Vec<f64>> {
     let n = structure.n_free;
     let mut btb = nalgebra::DMatrix::<f64>::zeros(n, n);

@@ -16,101 +16,13 @@ pub use fit::{ensure_fits, ensure_fits_in};
 use super::setup::{checks_by_substructures, AnswerChecks};
 use crate::case::Case;
 use crate::host::bytes_text;
+use crate::linalg::factor_bytes;
 use crate::solvers::latin::LatinSettings;
-use crate::solvers::newton::SPLIT_MIN_DOFS;
 use crate::solvers::Method;
 use crate::structure::StructureSize;
 
-/// Entries of a sparse Cholesky factor per dof and per `log2(dofs)` under nested dissection:
-/// 124 M entries on 256 × 256 modules (592 899 dofs, log2 = 19.2) is 10.9.
-pub const FACTOR_ENTRIES_PER_DOF_LOG2: f64 = 11.0;
-
-/// Bytes per factor entry: the value (8) and the supernodal structure's indices and workspace
-/// (peak RSS of `newton` minus that of `pcg-lcp`, one factor apart, is 9.5 bytes per entry on
-/// 64 × 64 to 256 × 256 grids; rounded up).
-pub const BYTES_PER_FACTOR_ENTRY: f64 = 10.0;
-
-/// What factoring newton's Hessian in two halves adds, in units of K's factor.
-pub const NEWTON_SPLIT_UNITS: f64 = 0.6;
-
-/// Fill of the minimum-degree ordering against nested dissection (194 M against 124 M
-/// entries on 256 × 256 modules), for `check`'s rank factorization. The solvers' factors use
-/// minimum degree only below 512 free nodes (it was 10 000 when the formula was calibrated,
-/// and it still bounded what was measured there, up to 56 × 56 modules), so they are all
-/// counted as nested dissection.
-pub const AMD_FILL_RATIO: f64 = 1.6;
-
-/// Bytes of one sparse Cholesky factor of the stiffness of a structure of `size`:
-/// `11 · d · log2(d)` entries of 10 bytes for `d` dofs (nested dissection), [`AMD_FILL_RATIO`]
-/// times that with `amd`.
-pub fn factor_bytes(size: StructureSize, amd: bool) -> u64 {
-    let d = size.dofs().max(2) as f64;
-    let entries = FACTOR_ENTRIES_PER_DOF_LOG2 * d * d.log2();
-    let fill = if amd { AMD_FILL_RATIO } else { 1.0 };
-    (fill * entries * BYTES_PER_FACTOR_ENTRY) as u64
-}
-
-/// Entries of a substructure factor per dof: `28 (log2 d_E − 8.3)`, at least `4 log2 d_E`, for
-/// `d_E` dofs (AMD on E's node graph). Fitted to the substructure factors of 256 × 256 modules
-/// on 2 × 2 to 64 × 64 substructures (148 224 to 180 dofs: 238, 183, 128, 82, 36 and 22 entries
-/// per dof, each below the formula).
-fn substructure_entries_per_dof(d_e: f64) -> f64 {
-    let l = d_e.max(2.0).log2();
-    f64::max(28.0 * (l - 8.3), 4.0 * l)
-}
-
-/// Macro dofs per substructure with a macro basis of degree p: `6p + 18`, two strong interfaces
-/// of `3p + 6` fields and the crosspoints' weak ones (22 on 256 × 256 modules with 256 and
-/// 1 024 substructures at p = 1; rounded up).
-fn macro_dofs_per_substructure(degree: f64) -> f64 {
-    6.0 * degree + 18.0
-}
-
-/// Columns of all the Z_E together (each substructure's macro dofs) on an `sx × sy` partition
-/// of a grid with a macro basis of degree p: two sides of each strong interface between
-/// neighbours along x or y, of `3p + 6` fields, and two of each one-node interface between
-/// diagonal neighbours, of 3 (44 per substructure on 256 × 256 modules with 256 substructures
-/// at p = 1).
-fn z_columns([sx, sy]: [usize; 2], degree: f64) -> f64 {
-    let strong = (sx * sy.saturating_sub(1) + sy * sx.saturating_sub(1)) as f64;
-    let crosspoints = (2 * sx.saturating_sub(1) * sy.saturating_sub(1)) as f64;
-    2.0 * strong * (3.0 * degree + 6.0) + 2.0 * crosspoints * 3.0
-}
-
-/// Bytes of micro-macro's own memory beside the structure on a structure of `size` with
-/// `settings`: the substructure factors (`substructure_entries_per_dof`, 10 bytes an entry
-/// as K's), Z_E unless `keep_z` is false, Anderson's history (two vectors of about 1.25 values
-/// per link per depth) and the macro factor (three times a stiffness factor of its dofs: its
-/// blocks are denser). Measured against peak RSS of whole runs (2026-11-27, reference none,
-/// `geometric_term = false`): 256 × 256 modules on 256 substructures, anderson 10, 1.31 GB
-/// (`keep_z = false`, estimate 1.45 GB) and 1.53 GB (1.68 GB); 512 × 512 on 1 024, anderson
-/// 10, `keep_z = false`, 5.08 GB (5.8 GB).
-pub fn micro_macro_bytes(size: StructureSize, settings: &LatinSettings) -> u64 {
-    let d = size.dofs().max(2) as f64;
-    let substructures = (settings.subdomains[0] * settings.subdomains[1]).max(1) as f64;
-    let d_e = d / substructures;
-    let factors = BYTES_PER_FACTOR_ENTRY * substructure_entries_per_dof(d_e) * d;
-    let degree = settings.macro_degree_on(size.links, substructures as usize) as f64;
-    // Z_E: E's dofs (d / substructures) × its macro dofs, 8 bytes each; twice, since a status
-    // rebuild builds the new Z_E beside the old one (kept until the rebuild succeeds).
-    let z = match settings.keep_z {
-        true => 2.0 * 8.0 * d / substructures * z_columns(settings.subdomains, degree),
-        false => 0.0,
-    };
-    let anderson = 2.0 * 1.25 * 8.0 * settings.anderson as f64 * size.links as f64;
-    let macro_size = StructureSize {
-        nodes: (macro_dofs_per_substructure(degree) * substructures / 3.0).ceil() as usize,
-        links: 0,
-    };
-    let macro_factor = match substructures > 1.0 {
-        true => 3 * factor_bytes(macro_size, false),
-        false => 0,
-    };
-    (factors + z + anderson) as u64 + macro_factor
-}
-
 /// The whole-structure factors of `methods`, in units of K's: every solver's but
-/// micro-macro's, which [`micro_macro_bytes`] counts.
+/// micro-macro's, which it counts itself ([`Method::own_bytes`]).
 fn whole_structure_units<'m>(methods: impl Iterator<Item = &'m Method>) -> f64 {
     methods
         .filter(|&&m| m != Method::MicroMacro)
@@ -163,23 +75,22 @@ impl MemoryEstimate {
     /// The structure of `size` under `work`: the structure, the taut stiffness's factor, and
     /// every solver's own factors.
     pub fn new(size: StructureSize, work: &Workload) -> MemoryEstimate {
-        let factor = factor_bytes(size, false);
+        let factor = factor_bytes(size.dofs(), false);
         let mut parts = vec![("structure".to_string(), size.bytes())];
         let latin = work.methods.iter().any(|m| m.is_latin());
-        // The solvers' own memory: whole-structure factors in units of K's, and micro-macro's
-        // substructure operators in bytes.
-        let mut solvers = whole_structure_units(work.methods.iter());
-        // newton's Hessian in two halves (from `SPLIT_MIN_DOFS` free dofs, on two threads or
-        // more; counted on any number): the halves' patterns, slots and values beside their
-        // factors, and the separator's dense blocks. 256 × 256 peaked at 3.56 GB on two
-        // threads against 2.89 on one: 0.54 of a factor.
-        if work.methods.contains(&Method::Newton) && size.dofs() >= SPLIT_MIN_DOFS {
-            solvers += NEWTON_SPLIT_UNITS;
-        }
-        let micro = match work.methods.contains(&Method::MicroMacro) {
-            true => micro_macro_bytes(size, &work.micro_macro),
-            false => 0,
-        };
+        // The solvers' own memory, as each estimates it: whole-structure factors in units of
+        // K's (micro-macro's counted in bytes, from its substructures).
+        let solvers = work
+            .methods
+            .iter()
+            .filter(|&&m| m != Method::MicroMacro)
+            .map(|m| m.factor_units_at(size.dofs()))
+            .sum::<f64>();
+        let micro = work
+            .methods
+            .iter()
+            .map(|m| m.own_bytes(size, &work.micro_macro))
+            .sum::<u64>();
         // K with every cable taut (the mechanism check) is factorized unless the check is made
         // by substructures; released, it is gone before the solvers' factors are built.
         let taut = !work.taut_by_substructures;
@@ -232,7 +143,7 @@ impl MemoryEstimate {
         let units = units + micro_parts as f64 / factor as f64;
         if work.rank_factorization {
             // Freed before the solvers' set-up: counted when larger than what follows it.
-            let rank = factor_bytes(size, true);
+            let rank = factor_bytes(size.dofs(), true);
             let later = (units * factor as f64) as u64;
             if rank > later {
                 parts.push((

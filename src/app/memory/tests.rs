@@ -64,7 +64,7 @@ fn a_released_taut_factor_is_not_counted_beside_the_solvers() {
         MemoryEstimate::new(size, &kept).total(),
         MemoryEstimate::new(size, &released).total(),
     );
-    let factor = factor_bytes(size, false);
+    let factor = crate::linalg::factor_bytes(size.dofs(), false);
     assert!(
         kept.abs_diff(released + factor) < 4,
         "{kept} {released} {factor}"
@@ -142,15 +142,15 @@ fn micro_macro_is_counted_by_its_substructures() {
         keep_z: false,
         ..LatinSettings::default()
     };
-    let lean = micro_macro_bytes(size, &settings);
-    let with_z = micro_macro_bytes(
+    let lean = crate::solvers::latin::memory_bytes(size, &settings);
+    let with_z = crate::solvers::latin::memory_bytes(
         size,
         &LatinSettings {
             keep_z: true,
             ..settings
         },
     );
-    let deeper = micro_macro_bytes(
+    let deeper = crate::solvers::latin::memory_bytes(
         size,
         &LatinSettings {
             anderson: 10,
@@ -181,7 +181,10 @@ fn micro_macro_is_counted_by_its_substructures() {
         ..work
     };
     let total = MemoryEstimate::new(size, &whole).total();
-    assert_eq!(total, size.bytes() + factor_bytes(size, false));
+    assert_eq!(
+        total,
+        size.bytes() + crate::linalg::factor_bytes(size.dofs(), false)
+    );
 }
 
 /// More modules, more solvers or more outputs never need less memory.

@@ -124,12 +124,7 @@ pub(super) fn sinks<'s>(
     sinks.add(out.vtk, PerSolveSink::vtk(root, dir));
     sinks.add(
         out.modes > 0,
-        ModesSink::new(
-            root,
-            dir,
-            (out.modes, case.modal_mass),
-            (out.vtk, out.plots),
-        ),
+        ModesSink::new(root, dir, (out.vtk, out.plots)),
     );
     if let Some(first) = solvers.first().filter(|_| out.plots) {
         let settings = FigureSettings {

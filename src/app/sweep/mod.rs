@@ -17,10 +17,12 @@ use models::Models;
 use path::PathStart;
 pub use sharing::Sharing;
 
+use super::auto::against_large::ModelOffBy;
 use super::auto::{prepare_start, RowModel};
 use super::memory::{self, MemoryEstimate, Workload};
 use super::reference::ReferenceSource;
 use super::setup::{set_up_on, AnswerChecks, Prepared, SetUpSolver};
+use crate::analysis::modes::ModalAnalysis;
 use crate::case::Case;
 use crate::decomposition::{Exchange, OneProcess};
 use crate::output::{alpha_label, Sink, Sinks, SolveEnd, SolveKey, SummaryRow, WriteError};
@@ -77,6 +79,10 @@ pub enum RunEvent<'a> {
     },
     /// A solve ended and its summary row was written.
     Row(&'a SummaryRow),
+    /// The run's rows on a model of the initial geometry left out more than `model.tolerance`
+    /// of the geometry: how many, the worst, and `large` measured at its α (sent once, after
+    /// the last row).
+    ModelOffBy(&'a ModelOffBy),
     /// Set-up kept `kept` of the structure's `whole` links on this process (fewer on an MPI
     /// rank that keeps only its micro-macro substructures' links).
     LinksKept {
@@ -207,6 +213,11 @@ pub fn run_on(
         sweep.solve_alpha(alpha, events)?;
     }
     let (rows, failures) = sweep.close()?;
+    // 10b. What a pinned model on the initial geometry is off by at its worst row, measured
+    //      with `large` there (small structures, one process), the run's solvers released.
+    if let Some(off) = ModelOffBy::of(&rows, &prepared, exchange.size() == 1) {
+        events(RunEvent::ModelOffBy(&off));
+    }
     // 11. Figure 12: the LATIN solvers at the largest α on the grid of each module kind asked.
     let compare = case.output.plots && !case.output.compare_modules.is_empty();
     if let Some(out) = out.as_ref().filter(|_| compare) {
@@ -309,6 +320,8 @@ struct Sweep<'s> {
     paths: Vec<PathStart>,
     /// The checks made of every answer with K's factor.
     checks: AnswerChecks,
+    /// The natural modes of every answer (`output.modes`).
+    modal: Option<ModalAnalysis>,
     rows: Vec<SummaryRow>,
     failures: Failures,
     /// The processes of the run: a solve's files, written by rank 0 alone, are agreed on
@@ -340,6 +353,8 @@ impl<'s> Sweep<'s> {
             reference,
             sinks,
             checks: AnswerChecks::of(models.case),
+            modal: (models.case.output.modes > 0)
+                .then(|| ModalAnalysis::new(models.case.output.modes, models.case.modal_mass)),
             models,
             rows: Vec::new(),
             failures: Failures::default(),
@@ -507,12 +522,17 @@ impl<'s> Sweep<'s> {
         }
         // 9. The files of this solve; with no answer, its row and no file that would look
         //    like one.
+        let modes = match (&mut self.modal, row.status.no_answer()) {
+            (Some(modal), false) => modal.of(&self.prepared.model, &solution.equilibrium),
+            _ => Vec::new(),
+        };
         let end = match row.status.no_answer() {
             true => SolveEnd::NoAnswer { row: &row },
             false => SolveEnd::Solved {
                 solution: &solution,
                 row: &row,
                 model: &self.prepared.model,
+                modes: &modes,
             },
         };
         self.sinks.end(key, end)?;

@@ -96,7 +96,7 @@ impl<'s> LargeNewton<'s> {
 impl<'s> Large<'s, LinearisedStep<'s>> {
     /// pcg-lcp, mono-latin or micro-macro on the `large` model: Newton steps whose directions
     /// the solver finds on the problem linearised at each step (`step`); the solve stops at
-    /// the solver's own tolerances on r(U) and r_F(U) ([`LinearisedStep::tolerances`]), each
+    /// the solver's own tolerances on r(U) and r_F(U) (`LinearisedStep::tolerances`), each
     /// load increment after at most [`crate::solvers::INCREMENT_MAX_STEPS`] steps
     /// (`solver.max_iterations` caps each linearised solve instead).
     pub fn linearised(model: &'s Model, step: LinearisedStep<'s>) -> Self {

@@ -211,17 +211,17 @@ impl Latin<'_> {
         which: &[usize],
         search: &[f64],
     ) -> Option<Enrichment> {
-        let soft = self.soft_modes.as_mut()?;
+        let soft = self.operators.soft_modes.as_mut()?;
         let stale = soft.stale(
-            &self.substructures,
+            &self.operators.substructures,
             which,
-            &self.held,
+            &self.ranks.held(),
             search,
-            self.exchange,
+            self.ranks.exchange(),
         );
-        let touched: Vec<usize> = (0..self.interfaces.len())
+        let touched: Vec<usize> = (0..self.interfaces.list.len())
             .filter(|&k| {
-                self.interfaces[k]
+                self.interfaces.list[k]
                     .topology
                     .sides
                     .iter()
@@ -230,7 +230,7 @@ impl Latin<'_> {
             .collect();
         let mut affected: Vec<usize> = touched
             .iter()
-            .flat_map(|&k| self.interfaces[k].topology.sides)
+            .flat_map(|&k| self.interfaces.list[k].topology.sides)
             .collect();
         affected.sort_unstable();
         affected.dedup();
@@ -248,25 +248,26 @@ impl Latin<'_> {
     /// set up anew; with nothing stale, the macro problem refactorized on the bases as they
     /// stand.
     pub(super) fn enrich(&mut self, plan: Enrichment) -> Result<(), SetupError> {
-        let Some(soft) = self.soft_modes.as_mut() else {
+        let Some(soft) = self.operators.soft_modes.as_mut() else {
             return Ok(());
         };
         if plan.stale.is_empty() {
             // The bases stand: the changed operators were condensed on them.
-            self.macro_problem = self
+            self.operators.macro_problem = self
+                .operators
                 .macro_problem
-                .refactor(&self.substructures, &self.interfaces)
+                .refactor(&self.operators.substructures, &self.interfaces.list)
                 .map_err(|_| SetupError::SingularMacroProblem {
                     advice: String::new(),
                 })?;
             return Ok(());
         }
         soft.update(
-            &self.substructures,
+            &self.operators.substructures,
             &plan.stale,
-            &self.held,
-            self.dm,
-            self.exchange,
+            &self.ranks.held(),
+            self.world.dm,
+            self.ranks.exchange(),
         );
         for &k in &plan.touched {
             let polynomial = &soft.polynomial[k];
@@ -274,21 +275,27 @@ impl Latin<'_> {
                 .column_iter()
                 .map(|c| c.iter().copied().collect())
                 .collect();
-            let mut labels: Vec<String> = self.interfaces[k].fields[..polynomial.ncols()].to_vec();
+            let mut labels: Vec<String> =
+                self.interfaces.list[k].fields[..polynomial.ncols()].to_vec();
             for (side, modes) in soft.modes[k].iter().enumerate() {
                 for (j, mode) in modes.iter().enumerate() {
                     fields.push(mode.clone());
                     labels.push(format!("soft {} of side {side}", j + 1));
                 }
             }
-            self.interfaces[k].set_fields(&fields, &labels);
+            self.interfaces.list[k].set_fields(&fields, &labels);
         }
-        number_macro_dofs(&mut self.interfaces);
+        number_macro_dofs(&mut self.interfaces.list);
         let affected = &plan.affected;
-        let (structure, interfaces, dm, storage) =
-            (self.structure, &self.interfaces, self.dm, self.storage);
+        let (structure, interfaces, dm, storage) = (
+            self.structure,
+            &self.interfaces.list,
+            self.world.dm,
+            self.operators.storage,
+        );
         let partition = &soft.partition;
         let failed = self
+            .operators
             .substructures
             .par_iter_mut()
             .enumerate()
@@ -300,21 +307,26 @@ impl Latin<'_> {
             })
             .collect::<Result<Vec<()>, usize>>()
             .err();
-        if !self.exchange.all(failed.is_none()) {
+        if !self.ranks.all(failed.is_none()) {
             return Err(SetupError::SingularSubstructure {
                 index: failed.unwrap_or(0),
                 prestress: self.model.prestress_stiffness().is_some(),
             });
         }
-        share_homogenised(&mut self.substructures, affected, self.exchange, &self.held);
-        self.macro_problem =
-            MacroProblem::new(&self.substructures, &self.interfaces, dm).map_err(|_| {
-                SetupError::SingularMacroProblem {
+        share_homogenised(
+            &mut self.operators.substructures,
+            affected,
+            self.ranks.exchange(),
+            &self.ranks.held(),
+        );
+        self.operators.macro_problem =
+            MacroProblem::new(&self.operators.substructures, &self.interfaces.list, dm).map_err(
+                |_| SetupError::SingularMacroProblem {
                     advice:
                         "lower `solver.soft_modes` (fewer soft interface modes in the macro basis)"
                             .to_string(),
-                }
-            })?;
+                },
+            )?;
         Ok(())
     }
 }

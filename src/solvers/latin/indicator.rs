@@ -35,22 +35,22 @@ impl Latin<'_> {
     /// measured against the exact law all the same (the links' ŝ recomputed on it), so that
     /// it says how far s is from the solution, not from the inner problem's.
     fn indicator(&self, state: &[SubState]) -> (f64, f64) {
-        let dm = self.dm;
+        let dm = self.world.dm;
         let sign = if self.accelerated() { -1.0 } else { 1.0 };
         let exact = self.newton_steps();
         let links = &self.structure.links;
         // Per held substructure in parallel, gathered from every rank, then added in the
         // substructures' order (the same sums on any number of threads and of ranks).
-        let held = self.held.clone();
-        let parts: Vec<(f64, f64)> = self.substructures[held.clone()]
+        let held = self.ranks.held();
+        let parts: Vec<(f64, f64)> = self.operators.substructures[held.clone()]
             .par_iter()
             .zip(state[held].par_iter())
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .map(|(sub, st)| {
                 let mut delta = 0.0;
                 let mut size = 0.0;
                 for (j, &i) in sub.links.iter().enumerate() {
-                    let l = self.search[i];
+                    let l = self.search.now[i];
                     let (e_hat, t_hat) = if exact {
                         let (e_hat, t_hat, _) = link_local_stage(&links[i], l, st.e[j], st.t[j]);
                         (e_hat, t_hat)
@@ -77,8 +77,8 @@ impl Latin<'_> {
             .collect();
         let mine: Vec<f64> = parts.iter().flat_map(|&(d, s)| [d, s]).collect();
         let (delta, size) = self
-            .exchange
-            .all_gather(&mine)
+            .ranks
+            .gather(&mine)
             .chunks(2)
             .fold((0.0, 0.0), |(d, s), p| (d + p[0], s + p[1]));
         ((0.5 * delta).sqrt(), (0.5 * size).sqrt())
@@ -125,7 +125,7 @@ impl Latin<'_> {
         } else {
             LOADED_ROUNDOFF
         };
-        state.at_roundoff = distance <= floor * self.prestress_scale;
+        state.at_roundoff = distance <= floor * self.world.prestress_scale;
         // r(U) of the linear stage's U under the exact law (docs/method.md §6), unless the
         // iteration measured it beside its local stage.
         let residuals = measured.unwrap_or_else(|| {
@@ -139,10 +139,10 @@ impl Latin<'_> {
         }
 
         // The slack cables of ŝ, counted per held substructure and gathered from every rank.
-        let held: Vec<f64> = state.subs[self.held.clone()]
+        let held: Vec<f64> = state.subs[self.ranks.held()]
             .iter()
             .map(|st| st.slack_hat.iter().filter(|&&x| x).count() as f64)
             .collect();
-        state.slack_cables = self.exchange.all_gather(&held).iter().sum::<f64>() as usize;
+        state.slack_cables = self.ranks.gather(&held).iter().sum::<f64>() as usize;
     }
 }

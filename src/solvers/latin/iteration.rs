@@ -52,21 +52,13 @@ impl Latin<'_> {
         }
     }
 
-    /// Status-following l, when the policy asks for it: `true` when the operators changed.
-    pub(super) fn update_search(&mut self, state: &mut LatinState) -> bool {
-        let updated = self.settings.policy == SearchPolicy::Status && self.follow_status(state);
-        if updated {
-            state.rebuilds += 1;
-            state.acceleration.relax = false;
-        }
-        updated
+    /// ŝ = local(s) (the iteration's first stage, before any rebuild).
+    fn relaxed_local_stage(&self, state: &mut LatinState) {
+        self.local_stage(&mut state.subs, LocalLaw::Exact);
     }
 
-    /// ŝ = local(s), new operators if the status asks for them, then s = linear(ŝ), relaxed
-    /// against the previous s with μ < 1.
-    pub(super) fn relaxed_iteration(&mut self, state: &mut LatinState) {
-        self.local_stage(&mut state.subs, LocalLaw::Exact);
-        self.update_search(state);
+    /// s = linear(ŝ), relaxed against the previous s with μ < 1.
+    fn relaxed_linear_stage(&self, state: &mut LatinState) {
         let mu = self.settings.relaxation;
         let relaxation = (state.acceleration.relax && mu < 1.0).then_some(mu);
         let accuracy = self.macro_accuracy(state);
@@ -74,16 +66,15 @@ impl Latin<'_> {
         state.acceleration.relax = true;
     }
 
-    /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; new
-    /// operators if the status asks for them; x⁺ from Anderson (restarted when the map changed:
-    /// new operators, or `restart` from a status step); then s = linear(x⁺) and ŝ = local(s),
-    /// with the residuals of s measured beside it (returned).
+    /// The state holds s = linear(x) and ŝ = local(s), so G(x) is the input ŝ gives; x⁺ from
+    /// Anderson (restarted when the map changed: new operators, or a status step's new law);
+    /// then s = linear(x⁺) and ŝ = local(s), with the residuals of s measured beside it
+    /// (returned).
     pub(super) fn accelerated_iteration(
-        &mut self,
+        &self,
         state: &mut LatinState,
-        restart: bool,
+        restarted: bool,
     ) -> Residuals {
-        let restarted = self.update_search(state) || restart;
         let g = self.linear_stage_input(&state.subs);
         let next = state.acceleration.anderson.step(
             &state.acceleration.input,
@@ -135,16 +126,16 @@ impl Latin<'_> {
     /// per interface row `(F̂^m + d_m Û^m)/√d_m`; of the substructures this process holds
     /// (whose linear stages it runs).
     pub(super) fn linear_stage_input(&self, subs: &[SubState]) -> Vec<f64> {
-        let sqrt_dm = self.dm.sqrt();
-        let held = self.held.clone();
-        let parts: Vec<Vec<f64>> = self.substructures[held.clone()]
+        let sqrt_dm = self.world.dm.sqrt();
+        let held = self.ranks.held();
+        let parts: Vec<Vec<f64>> = self.operators.substructures[held.clone()]
             .par_iter()
             .zip(subs[held].par_iter())
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .map(|(sub, st)| {
                 let mut x = Vec::with_capacity(Self::input_len(st));
                 for (j, &i) in sub.links.iter().enumerate() {
-                    let l = self.search[i];
+                    let l = self.search.now[i];
                     x.push((st.t_hat[j] - l * st.e_hat[j]) / l.sqrt());
                 }
                 for side in &st.sides {
@@ -160,15 +151,20 @@ impl Latin<'_> {
     /// links' order: the others' gathered from the ranks holding them (on one process,
     /// `mine` itself, laid out).
     fn per_link(&self, mine: Vec<f64>) -> Vec<f64> {
-        let all = match self.exchange.size() {
+        let all = match self.ranks.size() {
             1 => mine,
-            _ => self.exchange.all_gather(&mine),
+            _ => self.ranks.gather(&mine),
         };
         let mut out = vec![0.0; self.world.links];
         // Where each substructure's links lie in the whole structure, in its links' order.
-        let places: Box<dyn Iterator<Item = &usize>> = match self.world_links {
+        let places: Box<dyn Iterator<Item = &usize>> = match self.ranks.world_links() {
             Some(world_links) => Box::new(world_links.iter().flatten()),
-            None => Box::new(self.substructures.iter().flat_map(|sub| &sub.links)),
+            None => Box::new(
+                self.operators
+                    .substructures
+                    .iter()
+                    .flat_map(|sub| &sub.links),
+            ),
         };
         places.zip(all).for_each(|(&i, v)| out[i] = v);
         out
@@ -183,19 +179,19 @@ impl Latin<'_> {
     /// summed, for Anderson's inner products.
     pub(super) fn input_pieces(&self, subs: &[SubState]) -> Pieces<'_> {
         Pieces {
-            lengths: subs[self.held.clone()]
+            lengths: subs[self.ranks.held()]
                 .iter()
                 .map(Self::input_len)
                 .collect(),
-            exchange: self.exchange,
+            exchange: self.ranks.exchange(),
         }
     }
 
     /// A ŝ that a linear stage reads as `x` (t̂ = √l x, ê = 0 on the links), on the held
     /// substructures (`x` their part of the input).
     pub(super) fn set_linear_stage_input(&self, subs: &mut [SubState], x: &[f64]) {
-        let sqrt_dm = self.dm.sqrt();
-        let held = self.held.clone();
+        let sqrt_dm = self.world.dm.sqrt();
+        let held = self.ranks.held();
         let subs = &mut subs[held.clone()];
         let mut pieces = Vec::with_capacity(subs.len());
         let mut rest = x;
@@ -204,14 +200,14 @@ impl Latin<'_> {
             pieces.push(piece);
             rest = tail;
         }
-        self.substructures[held]
+        self.operators.substructures[held]
             .par_iter()
             .zip(subs.par_iter_mut().zip(pieces.into_par_iter()))
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .for_each(|(sub, (st, piece))| {
                 let mut x = piece.iter();
                 for (j, &i) in sub.links.iter().enumerate() {
-                    st.t_hat[j] = x.next().copied().unwrap_or(0.0) * self.search[i].sqrt();
+                    st.t_hat[j] = x.next().copied().unwrap_or(0.0) * self.search.now[i].sqrt();
                     st.e_hat[j] = 0.0;
                 }
                 for side in st.sides.iter_mut() {
@@ -252,11 +248,12 @@ impl Solver for Latin<'_> {
             // Of the others' substructures, a process exchanging s point to point keeps only
             // what it reads (`SubState::of_another_rank`).
             subs: self
+                .operators
                 .substructures
                 .iter()
                 .enumerate()
                 .map(|(e, sub)| {
-                    let own = self.held.contains(&e) || self.neighbours.is_none();
+                    let own = self.ranks.holds(e) || self.ranks.neighbours().is_none();
                     match own {
                         true => SubState::zero(sub),
                         false => SubState::of_another_rank(sub),
@@ -312,10 +309,25 @@ impl Solver for Latin<'_> {
     fn next_iter(&mut self, state: &mut LatinState) {
         let stepped = self.newton_steps() && self.inner_run_done(state);
         let measured = if self.accelerated() {
-            let restart = stepped && self.status_step(state).map_changed;
+            // 1. With status steps, the end of an inner run: the blend and its status.
+            let step = stepped.then(|| self.status_step(state));
+            let rebuild = step.as_ref().and_then(|s| s.rebuild.clone());
+            // 2. The explicit rebuild step: new operators for a status step's new directions,
+            //    or for status-following l.
+            let step_rebuilt = self.rebuild_for(rebuild, state);
+            let law_changed = match &step {
+                Some(step) => self.finish_status_step(state, step, step_rebuilt),
+                None => false,
+            };
+            let follow = self.status_to_follow(state);
+            let restart = self.rebuild_for(follow, state) || law_changed;
+            // 3. The iteration itself, the solver unchanged.
             Some(self.accelerated_iteration(state, restart))
         } else {
-            self.relaxed_iteration(state);
+            self.relaxed_local_stage(state);
+            let follow = self.status_to_follow(state);
+            self.rebuild_for(follow, state);
+            self.relaxed_linear_stage(state);
             None
         };
         state.iteration += 1;
@@ -350,7 +362,7 @@ impl Solver for Latin<'_> {
         // at round-off, said so: α = 1e-12 on a grid stalled at r(U) 3e-17 before, E2; the
         // paper's grid at α = 1e-10 stalled with r(U) 2.5e-17 and η 1.6e-6).
         let at_roundoff_answer = state.at_roundoff && (state.unloaded || balance != Balance::Unmet);
-        let stop = if self.operators_lost
+        let stop = if self.operators.lost
             || !(state.eta.is_finite() && state.residual.is_finite())
             || (self.settings.stop_on == StopOn::Eta && off_equilibrium && !state.unloaded)
         {
@@ -377,7 +389,7 @@ impl Solver for Latin<'_> {
     /// e of the linear stage, link by link (each link belongs to one substructure; on
     /// several ranks, gathered from the ranks holding them).
     fn elongations(&self, state: &LatinState) -> Vec<f64> {
-        let held = self.held.clone();
+        let held = self.ranks.held();
         let mine = state.subs[held].iter().flat_map(|st| st.e.iter().copied());
         self.per_link(mine.collect())
     }
@@ -396,9 +408,9 @@ impl Solver for Latin<'_> {
         let mut subs = state.subs.clone();
         self.complete_state(&mut subs);
         let u = self.displacements(&subs);
-        let held = self.held.clone();
+        let held = self.ranks.held();
         self.local_stage_on(&mut subs, LocalLaw::Exact, held.clone());
-        let mine: Vec<f64> = self.substructures[held.clone()]
+        let mine: Vec<f64> = self.operators.substructures[held.clone()]
             .iter()
             .zip(&subs[held])
             .flat_map(|(sub, st)| {
@@ -432,7 +444,7 @@ impl Latin<'_> {
     fn classified(&self, u: Vec<f64>, mut mine: Vec<f64>) -> Equilibrium {
         let s = self.structure;
         let held_links = || {
-            self.substructures[self.held.clone()]
+            self.operators.substructures[self.ranks.held()]
                 .iter()
                 .flat_map(|sub| &sub.links)
         };
@@ -444,13 +456,9 @@ impl Latin<'_> {
                 .map(|&i| &s.links[i])
                 .zip(trial.iter().copied()),
         );
-        let scale = match self.exchange.size() {
+        let scale = match self.ranks.size() {
             1 => scale,
-            _ => self
-                .exchange
-                .all_gather(&[scale])
-                .into_iter()
-                .fold(0.0, f64::max),
+            _ => self.ranks.gather(&[scale]).into_iter().fold(0.0, f64::max),
         };
         let slack: Vec<f64> = held_links()
             .zip(&trial)
@@ -478,12 +486,12 @@ impl Latin<'_> {
         let s = self.structure;
         // The same on every rank: u is whole.
         let d = unit_direction(self.model, u)?;
-        let held = self.held.clone();
+        let held = self.ranks.held();
         let parts: Vec<Option<LinksAlong>> = held
             .clone()
             .map(|e| {
-                let sub = &self.substructures[e];
-                let world = |j: usize| match self.world_links {
+                let sub = &self.operators.substructures[e];
+                let world = |j: usize| match self.ranks.world_links() {
                     Some(world_links) => world_links[e][j],
                     None => sub.links[j],
                 };
@@ -492,12 +500,12 @@ impl Latin<'_> {
                 LinksAlong::of(links, &d.direction)
             })
             .collect();
-        if !self.exchange.all(parts.iter().all(Option::is_some)) {
+        if !self.ranks.all(parts.iter().all(Option::is_some)) {
             return None;
         }
         let parts: Vec<LinksAlong> = parts.into_iter().flatten().collect();
         let stretches: Vec<f64> = parts.iter().map(|p| p.stretch).collect();
-        let stretch: f64 = self.exchange.all_gather(&stretches).iter().sum();
+        let stretch: f64 = self.ranks.gather(&stretches).iter().sum();
         // (link index, id's upper and lower 32 bits): exact in f64.
         let split = |id: u64| [(id >> 32) as f64, (id & 0xffff_ffff) as f64];
         let mine: Vec<f64> = parts
@@ -509,8 +517,8 @@ impl Latin<'_> {
             })
             .collect();
         let mut slack: Vec<(usize, u64)> = self
-            .exchange
-            .all_gather(&mine)
+            .ranks
+            .gather(&mine)
             .chunks_exact(3)
             .map(|c| (c[0] as usize, ((c[1] as u64) << 32) | c[2] as u64))
             .collect();

@@ -121,39 +121,41 @@ impl Latin<'_> {
         let inputs = StageInputs {
             structure: self.structure,
             load,
-            search: &self.search,
-            dm: self.dm,
+            search: &self.search.now,
+            dm: self.world.dm,
         };
         // 1. The substructures this process holds, condensed: y_E, g_E and E's part of the
         //    macro right-hand side.
-        let held = self.held.clone();
-        let macro_problem = &self.macro_problem;
-        let (condensed, pieces): (Vec<Condensed>, Vec<Vec<f64>>) = self.substructures[held.clone()]
-            .par_iter()
-            .zip(state[held.clone()].par_iter())
-            .with_min_len(self.chunk)
-            .map(|(sub, st)| {
-                let c = sub.condense(&inputs, st);
-                let piece = macro_problem.rhs_piece(sub, &c.g);
-                (c, piece)
-            })
-            .unzip();
+        let held = self.ranks.held();
+        let macro_problem = &self.operators.macro_problem;
+        let (condensed, pieces): (Vec<Condensed>, Vec<Vec<f64>>) = self.operators.substructures
+            [held.clone()]
+        .par_iter()
+        .zip(state[held.clone()].par_iter())
+        .with_min_len(self.ranks.chunk())
+        .map(|(sub, st)| {
+            let c = sub.condense(&inputs, st);
+            let piece = macro_problem.rhs_piece(sub, &c.g);
+            (c, piece)
+        })
+        .unzip();
         // 2. Every substructure's part (gathered from the ranks), summed in their order.
         let pieces = self.gather_pieces(pieces);
-        let mut rhs = self.macro_problem.zero_rhs();
-        for (e, (sub, piece)) in self.substructures.iter().zip(&pieces).enumerate() {
-            self.macro_problem
-                .add_rhs(e, sub, &self.interfaces, piece, &mut rhs);
+        let mut rhs = self.operators.macro_problem.zero_rhs();
+        for (e, (sub, piece)) in self.operators.substructures.iter().zip(&pieces).enumerate() {
+            self.operators
+                .macro_problem
+                .add_rhs(e, sub, &self.interfaces.list, piece, &mut rhs);
         }
         // 3. The macro problem, solved on every rank.
-        let solution = self.macro_problem.solve_rhs(rhs, accuracy);
+        let solution = self.operators.macro_problem.solve_rhs(rhs, accuracy);
         // 4. The held substructures recovered, relaxed when asked.
-        let interfaces = &self.interfaces;
-        self.substructures[held.clone()]
+        let interfaces = &self.interfaces.list;
+        self.operators.substructures[held.clone()]
             .par_iter()
             .zip(state[held.clone()].par_iter_mut())
             .zip(condensed.into_par_iter())
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .enumerate()
             .for_each(|(k, ((sub, st), condensed))| {
                 let e = held.start + k;
@@ -171,12 +173,13 @@ impl Latin<'_> {
     /// Every substructure's part of the macro right-hand side, from the `held` ones' parts on
     /// each rank (on one process: `held` itself).
     fn gather_pieces(&self, held: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
-        if self.exchange.size() == 1 {
+        if self.ranks.size() == 1 {
             return held;
         }
-        let all = self.exchange.all_gather(&held.concat());
+        let all = self.ranks.gather(&held.concat());
         let mut rest = all.as_slice();
-        self.substructures
+        self.operators
+            .substructures
             .iter()
             .map(|sub| {
                 let (piece, tail) = rest.split_at(sub.n_macro + sub.kernel.ncols());
@@ -190,9 +193,9 @@ impl Latin<'_> {
     /// point to point from the neighbouring ranks (`NeighbourPlan::share_s`), or s whole
     /// when every iteration reads it.
     fn share_linear_stage(&self, state: &mut [SubState]) {
-        match &self.neighbours {
-            _ if self.exchange.size() == 1 => {}
-            Some(plan) => plan.share_s(self.exchange, state),
+        match self.ranks.neighbours() {
+            _ if self.ranks.size() == 1 => {}
+            Some(plan) => plan.share_s(self.ranks.exchange(), state),
             None => self.share_whole_state(state),
         }
     }
@@ -201,18 +204,18 @@ impl Latin<'_> {
     /// that holds it onto every rank, when the iterations exchange s point to point (the
     /// answer's per-link values are gathered by themselves: `Latin::per_link`).
     pub(super) fn complete_state(&self, state: &mut [SubState]) {
-        if self.neighbours.is_none() || self.exchange.size() == 1 {
+        if self.ranks.neighbours().is_none() || self.ranks.size() == 1 {
             return;
         }
-        let mine: Vec<f64> = state[self.held.clone()]
+        let mine: Vec<f64> = state[self.ranks.held()]
             .iter()
             .flat_map(|st| st.u.iter().copied())
             .collect();
-        let all = self.exchange.all_gather(&mine);
+        let all = self.ranks.gather(&mine);
         let mut rest = all.as_slice();
         for (e, st) in state.iter_mut().enumerate() {
             let (values, tail) = rest.split_at(st.u.len());
-            if !self.held.contains(&e) {
+            if !self.ranks.holds(e) {
                 st.u.copy_from_slice(values);
             }
             rest = tail;
@@ -222,11 +225,11 @@ impl Latin<'_> {
     /// The fields of s a linear stage writes (e, t, U_E, the sides' U and F) of every
     /// substructure, from the rank that holds it onto every rank.
     pub(super) fn share_whole_state(&self, state: &mut [SubState]) {
-        if self.exchange.size() == 1 {
+        if self.ranks.size() == 1 {
             return;
         }
         let mut mine = Vec::new();
-        for st in &state[self.held.clone()] {
+        for st in &state[self.ranks.held()] {
             mine.extend_from_slice(&st.e);
             mine.extend_from_slice(&st.t);
             mine.extend_from_slice(&st.u);
@@ -235,7 +238,7 @@ impl Latin<'_> {
                 mine.extend_from_slice(&side.f);
             }
         }
-        let all = self.exchange.all_gather(&mine);
+        let all = self.ranks.gather(&mine);
         let mut rest = all.as_slice();
         let mut take = |into: &mut [f64], write: bool| {
             let (values, tail) = rest.split_at(into.len());
@@ -244,8 +247,12 @@ impl Latin<'_> {
             }
             rest = tail;
         };
-        for ((e, st), sub) in state.iter_mut().enumerate().zip(&self.substructures) {
-            let write = !self.held.contains(&e);
+        for ((e, st), sub) in state
+            .iter_mut()
+            .enumerate()
+            .zip(&self.operators.substructures)
+        {
+            let write = !self.ranks.holds(e);
             st.widen(sub);
             take(&mut st.e, write);
             take(&mut st.t, write);

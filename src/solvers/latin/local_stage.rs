@@ -22,7 +22,7 @@ impl Latin<'_> {
     /// the substructures this process holds and on the interfaces they touch (all of them on
     /// one process): what its linear stages, η and slack count read.
     pub(super) fn local_stage(&self, state: &mut [SubState], law: LocalLaw) {
-        self.local_stage_on(state, law, self.held.clone());
+        self.local_stage_on(state, law, self.ranks.held());
     }
 
     /// The local stage on the links of `subs` and on the interfaces they touch.
@@ -33,15 +33,15 @@ impl Latin<'_> {
         subs: std::ops::Range<usize>,
     ) {
         let s = self.structure;
-        let search = &self.search;
+        let search = &self.search.now;
         let status = match law {
             LocalLaw::Exact => None,
             LocalLaw::Frozen(status) => Some(status),
         };
-        self.substructures[subs.clone()]
+        self.operators.substructures[subs.clone()]
             .par_iter()
             .zip(state[subs.clone()].par_iter_mut())
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .for_each(|(sub, st)| {
                 for (j, &i) in sub.links.iter().enumerate() {
                     let (link, l, e, t) = (&s.links[i], search[i], st.e[j], st.t[j]);
@@ -57,27 +57,27 @@ impl Latin<'_> {
         // The interfaces with a side in `subs`: their two sides computed in parallel on
         // copies, then written back (an interface between two ranks is computed alike on
         // both, from the two sides' s every rank holds).
-        let touched: Vec<usize> = (0..self.interfaces.len())
+        let touched: Vec<usize> = (0..self.interfaces.list.len())
             .filter(|&k| {
-                let [a, b] = self.interfaces[k].topology.sides;
+                let [a, b] = self.interfaces.list[k].topology.sides;
                 subs.contains(&a) || subs.contains(&b)
             })
             .collect();
         let sides: Vec<(SideState, SideState)> = touched
             .par_iter()
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .map(|&k| {
-                let (iface, [ia, ib]) = (&self.interfaces[k], self.side_slots[k]);
+                let (iface, [ia, ib]) = (&self.interfaces.list[k], self.interfaces.side_slots[k]);
                 let [a, b] = iface.topology.sides;
                 let (mut side_a, mut side_b) =
                     (state[a].sides[ia].clone(), state[b].sides[ib].clone());
-                interface_local_stage(&iface.basis, self.dm, &mut side_a, &mut side_b);
+                interface_local_stage(&iface.basis, self.world.dm, &mut side_a, &mut side_b);
                 (side_a, side_b)
             })
             .collect();
         for (&k, (side_a, side_b)) in touched.iter().zip(sides) {
-            let [a, b] = self.interfaces[k].topology.sides;
-            let [ia, ib] = self.side_slots[k];
+            let [a, b] = self.interfaces.list[k].topology.sides;
+            let [ia, ib] = self.interfaces.side_slots[k];
             state[a].sides[ia] = side_a;
             state[b].sides[ib] = side_b;
         }

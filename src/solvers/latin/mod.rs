@@ -14,6 +14,7 @@
 //! `tests/docs.rs`).
 
 mod anderson;
+mod distribution;
 mod dof_ownership;
 mod enrichment;
 mod indicator;
@@ -22,6 +23,7 @@ mod linear_stage;
 mod link_share;
 mod local_stage;
 mod macro_problem;
+mod memory;
 mod neighbours;
 mod operators;
 mod ranks;
@@ -43,6 +45,7 @@ use crate::decomposition::{block, Exchange, Homogenised, MacroDof};
 use crate::decomposition::{Interface, Partition};
 pub use link_share::LinkShare;
 use link_share::WorldFacts;
+pub use memory::memory_bytes;
 pub use ranks::{RankLayout, RankShare, VALUES_PER_ROW, VALUES_PER_SHARED_DOF};
 pub use settings::{LatinSettings, SearchDirection, SearchPolicy, StopOn, PAPER_DM};
 pub use state::{LatinState, StatusSteps};
@@ -52,6 +55,7 @@ pub(crate) use substructure::{OperatorStorage, Substructure};
 use crate::linalg::CHUNK;
 use crate::model::Model;
 use crate::structure::Structure;
+use distribution::Distribution;
 use macro_problem::MacroProblem;
 use rayon::prelude::*;
 
@@ -87,59 +91,62 @@ pub struct PartitionReport {
     pub macro_degree: usize,
 }
 
-/// The LATIN solver, set up for one structure and one partition.
+/// The LATIN solver, set up for one structure and one partition: the model and settings, what
+/// it needs of the whole structure, and one value per role — the interfaces, the set-up
+/// operators (rebuilt by an explicit step when the search directions change), the search
+/// directions, and the distribution across ranks. The state of a solve is [`LatinState`].
 pub struct Latin<'s> {
     model: &'s Model,
     structure: &'s Structure,
     settings: LatinSettings,
-    /// d_m as used: `settings.dm`, or [`auto_dm`] for this structure and partition.
-    dm: f64,
-    /// How the substructure operators are kept: as dense inverses (see
-    /// `DENSE_BUDGET_BYTES`), and with or without Z_E (`solver.keep_z`).
-    storage: OperatorStorage,
-    /// Search direction l of every link as set up (`solver.l`).
-    base_search: Vec<f64>,
-    /// Search direction l of every link now: `base_search`, times ε on the cables of
-    /// `search_slack` (status-following l).
-    search: Vec<f64>,
-    /// The cables whose l is ε·l: the slack set of ŝ when the operators were last built.
-    search_slack: Vec<bool>,
-    /// A failed rebuild whose undo failed too: the operators match no search direction, and
-    /// the solve stops as stalled (it cannot happen: the undo repeats a build that succeeded).
-    operators_lost: bool,
-    /// The interfaces that carry constraints.
-    pub(crate) interfaces: Vec<Interface>,
+    /// What it needs of the whole structure: d_m, the macro degree, the prestress scale.
+    world: WorldFacts,
+    /// The interfaces that carry constraints, and what the partition left out.
+    interfaces: InterfaceSet,
+    /// The substructures' operators and the macro problem they make.
+    operators: Operators,
+    /// The links' search directions l.
+    search: SearchDirections,
+    /// The processes sharing the solve and what each holds.
+    ranks: Distribution<'s>,
+}
+
+/// The interfaces that carry constraints, and what the partition left out.
+pub(crate) struct InterfaceSet {
+    /// The interfaces.
+    pub(crate) list: Vec<Interface>,
+    /// Per interface: its index in the `sides` of its first and of its second substructure.
+    side_slots: Vec<[usize; 2]>,
+    /// Interfaces left out (`drop`, or all their nodes redundant).
+    dropped: usize,
+    /// Nodes left out of all-macro weak interfaces (their continuity holds through others).
+    redundant_nodes: usize,
+}
+
+/// The set-up operators: built once, rebuilt by [`Latin::rebuild`] (search.rs) for new search
+/// directions, never changed inside an iteration's stages.
+pub(crate) struct Operators {
     /// The substructures, row by row of the partition.
     pub(crate) substructures: Vec<Substructure>,
     macro_problem: MacroProblem,
-    /// Per interface: its index in the `sides` of its first and of its second substructure.
-    side_slots: Vec<[usize; 2]>,
-    dropped_interfaces: usize,
-    redundant_nodes: usize,
-    /// `(½ Σ t0² / l)^{1/2}`: the prestress in the units of Δη.
-    prestress_scale: f64,
-    /// Substructures per parallel task: all of them (one task, no threads) when the work of
-    /// an iteration is too small to pay for the scheduling.
-    chunk: usize,
-    /// The processes sharing the solve ([`OneProcess`] unless set up by [`Latin::on_ranks`]).
-    exchange: &'s dyn Exchange,
-    /// The substructures this process holds (their operators, their halves of the linear
-    /// stage): all of them on one process.
-    held: std::ops::Range<usize>,
-    /// Which substructure owns each free dof, for r(U).
-    dof_ownership: dof_ownership::DofOwnership,
-    /// On several ranks, what passes point to point after each linear stage; `None` when
-    /// every iteration reads the whole state ([`Latin::reads_whole_state`]) and on one
-    /// process.
-    neighbours: Option<neighbours::NeighbourPlan>,
-    /// What it needs of the whole structure.
-    world: WorldFacts,
-    /// On a rank that keeps only its substructures' links ([`LinkShare`]): per substructure,
-    /// its links' indices in the whole structure (`Substructure::links` index the kept ones).
-    /// `None` when `structure` is whole.
-    world_links: Option<&'s [Vec<usize>]>,
+    /// How the substructure operators are kept: as dense inverses (see
+    /// `DENSE_BUDGET_BYTES`), and with or without Z_E (`solver.keep_z`).
+    storage: OperatorStorage,
     /// With `solver.soft_modes`: the soft interface modes in the macro bases.
     soft_modes: Option<enrichment::SoftModes>,
+    /// A failed rebuild whose undo failed too: the operators match no search direction, and
+    /// the solve stops as stalled (it cannot happen: the undo repeats a build that succeeded).
+    lost: bool,
+}
+
+/// The links' search directions l.
+struct SearchDirections {
+    /// Every link's l as set up (`solver.l`).
+    base: Vec<f64>,
+    /// Every link's l now: `base`, times ε on the cables of `slack` (status-following l).
+    now: Vec<f64>,
+    /// The cables whose l is ε·l: the slack set of ŝ when the operators were last built.
+    slack: Vec<bool>,
 }
 
 /// The factor c of the default `d_m = c k̄ / √H` ([`auto_dm`]).
@@ -232,7 +239,7 @@ impl<'s> Latin<'s> {
     /// U of the linear stage on the free dofs, interface nodes averaged over the
     /// substructures holding them.
     fn displacements(&self, subs: &[SubState]) -> Vec<f64> {
-        let own = &self.dof_ownership;
+        let own = self.ranks.dof_ownership();
         (0..self.structure.n_free)
             .into_par_iter()
             .with_min_len(CHUNK)
@@ -246,7 +253,8 @@ impl<'s> Latin<'s> {
         if self.any_search_slack() {
             self.set_search(vec![false; self.structure.links.len()]);
         }
-        self.substructures
+        self.operators
+            .substructures
             .iter()
             .enumerate()
             .map(|(e, sub)| Homogenised {
@@ -255,7 +263,7 @@ impl<'s> Latin<'s> {
                     .sides
                     .iter()
                     .flat_map(|side| {
-                        let iface = &self.interfaces[side.interface];
+                        let iface = &self.interfaces.list[side.interface];
                         let neighbour = iface.topology.sides[1 - side.which];
                         iface.fields.iter().map(move |field| MacroDof {
                             interface: side.interface,
@@ -273,7 +281,8 @@ impl<'s> Latin<'s> {
     /// The number of kernel columns (rigid and zero-energy modes of K*_E) of every
     /// substructure, row by row of the partition.
     pub fn kernel_columns(&self) -> Vec<usize> {
-        self.substructures
+        self.operators
+            .substructures
             .iter()
             .map(|e| e.kernel.ncols())
             .collect()
@@ -283,6 +292,7 @@ impl<'s> Latin<'s> {
     /// components' rows of continuity).
     pub fn partly_held_interface_nodes(&self) -> usize {
         self.interfaces
+            .list
             .iter()
             .flat_map(|i| &i.free)
             .filter(|f| f.iter().any(|&x| x) && !f.iter().all(|&x| x))
@@ -298,26 +308,36 @@ impl<'s> Latin<'s> {
     pub fn report(&self) -> PartitionReport {
         let weak = self
             .interfaces
+            .list
             .iter()
             .filter(|i| i.topology.is_weak())
             .count();
         PartitionReport {
-            substructures: self.substructures.len(),
-            interfaces: self.interfaces.len(),
-            strong_interfaces: self.interfaces.len() - weak,
+            substructures: self.operators.substructures.len(),
+            interfaces: self.interfaces.list.len(),
+            strong_interfaces: self.interfaces.list.len() - weak,
             weak_interfaces: weak,
-            dropped_interfaces: self.dropped_interfaces,
-            redundant_nodes: self.redundant_nodes,
-            macro_dofs: self.macro_problem.n_forces,
-            macro_system: (self.macro_problem.n, self.macro_problem.factor_entries()),
-            kernel_columns: self.substructures.iter().map(|s| s.kernel.ncols()).sum(),
+            dropped_interfaces: self.interfaces.dropped,
+            redundant_nodes: self.interfaces.redundant_nodes,
+            macro_dofs: self.operators.macro_problem.n_forces,
+            macro_system: (
+                self.operators.macro_problem.n,
+                self.operators.macro_problem.factor_entries(),
+            ),
+            kernel_columns: self
+                .operators
+                .substructures
+                .iter()
+                .map(|s| s.kernel.ncols())
+                .sum(),
             max_substructure_dofs: self
+                .operators
                 .substructures
                 .iter()
                 .map(|s| s.n_dofs())
                 .max()
                 .unwrap_or(0),
-            dm: self.dm,
+            dm: self.world.dm,
             macro_degree: self.world.macro_degree,
         }
     }

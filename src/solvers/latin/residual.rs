@@ -74,11 +74,11 @@ impl Latin<'_> {
         slack: &[bool],
     ) -> (f64, f64, f64) {
         let s = self.structure;
-        let own = &self.dof_ownership;
-        let held = self.held.clone();
-        let pieces: Vec<LinkForces> = self.substructures[held.clone()]
+        let own = self.ranks.dof_ownership();
+        let held = self.ranks.held();
+        let pieces: Vec<LinkForces> = self.operators.substructures[held.clone()]
             .par_iter()
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .map(|sub| sub.link_forces(s, u, slack))
             .collect();
         // The pieces at shared dofs, from the ranks holding them, summed in the
@@ -86,11 +86,11 @@ impl Latin<'_> {
         let at_shared = self.pieces_at_shared_dofs(&pieces);
         // Per held substructure, the squares of the dofs it owns: r = Bᵀτ − F,
         // r_frozen = r + Bᵀ(τ_frozen − τ), |B|ᵀ|τ| and |B|ᵀ|τ − t0|.
-        let squares: Vec<f64> = self.substructures[held.clone()]
+        let squares: Vec<f64> = self.operators.substructures[held.clone()]
             .par_iter()
             .zip(&pieces)
             .enumerate()
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .flat_map_iter(|(i, (sub, piece))| {
                 let e = (held.start + i) as u32;
                 let mut sums = [0.0; 4];
@@ -118,8 +118,8 @@ impl Latin<'_> {
             })
             .collect();
         let total = self
-            .exchange
-            .all_gather(&squares)
+            .ranks
+            .gather(&squares)
             .chunks(4)
             .fold([0.0; 4], |t, p| {
                 [t[0] + p[0], t[1] + p[1], t[2] + p[2], t[3] + p[3]]
@@ -153,8 +153,8 @@ impl Latin<'_> {
     /// ranks (the dofs the held substructures share), or gathered from every rank when the
     /// solve shares its whole state at each iteration. The same sums either way.
     fn pieces_at_shared_dofs(&self, pieces: &[LinkForces]) -> Vec<[f64; PIECES_PER_DOF]> {
-        let own = &self.dof_ownership;
-        let held = self.held.clone();
+        let own = self.ranks.dof_ownership();
+        let held = self.ranks.held();
         let mine: Vec<Vec<f64>> = pieces
             .iter()
             .zip(&own.shared_local[held.clone()])
@@ -176,10 +176,10 @@ impl Latin<'_> {
         let mut at_shared = vec![[0.0; PIECES_PER_DOF]; own.n_shared];
         let mut add = |e: usize, position: usize, v: &[f64]| {
             let k = own.shared_local[e][position] as usize;
-            let sums = &mut at_shared[own.slot(self.substructures[e].dof_global[k])];
+            let sums = &mut at_shared[own.slot(self.operators.substructures[e].dof_global[k])];
             sums.iter_mut().zip(v).for_each(|(s, v)| *s += v);
         };
-        match (&self.neighbours, self.exchange.size()) {
+        match (self.ranks.neighbours(), self.ranks.size()) {
             (_, 1) => {
                 for (e, values) in held.clone().zip(&mine) {
                     for (position, v) in values.chunks_exact(PIECES_PER_DOF).enumerate() {
@@ -190,7 +190,7 @@ impl Latin<'_> {
             (Some(plan), _) => {
                 // (substructure, position in its shared dofs, pieces), put in the
                 // substructures' order.
-                let mut all = plan.share_pieces(self.exchange, |e| &mine[e - held.start]);
+                let mut all = plan.share_pieces(self.ranks.exchange(), |e| &mine[e - held.start]);
                 for (e, values) in held.clone().zip(&mine) {
                     for (position, v) in values.chunks_exact(PIECES_PER_DOF).enumerate() {
                         all.push((e, position as u32, [v[0], v[1], v[2], v[3]]));
@@ -202,7 +202,7 @@ impl Latin<'_> {
                 }
             }
             (None, _) => {
-                let all = self.exchange.all_gather(&mine.concat());
+                let all = self.ranks.gather(&mine.concat());
                 let mut values = all.chunks_exact(PIECES_PER_DOF);
                 for (e, shared) in own.shared_local.iter().enumerate() {
                     for (position, v) in (0..shared.len()).zip(&mut values) {

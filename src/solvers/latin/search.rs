@@ -4,28 +4,52 @@
 //! macro problem.
 
 use super::operators::share_homogenised;
-use super::{Latin, LatinState, SubState, STATUS_BAND, STATUS_PERSISTENCE};
+use super::{Latin, LatinState, SearchPolicy, SubState, STATUS_BAND, STATUS_PERSISTENCE};
 use crate::model::material;
 use rayon::prelude::*;
 
 impl Latin<'_> {
+    /// Status-following l, when the policy asks for it: the cables to make slack in new search
+    /// directions, for which the operators are to be rebuilt.
+    pub(super) fn status_to_follow(&self, state: &mut LatinState) -> Option<Vec<bool>> {
+        (self.settings.policy == SearchPolicy::Status)
+            .then(|| self.follow_status(state))
+            .flatten()
+    }
+
+    /// The one change an iteration makes to the solver: its operators rebuilt for the search
+    /// directions that make `slack` slack (status-following l). `true` when rebuilt, which
+    /// restarts relaxation and acceleration (the old s was computed with another l).
+    pub(super) fn rebuild_for(&mut self, slack: Option<Vec<bool>>, state: &mut LatinState) -> bool {
+        let Some(slack) = slack else {
+            return false;
+        };
+        let rebuilt = self.set_search(slack);
+        if rebuilt {
+            Self::followed(state);
+            state.rebuilds += 1;
+            state.acceleration.relax = false;
+        }
+        rebuilt
+    }
+
     /// Status-following l (docs/method.md §6): l for bars and taut cables, ε·l for slack ones, when at
-    /// least `update_threshold` cables changed status since the operators were built; then
-    /// the operators are rebuilt for it. A cable's status is read from the linear stage's
+    /// least `update_threshold` cables changed status since the operators were built: the
+    /// cables to make slack, for which the caller rebuilds the operators. A cable's status is read from the linear stage's
     /// trial tension `τ = t0 + k e` (newton's active set; the slack set of ŝ would keep a
     /// taut cable held at ε·l slack, since with l ≪ k its local stage barely moves), with a
     /// band: it goes slack below −δ and taut above +δ, δ = `STATUS_BAND` × the RMS trial
     /// tension of the cables, so that cables near zero tension do not flip back and forth
     /// (l is a search direction: any choice converges, only the rate changes). A cable's l
     /// changes only once its status has differed for [`STATUS_PERSISTENCE`] linear stages in a
-    /// row. `true` when rebuilt.
-    pub(super) fn follow_status(&mut self, state: &mut LatinState) -> bool {
+    /// row.
+    pub(super) fn follow_status(&self, state: &mut LatinState) -> Option<Vec<bool>> {
         let links = &self.structure.links;
         let (trial, rms) = self.trial_tensions(&state.subs);
         let band = STATUS_BAND * rms;
-        let mut slack = self.search_slack.clone();
+        let mut slack = self.search.slack.clone();
         for (i, (l, &tau)) in links.iter().zip(&trial).enumerate() {
-            let was_slack = self.search_slack[i];
+            let was_slack = self.search.slack[i];
             let is_slack = l.unilateral && if was_slack { tau <= band } else { tau < -band };
             let streak = &mut state.following.status_streak[i];
             *streak = if is_slack == was_slack {
@@ -39,22 +63,20 @@ impl Latin<'_> {
         }
         let changed = slack
             .iter()
-            .zip(&self.search_slack)
+            .zip(&self.search.slack)
             .filter(|(a, b)| a != b)
             .count();
-        if changed < self.settings.update_threshold.max(1) {
-            return false;
-        }
-        let rebuilt = self.set_search(slack);
-        if rebuilt {
-            // The cables whose l just changed start counting afresh.
-            for streak in &mut state.following.status_streak {
-                if *streak >= STATUS_PERSISTENCE {
-                    *streak = 0;
-                }
+        (changed >= self.settings.update_threshold.max(1)).then_some(slack)
+    }
+
+    /// After the rebuild [`Latin::follow_status`] asked for: the cables whose l just changed
+    /// start counting afresh.
+    pub(super) fn followed(state: &mut LatinState) {
+        for streak in &mut state.following.status_streak {
+            if *streak >= STATUS_PERSISTENCE {
+                *streak = 0;
             }
         }
-        rebuilt
     }
 
     /// Every link's trial tension `t0 + k e` from the linear stage's e, and the RMS of the
@@ -62,7 +84,7 @@ impl Latin<'_> {
     pub(super) fn trial_tensions(&self, subs: &[SubState]) -> (Vec<f64>, f64) {
         let links = &self.structure.links;
         let mut trial = vec![0.0; links.len()];
-        for (sub, st) in self.substructures.iter().zip(subs) {
+        for (sub, st) in self.operators.substructures.iter().zip(subs) {
             for (j, &i) in sub.links.iter().enumerate() {
                 trial[i] = material::trial_tension(&links[i], st.e[j]);
             }
@@ -78,11 +100,11 @@ impl Latin<'_> {
     /// Whether any cable has its search direction at ε·l, on any process (each knows its own
     /// substructures' cables).
     pub(super) fn any_search_slack(&self) -> bool {
-        let held = &self.substructures[self.held.clone()];
+        let held = &self.operators.substructures[self.ranks.held()];
         let mine = held
             .iter()
-            .any(|sub| sub.links.iter().any(|&i| self.search_slack[i]));
-        !self.exchange.all(!mine)
+            .any(|sub| sub.links.iter().any(|&i| self.search.slack[i]));
+        !self.ranks.all(!mine)
     }
 
     /// New operators with ε·l on the cables of `slack`: the substructures where l changed,
@@ -90,41 +112,41 @@ impl Latin<'_> {
     /// singular macro problem) the operators of the current directions are rebuilt and kept.
     /// `true` when rebuilt.
     pub(super) fn set_search(&mut self, slack: Vec<bool>) -> bool {
-        let mut search = self.base_search.clone();
+        let mut search = self.search.base.clone();
         for (l, factor) in search.iter_mut().zip(self.slack_factors(&slack)) {
             *l *= factor;
         }
         // Each process knows the status of its own substructures' links: the changed ones
         // are gathered from the ranks that hold them.
         let held_changed: Vec<usize> = self
-            .held
-            .clone()
+            .ranks
+            .held()
             .filter(|&e| {
-                self.substructures[e]
+                self.operators.substructures[e]
                     .links
                     .iter()
-                    .any(|&i| search[i] != self.search[i])
+                    .any(|&i| search[i] != self.search.now[i])
             })
             .collect();
-        let changed: Vec<usize> = match self.exchange.size() {
+        let changed: Vec<usize> = match self.ranks.size() {
             1 => held_changed,
             _ => {
                 let mine: Vec<f64> = held_changed.iter().map(|&e| e as f64).collect();
-                let all = self.exchange.all_gather(&mine);
+                let all = self.ranks.gather(&mine);
                 all.into_iter().map(|e| e as usize).collect()
             }
         };
         if self.rebuild(&changed, &search) {
-            self.search = search;
-            self.search_slack = slack;
+            self.search.now = search;
+            self.search.slack = slack;
             return true;
         }
         // Back to the current directions: the inputs the operators were last built from, so
         // the same operators, bit for bit. Should that fail all the same, the solve cannot go
         // on (`operators_lost`: it stops as stalled).
-        let current = std::mem::take(&mut self.search);
-        self.operators_lost |= !self.rebuild(&changed, &current);
-        self.search = current;
+        let current = std::mem::take(&mut self.search.now);
+        self.operators.lost |= !self.rebuild(&changed, &current);
+        self.search.now = current;
         false
     }
 
@@ -135,10 +157,11 @@ impl Latin<'_> {
     /// new bases (those only refactorized here). `false` on failure, when the changed
     /// substructures' operators are left unusable.
     fn rebuild(&mut self, changed: &[usize], search: &[f64]) -> bool {
-        let (dm, storage, held) = (self.dm, self.storage, self.held.clone());
+        let (dm, storage, held) = (self.world.dm, self.operators.storage, self.ranks.held());
         let plan = self.plan_enrichment(changed, search);
         let condensed_later: &[usize] = plan.as_ref().map_or(&[], |p| &p.affected);
         let rebuilt = self
+            .operators
             .substructures
             .par_iter_mut()
             .enumerate()
@@ -149,7 +172,7 @@ impl Latin<'_> {
             })
             .collect::<Result<Vec<()>, _>>()
             .is_ok();
-        if !self.exchange.all(rebuilt) {
+        if !self.ranks.all(rebuilt) {
             return false;
         }
         let condensed_now: Vec<usize> = changed
@@ -158,9 +181,9 @@ impl Latin<'_> {
             .copied()
             .collect();
         share_homogenised(
-            &mut self.substructures,
+            &mut self.operators.substructures,
             &condensed_now,
-            self.exchange,
+            self.ranks.exchange(),
             &held,
         );
         if let Some(plan) = plan {
@@ -168,11 +191,12 @@ impl Latin<'_> {
             return self.enrich(plan).is_ok();
         }
         match self
+            .operators
             .macro_problem
-            .refactor(&self.substructures, &self.interfaces)
+            .refactor(&self.operators.substructures, &self.interfaces.list)
         {
             Ok(macro_problem) => {
-                self.macro_problem = macro_problem;
+                self.operators.macro_problem = macro_problem;
                 true
             }
             Err(_) => false,

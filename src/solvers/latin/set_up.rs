@@ -5,6 +5,7 @@
 use super::link_share::{self, WorldFacts};
 use super::macro_problem::MacroProblem;
 use super::{dof_ownership, enrichment, neighbours, operators, LinkShare, OperatorStorage};
+use super::{Distribution, InterfaceSet, Operators, SearchDirections};
 use super::{Latin, LatinSettings, Substructure, PARALLEL_MIN_DOFS};
 use crate::decomposition::{block, Exchange, Interfaces, OneProcess, Partition, WeakInterfaces};
 use crate::model::Model;
@@ -142,66 +143,71 @@ impl<'s> Latin<'s> {
             holders: holders(partition, structure.n_nodes()),
         };
         let (interfaces, (substructures, macro_problem)) = built.at_a_degree(&mut world)?;
-        let dm = world.dm;
         let dof_ownership = dof_ownership::DofOwnership::of(&substructures, structure.n_free);
         let mut latin = Latin {
             model,
             structure,
             settings,
-            dm,
-            storage,
-            search: base_search.clone(),
-            search_slack: vec![false; structure.links.len()],
-            operators_lost: false,
-            base_search,
-            interfaces: interfaces.list,
-            substructures,
-            macro_problem,
-            side_slots: Vec::new(),
-            dropped_interfaces: interfaces.dropped,
-            redundant_nodes: interfaces.redundant_nodes,
-            prestress_scale: world.prestress_scale,
-            chunk: if structure.n_free < PARALLEL_MIN_DOFS {
-                usize::MAX
-            } else {
-                1
-            },
-            exchange,
-            held,
-            dof_ownership,
-            neighbours: None,
             world,
-            world_links,
-            soft_modes: None,
+            interfaces: InterfaceSet {
+                list: interfaces.list,
+                side_slots: Vec::new(),
+                dropped: interfaces.dropped,
+                redundant_nodes: interfaces.redundant_nodes,
+            },
+            operators: Operators {
+                substructures,
+                macro_problem,
+                storage,
+                soft_modes: None,
+                lost: false,
+            },
+            search: SearchDirections {
+                now: base_search.clone(),
+                slack: vec![false; structure.links.len()],
+                base: base_search,
+            },
+            ranks: Distribution::new(
+                exchange,
+                held,
+                dof_ownership,
+                world_links,
+                if structure.n_free < PARALLEL_MIN_DOFS {
+                    usize::MAX
+                } else {
+                    1
+                },
+            ),
         };
         // 4. Per interface, its place among each side's sides.
-        let mut side_slots = vec![[0usize; 2]; latin.interfaces.len()];
-        for sub in &latin.substructures {
+        let mut side_slots = vec![[0usize; 2]; latin.interfaces.list.len()];
+        for sub in &latin.operators.substructures {
             for (slot, side) in sub.sides.iter().enumerate() {
                 side_slots[side.interface][side.which] = slot;
             }
         }
-        latin.side_slots = side_slots;
+        latin.interfaces.side_slots = side_slots;
         // 5. Soft interface modes in the macro bases (`solver.soft_modes`).
-        if let (Some(theta), false) = (latin.settings.soft_modes, latin.interfaces.is_empty()) {
-            latin.soft_modes = Some(enrichment::SoftModes::new(
+        if let (Some(theta), false) = (latin.settings.soft_modes, latin.interfaces.list.is_empty())
+        {
+            latin.operators.soft_modes = Some(enrichment::SoftModes::new(
                 theta,
                 partition.clone(),
-                &latin.interfaces,
+                &latin.interfaces.list,
                 latin.structure.links.len(),
             ));
-            let all: Vec<usize> = (0..latin.substructures.len()).collect();
-            let search = latin.search.clone();
+            let all: Vec<usize> = (0..latin.operators.substructures.len()).collect();
+            let search = latin.search.now.clone();
             if let Some(plan) = latin.plan_enrichment(&all, &search) {
                 latin.enrich(plan)?;
             }
         }
         // 6. On several ranks, what passes point to point after each linear stage.
         if exchange.size() > 1 && !latin.reads_whole_state() {
-            latin.neighbours = Some(neighbours::NeighbourPlan::new(
-                &latin.substructures,
-                &latin.interfaces,
-                &latin.dof_ownership,
+            latin.ranks.set_neighbours(neighbours::NeighbourPlan::new(
+                &latin.operators.substructures,
+                &latin.interfaces.list,
+                latin.ranks.dof_ownership(),
                 exchange.rank(),
                 exchange.size(),
             ));

@@ -189,8 +189,8 @@ impl LatinSettings {
 
     /// The equilibrium stop every solver shares ([`crate::solvers::Balance`]): r(U) within
     /// [`LatinSettings::residual_tolerance`], and r_F(U), the unbalance relative to the load's
-    /// own forces, within [`LOAD_RESIDUAL_FACTOR`] times it (1e-6 at the defaults, η's
-    /// tolerance), and never looser than [`LOAD_RESIDUAL_LOOSEST`]. r_F is the looser because a LATIN iterate's accuracy is set by its stages'
+    /// own forces, within `LOAD_RESIDUAL_FACTOR` (100) times it (1e-6 at the defaults, η's
+    /// tolerance), and never looser than `LOAD_RESIDUAL_LOOSEST` (1e-2). r_F is the looser because a LATIN iterate's accuracy is set by its stages'
     /// round-off on prestress-sized terms: on the paper case the converged rows have r_F from
     /// 3e-14 to 1.2e-8 (mono-latin) and 1.5e-10 to 9.8e-9 (micro-macro, α 0.01 to 1); held to
     /// r(U)'s 1e-8, micro-macro (which settles at r(U) ≈ 1e-10) could not converge below

@@ -41,10 +41,10 @@ impl Latin<'_> {
             .iter()
             .map(|&s| if s { SLACK_SEARCH_FACTOR } else { 1.0 })
             .collect();
-        if self.interfaces.is_empty() {
+        if self.interfaces.list.is_empty() {
             return factors;
         }
-        let soft: Vec<Vec<usize>> = self.substructures[self.held.clone()]
+        let soft: Vec<Vec<usize>> = self.operators.substructures[self.ranks.held()]
             .par_iter()
             .filter(|sub| sub.links.len() >= SOFT_MIN_LINKS)
             .map(|sub| {
@@ -96,7 +96,7 @@ impl Latin<'_> {
                 let free: Vec<usize> = (0..3).filter(|&c| dofs[c] != CLAMPED).collect();
                 for &c in &free {
                     if interface.contains(&dofs[c]) {
-                        a[(c, c)] += self.dm;
+                        a[(c, c)] += self.world.dm;
                     }
                 }
                 // The smallest eigenvalue of A on the free components (∞ when all are held).

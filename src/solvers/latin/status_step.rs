@@ -63,9 +63,11 @@ struct StepSums {
 
 /// What a status step changed.
 pub(super) struct StatusStep {
-    /// Whether the fixed-point map changed (new law, new operators, or both): Anderson's
-    /// history then restarts.
-    pub map_changed: bool,
+    /// Whether the law linearised at the status changed.
+    pub law_changed: bool,
+    /// The cables to make slack in the search directions, when the operators are to be rebuilt
+    /// for the new status.
+    pub rebuild: Option<Vec<bool>>,
 }
 
 impl Latin<'_> {
@@ -91,9 +93,11 @@ impl Latin<'_> {
     }
 
     /// The end of an inner run: `θ` from the line search on the exact energy between the
-    /// step's start and `state`, `state ← start + θ (state − start)`, the blend's status, new
-    /// operators if it changed, and ŝ of the blend on the law linearised at that status.
-    pub(super) fn status_step(&mut self, state: &mut LatinState) -> StatusStep {
+    /// step's start and `state`, `state ← start + θ (state − start)`, and the blend's status
+    /// (`state.steps.law_slack`); the search directions to rebuild the operators for when
+    /// enough cables' directions disagree with it. The caller rebuilds them
+    /// ([`Latin::set_search`]), then finishes the step ([`Latin::finish_status_step`]).
+    pub(super) fn status_step(&self, state: &mut LatinState) -> StatusStep {
         let start = state.steps.start.take().expect("a status step has a start");
         let end = self.displacements(&state.subs);
         // An inner run on a law whose status leaves a mechanism runs away along it, driven by
@@ -150,12 +154,12 @@ impl Latin<'_> {
         let cables = self.world.cables;
         let whole = self.reads_whole_state();
         let classified = match whole {
-            true => 0..self.substructures.len(),
-            false => self.held.clone(),
+            true => 0..self.operators.substructures.len(),
+            false => self.ranks.held(),
         };
         let mut slack = state.steps.law_slack.clone();
         let (mut law_changed, mut disagree) = (false, 0usize);
-        for (sub, st) in self.substructures[classified.clone()]
+        for (sub, st) in self.operators.substructures[classified.clone()]
             .iter()
             .zip(&state.subs[classified])
         {
@@ -164,35 +168,39 @@ impl Latin<'_> {
                 let tau = material::trial_tension(l, e);
                 slack[i] = l.unilateral && if was { tau <= band } else { tau < -band };
                 law_changed |= slack[i] != was;
-                disagree += usize::from(slack[i] != self.search_slack[i]);
+                disagree += usize::from(slack[i] != self.search.slack[i]);
             }
         }
         if !whole {
-            law_changed = !self.exchange.all(!law_changed);
-            disagree = self
-                .exchange
-                .all_gather(&[disagree as f64])
-                .iter()
-                .sum::<f64>() as usize;
+            law_changed = !self.ranks.all(!law_changed);
+            disagree = self.ranks.gather(&[disagree as f64]).iter().sum::<f64>() as usize;
         }
-        let rebuilt =
-            disagree as f64 > REBUILD_FRACTION * cables as f64 && self.set_search(slack.clone());
-        if rebuilt {
-            state.rebuilds += 1;
-        }
+        let rebuild = (disagree as f64 > REBUILD_FRACTION * cables as f64).then(|| slack.clone());
         state.steps.law_slack = slack;
-        self.local_stage(&mut state.subs, self.local_law(&state.steps.law_slack));
         StatusStep {
-            map_changed: rebuilt || law_changed,
+            law_changed,
+            rebuild,
         }
+    }
+
+    /// After a status step and the rebuild it asked for (`rebuilt`): ŝ of the blend on the law
+    /// linearised at its status; whether the iteration's map changed.
+    pub(super) fn finish_status_step(
+        &self,
+        state: &mut LatinState,
+        step: &StatusStep,
+        rebuilt: bool,
+    ) -> bool {
+        self.local_stage(&mut state.subs, self.local_law(&state.steps.law_slack));
+        rebuilt || step.law_changed
     }
 
     /// ‖ΔU‖², ‖U0‖² and Fᵀ ΔU, each dof counted by the substructure that owns it, summed per
     /// held substructure and then over the substructures in their order (on every rank).
     fn step_sums(&self, step: &[f64], start: &[f64], load: &[f64]) -> StepSums {
-        let own = &self.dof_ownership;
-        let held = self.held.clone();
-        let parts: Vec<f64> = self.substructures[held.clone()]
+        let own = self.ranks.dof_ownership();
+        let held = self.ranks.held();
+        let parts: Vec<f64> = self.operators.substructures[held.clone()]
             .iter()
             .zip(held)
             .flat_map(|(sub, e)| {
@@ -205,7 +213,7 @@ impl Latin<'_> {
                 sums
             })
             .collect();
-        let all = self.exchange.all_gather(&parts);
+        let all = self.ranks.gather(&parts);
         let total = all
             .chunks_exact(3)
             .fold([0.0; 3], |t, p| [t[0] + p[0], t[1] + p[1], t[2] + p[2]]);
@@ -219,24 +227,24 @@ impl Latin<'_> {
     /// `step` on every free dof (on several ranks each holds it at its substructures' dofs
     /// only): each dof's value from the rank of the substructure that owns it.
     fn whole_step(&self, mut step: Vec<f64>) -> Vec<f64> {
-        if self.exchange.size() == 1 {
+        if self.ranks.size() == 1 {
             return step;
         }
-        let own = &self.dof_ownership;
+        let own = self.ranks.dof_ownership();
         let owned = |e: usize| {
-            let sub = &self.substructures[e];
+            let sub = &self.operators.substructures[e];
             sub.dof_global
                 .iter()
                 .copied()
                 .filter(move |&d| own.owns(e, d))
         };
         let mine: Vec<f64> = self
-            .held
-            .clone()
+            .ranks
+            .held()
             .flat_map(|e| owned(e).map(|d| step[d]))
             .collect();
-        let mut all = self.exchange.all_gather(&mine).into_iter();
-        for e in 0..self.substructures.len() {
+        let mut all = self.ranks.gather(&mine).into_iter();
+        for e in 0..self.operators.substructures.len() {
             for d in owned(e) {
                 step[d] = all.next().unwrap_or(0.0);
             }
@@ -248,8 +256,8 @@ impl Latin<'_> {
     /// squares summed per held substructure and then in the substructures' order.
     fn trial_tension_rms(&self, subs: &[SubState]) -> f64 {
         let links = &self.structure.links;
-        let held = self.held.clone();
-        let parts: Vec<f64> = self.substructures[held.clone()]
+        let held = self.ranks.held();
+        let parts: Vec<f64> = self.operators.substructures[held.clone()]
             .iter()
             .zip(&subs[held])
             .map(|(sub, st)| {
@@ -263,7 +271,7 @@ impl Latin<'_> {
                     .sum::<f64>()
             })
             .collect();
-        let sum: f64 = self.exchange.all_gather(&parts).iter().sum();
+        let sum: f64 = self.ranks.gather(&parts).iter().sum();
         let cables = self.world.cables;
         (sum / cables.max(1) as f64).sqrt()
     }
@@ -274,10 +282,10 @@ impl Latin<'_> {
     /// without the prestress's geometric stiffness.
     fn line_search_by_substructure(&self, u0: &[f64], step: &[f64], load_work: f64) -> f64 {
         let s = self.structure;
-        let held = self.held.clone();
-        let parts: Vec<EnergyAlongStep> = self.substructures[held]
+        let held = self.ranks.held();
+        let parts: Vec<EnergyAlongStep> = self.operators.substructures[held]
             .par_iter()
-            .with_min_len(self.chunk)
+            .with_min_len(self.ranks.chunk())
             .map(|sub| {
                 let at = |v: &[f64], row: &crate::structure::LinkDofs| -> f64 {
                     row.iter().map(|(d, c)| c * v[sub.dof_global[d]]).sum()
@@ -303,7 +311,7 @@ impl Latin<'_> {
 
     /// Every substructure's part, in order, from the held ones' on each rank.
     fn gather_parts(&self, held: Vec<EnergyAlongStep>) -> Vec<EnergyAlongStep> {
-        if self.exchange.size() == 1 {
+        if self.ranks.size() == 1 {
             return held;
         }
         let mut mine = Vec::new();
@@ -311,9 +319,9 @@ impl Latin<'_> {
             mine.extend([part.slope, part.curvature, part.breakpoints.len() as f64]);
             mine.extend(part.breakpoints.iter().flat_map(|&(p, c)| [p, c]));
         }
-        let all = self.exchange.all_gather(&mine);
+        let all = self.ranks.gather(&mine);
         let mut rest = all.as_slice();
-        let mut parts = Vec::with_capacity(self.substructures.len());
+        let mut parts = Vec::with_capacity(self.operators.substructures.len());
         while let [slope, curvature, n, tail @ ..] = rest {
             let n = *n as usize;
             let breakpoints = tail[..2 * n]

@@ -314,9 +314,9 @@ fn each_pair_of_ranks_agrees_on_what_passes_and_it_covers_the_shared_dofs() {
             ..LatinSettings::default()
         };
         let latin = Latin::new(&s, settings).unwrap();
-        let (subs, own) = (&latin.substructures, &latin.dof_ownership);
+        let (subs, own) = (&latin.operators.substructures, latin.ranks.dof_ownership());
         let plans: Vec<NeighbourPlan> = (0..ranks)
-            .map(|r| NeighbourPlan::new(subs, &latin.interfaces, own, r, ranks))
+            .map(|r| NeighbourPlan::new(subs, &latin.interfaces.list, own, r, ranks))
             .collect();
         for (p, plan) in plans.iter().enumerate() {
             for nb in &plan.neighbours {
@@ -353,7 +353,8 @@ fn each_pair_of_ranks_agrees_on_what_passes_and_it_covers_the_shared_dofs() {
                     }
                 }
                 for side in &subs[e].sides {
-                    let other = latin.interfaces[side.interface].topology.sides[1 - side.which];
+                    let other =
+                        latin.interfaces.list[side.interface].topology.sides[1 - side.which];
                     if !held.contains(&other) {
                         let found = receives(other, &|item| {
                             item.sides

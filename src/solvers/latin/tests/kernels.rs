@@ -109,7 +109,7 @@ pub(super) fn check_kernels(latin: &Latin<'_>, what: &str) -> (usize, f64, f64) 
     let mut total = 0;
     let mut gap = f64::INFINITY;
     let mut worst_null: f64 = 0.0;
-    for (e, sub) in latin.substructures.iter().enumerate() {
+    for (e, sub) in latin.operators.substructures.iter().enumerate() {
         let ev = sub.ops().k_star.clone().symmetric_eigenvalues();
         let null = ev.iter().filter(|&&x| x < 1e-6 * DM).count();
         assert_eq!(
@@ -171,15 +171,19 @@ fn partition_report_and_kernels_of_paper_case() {
         assert_eq!(r.weak_interfaces, weak_count, "{weak:?}");
         assert_eq!(r.dropped_interfaces, dropped, "{weak:?}");
         assert_eq!(r.macro_dofs, macro_dofs, "{weak:?}");
-        assert_eq!(latin.interfaces.len(), interfaces);
+        assert_eq!(latin.interfaces.list.len(), interfaces);
         // docs/method.md §2/§4: 195 free dofs for the substructures without supports.
         assert_eq!(r.max_substructure_dofs, 195, "{weak:?}");
         let (total, gap, worst_null) = check_kernels(&latin, &format!("{weak:?}"));
         assert_eq!(total, r.kernel_columns, "{weak:?}");
         // The same dimensions from B_E and the bases alone.
         let independent = independent_kernel_dimension(s, [4, 4], weak);
-        for (e, (sub, (dim, kept, null))) in
-            latin.substructures.iter().zip(&independent).enumerate()
+        for (e, (sub, (dim, kept, null))) in latin
+            .operators
+            .substructures
+            .iter()
+            .zip(&independent)
+            .enumerate()
         {
             assert_eq!(
                 sub.kernel.ncols(),
@@ -193,6 +197,7 @@ fn partition_report_and_kernels_of_paper_case() {
             "{weak:?}: kernel columns {total} (per substructure {:?}); K*_E eigenvalues: \
              smallest kept {gap:.3e} dm, largest null {worst_null:.1e} dm",
             latin
+                .operators
                 .substructures
                 .iter()
                 .map(|s| s.kernel.ncols())

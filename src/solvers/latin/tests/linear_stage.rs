@@ -46,11 +46,11 @@ fn check_linear_stage(
     );
     assert!(u_scale > 0.0 && f_scale > 0.0);
     let mut worst = [0.0f64; 3];
-    for (k, iface) in latin.interfaces.iter().enumerate() {
+    for (k, iface) in latin.interfaces.list.iter().enumerate() {
         let [a, b] = iface.topology.sides;
         assert!(a < b);
         let side_of = |e: usize| {
-            let sub = &latin.substructures[e];
+            let sub = &latin.operators.substructures[e];
             let found: Vec<usize> = (0..sub.sides.len())
                 .filter(|&j| sub.sides[j].interface == k)
                 .collect();
@@ -64,8 +64,8 @@ fn check_linear_stage(
         };
         let (ja, jb) = (side_of(a), side_of(b));
         let (sa, sb) = (
-            &latin.substructures[a].sides[ja],
-            &latin.substructures[b].sides[jb],
+            &latin.operators.substructures[a].sides[ja],
+            &latin.operators.substructures[b].sides[jb],
         );
         assert_eq!((sa.which, sb.which), (0, 1), "interface {k}");
         assert_eq!((sa.sign(), sb.sign()), (1.0, -1.0), "interface {k}");
@@ -76,7 +76,7 @@ fn check_linear_stage(
         let (ua, ub) = (&state.subs[a].sides[ja], &state.subs[b].sides[jb]);
         // The side vectors are C_E U_E, read directly from U_E through gamma_dofs.
         for (e, j, ss) in [(a, ja, ua), (b, jb, ub)] {
-            let sub = &latin.substructures[e];
+            let sub = &latin.operators.substructures[e];
             let side = &sub.sides[j];
             for r in 0..side.rows {
                 assert_eq!(
@@ -100,7 +100,13 @@ fn check_linear_stage(
         worst[1] = worst[1].max(df / f_scale);
     }
     // Equilibrium of every substructure: B_Eᵀ(t + t0) − share·F^d − C_Eᵀ F_EΓ = 0.
-    for (e, (sub, st)) in latin.substructures.iter().zip(&state.subs).enumerate() {
+    for (e, (sub, st)) in latin
+        .operators
+        .substructures
+        .iter()
+        .zip(&state.subs)
+        .enumerate()
+    {
         let n = sub.dof_global.len();
         let mut r = vec![0.0; n];
         let mut magnitude = vec![0.0; n];
@@ -179,6 +185,7 @@ fn linear_stage_invariants_uneven_partition() {
     let independent = independent_kernel_dimension(s, [3, 5], WeakInterfaces::Macro);
     let dims: Vec<usize> = independent.iter().map(|d| d.0).collect();
     let cols: Vec<usize> = latin
+        .operators
         .substructures
         .iter()
         .map(|s| s.kernel.ncols())

@@ -16,7 +16,13 @@ fn local_stage_law() {
         // s_{k−1}: the local stage of next_iter starts from it.
         let previous = state.subs.clone();
         latin.next_iter(&mut state);
-        for ((sub, st), prev) in latin.substructures.iter().zip(&state.subs).zip(&previous) {
+        for ((sub, st), prev) in latin
+            .operators
+            .substructures
+            .iter()
+            .zip(&state.subs)
+            .zip(&previous)
+        {
             for (j, &i) in sub.links.iter().enumerate() {
                 let link = &s.links[i];
                 let (k, t0) = (link.stiffness, link.prestress);

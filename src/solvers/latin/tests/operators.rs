@@ -9,6 +9,7 @@ use std::sync::Arc;
 /// Every substructure's operators that a test compares: L_E, and on its own dofs Z_E and K⁺_E.
 fn operator_bits(latin: &Latin<'_>) -> Vec<Vec<u64>> {
     latin
+        .operators
         .substructures
         .iter()
         .map(|sub| {
@@ -38,7 +39,7 @@ fn a_rebuild_and_its_undo_give_the_set_up_operators_bit_for_bit() {
     let differing = set_up.iter().zip(&rebuilt).filter(|(a, b)| a != b).count();
     assert_eq!(
         differing,
-        latin.substructures.len(),
+        latin.operators.substructures.len(),
         "every substructure has a slack cable"
     );
     assert!(latin.set_search(vec![false; s.links.len()]));
@@ -63,14 +64,14 @@ fn after_a_rebuild_with_soft_modes_every_operator_is_condensed_on_its_bases() {
     };
     let mut latin = Latin::new(&model, settings).unwrap();
     let condensed_on_its_bases = |latin: &Latin<'_>| {
-        latin.substructures.iter().all(|sub| {
+        latin.operators.substructures.iter().all(|sub| {
             let ops = sub.ops();
-            let (z, k_star) = sub.condense_operators(&ops.factor, latin.dm);
+            let (z, k_star) = sub.condense_operators(&ops.factor, latin.world.dm);
             let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             ops.z.as_ref().map(bits) == Some(bits(&z)) && bits(&ops.k_star) == bits(&k_star)
         })
     };
-    let macro_dofs = latin.macro_problem.n_forces;
+    let macro_dofs = latin.operators.macro_problem.n_forces;
     let mut slack = slack_every(s, 3);
     assert!(latin.set_search(slack.clone()));
     assert!(
@@ -78,18 +79,18 @@ fn after_a_rebuild_with_soft_modes_every_operator_is_condensed_on_its_bases() {
         "slack on a third of the cables"
     );
     assert_ne!(
-        latin.macro_problem.n_forces, macro_dofs,
+        latin.operators.macro_problem.n_forces, macro_dofs,
         "the modes were not retaken"
     );
     let one_more = (0..s.links.len())
         .find(|&i| s.links[i].unilateral && !slack[i])
         .expect("a taut cable");
     slack[one_more] = true;
-    let macro_dofs = latin.macro_problem.n_forces;
+    let macro_dofs = latin.operators.macro_problem.n_forces;
     assert!(latin.set_search(slack));
     assert!(condensed_on_its_bases(&latin), "one cable more");
     assert_eq!(
-        latin.macro_problem.n_forces, macro_dofs,
+        latin.operators.macro_problem.n_forces, macro_dofs,
         "one cable retook a substructure's modes"
     );
 }
@@ -105,10 +106,10 @@ fn the_macro_problems_accuracy_does_not_depend_on_the_status() {
     let model = Model::linear(grid_structure(64));
     let s = &model.structure;
     let mut latin = Latin::new(&model, settings([16, 16], WeakInterfaces::Macro)).unwrap();
-    let taut = latin.macro_problem.forward_error();
+    let taut = latin.operators.macro_problem.forward_error();
     let slack = slack_every(s, 2);
     assert!(latin.set_search(slack));
-    let slack = latin.macro_problem.forward_error();
+    let slack = latin.operators.macro_problem.forward_error();
     println!("macro forward error: taut {taut:.1e}, half the cables slack {slack:.1e}");
     assert!(taut < 1e-9 && slack < 10.0 * taut, "{taut:e} {slack:e}");
 }
@@ -122,6 +123,7 @@ fn substructures_of_one_shape_share_their_pattern() {
     let model = Model::linear(grid_structure(64));
     let latin = Latin::new(&model, settings([16, 16], WeakInterfaces::Macro)).unwrap();
     let patterns: Vec<&std::sync::Arc<crate::linalg::StiffnessPattern>> = latin
+        .operators
         .substructures
         .iter()
         .map(|sub| &sub.ops().pattern)
@@ -208,7 +210,11 @@ fn a_solve_without_z_e_is_the_solve_with_it() {
         )
         .unwrap();
         assert_eq!(
-            latin.substructures.iter().all(|sub| sub.ops().z.is_some()),
+            latin
+                .operators
+                .substructures
+                .iter()
+                .all(|sub| sub.ops().z.is_some()),
             keep_z
         );
         crate::solvers::drive(&mut latin, &f, None, &mut crate::solvers::Silent)
@@ -273,6 +279,7 @@ fn a_strip_one_module_wide_has_one_kernel_column_per_null_mode() {
     };
     let latin = Latin::new(&model, strips).unwrap();
     let columns: Vec<usize> = latin
+        .operators
         .substructures
         .iter()
         .map(|e| e.kernel.ncols())
@@ -315,6 +322,7 @@ fn the_parallel_gather_of_u_is_the_serial_mean_bit_for_bit() {
     let model = Model::linear(paper_structure());
     let latin = Latin::new(&model, settings([8, 8], WeakInterfaces::Macro)).unwrap();
     let subs: Vec<super::super::SubState> = latin
+        .operators
         .substructures
         .iter()
         .enumerate()
@@ -328,7 +336,7 @@ fn the_parallel_gather_of_u_is_the_serial_mean_bit_for_bit() {
         .collect();
     let n = model.structure.n_free;
     let (mut serial, mut count) = (vec![0.0; n], vec![0u32; n]);
-    for (sub, st) in latin.substructures.iter().zip(&subs) {
+    for (sub, st) in latin.operators.substructures.iter().zip(&subs) {
         for (local, &global) in sub.dof_global.iter().enumerate() {
             serial[global] += st.u[local];
             count[global] += 1;
@@ -404,6 +412,7 @@ fn a_slack_cable_is_soft_only_where_its_nodes_stay_held() {
     let s = &model.structure;
     let latin = Latin::new(&model, settings([4, 4], WeakInterfaces::Macro)).unwrap();
     let interface_dofs: std::collections::HashSet<usize> = latin
+        .operators
         .substructures
         .iter()
         .flat_map(|sub| sub.gamma_dofs.iter().map(|&d| sub.dof_global[d]))

@@ -9,10 +9,10 @@
 //! ([`LargeDistance::Unstable`]), and no model on the initial geometry can say so.
 
 use super::uniqueness::CHECKED_UP_TO_DOFS;
+use super::{Equilibrium, TautStiffness};
 use crate::linalg::SparseCholesky;
 use crate::model::material::{self, SlackRule};
 use crate::model::{CurrentGeometry, Model};
-use crate::solvers::{Equilibrium, TautStiffness};
 use crate::structure::Structure;
 
 /// A motion below this fraction of the structure's size is round-off, not a deflection.

@@ -7,13 +7,13 @@
 //! flagged not unique when such a v is found: one factorization of `K_c` per converged row, and
 //! the search for v only where `K_c` is singular.
 
+use super::Equilibrium;
 use crate::linalg::{
     dot, factorize_or_find_singular_below, norm, smallest_eigenvalues, SparseCholesky, SparseRow,
     StiffnessPattern, ZERO_MODES_COUNTED,
 };
 use crate::model::material::{carries_force, gap_scale, gap_slack};
 use crate::model::{largest_moving_nodes, Model};
-use crate::solvers::Equilibrium;
 use crate::structure::Structure;
 use nalgebra::{DMatrix, SymmetricEigen};
 
@@ -134,7 +134,7 @@ pub fn uniqueness(
     // Singular as `min_tangent_eigenvalue` calls it (below TANGENT_ZERO_RELATIVE of the mean
     // diagonal): under `prestress` and `large` a free motion's stiffness is round-off, not an
     // exact zero pivot, and a stricter test flipped `unique` from row to row.
-    let relative = crate::results::TANGENT_ZERO_RELATIVE;
+    let relative = super::TANGENT_ZERO_RELATIVE;
     if !factorize_or_find_singular_below(pattern, &values, &mut factor, relative) {
         return Uniqueness::Unique;
     }

@@ -101,3 +101,32 @@ pub fn natural_modes(
         })
         .collect())
 }
+
+/// The natural modes of the answers along a sweep (`output.modes`): `count` of them under
+/// `mass`, on the stiffness's pattern and symbolic analysis made at the first answer and kept.
+pub struct ModalAnalysis {
+    count: usize,
+    mass: MassKind,
+    analysed: Option<(StiffnessPattern, SparseCholesky)>,
+}
+
+impl ModalAnalysis {
+    /// `count` modes of each answer under `mass`.
+    pub fn new(count: usize, mass: MassKind) -> Self {
+        ModalAnalysis {
+            count,
+            mass,
+            analysed: None,
+        }
+    }
+
+    /// The modes at `eq` under `model`: none when `K_T − σM` factorizes for no shift tried.
+    pub fn of(&mut self, model: &Model, eq: &super::Equilibrium) -> Vec<NaturalMode> {
+        let (pattern, analysed) = self
+            .analysed
+            .get_or_insert_with(|| super::TautStiffness::analyse(&model.structure));
+        let carrying: Vec<bool> = eq.slack.iter().map(|&s| !s).collect();
+        let at = (&eq.displacements[..], &eq.tensions[..], &carrying[..]);
+        natural_modes(model, at, pattern, analysed, self.count, self.mass).unwrap_or_default()
+    }
+}

@@ -304,7 +304,7 @@ fn coarse_zero_modes(traces: &[RigidTrace]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solvers::{SetupError, TautStiffness};
+    use crate::analysis::{SetupError, TautStiffness};
     use crate::structure::{Clamp, GridSpec, LoadPattern, Loading, ModuleKind, NodeFix};
 
     fn grid(modules: [usize; 2], module: ModuleKind, clamp: Clamp) -> Structure {
