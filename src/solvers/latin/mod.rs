@@ -31,7 +31,6 @@ mod residual;
 mod search;
 mod set_up;
 mod settings;
-mod shapes;
 mod slack_direction;
 mod state;
 mod status_step;

@@ -3,9 +3,9 @@
 //! problem they make.
 
 use super::macro_problem::MacroProblem;
-use super::shapes::Shapes;
 use super::substructure::OperatorStorage;
 use super::{Interface, Partition, Substructure};
+use crate::decomposition::substructure::Shapes;
 use crate::decomposition::Exchange;
 use crate::model::Model;
 use crate::solvers::SetupError;

@@ -7,6 +7,7 @@ use super::macro_problem::MacroProblem;
 use super::{dof_ownership, enrichment, neighbours, operators, LinkShare, OperatorStorage};
 use super::{Distribution, InterfaceSet, Operators, SearchDirections};
 use super::{Latin, LatinSettings, Substructure, PARALLEL_MIN_DOFS};
+use crate::decomposition::substructure::holders;
 use crate::decomposition::{block, Exchange, Interfaces, OneProcess, Partition, WeakInterfaces};
 use crate::model::Model;
 use crate::solvers::SetupError;
@@ -298,15 +299,4 @@ impl Built<'_> {
             }),
         }
     }
-}
-
-/// Per node, how many of the partition's substructures hold it.
-fn holders(partition: &Partition, nodes: usize) -> Vec<u8> {
-    let mut holders = vec![0u8; nodes];
-    for topo in &partition.substructures {
-        for &n in &topo.nodes {
-            holders[n] += 1;
-        }
-    }
-    holders
 }

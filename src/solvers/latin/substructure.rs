@@ -3,22 +3,19 @@
 //! `K*_E = d_m I − d_m² R_Eᵀ C_E Z_E`, its kernel Q_E, `K⁺_E = (K*_E + Q Qᵀ)⁻¹ − Q Qᵀ` and the
 //! homogenised flexibility `L_E = K⁺_E − I/d_m`.
 
-use super::shapes::Shapes;
 use super::Interface;
 use crate::decomposition::kernel::{substructure_kernel, InterfaceTrace};
 use crate::decomposition::partition::SubstructureTopology;
+use crate::decomposition::substructure::{LocalDofs, Shapes};
 use crate::linalg::{gemv_transposed, SpdSolver, StiffnessPattern};
 use crate::model::Model;
-use crate::structure::{transverse_pair, LinkDofs, Structure, CLAMPED};
+use crate::structure::{transverse_pair, LinkDofs, Structure};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
 mod assembly;
 mod kernel;
-use assembly::{
-    clear_local_dofs, compatibility_rows, geometric_rows, interface_sides, number_local_dofs,
-    stiffness,
-};
+use assembly::{geometric_rows, interface_sides, stiffness};
 use kernel::{complete_kernel, invert, rigid_kernel};
 
 /// E's view of one of its interfaces.
@@ -116,7 +113,7 @@ impl Substructure {
     /// E's operators, built in the order of docs/method.md §4 "Linear stage", kept as
     /// `storage` says. `shapes`: the patterns and analyses of the
     /// substructures built so far, shared with E when it has the shape of one. `local_dof` is
-    /// a scratch map of length `3·nodes`, all [`CLAMPED`] on entry and on exit.
+    /// a scratch map of length `3·nodes`, all [`CLAMPED`](crate::structure::CLAMPED) on entry and on exit.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn new(
         index: usize,
@@ -180,7 +177,7 @@ impl Substructure {
     }
 
     /// Steps 1–3 of [`Self::new`]: E with its indexing and no operators, and its share of
-    /// K_G(t0) on its dofs. `local_dof` is all [`CLAMPED`] on entry and on exit.
+    /// K_G(t0) on its dofs. `local_dof` is all [`CLAMPED`](crate::structure::CLAMPED) on entry and on exit.
     fn indexed(
         index: usize,
         topology: &SubstructureTopology,
@@ -190,14 +187,17 @@ impl Substructure {
         local_dof: &mut [usize],
     ) -> (Substructure, Vec<(usize, LinkDofs, f64)>) {
         let structure = &model.structure;
-        // 1. E's local dofs, numbered in `local_dof` until step 3 is done.
-        let (dof_global, load_share) = number_local_dofs(topology, structure, holders, local_dof);
-        // 2. B_E, one row `e = n·(U_b − U_a)` per link on E's dofs, and E's share of K_G(t0).
-        let link_dofs = compatibility_rows(topology, structure, local_dof);
+        // 1.–2. E's local dofs (numbered in `local_dof` until step 3 is done) and B_E, one row
+        //       `e = n·(U_b − U_a)` per link on them (the substructure room's); E's share of K_G(t0).
+        let LocalDofs {
+            dof_global,
+            load_share,
+            link_dofs,
+        } = LocalDofs::number(topology, structure, holders, local_dof);
         let geometric = geometric_rows(topology, model, local_dof);
         // 3. C_E and R_E: E's interfaces, their rows in U_EΓ and their columns in u_E.
         let (sides, gamma_dofs, n_macro) = interface_sides(index, interfaces, local_dof);
-        clear_local_dofs(topology, local_dof);
+        LocalDofs::clear(topology, local_dof);
         let sub = Substructure {
             links: topology.links.clone(),
             dof_global,

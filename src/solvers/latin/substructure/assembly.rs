@@ -1,54 +1,8 @@
-//! Steps 1–4 of a substructure's set-up (docs/method.md §4 "Linear stage"): its local dofs,
-//! B_E and its share of K_G, its interfaces' rows and columns, and the values of K_E.
+//! Steps 2–4 of a substructure's set-up (docs/method.md §4 "Linear stage"), beside its local
+//! dofs and B_E from the substructure room ([`crate::decomposition::substructure`]): its share
+//! of K_G, its interfaces' rows and columns, and the values of K_E.
 
 use super::*;
-
-/// E's local dofs: the free components of its nodes, in node order (a node held on some
-/// components only keeps the others; held components stay out of E, like clamped nodes).
-/// Returns each one's global free dof and the share of a nodal load E carries
-/// (1 / substructures holding the node); `local_dof` maps `3·node + c` to it.
-pub(super) fn number_local_dofs(
-    topology: &SubstructureTopology,
-    structure: &Structure,
-    holders: &[u8],
-    local_dof: &mut [usize],
-) -> (Vec<usize>, Vec<f64>) {
-    let mut dof_global = Vec::with_capacity(3 * topology.nodes.len());
-    let mut load_share = Vec::with_capacity(3 * topology.nodes.len());
-    for &node in &topology.nodes {
-        for c in 0..3 {
-            let global = structure.dof_of[3 * node + c];
-            if global != CLAMPED {
-                local_dof[3 * node + c] = dof_global.len();
-                dof_global.push(global);
-                load_share.push(1.0 / holders[node] as f64);
-            }
-        }
-    }
-    (dof_global, load_share)
-}
-
-/// Undo [`number_local_dofs`]: `local_dof` all [`CLAMPED`] again.
-pub(super) fn clear_local_dofs(topology: &SubstructureTopology, local_dof: &mut [usize]) {
-    for &node in &topology.nodes {
-        for c in 0..3 {
-            local_dof[3 * node + c] = CLAMPED;
-        }
-    }
-}
-
-/// B_E: per link of E, its row `e = n·(U_b − U_a)` on E's local dofs.
-pub(super) fn compatibility_rows(
-    topology: &SubstructureTopology,
-    structure: &Structure,
-    local_dof: &[usize],
-) -> Vec<LinkDofs> {
-    topology
-        .links
-        .iter()
-        .map(|&i| structure.links[i].compatibility_row(local_dof))
-        .collect()
-}
 
 /// E's share of `K_G(t0) = Σ (t0/L)(I − n nᵀ)` (docs/method.md §8), with `I − n nᵀ = p pᵀ +
 /// q qᵀ`, when the model has the prestress's geometric stiffness: per link of E (its index j

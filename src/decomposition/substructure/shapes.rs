@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex};
 /// The shapes met so far while substructures are built (in parallel): each distinct pattern
 /// once, with a factorization workspace on its symbolic analysis when it is factorised sparse.
 #[derive(Default)]
-pub(super) struct Shapes {
+pub struct Shapes {
     seen: Mutex<Vec<Shape>>,
 }
 
@@ -25,7 +25,7 @@ impl Shapes {
     /// The shared pattern equal to `pattern`, and the factor of `values` on it: on the
     /// shape's symbolic analysis when the factor is sparse (the analysis made by the first
     /// substructure of the shape), else [`SpdSolver::new`]'s dense inverse.
-    pub(super) fn factor(
+    pub fn factor(
         &self,
         pattern: StiffnessPattern,
         values: &[f64],
