@@ -48,6 +48,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         grid.as_ref().map(|g| g.modules),
         &geometry.nodes,
     )?;
+    solver::linear_fits_model(&solver, model)?;
     // 6. The files to write.
     let mut output = output::output_choice(raw.output)?;
     let point_masses = modal::point_masses(&raw.modal, &geometry, &index_of)?;

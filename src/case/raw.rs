@@ -5,6 +5,7 @@
 
 use crate::decomposition::WeakInterfaces;
 use crate::solvers::latin::{SearchPolicy, StopOn};
+use crate::solvers::newton::LinearSolve;
 use crate::solvers::Method;
 use crate::structure::{Clamp, ModuleKind};
 use serde::Deserialize;
@@ -243,4 +244,5 @@ pub(super) struct RawSolver {
     pub soft_modes: Option<f64>,
     pub macro_degree: Option<usize>,
     pub reference: Option<ReferenceChoice>,
+    pub linear: Option<LinearSolve>,
 }

@@ -5,6 +5,7 @@ use super::numbers::{number, positive, shown};
 use super::raw::RawSolver;
 use super::{CaseError, SolverChoice};
 use crate::solvers::latin::{LatinSettings, SearchDirection, SearchPolicy, MAX_MACRO_DEGREE};
+use crate::solvers::newton::LinearSolve;
 
 /// The deepest Anderson history a case may ask for: each level keeps two vectors of the size
 /// of the LATIN state, and depths beyond about 10 did not pay on any case measured.
@@ -42,6 +43,11 @@ pub(super) fn solver_choice(
         choice.latin.tolerance = tol;
     }
     latin_settings(&raw, modules, nodes, &mut choice.latin)?;
+    // newton's substructured solve works on the case's partition.
+    choice.newton.subdomains = choice.latin.subdomains;
+    if let Some(linear) = raw.linear {
+        choice.newton.linear = linear;
+    }
     choice.subdomains_given = raw.subdomains.is_some();
     if let Some(reference) = raw.reference {
         choice.reference = reference;
@@ -59,6 +65,25 @@ pub(super) fn solver_choice(
         choice.latin.max_iterations = max_iterations;
     }
     Ok(choice)
+}
+
+/// `solver.linear = "krylov"` solves newton's systems on the initial geometry (`linear`,
+/// `prestress`, and `auto`'s rows until it moves to `large`, whose rows are then solved
+/// directly); a case pinned to `large` is refused.
+pub(super) fn linear_fits_model(
+    choice: &SolverChoice,
+    model: crate::model::GeometricModel,
+) -> Result<(), CaseError> {
+    if choice.newton.linear == LinearSolve::Krylov && model.updates_geometry() {
+        return Err(CaseError::invalid(
+            "solver.linear",
+            "\"krylov\"",
+            "newton's substructured solve works on the initial geometry for now: with \
+             `model.geometry = \"large\"` use `solver.linear = \"direct\"` (the default), or \
+             `model.geometry = \"auto\"`, whose rows on the initial geometry it solves",
+        ));
+    }
+    Ok(())
 }
 
 /// The LATIN keys of `[solver]` on a grid of `modules` (`None`: a general structure of

@@ -10,6 +10,7 @@
 //! | `kernel` | rigid frames and the kernel of a substructure's condensed operator |
 //! | `exchange` | the collective operations of the processes that share a solve |
 //! | `homogenised` | a substructure's homogenised flexibility on its macro dofs |
+//! | `schwarz` | a two-level overlapping Schwarz preconditioner with a GenEO coarse space |
 //! | `substructure` | one substructure's own dofs, factor and solves, for any substructure method |
 
 mod exchange;
@@ -18,6 +19,7 @@ pub(crate) mod interfaces;
 pub(crate) mod kernel;
 pub(crate) mod macro_basis;
 pub(crate) mod partition;
+pub mod schwarz;
 pub mod substructure;
 
 pub use exchange::{block, Exchange, OneProcess};

@@ -81,6 +81,9 @@ pub struct SummaryRow {
     pub model_reason: String,
     /// The case pins the model (else `auto` chose it): only a pinned model is warned of.
     pub model_pinned: bool,
+    /// PCG iterations over all of newton's steps with `solver.linear = "krylov"` (column
+    /// `krylov_iterations`, empty for a direct solve).
+    pub krylov_iterations: Option<usize>,
 }
 
 impl SummaryRow {
@@ -127,6 +130,7 @@ impl SummaryRow {
             model: measures.geometry,
             model_reason: String::new(),
             model_pinned: true,
+            krylov_iterations: solution.info.krylov_iterations,
         }
     }
 }
@@ -173,7 +177,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique,model";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique,model,krylov_iterations";
 
 /// The columns `summary.csv` gains when the case checks members (a strength or an inertia).
 pub const SUMMARY_CHECK_COLUMNS: &str = ",max_utilisation,max_utilisation_member";
@@ -212,7 +216,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -251,6 +255,9 @@ pub fn summary_line(r: &SummaryRow) -> String {
         r.path_reached.map(alpha_label).unwrap_or_default(),
         r.uniqueness.as_ref().map_or("", |u| u.column()),
         r.model.name(),
+        r.krylov_iterations
+            .map(|k| k.to_string())
+            .unwrap_or_default(),
     )
 }
 

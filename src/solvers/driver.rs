@@ -124,6 +124,7 @@ pub fn drive_from<S: Solver + ?Sized>(
             measure: solver.measure(),
             stopping_value: progress.stopping_value,
             rebuilds: progress.rebuilds,
+            krylov_iterations: progress.krylov_iterations,
             solve_seconds: clock.seconds(),
             at_roundoff: status == Status::Converged && progress.at_roundoff,
             no_equilibrium: runaway,

@@ -421,6 +421,7 @@ impl Solver for PcgLcp<'_> {
             // r(U) would cost a solve with K per iteration.
             equilibrium_residual: None,
             rebuilds: 0,
+            krylov_iterations: None,
             slack_cables: state.x.iter().filter(|&&xi| xi > 0.0).count(),
             at_roundoff: false,
             stop,

@@ -22,6 +22,9 @@ pub struct Progress {
     pub rebuilds: usize,
     /// Slack cables of this state.
     pub slack_cables: usize,
+    /// PCG iterations of newton's substructured linear solves in this solve so far
+    /// (`solver.linear = "krylov"`); `None` for a direct solve and the other solvers.
+    pub krylov_iterations: Option<usize>,
     /// `Some` when the solver stops here: [`Status::Converged`] when its stopping criterion
     /// holds, [`Status::Stalled`] when it cannot go on. `None`: it can take another iteration.
     pub stop: Option<Status>,

@@ -119,6 +119,9 @@ pub struct SolveInfo {
     pub stopping_value: f64,
     /// Operator rebuilds during the solve (status-following LATIN; 0 for the others).
     pub rebuilds: usize,
+    /// PCG iterations over every Newton step of the solve (newton with `solver.linear =
+    /// "krylov"`; `None` otherwise).
+    pub krylov_iterations: Option<usize>,
     /// Wall time of the iterations (the solver's own work, observers excluded), s.
     pub solve_seconds: f64,
     /// Converged because the stopping measure is at round-off, not because the criterion

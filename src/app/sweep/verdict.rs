@@ -408,6 +408,7 @@ mod tests {
                 measure: Measure::ComplementarityResidual,
                 stopping_value: f64::NAN,
                 rebuilds: 0,
+                krylov_iterations: None,
                 solve_seconds: 0.0,
                 at_roundoff: false,
                 no_equilibrium: Some(none),

@@ -299,6 +299,7 @@ impl<R: TangentStep> Solver for Large<'_, R> {
             stopping_value: state.eval.residual,
             equilibrium_residual: Some(state.eval.residual),
             rebuilds: 0,
+            krylov_iterations: None,
             slack_cables: material::slack_flags(
                 self.structure,
                 &state.eval.trial,

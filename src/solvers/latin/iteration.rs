@@ -380,6 +380,7 @@ impl Solver for Latin<'_> {
             stopping_value: state.eta,
             equilibrium_residual: Some(state.residual),
             rebuilds: state.rebuilds,
+            krylov_iterations: None,
             slack_cables: state.slack_cables,
             at_roundoff: stop == Some(Status::Converged) && !criterion,
             stop,

@@ -17,6 +17,7 @@
 //!
 //! Stopping measure: [`Measure::EquilibriumResidual`], `‖Bᵀτ − F‖ / (‖F‖ + ‖|B|ᵀ|τ|‖)`.
 
+mod krylov;
 mod line_search;
 
 use super::{
@@ -29,6 +30,8 @@ use crate::linalg::{
 use crate::model::material::{self, SlackRule};
 use crate::model::{unbalances_on, Model};
 use crate::structure::Structure;
+use krylov::KrylovSolve;
+pub use krylov::LinearSolve;
 pub(crate) use line_search::{exact_line_search, EnergyAlongStep};
 use rayon::prelude::*;
 
@@ -42,6 +45,11 @@ pub struct NewtonSettings {
     /// Reuse a factor of a nearby Hessian as a CG preconditioner (see the module doc);
     /// `false` refactorises at every step whose taut set is not all links. Default true.
     pub reuse_factor: bool,
+    /// How each Newton system is solved (`solver.linear`). Default [`LinearSolve::Direct`].
+    pub linear: LinearSolve,
+    /// The partition a substructured solve works on (`solver.subdomains`, or the structure's
+    /// default partition). Default `[4, 4]`.
+    pub subdomains: [usize; 2],
 }
 
 impl Default for NewtonSettings {
@@ -50,6 +58,8 @@ impl Default for NewtonSettings {
             tolerance: 1e-10,
             max_iterations: 100,
             reuse_factor: true,
+            linear: LinearSolve::Direct,
+            subdomains: [4, 4],
         }
     }
 }
@@ -73,6 +83,10 @@ pub struct NewtonWork {
     /// Columns of the low-rank correction computed (kept columns are not recomputed): one
     /// right-hand side of a forward substitution each.
     pub correction_columns: usize,
+    /// PCG iterations of the substructured solves (`solver.linear = "krylov"`).
+    pub krylov_iterations: usize,
+    /// Subdomains refactorised (with their GenEO vectors) by the substructured solves.
+    pub preconditioner_updates: usize,
 }
 
 /// Regularisation μ = `REGULARISATION · min(1, residual)² · mean diagonal`: enough to step
@@ -144,6 +158,8 @@ pub struct Newton<'s> {
     hessian: Vec<f64>,
     mean_stiffness: f64,
     work: NewtonWork,
+    /// The substructured solve, with `solver.linear = "krylov"`.
+    krylov: Option<KrylovSolve>,
 }
 
 /// The iterate.
@@ -187,6 +203,8 @@ impl<'s> Newton<'s> {
             hessian: vec![0.0; taut.values.len()],
             mean_stiffness: taut.pattern.mean_diagonal(&taut.values),
             work: NewtonWork::default(),
+            krylov: (settings.linear == LinearSolve::Krylov)
+                .then(|| KrylovSolve::new(model, settings.subdomains)),
         })
     }
 
@@ -245,13 +263,20 @@ impl<'s> Newton<'s> {
             .zip(&state.trial)
             .map(|(l, &trial)| material::is_taut(l, trial))
             .collect();
+        // H = Σ_taut k Bᵢᵀ Bᵢ + μ I, μ = REGULARISATION · min(1, r)² · mean diagonal.
+        let mut mu = REGULARISATION * state.residual.min(1.0).powi(2) * self.mean_stiffness;
+        if let Some(krylov) = &mut self.krylov {
+            let unbalance = state.residual.max(state.load_residual);
+            let stop = (unbalance, self.settings.tolerance);
+            if krylov.solve(self.model, &taut_links, mu, stop, step, &mut self.work) {
+                return;
+            }
+        }
         if taut_links.iter().all(|&t| t) {
             self.work.taut_steps += 1;
             self.taut.factor.solve_in_place(step);
             return;
         }
-        // H = Σ_taut k Bᵢᵀ Bᵢ + μ I, μ = REGULARISATION · min(1, r)² · mean diagonal.
-        let mut mu = REGULARISATION * state.residual.min(1.0).powi(2) * self.mean_stiffness;
         if self.settings.reuse_factor
             && self.solve_with_nearby_factor(&taut_links, mu, step, state.residual)
         {
@@ -384,6 +409,9 @@ impl Solver for Newton<'_> {
 
     /// U = 0.
     fn init(&mut self, load: &[f64]) -> NewtonState {
+        if let Some(krylov) = &mut self.krylov {
+            krylov.begin(&self.work);
+        }
         self.state_at(load, vec![0.0; self.structure.n_free])
     }
 
@@ -393,6 +421,9 @@ impl Solver for Newton<'_> {
     fn warm_init(&mut self, load: &[f64], previous: &Equilibrium) -> NewtonState {
         let u = &previous.displacements;
         if u.len() == self.structure.n_free && u.iter().all(|x| x.is_finite()) {
+            if let Some(krylov) = &mut self.krylov {
+                krylov.begin(&self.work);
+            }
             self.state_at(load, u.clone())
         } else {
             self.init(load)
@@ -453,6 +484,7 @@ impl Solver for Newton<'_> {
             // newton's own measure is r(U).
             equilibrium_residual: Some(state.residual),
             rebuilds: 0,
+            krylov_iterations: self.krylov.as_ref().map(|k| k.iterations(&self.work)),
             slack_cables: material::slack_flags(self.structure, &state.trial, SlackRule::Clipped)
                 .iter()
                 .filter(|&&x| x)
@@ -499,48 +531,4 @@ fn assemble_hessian(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::structure::{GridSpec, LoadPattern};
-
-    /// The link-by-link product CG uses is the one of the Hessian a factorization gets, for a
-    /// taut set with slack cables and a regularisation; and it changes when a link's state
-    /// does.
-    #[test]
-    fn hessian_product_is_the_assembled_hessians() {
-        let spec = GridSpec {
-            modules: [3, 2],
-            ..GridSpec::default()
-        };
-        let model = Model::linear(Structure::grid(&spec, &LoadPattern::default()));
-        let s = &model.structure;
-        let taut = TautStiffness::new(&model).expect("regular");
-        let taut_links: Vec<bool> = s
-            .links
-            .iter()
-            .enumerate()
-            .map(|(i, l)| !l.unilateral || i % 3 != 0)
-            .collect();
-        assert!(taut_links.iter().any(|t| !t), "some cables slack");
-        let mu = 1e-3 * taut.pattern.mean_diagonal(&taut.values);
-        let mut assembled = vec![0.0; taut.values.len()];
-        assemble_hessian(&model, &taut.pattern, &taut_links, mu, &mut assembled);
-        let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
-        let (mut expected, mut product) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
-        taut.pattern.sym_matvec(&assembled, &v, &mut expected);
-        model.tangent_product(&taut_links, mu, &v, &mut product);
-        let scale = norm(&expected);
-        for (p, e) in product.iter().zip(&expected) {
-            assert!((p - e).abs() <= 1e-12 * scale, "{p} against {e}");
-        }
-        let mut one_more_taut = taut_links.clone();
-        let flipped = one_more_taut.iter().position(|t| !t).expect("a slack link");
-        one_more_taut[flipped] = true;
-        let mut changed = vec![0.0; s.n_free];
-        model.tangent_product(&one_more_taut, mu, &v, &mut changed);
-        assert!(changed
-            .iter()
-            .zip(&product)
-            .any(|(a, b)| (a - b).abs() > 1e-9 * scale));
-    }
-}
+mod tests;

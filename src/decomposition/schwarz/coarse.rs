@@ -1,0 +1,191 @@
+//! The coarse problem of the two-level Schwarz preconditioner: `E = Zᵀ H Z` with
+//! `Z = [R_jᵀ Z_j]_j` (the subdomains' GenEO vectors), assembled block by block from
+//! `Y_j = H R_jᵀ Z_j` (H applied link by link, so on Ω_j and one layer of dofs around it), and
+//! factorised by faer's sparse Cholesky on its own analysis (docs/method.md, "Newton–Krylov on
+//! the substructures").
+
+use super::local::LocalProblem;
+use super::overlap::Overlap;
+use crate::linalg::{NotPositiveDefinite, SparseCholesky, StiffnessPattern};
+use crate::structure::Structure;
+use faer::Par;
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+/// A shift, relative to E's mean diagonal, added when E does not factorise (coarse vectors of
+/// neighbouring subdomains dependent to round-off); multiplied by 100 at each retry.
+const FIRST_SHIFT: f64 = 1e-12;
+
+/// The factorised coarse matrix E.
+pub(super) struct Coarse {
+    /// First coarse unknown of each subdomain (one more entry than subdomains).
+    pub offsets: Vec<usize>,
+    factor: Option<SparseCholesky>,
+}
+
+impl Coarse {
+    /// No coarse space.
+    pub(super) fn none(subdomains: usize) -> Coarse {
+        Coarse {
+            offsets: vec![0; subdomains + 1],
+            factor: None,
+        }
+    }
+
+    /// The coarse unknowns.
+    pub(super) fn len(&self) -> usize {
+        self.offsets.last().copied().unwrap_or(0)
+    }
+
+    /// `E = Zᵀ H Z` for `H = Σ w_i b_i b_iᵀ + μ I`, factorised.
+    pub(super) fn new(
+        structure: &Structure,
+        overlap: &Overlap,
+        locals: &[LocalProblem],
+        (weights, mu): (&[f64], f64),
+    ) -> Result<Coarse, NotPositiveDefinite> {
+        let mut offsets = vec![0usize; locals.len() + 1];
+        for (j, local) in locals.iter().enumerate() {
+            offsets[j + 1] = offsets[j] + local.coarse.ncols();
+        }
+        let n = offsets[locals.len()];
+        if n == 0 {
+            return Ok(Coarse::none(locals.len()));
+        }
+        // Per subdomain j, the blocks E_ij = Z_iᵀ (Y_j on Ω_i) of the subdomains i ≥ j that
+        // Y_j reaches.
+        let blocks: Vec<Vec<(usize, DMatrix<f64>)>> = (0..locals.len())
+            .into_par_iter()
+            .map(|j| column_blocks(structure, overlap, locals, j, (weights, mu)))
+            .collect();
+        // Lower-triangle entries of E in coarse numbering.
+        let mut entries = Vec::new();
+        let mut values = Vec::new();
+        for (j, column) in blocks.iter().enumerate() {
+            for (i, block) in column {
+                for b in 0..block.ncols() {
+                    for a in 0..block.nrows() {
+                        let (row, col) = (offsets[*i] + a, offsets[j] + b);
+                        if row >= col {
+                            entries.push((row, col));
+                            values.push(block[(a, b)]);
+                        }
+                    }
+                }
+            }
+        }
+        let pattern = StiffnessPattern::from_lower_entries(n, &entries);
+        let mut e = vec![0.0; pattern.nnz()];
+        for (&(r, c), v) in entries.iter().zip(&values) {
+            let slot = pattern.slot(r, c).expect("an entry of the pattern");
+            e[slot] += v;
+        }
+        drop(entries);
+        let mut factor = SparseCholesky::analyse(&pattern, Par::rayon(0));
+        let mean = pattern.mean_diagonal(&e).abs();
+        let mut shift = 0.0;
+        let mut next = FIRST_SHIFT * mean;
+        for _ in 0..4 {
+            if factor.factorize(&pattern, &e).is_ok() {
+                return Ok(Coarse {
+                    offsets,
+                    factor: Some(factor),
+                });
+            }
+            for &s in &pattern.diag_slot {
+                e[s] += next - shift;
+            }
+            shift = next;
+            next *= 100.0;
+        }
+        factor.factorize(&pattern, &e)?;
+        Ok(Coarse {
+            offsets,
+            factor: Some(factor),
+        })
+    }
+
+    /// `c ← E⁻¹ c`.
+    pub(super) fn solve(&self, c: &mut [f64]) {
+        if let Some(factor) = &self.factor {
+            factor.solve_in_place(c);
+        }
+    }
+}
+
+/// The blocks `E_ij = Z_iᵀ H Z_j`, i ≥ j, of coarse column block j.
+fn column_blocks(
+    structure: &Structure,
+    overlap: &Overlap,
+    locals: &[LocalProblem],
+    j: usize,
+    (weights, mu): (&[f64], f64),
+) -> Vec<(usize, DMatrix<f64>)> {
+    let z = &locals[j].coarse;
+    let m = z.ncols();
+    if m == 0 {
+        return Vec::new();
+    }
+    let dofs = &overlap.dofs[j];
+    // The dofs Y_j = H R_jᵀ Z_j reaches: Ω_j's and those of its links.
+    let mut reach: Vec<usize> = dofs.clone();
+    for &(i, _) in &overlap.links[j] {
+        reach.extend(structure.link_dofs[i].iter().map(|(d, _)| d));
+    }
+    reach.sort_unstable();
+    reach.dedup();
+    let at = |d: usize| reach.binary_search(&d).expect("a reached dof");
+    // Y_j = Σ_links w b (bᵀ R_jᵀ Z_j) + μ R_jᵀ Z_j.
+    let mut y = DMatrix::<f64>::zeros(reach.len(), m);
+    let mut t = vec![0.0; m];
+    for &(i, _) in &overlap.links[j] {
+        let w = weights[i];
+        if w == 0.0 {
+            continue;
+        }
+        let row = &structure.link_dofs[i];
+        t.iter_mut().for_each(|v| *v = 0.0);
+        for (d, c) in row.iter() {
+            if let Ok(k) = dofs.binary_search(&d) {
+                for (tv, zv) in t.iter_mut().zip(z.row(k).iter()) {
+                    *tv += c * zv;
+                }
+            }
+        }
+        for (d, c) in row.iter() {
+            let r = at(d);
+            for (col, tv) in t.iter().enumerate() {
+                y[(r, col)] += w * c * tv;
+            }
+        }
+    }
+    for (k, &d) in dofs.iter().enumerate() {
+        let r = at(d);
+        for col in 0..m {
+            y[(r, col)] += mu * z[(k, col)];
+        }
+    }
+    // The subdomains i ≥ j that hold a reached dof.
+    let mut near: Vec<usize> = reach
+        .iter()
+        .flat_map(|&d| overlap.holders_of(d))
+        .filter(|&i| i >= j)
+        .collect();
+    near.sort_unstable();
+    near.dedup();
+    near.into_iter()
+        .filter(|&i| locals[i].coarse.ncols() > 0)
+        .map(|i| {
+            // E_ij = Z_i[Ω_i ∩ reach]ᵀ Y_j[Ω_i ∩ reach].
+            let common: Vec<(usize, usize)> = overlap.dofs[i]
+                .iter()
+                .enumerate()
+                .filter_map(|(k, &d)| reach.binary_search(&d).ok().map(|r| (k, r)))
+                .collect();
+            let zi = &locals[i].coarse;
+            let zi_rows = DMatrix::from_fn(common.len(), zi.ncols(), |a, b| zi[(common[a].0, b)]);
+            let y_rows = DMatrix::from_fn(common.len(), m, |a, b| y[(common[a].1, b)]);
+            (i, zi_rows.transpose() * y_rows)
+        })
+        .collect()
+}

@@ -1,0 +1,227 @@
+//! A two-level overlapping Schwarz preconditioner with a GenEO coarse space, for `H x = b` with
+//! `H = Σ_i w_i b_i b_iᵀ + μ I` (newton's Hessian on a taut set: docs/method.md, "Newton–Krylov
+//! on the substructures"):
+//!
+//! `M⁻¹ = Σ_j R_jᵀ A_j⁻¹ R_j + Z E⁻¹ Zᵀ`, `A_j = R_j H R_jᵀ`, `E = Zᵀ H Z`,
+//!
+//! Z the subdomains' GenEO vectors (`A_j^Neu v = λ D_j A_j D_j v`, λ < τ), so that the
+//! condition number of `M⁻¹ H` is bounded by a function of τ and of the number of subdomains
+//! sharing a dof alone, whatever the number of subdomains and whichever cables are slack (the
+//! kernel of a subdomain whose cables went slack is among its vectors). Measured first in
+//! docs/performance.md ("Toward the exact answer at any size").
+//!
+//! | file | what |
+//! |---|---|
+//! | `overlap` | the overlapping subdomains of a partition, the partition of unity |
+//! | `local` | a subdomain's Dirichlet factor and its GenEO vectors |
+//! | `coarse` | `E = Zᵀ H Z`, assembled block by block and factorised |
+
+mod coarse;
+mod local;
+mod overlap;
+
+use super::substructure::SubstructureSolves;
+use super::Partition;
+use crate::linalg::NotPositiveDefinite;
+use crate::structure::Structure;
+use coarse::Coarse;
+use local::LocalProblem;
+use nalgebra::DVector;
+pub use overlap::Overlap;
+use rayon::prelude::*;
+
+/// Settings, each default written once, at its field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SchwarzSettings {
+    /// Layers of nodes each substructure is grown by. Default 1.
+    pub layers: usize,
+    /// GenEO's threshold τ: a subdomain keeps the vectors with λ < τ. The condition number is
+    /// bounded by about `(1 + k₀)(2 + k₀(2k₀ + 1)/τ)`, k₀ the most subdomains sharing a dof.
+    /// Default 0.25 (κ ≈ 9–10 measured on 16 to 256 substructures, taut and softened).
+    pub tau: f64,
+    /// The most GenEO vectors a subdomain keeps. Default 400.
+    pub max_modes: usize,
+}
+
+impl Default for SchwarzSettings {
+    fn default() -> Self {
+        SchwarzSettings {
+            layers: 1,
+            tau: 0.25,
+            max_modes: 400,
+        }
+    }
+}
+
+/// Why the preconditioner could not be made: the Dirichlet matrix of a subdomain (or the
+/// coarse matrix) is not positive definite, so H is not.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NotDefinite {
+    /// The subdomain, or `None` for the coarse matrix.
+    pub subdomain: Option<usize>,
+}
+
+/// What a [`TwoLevelSchwarz::update`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Refresh {
+    /// Subdomains refactorised (their links' weights changed).
+    pub subdomains: usize,
+    /// The coarse space's size after it.
+    pub coarse: usize,
+    /// Subdomains whose GenEO vectors stopped at `max_modes` or did not all converge.
+    pub incomplete: usize,
+}
+
+/// The preconditioner: the subdomains (made once), their factors and the coarse factor (made
+/// anew by [`TwoLevelSchwarz::update`]).
+pub struct TwoLevelSchwarz {
+    settings: SchwarzSettings,
+    overlap: Overlap,
+    locals: Vec<LocalProblem>,
+    coarse: Coarse,
+    /// The coarse factor is that of the subdomains' current vectors.
+    coarse_ready: bool,
+    n: usize,
+}
+
+impl TwoLevelSchwarz {
+    /// The subdomains of `partition` on `structure`, grown by `settings.layers`, with their
+    /// patterns and symbolic analyses; nothing factorised yet.
+    pub fn new(
+        structure: &Structure,
+        partition: &Partition,
+        settings: SchwarzSettings,
+    ) -> TwoLevelSchwarz {
+        let overlap = Overlap::new(structure, partition, settings.layers);
+        let locals = (0..overlap.len())
+            .into_par_iter()
+            .map(|j| LocalProblem::new(structure, &overlap.dofs[j], &overlap.links[j]))
+            .collect();
+        TwoLevelSchwarz {
+            settings,
+            coarse: Coarse::none(overlap.len()),
+            coarse_ready: false,
+            overlap,
+            locals,
+            n: structure.n_free,
+        }
+    }
+
+    /// The preconditioner of `H = Σ w_i b_i b_iᵀ + μ I` (`weights` per link of `structure`):
+    /// the subdomains whose links' weights changed since their last factorisation are
+    /// refactorised with `mu` and get new GenEO vectors (the others keep theirs, made with an
+    /// earlier μ: a preconditioner need not be exact), then the coarse matrix is made anew.
+    pub fn update(
+        &mut self,
+        structure: &Structure,
+        weights: &[f64],
+        mu: f64,
+    ) -> Result<Refresh, NotDefinite> {
+        let settings = self.settings;
+        let unity = &self.overlap.unity;
+        let refreshed: Vec<Result<bool, usize>> = self
+            .locals
+            .par_iter_mut()
+            .enumerate()
+            .map(|(j, local)| {
+                if !local.changed(weights) {
+                    return Ok(false);
+                }
+                local
+                    .refresh(weights, mu, &unity[j], settings.tau, settings.max_modes)
+                    .map(|_| true)
+                    .map_err(|_: NotPositiveDefinite| j)
+            })
+            .collect();
+        let mut refresh = Refresh::default();
+        for r in refreshed {
+            match r {
+                Ok(true) => refresh.subdomains += 1,
+                Ok(false) => {}
+                Err(j) => return Err(NotDefinite { subdomain: Some(j) }),
+            }
+        }
+        refresh.incomplete = self.locals.iter().filter(|l| !l.complete).count();
+        if refresh.subdomains == 0 && self.coarse_ready {
+            // The same taut set: the coarse factor kept (made with an earlier μ).
+            refresh.coarse = self.coarse.len();
+            return Ok(refresh);
+        }
+        self.coarse_ready = false;
+        self.coarse = Coarse::new(structure, &self.overlap, &self.locals, (weights, mu))
+            .map_err(|_| NotDefinite { subdomain: None })?;
+        self.coarse_ready = true;
+        refresh.coarse = self.coarse.len();
+        Ok(refresh)
+    }
+
+    /// Every subdomain and the coarse matrix made anew at the next [`TwoLevelSchwarz::update`]
+    /// (after a change of μ that the kept factors must not miss).
+    pub fn forget_factors(&mut self) {
+        self.locals.iter_mut().for_each(LocalProblem::forget);
+        self.coarse_ready = false;
+    }
+
+    /// The number of subdomains.
+    pub fn subdomains(&self) -> usize {
+        self.locals.len()
+    }
+
+    /// The coarse space's size.
+    pub fn coarse_size(&self) -> usize {
+        self.coarse.len()
+    }
+
+    /// `r ← M⁻¹ r = Σ_j R_jᵀ A_j⁻¹ R_j r + Z E⁻¹ Zᵀ r` (additive, both levels).
+    pub fn apply(&self, r: &mut [f64]) {
+        debug_assert_eq!(r.len(), self.n);
+        let overlap = &self.overlap;
+        // Per subdomain: A_j⁻¹ R_j r and Z_jᵀ R_j r.
+        let parts: Vec<(Vec<f64>, DVector<f64>)> = self
+            .locals
+            .par_iter()
+            .enumerate()
+            .map(|(j, local)| {
+                let mut x: Vec<f64> = overlap.dofs[j].iter().map(|&d| r[d]).collect();
+                let c = local.coarse.tr_mul(&DVector::from_column_slice(&x));
+                local.solve(&mut x);
+                (x, c)
+            })
+            .collect();
+        // E⁻¹ Zᵀ r.
+        let mut c = vec![0.0; self.coarse.len()];
+        for (j, (_, cj)) in parts.iter().enumerate() {
+            c[self.coarse.offsets[j]..self.coarse.offsets[j + 1]].copy_from_slice(cj.as_slice());
+        }
+        self.coarse.solve(&mut c);
+        let lifted: Vec<DVector<f64>> = self
+            .locals
+            .par_iter()
+            .enumerate()
+            .map(|(j, local)| {
+                let cj = &c[self.coarse.offsets[j]..self.coarse.offsets[j + 1]];
+                &local.coarse * DVector::from_column_slice(cj)
+            })
+            .collect();
+        // Σ_j R_jᵀ (A_j⁻¹ R_j r + Z_j (E⁻¹ Zᵀ r)_j), in subdomain order.
+        r.iter_mut().for_each(|v| *v = 0.0);
+        for (j, ((x, _), z)) in parts.iter().zip(&lifted).enumerate() {
+            for ((&d, xv), zv) in overlap.dofs[j].iter().zip(x).zip(z.iter()) {
+                r[d] += xv + zv;
+            }
+        }
+    }
+}
+
+impl SubstructureSolves for TwoLevelSchwarz {
+    fn substructures(&self) -> usize {
+        self.locals.len()
+    }
+
+    /// `rhs[j] ← A_j⁻¹ rhs[j]`, the subdomains' Dirichlet solves (on Ω_j's dofs).
+    fn solve_each(&self, rhs: &mut [Vec<f64>]) {
+        rhs.par_iter_mut()
+            .zip(&self.locals)
+            .for_each(|(b, local)| local.solve(b));
+    }
+}

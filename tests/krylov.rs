@@ -1,0 +1,145 @@
+//! newton with its Newton systems solved on the substructures (`solver.linear = "krylov"`:
+//! PCG with a two-level Schwarz preconditioner whose GenEO coarse space follows the slack
+//! cables) gives direct newton's answer: the same slack set, displacements to 1e-8 relative,
+//! the same verdicts; and says how many PCG iterations it took.
+
+use std::path::Path;
+use tensolve::app::setup::{prepare, set_up};
+use tensolve::case::{self, Case};
+use tensolve::solvers::{Method, Silent, Solution, Status};
+
+/// `path` with the overrides `set`, loaded.
+fn case(path: &str, set: &[&str]) -> Case {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    case::load_with(Path::new(path), &set).unwrap()
+}
+
+/// newton's answers at every α of `case`, each from the previous (as `run` sweeps).
+fn answers(case: &Case) -> Vec<(f64, Solution)> {
+    let prepared = prepare(case).unwrap();
+    let mut newton = set_up(Method::Newton, &case.solver, &prepared).unwrap();
+    let mut previous = None;
+    case.load
+        .alphas
+        .iter()
+        .map(|&alpha| {
+            let load = prepared.model.load(alpha);
+            let solution = newton
+                .solver
+                .solve_from(&load, previous.as_ref(), None, &mut Silent);
+            previous = Some(solution.equilibrium.clone());
+            (alpha, solution)
+        })
+        .collect()
+}
+
+/// `‖a − b‖ / ‖b‖` (`‖a − b‖` where b = 0).
+fn relative(a: &[f64], b: &[f64]) -> f64 {
+    let diff = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let scale = b.iter().map(|y| y * y).sum::<f64>().sqrt();
+    if scale > 0.0 {
+        diff / scale
+    } else {
+        diff
+    }
+}
+
+/// Direct and substructured newton on `path` (with `set`) agree: status, slack set exactly,
+/// displacements to 1e-8; every substructured row counts its PCG iterations, every direct row
+/// none. Returns the substructured rows' PCG iterations.
+fn agree(path: &str, set: &[&str]) -> Vec<usize> {
+    let direct = answers(&case(path, set));
+    let mut krylov_set = set.to_vec();
+    krylov_set.push("solver.linear=\"krylov\"");
+    let krylov = answers(&case(path, &krylov_set));
+    assert_eq!(direct.len(), krylov.len());
+    direct
+        .iter()
+        .zip(&krylov)
+        .map(|((alpha, d), (_, k))| {
+            assert_eq!(d.info.status, k.info.status, "{path} at alpha {alpha}");
+            assert_eq!(d.info.krylov_iterations, None);
+            assert_eq!(
+                d.equilibrium.slack, k.equilibrium.slack,
+                "{path} at alpha {alpha}: slack sets differ"
+            );
+            let du = relative(&k.equilibrium.displacements, &d.equilibrium.displacements);
+            assert!(
+                du <= 1e-8,
+                "{path} at alpha {alpha}: displacements differ by {du:e}"
+            );
+            k.info
+                .krylov_iterations
+                .expect("a substructured row counts its PCG iterations")
+        })
+        .collect()
+}
+
+#[test]
+fn the_paper_case_substructured_is_direct_newtons() {
+    // 16 × 16 modules on the default 4 × 4 partition, α from 0 to 1: 0 to 11 % slack.
+    let iterations = agree("cases/paper.toml", &["model.geometry=\"linear\""]);
+    // α = 0 is the prestress alone: newton's first state may already balance it.
+    assert!(iterations[1..].iter().all(|&k| k > 0), "{iterations:?}");
+}
+
+#[test]
+fn a_prestress_model_substructured_is_direct_newtons() {
+    // K + K_G(t0): the preconditioner leaves K_G out, PCG still solves to the forcing term.
+    agree(
+        "cases/paper.toml",
+        &["model.geometry=\"prestress\"", "load.alpha=[0.5, 1.0]"],
+    );
+}
+
+#[test]
+fn a_general_structure_substructured_is_direct_newtons() {
+    // A [structure] case cut into boxes of its plan, with settlements and point loads.
+    agree(
+        "cases/skew-grid.toml",
+        &["model.geometry=\"linear\"", "solver.subdomains=[3, 2]"],
+    );
+}
+
+#[test]
+fn a_64_grid_substructured_is_direct_newtons_in_few_pcg_iterations() {
+    // 64 × 64 modules at α = 0.15 (13.5 % slack) on 16 substructures of 16 × 16 modules.
+    let iterations = agree("cases/scale-64.toml", &["model.geometry=\"linear\""]);
+    // The go/no-go measured 37 PCG iterations taut and 29 softened to 1e-8 per system; newton
+    // takes about seven steps at forcing terms from 0.1 down.
+    assert!(iterations[0] <= 400, "{iterations:?}");
+}
+
+#[test]
+fn no_equilibrium_is_found_substructured_too() {
+    let set = ["model.geometry=\"linear\""];
+    let direct = answers(&case("cases/simplex-no-equilibrium.toml", &set));
+    let krylov = answers(&case(
+        "cases/simplex-no-equilibrium.toml",
+        &["model.geometry=\"linear\"", "solver.linear=\"krylov\""],
+    ));
+    for ((alpha, d), (_, k)) in direct.iter().zip(&krylov) {
+        assert_eq!(d.info.status, k.info.status, "alpha {alpha}");
+    }
+    assert!(krylov
+        .iter()
+        .any(|(_, k)| k.info.status == Status::NoEquilibrium));
+}
+
+#[test]
+fn krylov_under_large_is_refused_with_the_key_named() {
+    let set: Vec<String> = ["model.geometry=\"large\"", "solver.linear=\"krylov\""]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let error = case::load_with(Path::new("cases/paper.toml"), &set)
+        .expect_err("refused")
+        .to_string();
+    assert!(error.contains("solver.linear"), "{error}");
+    assert!(error.contains("direct"), "{error}");
+}
