@@ -143,3 +143,31 @@ fn krylov_under_large_is_refused_with_the_key_named() {
     assert!(error.contains("solver.linear"), "{error}");
     assert!(error.contains("direct"), "{error}");
 }
+
+/// `check` says how newton will solve its Newton systems, on which partition.
+#[test]
+fn check_says_which_linear_solve_and_why() {
+    let check = |set: &[&str]| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_tensolve"));
+        command.arg("check").arg("cases/paper.toml");
+        for s in set {
+            command.arg("--set").arg(s);
+        }
+        let output = command.output().unwrap();
+        assert!(output.status.success(), "{output:?}");
+        String::from_utf8(output.stdout).unwrap()
+    };
+    let direct = check(&[]);
+    assert!(
+        direct.contains("newton solve  direct: a sparse factor"),
+        "{direct}"
+    );
+    let krylov = check(&["solver.linear=\"krylov\""]);
+    assert!(
+        krylov.contains("newton solve  krylov: PCG with a two-level Schwarz preconditioner on the 4 x 4 partition"),
+        "{krylov}"
+    );
+    // Without newton, nothing to say.
+    let latin = check(&["solver.methods=[\"mono-latin\"]"]);
+    assert!(!latin.contains("newton solve"), "{latin}");
+}

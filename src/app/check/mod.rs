@@ -85,6 +85,8 @@ pub struct ModelReport {
     pub alphas: Vec<f64>,
     /// The solvers.
     pub methods: Vec<Method>,
+    /// How newton solves its Newton systems, and on which partition, when newton is asked.
+    pub newton_linear: Option<(crate::solvers::newton::LinearSolve, [usize; 2])>,
 }
 
 pub use crate::structure::{equilibrium_counts, EquilibriumCounts};
@@ -224,6 +226,11 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         flat_form: case.design.as_ref().and_then(|d| d.flat),
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
+        newton_linear: case
+            .solver
+            .methods
+            .contains(&Method::Newton)
+            .then_some((case.solver.newton.linear, case.solver.newton.subdomains)),
     };
     let mut model = model;
     if model.counts.mechanisms > 0 {

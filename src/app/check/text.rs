@@ -227,6 +227,19 @@ impl CheckReport {
         writeln!(f, "load factors    {}", alphas.join(", "))?;
         let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();
         writeln!(f, "solvers         {}", methods.join(", "))?;
+        if let Some((linear, [sx, sy])) = m.newton_linear {
+            use crate::solvers::newton::LinearSolve;
+            let why = match linear {
+                LinearSolve::Direct => "a sparse factor of each Hessian (the default at every \
+                                        size measured: docs/performance.md)"
+                    .to_string(),
+                LinearSolve::Krylov => format!(
+                    "PCG with a two-level Schwarz preconditioner on the {sx} x {sy} partition \
+                     (GenEO coarse space); slower than direct at every size measured so far"
+                ),
+            };
+            writeln!(f, "  newton solve  {}: {why}", linear.name())?;
+        }
         writeln!(f, "memory (run)    {}", self.memory)?;
         match &self.available {
             Some(a) => writeln!(f, "  available     {a}")?,
