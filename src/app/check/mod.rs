@@ -169,6 +169,15 @@ fn partition_origin(case: &Case, method: Method) -> &'static str {
     }
 }
 
+/// How newton of `case` solves its Newton systems, and on which partition, when it is asked.
+fn newton_linear(case: &Case) -> Option<(crate::solvers::newton::LinearSolve, [usize; 2])> {
+    let newton = &case.solver.newton;
+    case.solver
+        .methods
+        .contains(&Method::Newton)
+        .then_some((newton.linear, newton.subdomains))
+}
+
 /// Check `case` (read from `path`), with `available` the memory this process could use before
 /// it built anything.
 pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckReport {
@@ -226,11 +235,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         flat_form: case.design.as_ref().and_then(|d| d.flat),
         alphas: case.load.alphas.clone(),
         methods: case.solver.methods.clone(),
-        newton_linear: case
-            .solver
-            .methods
-            .contains(&Method::Newton)
-            .then_some((case.solver.newton.linear, case.solver.newton.subdomains)),
+        newton_linear: newton_linear(case),
     };
     let mut model = model;
     if model.counts.mechanisms > 0 {

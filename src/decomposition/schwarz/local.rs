@@ -24,6 +24,8 @@ pub(super) struct LocalProblem {
     dirichlet: SparseCholesky,
     /// The link weights A_j was last factorised with (`None`: never).
     weights: Option<Vec<f64>>,
+    /// The link weights of the pencil its GenEO vectors solve (`None`: none yet).
+    geneo_weights: Option<Vec<f64>>,
     /// `Z_j = D_j V_j` (Ω_j's dofs × its coarse vectors).
     pub coarse: DMatrix<f64>,
     /// GenEO's eigenvalues of the kept vectors, ascending, and whether every one below τ was
@@ -50,6 +52,7 @@ impl LocalProblem {
             links: links.to_vec(),
             dirichlet,
             weights: None,
+            geneo_weights: None,
             coarse: DMatrix::zeros(dofs.len(), 0),
             values: Vec::new(),
             complete: true,
@@ -70,15 +73,18 @@ impl LocalProblem {
     }
 
     /// A_j for `weights` and `mu` (`H = Σ w_i b_i b_iᵀ + μ I`), factorised, and its GenEO
-    /// vectors below `tau` (at most `max_modes`); `unity` is D_j.
+    /// vectors below `settings.tau` (at most `settings.max_modes`), kept where at most
+    /// `settings.keep_vectors` of Ω_j's links changed weight since they were found (a
+    /// preconditioner's coarse space need not be exact; E is made anew on the current H);
+    /// `unity` is D_j. `true` when the vectors were found anew.
     pub(super) fn refresh(
         &mut self,
         weights: &[f64],
         mu: f64,
         unity: &[f64],
-        tau: f64,
-        max_modes: usize,
-    ) -> Result<(), NotPositiveDefinite> {
+        settings: &super::SchwarzSettings,
+    ) -> Result<bool, NotPositiveDefinite> {
+        let (tau, max_modes) = (settings.tau, settings.max_modes);
         let local_weights: Vec<f64> = self.links.iter().map(|&(i, _)| weights[i]).collect();
         let pattern = &self.pattern;
         // A_j = Σ_{links of Ω_j} w (R_j b)(R_j b)ᵀ + μ I.
@@ -98,6 +104,18 @@ impl LocalProblem {
         }
         self.weights = None;
         self.dirichlet.factorize(pattern, &dirichlet)?;
+        let kept = self.geneo_weights.as_ref().is_some_and(|old| {
+            let changed = old
+                .iter()
+                .zip(&local_weights)
+                .filter(|(a, b)| a != b)
+                .count();
+            changed as f64 <= settings.keep_vectors * old.len() as f64
+        });
+        if kept {
+            self.weights = Some(local_weights);
+            return Ok(false);
+        }
         // B = D_j A_j D_j.
         let mut scaled = dirichlet;
         for (r, c, s) in pattern.entries() {
@@ -113,13 +131,15 @@ impl LocalProblem {
         self.coarse = coarse;
         self.values = modes.values;
         self.complete = modes.complete;
+        self.geneo_weights = Some(local_weights.clone());
         self.weights = Some(local_weights);
-        Ok(())
+        Ok(true)
     }
 
-    /// Refactorised at the next refresh, whatever the weights.
+    /// Refactorised, its GenEO vectors found anew, at the next refresh, whatever the weights.
     pub(super) fn forget(&mut self) {
         self.weights = None;
+        self.geneo_weights = None;
     }
 
     /// `x ← A_j⁻¹ x` on Ω_j's dofs.
