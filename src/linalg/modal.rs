@@ -34,8 +34,9 @@ pub struct GeneralizedModes {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoShiftFactorizes;
 
-/// Deterministic pseudo-random vector (xorshift), entries in [−0.5, 0.5).
-fn random_vector(n: usize, seed: u64) -> Vec<f64> {
+/// Deterministic pseudo-random vector (xorshift), entries in [−0.5, 0.5): the start vectors of
+/// the Krylov solvers here.
+pub(super) fn random_vector(n: usize, seed: u64) -> Vec<f64> {
     let mut state = 0x9E37_79B9_7F4A_7C15u64 ^ seed.wrapping_mul(0x2545_F491_4F6C_DD1D);
     (0..n)
         .map(|_| {

@@ -14,6 +14,7 @@
 //! of p equal converged Ritz values, and the blocks then widen by [`BLOCK`] fresh random
 //! vectors (filtered by the operator), which bring out the other copies.
 
+use super::modal::random_vector;
 use super::{NotPositiveDefinite, SparseCholesky, StiffnessPattern};
 use basis::Basis;
 use faer::diag::Diag;
@@ -281,19 +282,6 @@ fn factorize_shifted(
         sigma *= 10.0;
     }
     Err(last)
-}
-
-/// Deterministic pseudo-random vector (xorshift), entries in [−0.5, 0.5).
-fn random_vector(n: usize, seed: u64) -> Vec<f64> {
-    let mut state = 0x9E37_79B9_7F4A_7C15u64 ^ seed.wrapping_mul(0x2545_F491_4F6C_DD1D);
-    (0..n)
-        .map(|_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect()
 }
 
 /// A column-major block of vectors of length `n` as a faer view.
