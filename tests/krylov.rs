@@ -3,6 +3,9 @@
 //! cables) gives direct newton's answer: the same slack set, displacements to 1e-8 relative,
 //! the same verdicts; and says how many PCG iterations it took.
 
+mod common;
+
+use common::relative_difference;
 use std::path::Path;
 use tensolve::app::setup::{prepare, set_up};
 use tensolve::case::{self, Case};
@@ -33,22 +36,6 @@ fn answers(case: &Case) -> Vec<(f64, Solution)> {
         .collect()
 }
 
-/// `‖a − b‖ / ‖b‖` (`‖a − b‖` where b = 0).
-fn relative(a: &[f64], b: &[f64]) -> f64 {
-    let diff = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    let scale = b.iter().map(|y| y * y).sum::<f64>().sqrt();
-    if scale > 0.0 {
-        diff / scale
-    } else {
-        diff
-    }
-}
-
 /// Direct and substructured newton on `path` (with `set`) agree: status, slack set exactly,
 /// displacements to 1e-8; every substructured row counts its PCG iterations, every direct row
 /// none. Returns the substructured rows' PCG iterations.
@@ -68,7 +55,8 @@ fn agree(path: &str, set: &[&str]) -> Vec<usize> {
                 d.equilibrium.slack, k.equilibrium.slack,
                 "{path} at alpha {alpha}: slack sets differ"
             );
-            let du = relative(&k.equilibrium.displacements, &d.equilibrium.displacements);
+            let du =
+                relative_difference(&k.equilibrium.displacements, &d.equilibrium.displacements);
             assert!(
                 du <= 1e-8,
                 "{path} at alpha {alpha}: displacements differ by {du:e}"

@@ -12,6 +12,22 @@ use tensolve::solvers::pcg_lcp::{PcgLcp, PcgLcpSettings};
 use tensolve::solvers::{AnySolver, Silent, Solution, TautStiffness};
 use tensolve::structure::Structure;
 
+/// `‖a − b‖ / ‖b‖` (`‖a − b‖` where b = 0).
+pub fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    let diff = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let scale = b.iter().map(|y| y * y).sum::<f64>().sqrt();
+    if scale > 0.0 {
+        diff / scale
+    } else {
+        diff
+    }
+}
+
 /// Lower cable prestress p of the paper case, N.
 pub const P: f64 = 2000.0;
 

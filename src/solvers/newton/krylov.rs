@@ -102,14 +102,15 @@ impl KrylovSolve {
     }
 
     /// `step ← H⁻¹ step` to the forcing tolerance, `H = Σ_taut k Bᵢᵀ Bᵢ (+ K_G) + μ I`, the
-    /// preconditioner refreshed on the subdomains whose links changed state; `residual` is the
+    /// preconditioner refreshed on the subdomains whose links changed state; μ raised as the
+    /// direct path raises it (`mean_diagonal`: the taut stiffness's); `residual` is the
     /// larger of r(U) and r_F(U) at this step. `false`: no subdomain factor could be made even
     /// with μ raised (the caller solves directly); `step` is then untouched.
     pub(super) fn solve(
         &mut self,
         model: &Model,
         taut_links: &[bool],
-        mut mu: f64,
+        (mut mu, mean_diagonal): (f64, f64),
         (residual, tolerance): (f64, f64),
         step: &mut [f64],
         work: &mut NewtonWork,
@@ -121,7 +122,6 @@ impl KrylovSolve {
             .zip(taut_links)
             .map(|(l, &taut)| if taut { l.stiffness } else { 0.0 })
             .collect();
-        let mean = s.links.iter().map(|l| l.stiffness).sum::<f64>() / s.links.len().max(1) as f64;
         let mut shifts = 0;
         loop {
             match self.schwarz.update(s, &weights, mu) {
@@ -131,7 +131,7 @@ impl KrylovSolve {
                 }
                 Err(_) if shifts < MAX_SHIFTS => {
                     shifts += 1;
-                    mu = (mu * 100.0).max(1e-12 * mean);
+                    mu = super::raised_regularisation(mu, mean_diagonal);
                     // Every subdomain is refactorised with the new μ.
                     self.schwarz.forget_factors();
                 }

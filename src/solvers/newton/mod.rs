@@ -268,6 +268,7 @@ impl<'s> Newton<'s> {
         if let Some(krylov) = &mut self.krylov {
             let unbalance = state.residual.max(state.load_residual);
             let stop = (unbalance, self.settings.tolerance);
+            let mu = (mu, self.mean_stiffness);
             if krylov.solve(self.model, &taut_links, mu, stop, step, &mut self.work) {
                 return;
             }
@@ -289,7 +290,7 @@ impl<'s> Newton<'s> {
             if self.chol.factorize(pattern, &self.hessian).is_ok() {
                 break;
             }
-            mu = (mu * 100.0).max(1e-12 * self.mean_stiffness);
+            mu = raised_regularisation(mu, self.mean_stiffness);
             for &d in &pattern.diag_slot {
                 self.hessian[d] += mu - added;
             }
@@ -503,6 +504,12 @@ impl Solver for Newton<'_> {
     fn iterate(&self, state: &NewtonState) -> Equilibrium {
         Equilibrium::classified(self.model, state.u.clone(), state.tensions.clone())
     }
+}
+
+/// μ after a factorization that failed: ×100, and at least 1e-12 of the mean diagonal (the
+/// direct and the substructured solves alike).
+fn raised_regularisation(mu: f64, mean_diagonal: f64) -> f64 {
+    (mu * 100.0).max(1e-12 * mean_diagonal)
 }
 
 /// The Hessian's factor: in two halves side by side (`SparseCholesky::share_symbolic_split`)
