@@ -299,10 +299,9 @@ fn product(a: MatRef<'_, f64>, transposed: bool, b: MatRef<'_, f64>) -> Mat<f64>
 
 /// `M X` for the symmetric M of `values` on `pattern` and a column-major block X.
 fn apply(pattern: &StiffnessPattern, values: &[f64], x: &[f64], n: usize) -> Vec<f64> {
+    debug_assert_eq!(pattern.n, n);
     let mut y = vec![0.0; x.len()];
-    for (xc, yc) in x.chunks(n).zip(y.chunks_mut(n)) {
-        pattern.sym_matvec(values, xc, yc);
-    }
+    pattern.sym_matmat(values, x, &mut y);
     y
 }
 
