@@ -2,6 +2,7 @@
 //! it: equilibrium and complementarity residuals (for checks and tests), deflection, tension.
 
 pub mod checks;
+pub mod eurocode;
 
 // The analyses of an answer, where their users have found them.
 pub use crate::analysis::{

@@ -21,6 +21,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     let model_tolerance = model_tolerance(raw.model.tolerance)?;
     // 1. The structure: a [grid]'s generated geometry and clamps, or a [structure]'s tables.
     let (grid, mut geometry, mut fixes) = structure(&raw, base)?;
+    super::code_checks::apply_factors(&raw, &mut geometry.checks)?;
     let index_of = index_of(&geometry);
     // 2. The supports of [[supports.fix]].
     fixes.extend(supports(&raw.supports, &geometry, &index_of)?);
@@ -143,11 +144,13 @@ fn structure(
                 ("bars.strength", raw.bars.strength),
                 ("bars.inertia", raw.bars.inertia),
                 ("cables.strength", raw.cables.strength),
+                ("cables.breaking_load", raw.cables.breaking_load),
                 ("bars.density", raw.bars.density),
                 ("cables.density", raw.cables.density),
             ] {
                 general_only(key, value.map(|v| v.to_string()))?;
             }
+            general_only("bars.buckling_curve", raw.bars.buckling_curve.clone())?;
             general_only(
                 "prestress.lower_cable",
                 raw.prestress.lower_cable.map(|v| v.to_string()),

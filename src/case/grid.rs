@@ -99,8 +99,10 @@ pub(super) fn grid_densities(raw: &RawCase, geometry: &mut Geometry) -> Result<(
     Ok(())
 }
 
-/// The member checks of a grid (`bars.strength`, `bars.inertia`, `cables.strength`), when any
-/// is given, for the materials of `spec`; each a physical quantity (> 0).
+/// The member checks of a grid (`bars.strength`, `bars.inertia`, `bars.buckling_curve`,
+/// `cables.strength`, `cables.breaking_load`), when any is given, for the materials of `spec`;
+/// each a physical quantity (> 0). The partial factors are put on by
+/// [`super::code_checks::apply_factors`].
 pub(super) fn grid_checks(
     raw: &RawCase,
     spec: &GridSpec,
@@ -123,21 +125,21 @@ pub(super) fn grid_checks(
         raw.cables.strength,
         "the cables' design strength in Pa",
     )?;
-    if bar_strength.is_none() && inertia.is_none() && cable_strength.is_none() {
+    let buckling = super::code_checks::grid_buckling(raw, bar_strength, inertia)?;
+    let breaking = super::code_checks::grid_breaking(raw)?;
+    let bars = CheckedMember {
+        strength: bar_strength,
+        inertia,
+        buckling,
+        ..CheckedMember::unchecked(spec.bars.young, spec.bars.section)
+    };
+    let cables = CheckedMember {
+        strength: cable_strength,
+        breaking,
+        ..CheckedMember::unchecked(spec.cables.material.young, spec.cables.material.section)
+    };
+    if !bars.is_checked() && !cables.is_checked() {
         return Ok(None);
     }
-    Ok(Some(MemberChecks::Kinds {
-        bars: CheckedMember {
-            young: spec.bars.young,
-            section: spec.bars.section,
-            strength: bar_strength,
-            inertia,
-        },
-        cables: CheckedMember {
-            young: spec.cables.material.young,
-            section: spec.cables.material.section,
-            strength: cable_strength,
-            inertia: None,
-        },
-    }))
+    Ok(Some(MemberChecks::Kinds { bars, cables }))
 }

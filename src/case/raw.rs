@@ -51,6 +51,8 @@ pub(super) struct RawCase {
     pub model: RawModel,
     #[serde(default)]
     pub modal: RawModal,
+    #[serde(default)]
+    pub checks: RawChecks,
     /// `tensolve design --rebalance`: never read from the file.
     #[serde(skip)]
     pub rebalance: bool,
@@ -164,6 +166,7 @@ pub(super) struct RawCables {
     pub section: Option<f64>,
     pub unilateral: Option<bool>,
     pub strength: Option<f64>,
+    pub breaking_load: Option<f64>,
     pub density: Option<f64>,
 }
 
@@ -175,7 +178,16 @@ pub(super) struct RawBars {
     pub section: Option<f64>,
     pub strength: Option<f64>,
     pub inertia: Option<f64>,
+    pub buckling_curve: Option<String>,
     pub density: Option<f64>,
+}
+
+/// `[checks]`: the partial factors of EN 1993's member checks.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawChecks {
+    pub gamma_m1: Option<f64>,
+    pub gamma_r: Option<f64>,
 }
 
 /// `[prestress]`.

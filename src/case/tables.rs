@@ -1,11 +1,12 @@
 //! The `[structure]` tables: `nodes.csv` (`node,x,y,z`) and `members.csv`
-//! (`member,a,b,kind,young,section,prestress[,density[,strength[,inertia]]][,group]`). Every row is checked and an error
+//! (`member,a,b,kind,young,section,prestress[,density[,strength[,inertia[,buckling_curve[,breaking_load]]]]][,group]`). Every row is checked and an error
 //! names the file, the line, the column, the value and the fix.
 
 use super::numbers::{PHYSICAL_MAX, PHYSICAL_MIN};
 use super::CaseError;
 use crate::structure::{
-    length_and_direction, CheckedMember, Geometry, LinkKind, Member, MemberChecks,
+    length_and_direction, Buckling, BucklingCurve, CableBreaking, CheckedMember, Geometry,
+    LinkKind, Member, MemberChecks,
 };
 use std::collections::HashMap;
 use std::path::Path;
@@ -262,7 +263,13 @@ fn read_members(
     let mut checks = Vec::new();
     let mut seen: HashMap<u64, u64> = HashMap::new();
     let columns = ["member", "a", "b", "kind", "young", "section", "prestress"];
-    let optional = ["density", "strength", "inertia"];
+    let optional = [
+        "density",
+        "strength",
+        "inertia",
+        "buckling_curve",
+        "breaking_load",
+    ];
     let (rows, grouped) = table.rows(members_text, &columns, &optional, Some("group"))?;
     let mut groups = Vec::new();
     for (line, mut row) in rows {
@@ -332,19 +339,19 @@ fn read_members(
             density,
             module: 0,
         });
+        let (buckling, breaking) = table.code_cells(line, id, kind, &row, strength, inertia)?;
         checks.push(CheckedMember {
-            young,
-            section,
             strength,
             inertia,
+            buckling,
+            breaking,
+            ..CheckedMember::unchecked(young, section)
         });
     }
     if members.is_empty() {
         return Err(table.error(1, "member", "", "give at least one member, one row each"));
     }
-    let checked = checks
-        .iter()
-        .any(|c| c.strength.is_some() || c.inertia.is_some());
+    let checked = checks.iter().any(CheckedMember::is_checked);
     Ok((
         members,
         checked.then_some(MemberChecks::Each(checks)),
@@ -422,6 +429,66 @@ impl Table<'_> {
             None => None,
         };
         Ok((density, strength, inertia))
+    }
+
+    /// Member `id`'s cells of EN 1993's checks: `buckling_curve` (a bar with a `strength`,
+    /// read as f_y, and an `inertia`) and `breaking_load` (a cable's F_uk, N, > 0); empty or
+    /// absent: not checked. The partial factors are put on later (`code_checks`).
+    fn code_cells(
+        &self,
+        line: u64,
+        id: u64,
+        kind: LinkKind,
+        row: &[String],
+        strength: Option<f64>,
+        inertia: Option<f64>,
+    ) -> Result<(Option<Buckling>, Option<CableBreaking>), CaseError> {
+        let cell = |k: usize| row.get(k).filter(|text| !text.is_empty());
+        let bar = kind == LinkKind::Bar;
+        let buckling = match cell(10) {
+            None => None,
+            Some(text) => {
+                let refuse = |fix: String| Err(self.error(line, "buckling_curve", text, fix));
+                let Some(curve) = BucklingCurve::from_name(text) else {
+                    return refuse(format!(
+                        "member {id}: `buckling_curve` must be one of EN 1993-1-1 Table 6.1's                          curves `a0`, `a`, `b`, `c`, `d`, or empty"
+                    ));
+                };
+                if !bar {
+                    return refuse(format!(
+                        "member {id} is a cable: a buckling curve is a bar's; leave the cell empty"
+                    ));
+                }
+                if strength.is_none() || inertia.is_none() {
+                    return refuse(format!(
+                        "member {id}: the buckling resistance χ A f_y / γ_M1 needs its                          `strength` (f_y) and `inertia`: give both, or leave the cell empty"
+                    ));
+                }
+                Some(Buckling {
+                    curve,
+                    gamma_m1: f64::NAN,
+                })
+            }
+        };
+        let breaking = match cell(11) {
+            None => None,
+            Some(text) => {
+                let load = self.limit(line, id, "breaking_load", text, true, |v| {
+                    if v.is_nan() || v <= 0.0 {
+                        Some("must be > 0 (N): give the cable's characteristic breaking load F_uk, or leave the cell empty".to_string())
+                    } else if bar {
+                        Some("is a cable's (EN 1993-1-11): this member is a bar; leave the cell empty".to_string())
+                    } else {
+                        None
+                    }
+                })?;
+                Some(CableBreaking {
+                    load,
+                    gamma_r: f64::NAN,
+                })
+            }
+        };
+        Ok((buckling, breaking))
     }
 
     /// Member `id`'s `column` of `text`: a number that `refuse` finds nothing wrong with (it

@@ -268,10 +268,7 @@ fn format_row(r: &SummaryRow) -> String {
             alpha_label(r.alpha),
             g.member,
             g.utilisation,
-            match g.buckling {
-                true => "Euler load (buckling)",
-                false => "design strength",
-            },
+            g.clause.resistance(),
         ));
     }
     if let Some(not_unique) = r

@@ -7,6 +7,7 @@ mod atomic;
 mod groups;
 mod history;
 mod homogenised;
+mod member_checks;
 pub mod modes;
 mod modes_vtk;
 pub mod plots;
@@ -19,6 +20,7 @@ pub use crate::labels::alpha_label;
 pub use atomic::{ensure_writable, write_atomic};
 pub use history::{history_column, history_header, HistoryWriter};
 pub use homogenised::{homogenised_path, write_homogenised};
+pub use member_checks::{ChecksSink, CHECKS_HEADER, CHECK_COLUMNS, EUROCODE_COLUMNS};
 pub use modes::ModesSink;
 pub use plots::{FigureData, FigureSettings};
 pub use publish::{lock_directory, OpenError, OutputDir};
@@ -26,7 +28,7 @@ pub use sinks::{Sink, Sinks, SolveEnd, SolveKey, WriteError};
 pub use tables::{
     reaction_totals, reaction_totals_line, result_path, stability_line, summary_check_cells,
     summary_line, write_displacements, write_forces, write_mechanisms, write_reactions,
-    write_tensions, StabilityRow, SummaryRow, CHECK_COLUMNS, REACTION_TOTALS_HEADER,
-    STABILITY_HEADER, SUMMARY_CHECK_COLUMNS, SUMMARY_HEADER,
+    write_tensions, StabilityRow, SummaryRow, REACTION_TOTALS_HEADER, STABILITY_HEADER,
+    SUMMARY_CHECK_COLUMNS, SUMMARY_HEADER,
 };
 pub use vtk::{kind_code, link_code, vtu_path, write_vtu, VTK_LINE};

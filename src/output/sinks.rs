@@ -11,6 +11,7 @@
 //! | [`PublishSink`] | publishes what the sinks above staged: the solve's commit point |
 //! | [`StabilitySink`] | `stability.csv`, one row appended after every solve |
 //! | [`ReactionTotalsSink`] | `reaction_totals.csv`, one row appended after every solve with an answer |
+//! | [`super::ChecksSink`] | `checks.csv`, a row per member above a utilisation of 1, after every solve |
 //! | [`SummarySink`] | `summary.csv`, one row appended after every solve |
 //!
 //! The sinks above [`PublishSink`] write into the run's private staging directory; nothing of
@@ -479,9 +480,9 @@ impl Sink for SummarySink<'_> {
     }
 }
 
-/// Append `line` to the ledger `name` of `out`. When it cannot be written, the solve's files
-/// and rows are withdrawn ([`OutputDir::withdraw`]): they would have no `summary.csv` row.
-fn append(
+/// Append `line` (one or more rows, one write) to the ledger `name` of `out`. When it cannot
+/// be written, the solve's files and rows are withdrawn ([`OutputDir::withdraw`]).
+pub(super) fn append(
     out: &RefCell<OutputDir>,
     name: &str,
     header: &str,

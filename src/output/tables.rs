@@ -1,6 +1,7 @@
 //! CSV tables: `summary.csv`, `tensions/{solver}_alpha{α}.csv`,
 //! `displacements/{solver}_alpha{α}.csv`, `forces/…`, `reactions/…`, `reaction_totals.csv`.
 
+use super::member_checks::{check_cells, eurocode_cells, CHECK_COLUMNS, EUROCODE_COLUMNS};
 use super::write_atomic;
 use crate::labels::alpha_label;
 use crate::model::{GeometricModel, Model};
@@ -353,32 +354,6 @@ fn finite(what: &str, values: impl IntoIterator<Item = f64>) -> std::io::Result<
     }
 }
 
-/// The member checks' columns of `forces/` ([`results::checks::MemberCheck`]).
-pub const CHECK_COLUMNS: [&str; 5] = [
-    "stress_Pa",
-    "utilisation",
-    "euler_load_N",
-    "buckling_utilisation",
-    "slack_margin",
-];
-
-/// The cells of `c` under [`CHECK_COLUMNS`]: empty where the member is not so checked; a
-/// non-finite value is left empty too (it cannot be: sections and inertias are > 0).
-fn check_cells(c: &results::checks::MemberCheck) -> [String; 5] {
-    let cell = |v: Option<f64>| {
-        v.filter(|v| v.is_finite())
-            .map(|v| v.to_string())
-            .unwrap_or_default()
-    };
-    [
-        cell(Some(c.stress)),
-        cell(c.utilisation),
-        cell(c.euler_load),
-        cell(c.buckling_utilisation),
-        cell(c.slack_margin),
-    ]
-}
-
 /// Write `dir/forces/{solver}_alpha{α}.csv`: per member (bars and cables, by id), its kind,
 /// end nodes, total axial force τ (N, tension > 0), elongation and length (m) under the
 /// model ([`Model::member_states`]), and the member checks' [`CHECK_COLUMNS`] when the case
@@ -416,16 +391,24 @@ pub fn write_forces(
         "elongation_m",
         "current_length_m",
     ];
-    // The member checks' columns only when the case gives a strength or an inertia; the
-    // group last, when the members table has one.
+    // The member checks' columns only when the case gives a strength or an inertia (and
+    // EN 1993's when it gives a buckling curve or a breaking load); the group last, when the
+    // members table has one.
     let checks = results::checks::member_checks(model, eq);
+    let eurocode = s.checks.as_ref().is_some_and(|c| c.any_eurocode());
     if checks.is_some() {
         header.extend(CHECK_COLUMNS);
+    }
+    if eurocode {
+        header.extend(EUROCODE_COLUMNS);
     }
     header.extend(s.groups.as_ref().map(|_| "group"));
     let rows = rows.enumerate().map(|(i, mut row)| {
         if let Some(checks) = &checks {
             row.extend(check_cells(&checks[i]));
+            if eurocode {
+                row.extend(eurocode_cells(s, i, &checks[i]));
+            }
         }
         row.extend(s.group_of(i).map(str::to_string));
         row

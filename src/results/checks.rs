@@ -1,10 +1,48 @@
 //! The member checks (issue 45): per member its stress, its utilisation against its design
-//! strength, for a bar its Euler load and the utilisation of that by its compression, for a
-//! cable its slack margin; and the largest utilisation of a solve with its member.
+//! strength, for a bar its Euler load and the utilisation of that (or, with a buckling curve,
+//! of its buckling resistance by EN 1993-1-1 §6.3.1) by its compression, for a cable its slack
+//! margin and, with a breaking load, its utilisation by EN 1993-1-11 §6.3; and the largest
+//! utilisation of a solve with its member and the clause it comes from.
 
+use super::eurocode::{cable_resistance, flexural_buckling, FlexuralBuckling};
 use crate::model::Model;
 use crate::solvers::Equilibrium;
 use crate::structure::{LinkKind, MemberChecks, Structure};
+
+/// Where a utilisation comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Clause {
+    /// `|σ| / f`, the design strength.
+    Stress,
+    /// A bar's compression over its Euler load `π² E I / ℓ²` (no buckling curve).
+    Euler,
+    /// A bar's compression over `N_b,Rd = χ A f_y / γ_M1` (EN 1993-1-1 §6.3.1).
+    FlexuralBuckling,
+    /// A cable's tension over `F_Rd = F_uk / (1.5 γ_R)` (EN 1993-1-11 §6.3).
+    CableResistance,
+}
+
+impl Clause {
+    /// Its name in `forces/`' `clause` column and `checks.csv`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Clause::Stress => "stress",
+            Clause::Euler => "Euler",
+            Clause::FlexuralBuckling => "EN 1993-1-1 6.3.1",
+            Clause::CableResistance => "EN 1993-1-11 6.3",
+        }
+    }
+
+    /// What the utilisation is of, in a sentence.
+    pub fn resistance(self) -> &'static str {
+        match self {
+            Clause::Stress => "design strength",
+            Clause::Euler => "Euler load (buckling)",
+            Clause::FlexuralBuckling => "buckling resistance N_b,Rd (EN 1993-1-1 §6.3.1)",
+            Clause::CableResistance => "design resistance F_Rd (EN 1993-1-11 §6.3)",
+        }
+    }
+}
 
 /// One member's checks at an answer.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -16,23 +54,42 @@ pub struct MemberCheck {
     /// A bar's Euler load `π² E I / ℓ²`, N, on the current length ℓ under `large` and the
     /// initial length otherwise; `None` for cables and bars without an inertia.
     pub euler_load: Option<f64>,
-    /// A bar's compression over its Euler load (0 in tension); `None` with no Euler load.
+    /// A bar's compression (0 in tension) over its buckling resistance N_b,Rd with a buckling
+    /// curve, over its Euler load without; `None` with no Euler load.
     pub buckling_utilisation: Option<f64>,
+    /// A bar's flexural buckling by EN 1993-1-1 §6.3.1 (λ̄, χ, N_b,Rd), with a buckling curve.
+    pub flexural: Option<FlexuralBuckling>,
+    /// A cable's design resistance F_Rd (EN 1993-1-11 §6.3), N, with a breaking load.
+    pub cable_resistance: Option<f64>,
+    /// A cable's tension over F_Rd (0 slack), with a breaking load.
+    pub cable_utilisation: Option<f64>,
     /// A cable's tension over its given prestress t0 (1 at the prestressed state, 0 slack);
     /// `None` for bars and cables without prestress.
     pub slack_margin: Option<f64>,
 }
 
 impl MemberCheck {
-    /// The member's larger utilisation (strength or buckling), when it has one, and whether
-    /// it is the buckling one.
-    pub fn governing(&self) -> Option<(f64, bool)> {
-        match (self.utilisation, self.buckling_utilisation) {
-            (Some(u), Some(b)) if b > u => Some((b, true)),
-            (Some(u), _) => Some((u, false)),
-            (None, Some(b)) => Some((b, true)),
-            (None, None) => None,
-        }
+    /// The member's largest utilisation (strength, buckling, cable resistance), when it has
+    /// one, and its clause (the first of these on a tie).
+    pub fn governing(&self) -> Option<(f64, Clause)> {
+        let buckling = match self.flexural {
+            Some(_) => Clause::FlexuralBuckling,
+            None => Clause::Euler,
+        };
+        [
+            (self.utilisation, Clause::Stress),
+            (self.buckling_utilisation, buckling),
+            (self.cable_utilisation, Clause::CableResistance),
+        ]
+        .into_iter()
+        .filter_map(|(u, clause)| u.map(|u| (u, clause)))
+        .fold(
+            None,
+            |worst: Option<(f64, Clause)>, (u, clause)| match worst {
+                Some((w, _)) if w >= u => worst,
+                _ => Some((u, clause)),
+            },
+        )
     }
 }
 
@@ -54,11 +111,30 @@ pub fn member_check(
         LinkKind::Cable => None,
     };
     let prestress = s.given_prestress(l);
+    // EN 1993-1-1 §6.3.1 on a bar with a buckling curve (its strength f_y, its Euler load N_cr).
+    let flexural = match (data.buckling, data.strength, euler_load) {
+        (Some(b), Some(f_y), Some(n_cr)) if l.kind == LinkKind::Bar => Some(flexural_buckling(
+            data.section,
+            f_y,
+            n_cr,
+            b.curve,
+            b.gamma_m1,
+        )),
+        _ => None,
+    };
+    let buckling_resistance = flexural.map(|f| f.resistance).or(euler_load);
+    let cable_resistance = data
+        .breaking
+        .filter(|_| l.kind.is_cable())
+        .map(|c| cable_resistance(c.load, c.gamma_r));
     MemberCheck {
         stress,
         utilisation: data.strength.map(|f| stress.abs() / f),
         euler_load,
-        buckling_utilisation: euler_load.map(|p| (-tension).max(0.0) / p),
+        buckling_utilisation: buckling_resistance.map(|p| (-tension).max(0.0) / p),
+        flexural,
+        cable_resistance,
+        cable_utilisation: cable_resistance.map(|r| tension.max(0.0) / r),
         slack_margin: (l.kind.is_cable() && prestress > 0.0).then(|| tension / prestress),
     }
 }
@@ -83,12 +159,12 @@ pub fn member_checks(model: &Model, eq: &Equilibrium) -> Option<Vec<MemberCheck>
 /// The largest utilisation of a solve and its member.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Governing {
-    /// The largest of the members' utilisations (strength and buckling).
+    /// The largest of the members' utilisations (strength, buckling, cable resistance).
     pub utilisation: f64,
     /// The member it belongs to (its id).
     pub member: u64,
-    /// It is the buckling utilisation (else the strength one).
-    pub buckling: bool,
+    /// The check it comes from.
+    pub clause: Clause,
     /// How many members have a utilisation above 1.
     pub over: usize,
 }
@@ -99,7 +175,7 @@ pub fn governing(model: &Model, eq: &Equilibrium) -> Option<Governing> {
     let mut worst: Option<Governing> = None;
     let mut over = 0;
     for (i, check) in checks.iter().enumerate() {
-        let Some((utilisation, buckling)) = check.governing() else {
+        let Some((utilisation, clause)) = check.governing() else {
             continue;
         };
         over += usize::from(utilisation > 1.0);
@@ -107,7 +183,7 @@ pub fn governing(model: &Model, eq: &Equilibrium) -> Option<Governing> {
             worst = Some(Governing {
                 utilisation,
                 member: model.structure.links[i].id,
-                buckling,
+                clause,
                 over: 0,
             });
         }

@@ -15,7 +15,7 @@ mod statics;
 mod storage;
 mod supports;
 
-pub use checks::{CheckedMember, MemberChecks};
+pub use checks::{Buckling, BucklingCurve, CableBreaking, CheckedMember, MemberChecks};
 pub use geometry::{length_and_direction, transverse_pair, Geometry, Loading, Member, NodeFix};
 pub use grid::{module_nodes, GridLayout, GridRole};
 pub use grouped::{

@@ -263,3 +263,38 @@ pub fn difference_of_runs(model: &Path, large: &Path, solver: &str, alpha: &str)
         .fold(0.0, f64::max);
     (displacement / deflection).max(force / largest)
 }
+
+/// A bar from node 0 (0, 0, 0) up to node 1 (0, 0, 1) and a cable from node 1 down to node 2
+/// (0, 0, −1), nodes 0 and 2 held, node 1 free along z alone, carrying 100 kN down at α = 1.
+/// Bar: E = 2e11 Pa, S = 1e-4 m², k_b = 2e7 N/m, t0 = −50 kN; cable: E = 1e11, S = 1e-4, ℓ = 2
+/// m, k_c = 5e6 N/m, t0 = 50 kN. The members stay on the z axis, so `linear` and `large`
+/// agree: u_z = −F / (k_b + k_c) = −4 mm, τ_b = −50 kN − 80 kN = −130 kN, τ_c = 50 kN − 20 kN
+/// = 30 kN.
+pub fn column_case(dir: &Path, members: &str, geometry: &str) -> Temp {
+    column_case_with(dir, members, geometry, "")
+}
+
+/// [`column_case`] with `extra` TOML appended (e.g. a `[checks]` table).
+pub fn column_case_with(dir: &Path, members: &str, geometry: &str, extra: &str) -> Temp {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(
+        dir.join("nodes.csv"),
+        "node,x,y,z\n0,0,0,0\n1,0,0,1\n2,0,0,-1\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("members.csv"), members).unwrap();
+    let case = dir.join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "[structure]\nnodes = \"nodes.csv\"\nmembers = \"members.csv\"\n\
+             [[supports.fix]]\nnodes = [0, 2]\n\
+             [[supports.fix]]\nnodes = [1]\ndofs = [\"x\", \"y\"]\n\
+             [[load.point]]\nnodes = [1]\nforce = [0.0, 0.0, -1e5]\n\
+             [load]\nalpha = [1.0]\n[model]\ngeometry = \"{geometry}\"\n\
+             [solver]\nmethods = [\"newton\"]\n{extra}"
+        ),
+    )
+    .unwrap();
+    Temp(case)
+}

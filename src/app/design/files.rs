@@ -54,14 +54,14 @@ fn nodes_csv(w: &mut dyn Write, case: &Case) -> std::io::Result<()> {
     Ok(())
 }
 
-/// `member,a,b,kind,young,section,prestress,density,strength,inertia,group` (empty cells where
-/// the case gave none).
+/// `member,a,b,kind,young,section,prestress,density,strength,inertia,buckling_curve,breaking_load,group`
+/// (empty cells where the case gave none).
 fn members_csv(w: &mut dyn Write, case: &Case) -> std::io::Result<()> {
     let g = &case.geometry;
     let groups = g.member_groups();
     writeln!(
         w,
-        "member,a,b,kind,young,section,prestress,density,strength,inertia,group"
+        "member,a,b,kind,young,section,prestress,density,strength,inertia,buckling_curve,breaking_load,group"
     )?;
     let cell = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
     for (j, m) in g.members.iter().enumerate() {
@@ -71,7 +71,7 @@ fn members_csv(w: &mut dyn Write, case: &Case) -> std::io::Result<()> {
         };
         writeln!(
             w,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             m.id,
             g.node_ids[m.a],
             g.node_ids[m.b],
@@ -82,6 +82,10 @@ fn members_csv(w: &mut dyn Write, case: &Case) -> std::io::Result<()> {
             m.density,
             cell(checked.and_then(|c| c.strength)),
             cell(checked.and_then(|c| c.inertia)),
+            checked
+                .and_then(|c| c.buckling)
+                .map_or("", |b| b.curve.name()),
+            cell(checked.and_then(|c| c.breaking.map(|b| b.load))),
             groups[j]
         )?;
     }

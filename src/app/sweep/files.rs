@@ -10,7 +10,7 @@ use crate::output::{
         HistorySink, PerSolveSink, PlotsSink, PublishSink, ReactionTotalsSink, StabilitySink,
         SummarySink,
     },
-    FigureSettings, ModesSink, OutputDir, Sinks, WriteError,
+    ChecksSink, FigureSettings, ModesSink, OutputDir, Sinks, WriteError,
 };
 use std::cell::RefCell;
 use std::path::Path;
@@ -143,6 +143,7 @@ pub(super) fn sinks<'s>(
     }
     sinks.add(out.reactions, ReactionTotalsSink::new(output));
     let checks = model.structure.checks.is_some();
+    sinks.add(checks, ChecksSink::new(output));
     sinks.add(out.summary, SummarySink::new(output, checks));
     sinks
 }
