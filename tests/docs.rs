@@ -125,7 +125,13 @@ fn case_keys(path: &mut Vec<(String, Holds)>, out: &mut Vec<(String, Holds, Vec<
 }
 
 /// Tables documented by one row of the key table, which names each of their keys.
-const ONE_ROW: &[&str] = &["load.point", "modal.point_mass", "supports.fix[i].box"];
+const ONE_ROW: &[&str] = &[
+    "load.point",
+    "load.rest_length_change",
+    "load.temperature",
+    "modal.point_mass",
+    "supports.fix[i].box",
+];
 
 /// Tables documented in a section of their own (whose TOML example names each key), not in
 /// the key table.
@@ -151,6 +157,8 @@ const DEFAULTS_IN_WORDS: &[&str] = &[
     "supports.fix[i].nodes",
     "supports.fix[i].box",
     "load.point",
+    "load.rest_length_change",
+    "load.temperature",
     "modal.point_mass",
     "load.alpha",
     "solver.tolerance",

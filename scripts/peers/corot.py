@@ -9,7 +9,10 @@ Reads a `[structure]` case (its two tables, `[[supports.fix]]` by `nodes` or `bo
 `InitStressMaterial` (σ0 = t0 / S) over `Elastic E 0 Eneg`, Eneg = 0 for unilateral cables and
 E otherwise. With engineering strain on the initial length L this is tensolve's law on the exact
 length, τ = t0 + (E S / L)(ℓ − L), clipped at 0 for unilateral cables. The prestress being a
-self-stress, α = 0 is the prestressed state (no displacement).
+self-stress, α = 0 is the prestressed state (no displacement). A member whose rest length
+changes by Δℓ0 (`[[load.rest_length_change]]`, `[[load.temperature]]`: α_T ΔT L) carries
+instead `InitStrainMaterial` (ε0 = t0 / (E S) − Δℓ0 / L) over the same elastic material: the
+actuated structure moves before any load, and the first load step starts from the unmoved one.
 
 The load path is the case's α in increasing order, each reached from the previous one (from 0
 for the first) in `--increments` equal load steps (LoadControl), each step solved by Newton to
@@ -135,6 +138,8 @@ def load_case(path):
     for i, entry in enumerate(case.get("modal", {}).get("point_mass", [])):
         for n in selected_nodes(entry, f"modal.point_mass[{i}]", ids, X):
             point_mass[n] += float(entry["mass"])
+    rest_change = rest_length_changes(case, members, X, [index[int(r["a"])] for r in members],
+                                      [index[int(r["b"])] for r in members])
     alpha = case["load"]["alpha"]
     if isinstance(alpha, dict):
         lo, hi, steps = float(alpha["from"]), float(alpha["to"]), int(alpha["steps"])
@@ -149,6 +154,7 @@ def load_case(path):
         "young": np.array([float(r["young"]) for r in members]),
         "section": np.array([float(r["section"]) for r in members]),
         "t0": np.array([float(r["prestress"]) for r in members]),
+        "rest_change": rest_change,
         "density": np.array([float(r.get("density") or 0.0) for r in members]),
         "consistent_mass": case.get("modal", {}).get("mass", "consistent") == "consistent",
         "point_mass": point_mass,
@@ -158,6 +164,34 @@ def load_case(path):
         "alphas": sorted({float(a) for a in alpha}),
         "geometry": case.get("model", {}).get("geometry"),
     }
+
+
+def rest_length_changes(case, members, X, a, b):
+    """Δℓ0 per member (m): `[[load.rest_length_change]]` (`change`) and `[[load.temperature]]`
+    (α_T ΔT L), each on `members = [ids]`, a members-table `group`, or (temperature) every
+    member."""
+    ids = [int(r["member"]) for r in members]
+    groups = [r.get("group") for r in members]
+    length = np.linalg.norm(X[b] - X[a], axis=1)
+    change = np.zeros(len(members))
+
+    def chosen(entry, everyone):
+        if "members" in entry:
+            wanted = {int(m) for m in entry["members"]}
+            return [j for j, m in enumerate(ids) if m in wanted]
+        if "group" in entry:
+            return [j for j, g in enumerate(groups) if g == entry["group"]]
+        if everyone:
+            return list(range(len(ids)))
+        raise CaseError("a rest-length change names no members")
+
+    for entry in case["load"].get("rest_length_change", []):
+        for j in chosen(entry, False):
+            change[j] += float(entry["change"])
+    for entry in case["load"].get("temperature", []):
+        for j in chosen(entry, True):
+            change[j] += float(entry["expansion"]) * float(entry["change"]) * length[j]
+    return change
 
 
 def unbalance_scale(c):
@@ -185,7 +219,15 @@ def build_model(c, ops):
         negative = e if c["bar"][j] or not c["unilateral"] else 0.0
         ops.uniaxialMaterial("Elastic", 2 * j + 1, e, 0.0, negative)
         material = 2 * j + 1
-        if t0 != 0.0:
+        change = c["rest_change"][j]
+        if change != 0.0:
+            # An initial strain: the material sees ε + ε0, ε0 = t0 / (E S) − Δℓ0 / L, so that
+            # τ = t0 − (E S / L) Δℓ0 + (E S / L)(ℓ − L), clipped at 0 for unilateral cables.
+            length = float(np.linalg.norm(c["X"][b] - c["X"][a]))
+            strain = t0 / (e * s) - change / length
+            ops.uniaxialMaterial("InitStrainMaterial", 2 * j + 2, 2 * j + 1, strain)
+            material = 2 * j + 2
+        elif t0 != 0.0:
             ops.uniaxialMaterial("InitStressMaterial", 2 * j + 2, 2 * j + 1, t0 / s)
             material = 2 * j + 2
         # Mass per unit length ρS, spread on the ends as tensolve's modal.mass says.

@@ -177,9 +177,19 @@ fn not_prestress_stable(model: &Model, stability: Option<&PrestressStability>) -
             crate::model::indefinite_reason(s, stability)
         ),
     };
+    // Rest-length changes act in full on the initial geometry (never ramped by α): there the
+    // members carry t0 − k Δℓ0, and a change larger than the prestress can take shows here.
+    let actions = if s.links.iter().any(|l| l.rest_change != 0.0) {
+        "; the members' rest-length changes (`load.rest_length_change`, `load.temperature`) act \
+         in full on the initial geometry, where the members then carry t0 − k Δℓ0: a change \
+         that slackens cables or overloads bars there is refused with it (smaller changes, or \
+         a larger prestress)"
+    } else {
+        ""
+    };
     SetupError::NotPrestressStable {
         model: model.geometry().name(),
-        detail,
+        detail: format!("{detail}{actions}"),
         modes,
     }
 }

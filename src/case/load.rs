@@ -58,6 +58,7 @@ pub(super) fn load(
         pattern,
         points,
         gravity,
+        rest_length_changes: super::actions::rest_length_changes(raw, geometry)?,
         alphas: alpha_values(&raw.alpha)?,
     })
 }

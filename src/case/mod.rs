@@ -8,6 +8,7 @@
 //! order (docs/guide.md's source layout lists them). Every file is read through `read_text`,
 //! whose bytes `sources` can record (MPI rank 0) or replay (the others).
 
+mod actions;
 mod code_checks;
 mod convert;
 mod design;

@@ -232,7 +232,28 @@ pub(super) struct RawLoad {
     pub nodal: Option<Exact<f64, 3>>,
     pub point: Option<Vec<RawPoint>>,
     pub self_weight: Option<RawSelfWeight>,
+    pub rest_length_change: Option<Vec<RawRestLengthChange>>,
+    pub temperature: Option<Vec<RawTemperature>>,
     pub alpha: toml::Value,
+}
+
+/// `[[load.rest_length_change]]`: actuation.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawRestLengthChange {
+    pub members: Option<Vec<u64>>,
+    pub group: Option<String>,
+    pub change: f64,
+}
+
+/// `[[load.temperature]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTemperature {
+    pub members: Option<Vec<u64>>,
+    pub group: Option<String>,
+    pub change: f64,
+    pub expansion: f64,
 }
 
 /// `[solver]`. `l` is `"stiffness"` or a number, read by hand.

@@ -66,6 +66,7 @@ impl Case {
             nodal: self.load.pattern.nodal,
             points: self.load.points.clone(),
             gravity: self.load.gravity,
+            rest_length_changes: self.load.rest_length_changes.clone(),
         };
         let mut s = Structure::new(&self.geometry, &self.fixes, &loading);
         s.point_masses = self.point_masses.clone();
@@ -107,6 +108,9 @@ pub struct Load {
     pub points: Vec<(usize, [f64; 3])>,
     /// Gravity for self-weight (`load.self_weight.gravity`), m/s².
     pub gravity: Option<[f64; 3]>,
+    /// Changes Δℓ0 of members' rest lengths, m, per member index (`load.rest_length_change`
+    /// and `load.temperature`, summed; never scaled by α).
+    pub rest_length_changes: Vec<(usize, f64)>,
     /// The load factors α, in solve order; finite, at least one.
     pub alphas: Vec<f64>,
 }

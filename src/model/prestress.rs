@@ -4,7 +4,7 @@
 //! stability is judged by.
 
 use crate::linalg::{SparseRow, StiffnessPattern};
-use crate::structure::{transverse_pair, Structure, CLAMPED};
+use crate::structure::{transverse_pair, Link, Structure, CLAMPED};
 
 /// The geometric stiffness of the prestress on the initial geometry,
 /// `K_G(t0) = Σ (t0_i / L_i)(I − n nᵀ)` on each member's relative displacement (docs/method.md
@@ -25,6 +25,17 @@ impl GeometricStiffness {
     /// the displacements, 1.6 % to 5 % of the answer on a 5 mm settlement of review/t2's skew
     /// grid).
     pub fn of_prestress(s: &Structure) -> GeometricStiffness {
+        GeometricStiffness::with_tensions(s, |l| s.given_prestress(l))
+    }
+
+    /// `K_G(t0)` of `s` with t0 the case's self-stress, before any change of the members'
+    /// rest lengths ([`Structure::self_stress`]): what the prestress's stability is judged on.
+    pub fn of_self_stress(s: &Structure) -> GeometricStiffness {
+        GeometricStiffness::with_tensions(s, |l| s.self_stress(l))
+    }
+
+    /// `Σ (t(l) / L)(I − n nᵀ)` over the links `l` of `s`.
+    fn with_tensions(s: &Structure, t: impl Fn(&Link) -> f64) -> GeometricStiffness {
         let rows = s
             .links
             .iter()
@@ -33,11 +44,7 @@ impl GeometricStiffness {
                 [l.row_along(p, &s.dof_of), l.row_along(q, &s.dof_of)]
             })
             .collect();
-        let weights = s
-            .links
-            .iter()
-            .map(|l| s.given_prestress(l) / l.length)
-            .collect();
+        let weights = s.links.iter().map(|l| t(l) / l.length).collect();
         GeometricStiffness { rows, weights }
     }
 

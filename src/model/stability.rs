@@ -78,7 +78,8 @@ impl PrestressStability {
     }
 }
 
-/// The test for `s`, whatever its model (`K_G(t0)` is taken from its links), or `None` above
+/// The test for `s`, whatever its model (`K_G(t0)` of its self-stress, before any change of
+/// the rest lengths), or `None` above
 /// [`DENSE_LIMIT`] free dofs.
 pub fn prestress_stability(s: &Structure) -> Option<PrestressStability> {
     let n = s.n_free;
@@ -88,7 +89,7 @@ pub fn prestress_stability(s: &Structure) -> Option<PrestressStability> {
     // BᵀB with unit member stiffness: its null space is the mechanisms'.
     let basis = mechanism_basis(s);
     let m = basis.len();
-    let geometric = super::GeometricStiffness::of_prestress(s);
+    let geometric = super::GeometricStiffness::of_self_stress(s);
     let threshold = STIFFENED_RELATIVE
         * geometric
             .weights()
@@ -246,7 +247,7 @@ pub fn unit_slip_strain(s: &Structure) -> Option<(u64, f64)> {
     s.links
         .iter()
         .map(|l| {
-            let strain = s.given_prestress(l).abs() / (l.stiffness * l.length);
+            let strain = s.self_stress(l).abs() / (l.stiffness * l.length);
             (l.id, if strain.is_nan() { 0.0 } else { strain })
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
@@ -270,7 +271,7 @@ fn buckling_bar(s: &Structure) -> Option<(u64, f64)> {
         .iter()
         .filter(|l| !l.kind.is_cable())
         .map(|l| {
-            let t0 = s.given_prestress(l);
+            let t0 = s.self_stress(l);
             (l.id, -t0 / (l.length * l.stiffness))
         })
         .filter(|&(_, r)| r >= 1e-2)

@@ -110,7 +110,7 @@ pub fn member_check(
             .map(|inertia| std::f64::consts::PI.powi(2) * data.young * inertia / (length * length)),
         LinkKind::Cable => None,
     };
-    let prestress = s.given_prestress(l);
+    let prestress = s.self_stress(l);
     // EN 1993-1-1 §6.3.1 on a bar with a buckling curve (its strength f_y, its Euler load N_cr).
     let flexural = match (data.buckling, data.strength, euler_load) {
         (Some(b), Some(f_y), Some(n_cr)) if l.kind == LinkKind::Bar => Some(flexural_buckling(

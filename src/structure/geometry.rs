@@ -124,6 +124,21 @@ pub struct Loading {
     /// Gravity acceleration, m/s², for self-weight (`load.self_weight`): a member of mass
     /// `ρ S ℓ` puts `ρ S ℓ g / 2` on each end (docs/method.md §7).
     pub gravity: Option<[f64; 3]>,
+    /// Changes Δℓ0 of members' rest lengths, m (member index, change; actuation and
+    /// temperature, `load.rest_length_change`, `load.temperature`): the member's law becomes
+    /// `τ = t0 − k Δℓ0 + k e` in every model, never scaled by α.
+    pub rest_length_changes: Vec<(usize, f64)>,
+}
+
+impl Loading {
+    /// Δℓ0 of each of `members` members, m (0 where none is given; entries add up).
+    pub fn rest_length_change_of(&self, members: usize) -> Vec<f64> {
+        let mut change = vec![0.0; members];
+        for &(j, c) in &self.rest_length_changes {
+            change[j] += c;
+        }
+        change
+    }
 }
 
 /// Length ℓ of the segment from `xa` to `xb` and its unit direction.

@@ -85,9 +85,12 @@ pub struct Link {
     pub length: f64,
     /// Axial stiffness k = E·S/ℓ, N/m.
     pub stiffness: f64,
-    /// Prestress t0, N (tension positive), plus `k e_p` where prescribed displacements
-    /// impose an elongation `e_p` (docs/method.md §7).
+    /// Prestress t0, N (tension positive), plus `k (e_p − Δℓ0)` where prescribed
+    /// displacements impose an elongation `e_p` and the rest length changes by Δℓ0
+    /// (docs/method.md §7).
     pub prestress: f64,
+    /// Δℓ0, m: the change of the rest length (actuation, temperature; 0 without).
+    pub rest_change: f64,
     /// Tension-only: complementarity `0 ≤ τ ⊥ λ ≥ 0` instead of a linear law.
     pub unilateral: bool,
     /// Mass ρ·S·ℓ, kg (0 without a density): the natural modes' mass matrix.
@@ -202,8 +205,11 @@ impl Structure {
     /// Prescribed displacements `Ud` enter as an imposed elongation `e_p = B_p Ud` of every
     /// link (docs/method.md §7): the link's tension is `τ = t0 + k (B_f U_f + e_p)`, so its effective
     /// prestress is `t0 + k e_p`, and [`Structure::settlement_force`] holds `B_fᵀ (k e_p)`.
+    /// A change Δℓ0 of a member's rest length (`loading.rest_length_changes`) enters the same
+    /// way as `e_p − Δℓ0`: its given prestress becomes `t0 − k Δℓ0`.
     pub fn new(geometry: &Geometry, fixes: &[NodeFix], loading: &Loading) -> Structure {
         let n_nodes = geometry.nodes.len();
+        let rest_change = loading.rest_length_change_of(geometry.members.len());
         let mut fixed = vec![false; 3 * n_nodes];
         let mut prescribed = vec![0.0; 3 * n_nodes];
         for fix in fixes {
@@ -228,7 +234,8 @@ impl Structure {
         let links: Vec<Link> = geometry
             .members
             .iter()
-            .map(|m| {
+            .zip(&rest_change)
+            .map(|(m, &rest_change)| {
                 let (length, direction) =
                     length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]);
                 let stiffness = m.young * m.section / length;
@@ -245,7 +252,9 @@ impl Structure {
                     direction,
                     length,
                     stiffness,
-                    prestress: m.prestress + stiffness * imposed,
+                    // t0 + k (e_p − Δℓ0).
+                    prestress: m.prestress + stiffness * (imposed - rest_change),
+                    rest_change,
                     unilateral: m.kind.is_cable() && geometry.unilateral,
                     mass: m.density * m.section * length,
                 }
@@ -374,10 +383,18 @@ impl Structure {
     }
 
     /// The given prestress t0 of a link, without the `k e_p` its prescribed end displacements
-    /// impose ([`Link::prestress`] holds `t0 + k e_p`).
+    /// impose ([`Link::prestress`] holds `t0 + k (e_p − Δℓ0)`): `t0 − k Δℓ0`, the tension of
+    /// the member on the initial geometry once its rest length changed.
     #[inline]
     pub fn given_prestress(&self, l: &Link) -> f64 {
         l.prestress - l.stiffness * self.imposed_elongation(l)
+    }
+
+    /// The self-stress t0 of a link as the case gives it, before any change of its rest
+    /// length: what the prestress's stability, strain and slack margin are judged on.
+    #[inline]
+    pub fn self_stress(&self, l: &Link) -> f64 {
+        self.given_prestress(l) + l.stiffness * l.rest_change
     }
 
     /// The nodes' bounding box, m: `[min, max]` per axis (infinite bounds without nodes).

@@ -35,7 +35,7 @@ pub fn drawn_for(s: &Structure) -> bool {
 pub fn to_svg(solver: &str, alpha: f64, s: &Structure, eq: &Equilibrium) -> io::Result<String> {
     let n = s.links.len();
     let height = TITLE + n as u32 * ROW + X_LABELS + 2 * MARGIN;
-    let prestress = s.links.iter().map(|l| s.given_prestress(l));
+    let prestress = s.links.iter().map(|l| s.self_stress(l));
     let (lo, hi) = eq
         .tensions
         .iter()
@@ -91,7 +91,7 @@ pub fn to_svg(solver: &str, alpha: f64, s: &Structure, eq: &Equilibrium) -> io::
                 bar.set_margin(0, 0, 0, 0);
                 chart.draw_series([bar]).map_err(plot_error)?;
             }
-            let t0 = s.given_prestress(link);
+            let t0 = s.self_stress(link);
             let tick = PathElement::new(
                 vec![(t0, y + 0.05), (t0, y + 0.95)],
                 PRESTRESS.stroke_width(2),

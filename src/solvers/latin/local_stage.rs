@@ -178,6 +178,7 @@ mod tests {
             stiffness: k,
             prestress: t0,
             unilateral,
+            rest_change: 0.0,
             mass: 0.0,
         }
     }

@@ -175,6 +175,7 @@ mod tests {
             stiffness,
             prestress: 0.0,
             unilateral,
+            rest_change: 0.0,
             mass: 0.0,
         }
     }

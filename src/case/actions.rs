@@ -1,0 +1,159 @@
+//! `[load]`'s actions beyond loads, each a change Δℓ0 of some members' rest lengths (never
+//! scaled by α): `[[load.rest_length_change]]` (actuation: `change` = Δℓ0, m) and
+//! `[[load.temperature]]` (`change` = ΔT, K, and `expansion` = α_T, 1/K: Δℓ0 = α_T ΔT L). A
+//! member's law becomes `τ = t0 − k Δℓ0 + k e` in every model: a cable shortened by δ gains
+//! `k δ` of tension before anything moves (docs/method.md §7).
+
+use super::numbers::{bounded, number, PHYSICAL_MAX};
+use super::raw::RawLoad;
+use super::CaseError;
+use crate::structure::{length_and_direction, Geometry};
+use std::collections::HashMap;
+
+/// The largest |ΔT| accepted, K.
+const TEMPERATURE_MAX: f64 = 1e4;
+
+/// The largest α_T accepted, 1/K (steel's is 1.2e-5).
+const EXPANSION_MAX: f64 = 1e-2;
+
+/// Every member's rest-length change, summed over the entries of both keys, by member index
+/// (members with no change left out).
+pub(super) fn rest_length_changes(
+    raw: &RawLoad,
+    geometry: &Geometry,
+) -> Result<Vec<(usize, f64)>, CaseError> {
+    let mut change = vec![0.0; geometry.members.len()];
+    let length = |j: usize| {
+        let m = &geometry.members[j];
+        length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]).0
+    };
+    for (i, entry) in raw.rest_length_change.iter().flatten().enumerate() {
+        let key = format!("load.rest_length_change[{i}]");
+        bounded(
+            &format!("{key}.change"),
+            entry.change,
+            PHYSICAL_MAX,
+            "the change of the rest length in m (negative shortens)",
+        )?;
+        let members = selected(&key, geometry, &entry.members, &entry.group, false)?;
+        members.into_iter().for_each(|j| change[j] += entry.change);
+    }
+    for (i, entry) in raw.temperature.iter().flatten().enumerate() {
+        let key = format!("load.temperature[{i}]");
+        bounded(
+            &format!("{key}.change"),
+            entry.change,
+            TEMPERATURE_MAX,
+            "the temperature change ΔT in K",
+        )?;
+        let expansion = entry.expansion;
+        if !(expansion.is_finite() && (0.0..=EXPANSION_MAX).contains(&expansion)) {
+            return Err(CaseError::invalid(
+                format!("{key}.expansion"),
+                number(expansion),
+                format!(
+                    "give the coefficient of thermal expansion α_T in 1/K, ≥ 0 and at most \
+                     {EXPANSION_MAX:e} (steel 1.2e-5)"
+                ),
+            ));
+        }
+        for j in selected(&key, geometry, &entry.members, &entry.group, true)? {
+            // Δℓ0 = α_T ΔT L.
+            change[j] += expansion * entry.change * length(j);
+        }
+    }
+    // A rest length must stay positive: L + Δℓ0 > 0.
+    for (j, &c) in change.iter().enumerate() {
+        if length(j) + c <= 0.0 {
+            return Err(CaseError::invalid(
+                "load.rest_length_change",
+                number(c),
+                format!(
+                    "member {} ({} m long) would have a rest length of {} m: give a change \
+                     above −{} m",
+                    geometry.members[j].id,
+                    number(length(j)),
+                    number(length(j) + c),
+                    number(length(j))
+                ),
+            ));
+        }
+    }
+    Ok(change
+        .into_iter()
+        .enumerate()
+        .filter(|&(_, c)| c != 0.0)
+        .collect())
+}
+
+/// The members an entry `key` names: by `members` (ids) or `group` (a members table's group,
+/// or a grid's member kind), exactly one of the two; neither selects every member where
+/// `all_by_default`.
+fn selected(
+    key: &str,
+    geometry: &Geometry,
+    members: &Option<Vec<u64>>,
+    group: &Option<String>,
+    all_by_default: bool,
+) -> Result<Vec<usize>, CaseError> {
+    match (members, group) {
+        (Some(_), Some(_)) => Err(CaseError::invalid(
+            key,
+            "`members` and `group`",
+            "give one of `members` (ids) and `group`",
+        )),
+        (None, None) if all_by_default => Ok((0..geometry.members.len()).collect()),
+        (None, None) => Err(CaseError::invalid(
+            key,
+            "no members",
+            "name the members it changes: `members = [ids]` or `group = \"name\"`",
+        )),
+        (Some(ids), None) => {
+            let index: HashMap<u64, usize> = geometry
+                .members
+                .iter()
+                .enumerate()
+                .map(|(j, m)| (m.id, j))
+                .collect();
+            if ids.is_empty() {
+                return Err(CaseError::invalid(
+                    format!("{key}.members"),
+                    "[]",
+                    "name at least one member id",
+                ));
+            }
+            ids.iter()
+                .map(|id| {
+                    index.get(id).copied().ok_or_else(|| {
+                        CaseError::invalid(
+                            format!("{key}.members"),
+                            id,
+                            "no member has this id: name members of the structure (a members \
+                             table's `member` column; a grid's member ids are those of \
+                             `forces/`)",
+                        )
+                    })
+                })
+                .collect()
+        }
+        (None, Some(name)) => {
+            let groups = geometry.member_groups();
+            let chosen: Vec<usize> = (0..groups.len()).filter(|&j| &groups[j] == name).collect();
+            if chosen.is_empty() {
+                let mut known: Vec<&str> = groups.iter().map(String::as_str).collect();
+                known.sort_unstable();
+                known.dedup();
+                known.truncate(12);
+                return Err(CaseError::invalid(
+                    format!("{key}.group"),
+                    format!("\"{name}\""),
+                    format!(
+                        "no member is in this group: name one of {}",
+                        known.join(", ")
+                    ),
+                ));
+            }
+            Ok(chosen)
+        }
+    }
+}
