@@ -17,11 +17,12 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tensolve::app::bench::{self, BenchError};
 use tensolve::app::check::check;
+use tensolve::app::combinations::run_combinations;
 use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::design::design;
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
-use tensolve::app::sweep::{output_dir, run_on, RunError, RunOptions, Sharing};
+use tensolve::app::sweep::{output_dir, run_on, RunError, RunEvent, RunOptions, Sharing};
 use tensolve::case;
 use tensolve::host;
 use tensolve::output::alpha_label;
@@ -295,12 +296,15 @@ fn run_command(
         .as_ref()
         .unwrap_or(&case.solver.methods)
         .len()
-        * case.load.alphas.len();
+        * case.load.alphas.len()
+        * case.load.combinations.len().max(1);
     let mut reporter = Reporter::new(quiet, solves);
     let exchange = ranks.exchange();
-    let result = run_on(case, &options, &exchange, &mut |event| {
-        reporter.run_event(event)
-    });
+    let mut events = |event: RunEvent<'_>| reporter.run_event(event);
+    let result = match case.load.combinations.is_empty() {
+        true => run_on(case, &options, &exchange, &mut events).map(|_| ()),
+        false => run_combinations(&case, &options, &exchange, &mut events).map(|_| ()),
+    };
     if ranks.size() > 1 {
         // The most links a rank kept, and a rank other than 0 (every rank asks, whatever the
         // run's end).
@@ -357,7 +361,7 @@ fn run_command(
     ) {
         reporter.line(&format!("results in {}", dir.display()));
     }
-    result.map(|_| ())
+    result
 }
 
 fn bench_command(

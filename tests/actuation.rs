@@ -151,7 +151,7 @@ fn bad_actions_are_refused_with_their_key() {
         ),
         (
             "[[load.rest_length_change]]\nmembers = [1]\ngroup = \"x\"\nchange = 0.1\n",
-            &["load.rest_length_change[0]", "one of `members`"],
+            &["load.rest_length_change[0]", "name the members one way"],
         ),
         (
             "[[load.rest_length_change]]\ngroup = \"lower\"\nchange = 0.1\n",

@@ -129,6 +129,8 @@ const ONE_ROW: &[&str] = &[
     "load.point",
     "load.rest_length_change",
     "load.temperature",
+    "load.cases",
+    "load.combinations",
     "modal.point_mass",
     "supports.fix[i].box",
 ];
@@ -159,6 +161,8 @@ const DEFAULTS_IN_WORDS: &[&str] = &[
     "load.point",
     "load.rest_length_change",
     "load.temperature",
+    "load.cases",
+    "load.combinations",
     "modal.point_mass",
     "load.alpha",
     "solver.tolerance",

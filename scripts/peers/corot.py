@@ -168,8 +168,8 @@ def load_case(path):
 
 def rest_length_changes(case, members, X, a, b):
     """Δℓ0 per member (m): `[[load.rest_length_change]]` (`change`) and `[[load.temperature]]`
-    (α_T ΔT L), each on `members = [ids]`, a members-table `group`, or (temperature) every
-    member."""
+    (α_T ΔT L), each on `members = [ids]`, a members-table `group`, a `kind`, or
+    (temperature) every member."""
     ids = [int(r["member"]) for r in members]
     groups = [r.get("group") for r in members]
     length = np.linalg.norm(X[b] - X[a], axis=1)
@@ -181,6 +181,8 @@ def rest_length_changes(case, members, X, a, b):
             return [j for j, m in enumerate(ids) if m in wanted]
         if "group" in entry:
             return [j for j, g in enumerate(groups) if g == entry["group"]]
+        if "kind" in entry:
+            return [j for j, r in enumerate(members) if r["kind"] == entry["kind"]]
         if everyone:
             return list(range(len(ids)))
         raise CaseError("a rest-length change names no members")

@@ -7,6 +7,7 @@ pub mod allocator;
 pub mod auto;
 pub mod bench;
 pub mod check;
+pub mod combinations;
 pub mod compare;
 pub mod design;
 pub mod memory;

@@ -5,7 +5,7 @@
 //! `k δ` of tension before anything moves (docs/method.md §7).
 
 use super::numbers::{bounded, number, PHYSICAL_MAX};
-use super::raw::RawLoad;
+use super::raw::LoadParts;
 use super::CaseError;
 use crate::structure::{length_and_direction, Geometry};
 use std::collections::HashMap;
@@ -16,10 +16,11 @@ const TEMPERATURE_MAX: f64 = 1e4;
 /// The largest α_T accepted, 1/K (steel's is 1.2e-5).
 const EXPANSION_MAX: f64 = 1e-2;
 
-/// Every member's rest-length change, summed over the entries of both keys, by member index
-/// (members with no change left out).
+/// Every member's rest-length change, summed over the entries of both keys under `prefix`
+/// (`load`, `load.cases[k]`), by member index (members with no change left out).
 pub(super) fn rest_length_changes(
-    raw: &RawLoad,
+    prefix: &str,
+    raw: &LoadParts<'_>,
     geometry: &Geometry,
 ) -> Result<Vec<(usize, f64)>, CaseError> {
     let mut change = vec![0.0; geometry.members.len()];
@@ -28,18 +29,23 @@ pub(super) fn rest_length_changes(
         length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]).0
     };
     for (i, entry) in raw.rest_length_change.iter().flatten().enumerate() {
-        let key = format!("load.rest_length_change[{i}]");
+        let key = format!("{prefix}.rest_length_change[{i}]");
         bounded(
             &format!("{key}.change"),
             entry.change,
             PHYSICAL_MAX,
             "the change of the rest length in m (negative shortens)",
         )?;
-        let members = selected(&key, geometry, &entry.members, &entry.group, false)?;
+        let by = Selection {
+            members: &entry.members,
+            group: &entry.group,
+            kind: &entry.kind,
+        };
+        let members = selected(&key, geometry, by, false)?;
         members.into_iter().for_each(|j| change[j] += entry.change);
     }
     for (i, entry) in raw.temperature.iter().flatten().enumerate() {
-        let key = format!("load.temperature[{i}]");
+        let key = format!("{prefix}.temperature[{i}]");
         bounded(
             &format!("{key}.change"),
             entry.change,
@@ -57,7 +63,12 @@ pub(super) fn rest_length_changes(
                 ),
             ));
         }
-        for j in selected(&key, geometry, &entry.members, &entry.group, true)? {
+        let by = Selection {
+            members: &entry.members,
+            group: &entry.group,
+            kind: &entry.kind,
+        };
+        for j in selected(&key, geometry, by, true)? {
             // Δℓ0 = α_T ΔT L.
             change[j] += expansion * entry.change * length(j);
         }
@@ -66,7 +77,7 @@ pub(super) fn rest_length_changes(
     for (j, &c) in change.iter().enumerate() {
         if length(j) + c <= 0.0 {
             return Err(CaseError::invalid(
-                "load.rest_length_change",
+                format!("{prefix}.rest_length_change"),
                 number(c),
                 format!(
                     "member {} ({} m long) would have a rest length of {} m: give a change \
@@ -86,29 +97,54 @@ pub(super) fn rest_length_changes(
         .collect())
 }
 
-/// The members an entry `key` names: by `members` (ids) or `group` (a members table's group,
-/// or a grid's member kind), exactly one of the two; neither selects every member where
+/// How an entry names its members: exactly one of `members` (ids), `group` (a members
+/// table's group, or a grid's member kind) and `kind` (`"bar"` or `"cable"`).
+struct Selection<'a> {
+    members: &'a Option<Vec<u64>>,
+    group: &'a Option<String>,
+    kind: &'a Option<String>,
+}
+
+/// The members an entry `key` names by `by`; none named selects every member where
 /// `all_by_default`.
 fn selected(
     key: &str,
     geometry: &Geometry,
-    members: &Option<Vec<u64>>,
-    group: &Option<String>,
+    by: Selection<'_>,
     all_by_default: bool,
 ) -> Result<Vec<usize>, CaseError> {
-    match (members, group) {
-        (Some(_), Some(_)) => Err(CaseError::invalid(
+    let given = [by.members.is_some(), by.group.is_some(), by.kind.is_some()];
+    if given.iter().filter(|&&g| g).count() > 1 {
+        return Err(CaseError::invalid(
             key,
-            "`members` and `group`",
-            "give one of `members` (ids) and `group`",
-        )),
+            "more than one of `members`, `group`, `kind`",
+            "name the members one way: `members = [ids]`, `group = \"name\"` or `kind = \"cable\"`",
+        ));
+    }
+    if let Some(kind) = by.kind {
+        let cables = match kind.as_str() {
+            "cable" => true,
+            "bar" => false,
+            other => {
+                return Err(CaseError::invalid(
+                    format!("{key}.kind"),
+                    format!("\"{other}\""),
+                    "give `\"bar\"` or `\"cable\"`",
+                ))
+            }
+        };
+        return Ok((0..geometry.members.len())
+            .filter(|&j| geometry.members[j].kind.is_cable() == cables)
+            .collect());
+    }
+    match (by.members, by.group) {
         (None, None) if all_by_default => Ok((0..geometry.members.len()).collect()),
         (None, None) => Err(CaseError::invalid(
             key,
             "no members",
-            "name the members it changes: `members = [ids]` or `group = \"name\"`",
+            "name the members it changes: `members = [ids]`, `group = \"name\"` or `kind = \"cable\"`",
         )),
-        (Some(ids), None) => {
+        (Some(ids), _) => {
             let index: HashMap<u64, usize> = geometry
                 .members
                 .iter()

@@ -1,8 +1,9 @@
-//! `[load]`: the load pattern, point loads, self weight, and the load factors α.
+//! `[load]`: the load pattern, point loads, self weight, rest-length changes (`actions`), the
+//! load cases and combinations (`combinations`), and the load factors α.
 
-use super::nodes::select;
-use super::numbers::{bounded, shown, vector, PHYSICAL_MAX};
-use super::raw::RawLoad;
+use super::loads::case_loads;
+use super::numbers::{bounded, shown};
+use super::raw::{LoadParts, RawLoad};
 use super::{CaseError, Load};
 use crate::structure::{Geometry, LoadPattern};
 use std::collections::HashMap;
@@ -10,11 +11,9 @@ use std::collections::HashMap;
 /// Largest load factor accepted.
 const ALPHA_MAX: f64 = 1e6;
 
-/// `load.self_weight.gravity` when `[load.self_weight]` leaves it out, m/s².
-const STANDARD_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
-
 /// `[load]` of a structure of `geometry` (`grid`: a module grid, whose nodal load defaults to
-/// the paper's; a general structure's to none).
+/// the paper's; a general structure's to none, as does a load case's): its loads, or its named
+/// load cases and their combinations (`super::combinations`), and the load factors α.
 pub(super) fn load(
     raw: &RawLoad,
     grid: bool,
@@ -26,39 +25,23 @@ pub(super) fn load(
     } else {
         [0.0; 3]
     };
-    let pattern = LoadPattern {
-        nodal: raw.nodal.map_or(default_nodal, |n| n.0),
+    let own = LoadParts {
+        nodal: raw.nodal.as_ref().map(|n| n.0),
+        point: &raw.point,
+        self_weight: &raw.self_weight,
+        rest_length_change: &raw.rest_length_change,
+        temperature: &raw.temperature,
     };
-    for (c, &f) in pattern.nodal.iter().enumerate() {
-        let key = ["load.nodal[0]", "load.nodal[1]", "load.nodal[2]"][c];
-        bounded(key, f, PHYSICAL_MAX, "each nodal force component in N")?;
-    }
-    let mut points = Vec::new();
-    for (i, p) in raw.point.iter().flatten().enumerate() {
-        let key = format!("load.point[{i}]");
-        let nodes = select(&key, geometry, index_of, &p.nodes, &p.in_box)?;
-        let force = vector(
-            &format!("{key}.force"),
-            p.force,
-            PHYSICAL_MAX,
-            "each force component in N",
-        )?;
-        points.extend(nodes.into_iter().map(|n| (n, force)));
-    }
-    let gravity = match &raw.self_weight {
-        None => None,
-        Some(w) => Some(vector(
-            "load.self_weight.gravity",
-            w.gravity.unwrap_or(STANDARD_GRAVITY),
-            1e6,
-            "each gravity component in m/s²",
-        )?),
-    };
+    let (cases, combinations) =
+        super::combinations::cases_and_combinations(raw, &own, geometry, index_of)?;
+    let loads = case_loads("load", &own, default_nodal, geometry, index_of)?;
     Ok(Load {
-        pattern,
-        points,
-        gravity,
-        rest_length_changes: super::actions::rest_length_changes(raw, geometry)?,
+        pattern: LoadPattern { nodal: loads.nodal },
+        points: loads.points,
+        gravity: loads.gravity,
+        rest_length_changes: loads.rest_length_changes,
+        cases,
+        combinations,
         alphas: alpha_values(&raw.alpha)?,
     })
 }

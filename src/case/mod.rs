@@ -10,12 +10,14 @@
 
 mod actions;
 mod code_checks;
+mod combinations;
 mod convert;
 mod design;
 mod error;
 mod force_density;
 mod grid;
 mod load;
+mod loads;
 mod modal;
 mod nodes;
 mod numbers;
@@ -30,10 +32,11 @@ mod typed;
 
 pub use tables::read_geometry;
 
+pub use combinations::PRESTRESS_FACTOR;
 pub use design::{Design, GroupForce};
 pub use error::CaseError;
 pub use solver::default_subdomains;
-pub use typed::{Case, Load, OutputChoice, ReferenceChoice, SolverChoice};
+pub use typed::{Case, Combination, Load, LoadCase, OutputChoice, ReferenceChoice, SolverChoice};
 
 use serde::Deserialize;
 use std::path::Path;

@@ -234,7 +234,29 @@ pub(super) struct RawLoad {
     pub self_weight: Option<RawSelfWeight>,
     pub rest_length_change: Option<Vec<RawRestLengthChange>>,
     pub temperature: Option<Vec<RawTemperature>>,
+    pub cases: Option<Vec<RawLoadCase>>,
+    pub combinations: Option<Vec<RawCombination>>,
     pub alpha: toml::Value,
+}
+
+/// `[[load.cases]]`: a named load case, with `[load]`'s loads.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawLoadCase {
+    pub name: String,
+    pub nodal: Option<Exact<f64, 3>>,
+    pub point: Option<Vec<RawPoint>>,
+    pub self_weight: Option<RawSelfWeight>,
+    pub rest_length_change: Option<Vec<RawRestLengthChange>>,
+    pub temperature: Option<Vec<RawTemperature>>,
+}
+
+/// `[[load.combinations]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCombination {
+    pub name: String,
+    pub factors: std::collections::BTreeMap<String, f64>,
 }
 
 /// `[[load.rest_length_change]]`: actuation.
@@ -243,6 +265,7 @@ pub(super) struct RawLoad {
 pub(super) struct RawRestLengthChange {
     pub members: Option<Vec<u64>>,
     pub group: Option<String>,
+    pub kind: Option<String>,
     pub change: f64,
 }
 
@@ -252,6 +275,7 @@ pub(super) struct RawRestLengthChange {
 pub(super) struct RawTemperature {
     pub members: Option<Vec<u64>>,
     pub group: Option<String>,
+    pub kind: Option<String>,
     pub change: f64,
     pub expansion: f64,
 }
@@ -278,4 +302,24 @@ pub(super) struct RawSolver {
     pub macro_degree: Option<usize>,
     pub reference: Option<ReferenceChoice>,
     pub linear: Option<LinearSolve>,
+}
+
+/// The loads of `[load]` or of one `[[load.cases]]` entry, as written.
+pub(super) struct LoadParts<'a> {
+    pub nodal: Option<[f64; 3]>,
+    pub point: &'a Option<Vec<RawPoint>>,
+    pub self_weight: &'a Option<RawSelfWeight>,
+    pub rest_length_change: &'a Option<Vec<RawRestLengthChange>>,
+    pub temperature: &'a Option<Vec<RawTemperature>>,
+}
+
+impl LoadParts<'_> {
+    /// Whether any load is written.
+    pub(super) fn any(&self) -> bool {
+        self.nodal.is_some()
+            || self.point.is_some()
+            || self.self_weight.is_some()
+            || self.rest_length_change.is_some()
+            || self.temperature.is_some()
+    }
 }

@@ -111,8 +111,41 @@ pub struct Load {
     /// Changes Δℓ0 of members' rest lengths, m, per member index (`load.rest_length_change`
     /// and `load.temperature`, summed; never scaled by α).
     pub rest_length_changes: Vec<(usize, f64)>,
+    /// The named load cases of `[[load.cases]]` (empty without: the loads above are the
+    /// case's one load).
+    pub cases: Vec<LoadCase>,
+    /// The combinations of `[[load.combinations]]`, each solved on its own (one per load case,
+    /// at factor 1, where none is given); empty without load cases.
+    pub combinations: Vec<Combination>,
     /// The load factors α, in solve order; finite, at least one.
     pub alphas: Vec<f64>,
+}
+
+/// A named load case (`[[load.cases]]`): its loads at factor 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadCase {
+    /// Its name (`name`).
+    pub name: String,
+    /// The force on every free node, N (`nodal`, default none).
+    pub nodal: [f64; 3],
+    /// Point loads: node index and force, N.
+    pub points: Vec<(usize, [f64; 3])>,
+    /// Gravity for self-weight, m/s².
+    pub gravity: Option<[f64; 3]>,
+    /// Changes Δℓ0 of members' rest lengths, m, per member index.
+    pub rest_length_changes: Vec<(usize, f64)>,
+}
+
+/// A combination (`[[load.combinations]]`): `Σ factor · case`, solved as one load (never
+/// superposed: cables go slack), the prestress scaled by its own factor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Combination {
+    /// Its name (`name`).
+    pub name: String,
+    /// Per load case (index into [`Load::cases`]) its factor.
+    pub factors: Vec<(usize, f64)>,
+    /// The prestress's factor (`factors.prestress`, default 1).
+    pub prestress: f64,
 }
 
 /// The solution the LATIN error e is measured against.

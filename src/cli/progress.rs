@@ -149,6 +149,10 @@ impl Reporter {
                     _ => self.status(text),
                 }
             }
+            RunEvent::Combination(name) => {
+                self.end_stage();
+                self.line(&format!("combination {name}"));
+            }
             RunEvent::LinksKept { kept, whole } => self.links_kept = Some((kept, whole)),
             RunEvent::ModelOffBy(off) => self.model_off_by = Some(off.clone()),
             RunEvent::Row(row) => {

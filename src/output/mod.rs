@@ -4,6 +4,7 @@
 //! a sweep; the other modules write one kind of file each.
 
 mod atomic;
+mod envelope;
 mod groups;
 mod history;
 mod homogenised;
@@ -18,6 +19,10 @@ mod vtk;
 
 pub use crate::labels::alpha_label;
 pub use atomic::{ensure_writable, write_atomic};
+pub use envelope::{
+    write_combined_summary, write_envelopes, Combined, ENVELOPE_MEMBERS_HEADER,
+    ENVELOPE_NODES_HEADER,
+};
 pub use history::{history_column, history_header, HistoryWriter};
 pub use homogenised::{homogenised_path, write_homogenised};
 pub use member_checks::{ChecksSink, CHECKS_HEADER, CHECK_COLUMNS, EUROCODE_COLUMNS};

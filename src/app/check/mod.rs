@@ -83,6 +83,8 @@ pub struct ModelReport {
     pub flat_form: Option<f64>,
     /// The load factors.
     pub alphas: Vec<f64>,
+    /// The load cases' and the combinations' names (empty without `[[load.cases]]`).
+    pub combinations: (Vec<String>, Vec<String>),
     /// The solvers.
     pub methods: Vec<Method>,
     /// How newton solves its Newton systems, and on which partition, when newton is asked.
@@ -178,13 +180,22 @@ fn newton_linear(case: &Case) -> Option<(crate::solvers::newton::LinearSolve, [u
         .then_some((newton.linear, newton.subdomains))
 }
 
+/// The names of `case`'s load cases and combinations.
+fn load_names(case: &Case) -> (Vec<String>, Vec<String>) {
+    let load = &case.load;
+    let cases = load.cases.iter().map(|c| c.name.clone()).collect();
+    (
+        cases,
+        load.combinations.iter().map(|c| c.name.clone()).collect(),
+    )
+}
+
 /// Check `case` (read from `path`), with `available` the memory this process could use before
 /// it built anything.
 pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckReport {
     let case_model = case.model();
     let s = &case_model.structure;
-    // The mechanism check as the run makes it: substructure by substructure when the run
-    // never factorizes K whole, which then also gives the counts (m = dim ker K).
+    // The mechanism check as the run makes it (by substructures where it never factorizes K).
     let run = Workload::run(case, &case.solver.methods);
     let zero_modes = zero_modes_by_substructures(case, s, run.keeps_taut);
     // The given prestress t0, without the tensions prescribed displacements impose.
@@ -234,6 +245,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         thick_member: case.geometry.thickest_member(),
         flat_form: case.design.as_ref().and_then(|d| d.flat),
         alphas: case.load.alphas.clone(),
+        combinations: load_names(case),
         methods: case.solver.methods.clone(),
         newton_linear: newton_linear(case),
     };

@@ -225,6 +225,16 @@ impl CheckReport {
         let m = &self.model;
         let alphas: Vec<String> = m.alphas.iter().map(|&a| alpha_label(a)).collect();
         writeln!(f, "load factors    {}", alphas.join(", "))?;
+        let (cases, combinations) = &m.combinations;
+        if !cases.is_empty() {
+            writeln!(f, "load cases      {}", cases.join(", "))?;
+            writeln!(
+                f,
+                "combinations    {}: each solved on its own (cables go slack: never superposed), \
+                 into combinations/<name>/, with envelope/ over them",
+                combinations.join(", ")
+            )?;
+        }
         let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();
         writeln!(f, "solvers         {}", methods.join(", "))?;
         if let Some((linear, [sx, sy])) = m.newton_linear {

@@ -79,10 +79,11 @@ pub enum RunEvent<'a> {
     },
     /// A solve ended and its summary row was written.
     Row(&'a SummaryRow),
-    /// The run's rows on a model of the initial geometry left out more than `model.tolerance`
-    /// of the geometry: how many, the worst, and `large` measured at its α (sent once, after
-    /// the last row).
+    /// The rows on a model of the initial geometry off by more than `model.tolerance`: how
+    /// many, the worst, and `large` measured at its α (sent once, after the last row).
     ModelOffBy(&'a ModelOffBy),
+    /// A combination's own run begins (into `combinations/<name>/`).
+    Combination(&'a str),
     /// Set-up kept `kept` of the structure's `whole` links on this process (fewer on an MPI
     /// rank that keeps only its micro-macro substructures' links).
     LinksKept {
