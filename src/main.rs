@@ -299,6 +299,7 @@ fn run_command(
         * case.load.alphas.len()
         * case.load.combinations.len().max(1);
     let mut reporter = Reporter::new(quiet, solves);
+    reporter.forbid_slack = case.forbid_slack;
     let exchange = ranks.exchange();
     let mut events = |event: RunEvent<'_>| reporter.run_event(event);
     let result = match case.load.combinations.is_empty() {

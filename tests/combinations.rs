@@ -340,3 +340,34 @@ fn check_names_the_cases_and_combinations() {
         "{text}"
     );
 }
+
+/// `checks.forbid_slack`: every slack cable of a combination's answer is a row of its
+/// `checks.csv` (as many as its summary's `slack_cables`, members whose force is 0), and
+/// a combination with none writes no file.
+#[test]
+fn forbidden_slack_is_listed_per_combination() {
+    let text = "[grid]\nmodules = [8, 8]\n[model]\ngeometry = \"linear\"\n\
+                [solver]\nmethods = [\"newton\"]\n[load]\nalpha = [1.0]\n\
+                [checks]\nforbid_slack = true\n\
+                [[load.cases]]\nname = \"G\"\nnodal = [0.0, 0.0, -40.0]\n\
+                [[load.combinations]]\nname = \"heavy\"\nfactors = { G = 2.5 }\n\
+                [[load.combinations]]\nname = \"light\"\nfactors = { G = 0.1 }\n";
+    let (_d, out) = run("comb-slack", text);
+    let heavy = out.0.join("combinations/heavy");
+    let listed = csv_rows(&heavy.join("checks.csv"));
+    let slack = csv_rows(&heavy.join("summary.csv"))[0]["slack_cables"]
+        .parse::<usize>()
+        .unwrap();
+    assert!(slack > 0);
+    assert_eq!(listed.len(), slack);
+    let forces = file(&heavy, "forces", "newton", "1");
+    for row in &listed {
+        assert_eq!(row["clause"], "slack (checks.forbid_slack)");
+        let t = forces
+            .iter()
+            .find(|t| t["member"] == row["member"])
+            .unwrap();
+        assert_eq!(t["force_N"].parse::<f64>().unwrap(), 0.0, "{row:?}");
+    }
+    assert!(!out.0.join("combinations/light/checks.csv").exists());
+}

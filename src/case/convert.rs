@@ -73,6 +73,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         modal_mass: raw.modal.mass.unwrap_or_default(),
         design,
         point_masses,
+        forbid_slack: raw.checks.forbid_slack.unwrap_or(false),
     })
 }
 

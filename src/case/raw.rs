@@ -182,12 +182,14 @@ pub(super) struct RawBars {
     pub density: Option<f64>,
 }
 
-/// `[checks]`: the partial factors of EN 1993's member checks.
+/// `[checks]`: the partial factors of EN 1993's member checks, and whether a cable may go
+/// slack.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawChecks {
     pub gamma_m1: Option<f64>,
     pub gamma_r: Option<f64>,
+    pub forbid_slack: Option<bool>,
 }
 
 /// `[prestress]`.

@@ -47,6 +47,9 @@ pub struct Case {
     /// Point masses of the natural modes (`modal.point_mass`): node index and kg on each of
     /// its components.
     pub point_masses: Vec<(usize, f64)>,
+    /// A slack cable is a failed check (`checks.forbid_slack`): listed in `checks.csv` and
+    /// warned of. Default false.
+    pub forbid_slack: bool,
 }
 
 impl Case {

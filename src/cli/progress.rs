@@ -42,6 +42,8 @@ pub struct Reporter {
     /// The links this process kept of the structure's, when set-up said
     /// ([`RunEvent::LinksKept`]).
     pub links_kept: Option<(usize, usize)>,
+    /// A row with slack cables gets a warning (`checks.forbid_slack`).
+    pub forbid_slack: bool,
 }
 
 impl Reporter {
@@ -69,6 +71,7 @@ impl Reporter {
             last_error: None,
             model_off_by: None,
             links_kept: None,
+            forbid_slack: false,
         }
     }
 
@@ -157,6 +160,15 @@ impl Reporter {
             RunEvent::ModelOffBy(off) => self.model_off_by = Some(off.clone()),
             RunEvent::Row(row) => {
                 let mut text = format_row(row);
+                if self.forbid_slack && row.slack_cables > 0 && !row.status.no_answer() {
+                    text.push_str(&format!(
+                        "\n  warning: {} at alpha = {}: {} cable(s) slack where \
+                         `checks.forbid_slack` forbids it (checks.csv names them)",
+                        row.solver,
+                        alpha_label(row.alpha),
+                        row.slack_cables
+                    ));
+                }
                 if let Some(e) = self.last_error.take() {
                     // Beside the row's numbers, before the warnings under it.
                     let end = text.find('\n').unwrap_or(text.len());

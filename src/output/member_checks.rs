@@ -73,15 +73,21 @@ pub(super) fn eurocode_cells(s: &Structure, i: usize, c: &MemberCheck) -> [Strin
 }
 
 /// `checks.csv`: after every solve with an answer, a row per member whose largest utilisation
-/// is above 1 (none: no row; no such member in the whole run: no file).
+/// is above 1, and, where slack is forbidden, per slack cable (none: no row; none in the whole
+/// run: no file).
 pub struct ChecksSink<'s> {
     out: &'s RefCell<OutputDir>,
+    /// Slack cables are listed (`checks.forbid_slack`).
+    forbid_slack: bool,
 }
 
+/// The clause of a slack cable's row of `checks.csv`.
+pub const SLACK_CLAUSE: &str = "slack (checks.forbid_slack)";
+
 impl<'s> ChecksSink<'s> {
-    /// `checks.csv` in `out`.
-    pub fn new(out: &'s RefCell<OutputDir>) -> Self {
-        ChecksSink { out }
+    /// `checks.csv` in `out`, with the slack cables when `forbid_slack`.
+    pub fn new(out: &'s RefCell<OutputDir>, forbid_slack: bool) -> Self {
+        ChecksSink { out, forbid_slack }
     }
 }
 
@@ -93,25 +99,29 @@ impl Sink for ChecksSink<'_> {
         else {
             return Ok(());
         };
-        let Some(checks) = member_checks(model, &solution.equilibrium) else {
-            return Ok(());
-        };
+        let eq = &solution.equilibrium;
         let s = &model.structure;
-        let rows: Vec<String> = checks
+        let row = |i: usize, utilisation: String, clause: &str| {
+            let (solver, alpha, id) = (key.method.name(), key.alpha, s.links[i].id);
+            format!(
+                "{solver},{alpha},{id},{},{utilisation},{clause}",
+                s.kind_name(i)
+            )
+        };
+        let checks = member_checks(model, eq).unwrap_or_default();
+        let mut rows: Vec<String> = checks
             .iter()
             .enumerate()
             .filter_map(|(i, c)| {
                 let (u, clause) = c.governing().filter(|(u, _)| *u > 1.0)?;
-                Some(format!(
-                    "{},{},{},{},{u},{}",
-                    key.method.name(),
-                    key.alpha,
-                    s.links[i].id,
-                    s.kind_name(i),
-                    clause.name()
-                ))
+                Some(row(i, u.to_string(), clause.name()))
             })
             .collect();
+        if self.forbid_slack {
+            // A slack cable's row: its utilisation empty, its tension 0.
+            let slack = (0..s.links.len()).filter(|&i| s.links[i].unilateral && eq.slack[i]);
+            rows.extend(slack.map(|i| row(i, String::new(), SLACK_CLAUSE)));
+        }
         if rows.is_empty() {
             return Ok(());
         }

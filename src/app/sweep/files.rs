@@ -143,7 +143,10 @@ pub(super) fn sinks<'s>(
     }
     sinks.add(out.reactions, ReactionTotalsSink::new(output));
     let checks = model.structure.checks.is_some();
-    sinks.add(checks, ChecksSink::new(output));
+    sinks.add(
+        checks || case.forbid_slack,
+        ChecksSink::new(output, case.forbid_slack),
+    );
     sinks.add(out.summary, SummarySink::new(output, checks));
     sinks
 }
