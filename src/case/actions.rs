@@ -7,7 +7,7 @@
 use super::numbers::{bounded, number, PHYSICAL_MAX};
 use super::raw::LoadParts;
 use super::CaseError;
-use crate::structure::{length_and_direction, Geometry};
+use crate::structure::Geometry;
 use std::collections::HashMap;
 
 /// The largest |ΔT| accepted, K.
@@ -24,10 +24,7 @@ pub(super) fn rest_length_changes(
     geometry: &Geometry,
 ) -> Result<Vec<(usize, f64)>, CaseError> {
     let mut change = vec![0.0; geometry.members.len()];
-    let length = |j: usize| {
-        let m = &geometry.members[j];
-        length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]).0
-    };
+    let length = |j: usize| geometry.member_length(j);
     for (i, entry) in raw.rest_length_change.iter().flatten().enumerate() {
         let key = format!("{prefix}.rest_length_change[{i}]");
         bounded(
@@ -73,28 +70,38 @@ pub(super) fn rest_length_changes(
             change[j] += expansion * entry.change * length(j);
         }
     }
-    // A rest length must stay positive: L + Δℓ0 > 0.
-    for (j, &c) in change.iter().enumerate() {
-        if length(j) + c <= 0.0 {
-            return Err(CaseError::invalid(
-                format!("{prefix}.rest_length_change"),
-                number(c),
-                format!(
-                    "member {} ({} m long) would have a rest length of {} m: give a change \
-                     above −{} m",
-                    geometry.members[j].id,
-                    number(length(j)),
-                    number(length(j) + c),
-                    number(length(j))
-                ),
-            ));
-        }
+    let changes = change.iter().copied().enumerate();
+    if let Some((j, c, l)) = first_non_positive_rest_length(changes, geometry) {
+        return Err(CaseError::invalid(
+            format!("{prefix}.rest_length_change"),
+            number(c),
+            format!(
+                "member {} ({} m long) would have a rest length of {} m: give a change above \
+                 −{} m",
+                geometry.members[j].id,
+                number(l),
+                number(l + c),
+                number(l)
+            ),
+        ));
     }
     Ok(change
         .into_iter()
         .enumerate()
         .filter(|&(_, c)| c != 0.0)
         .collect())
+}
+
+/// The first member of `changes` (index, Δℓ0) whose rest length `L + Δℓ0` is not positive,
+/// with its change and its length L.
+pub(super) fn first_non_positive_rest_length(
+    changes: impl IntoIterator<Item = (usize, f64)>,
+    geometry: &Geometry,
+) -> Option<(usize, f64, f64)> {
+    changes
+        .into_iter()
+        .map(|(j, c)| (j, c, geometry.member_length(j)))
+        .find(|&(_, c, l)| l + c <= 0.0)
 }
 
 /// How an entry names its members: exactly one of `members` (ids), `group` (a members

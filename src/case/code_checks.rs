@@ -45,9 +45,10 @@ pub(super) fn grid_buckling(
              or remove this key",
         ));
     }
+    // γ_M1 is put on by `apply_factors`.
     Ok(Some(Buckling {
         curve,
-        gamma_m1: GAMMA_M1,
+        gamma_m1: f64::NAN,
     }))
 }
 

@@ -68,14 +68,7 @@ pub(super) fn cases_and_combinations(
                  otherwise",
             ));
         }
-        let parts = LoadParts {
-            nodal: c.nodal.as_ref().map(|n| n.0),
-            point: &c.point,
-            self_weight: &c.self_weight,
-            rest_length_change: &c.rest_length_change,
-            temperature: &c.temperature,
-        };
-        let mut loads = case_loads(&prefix, &parts, [0.0; 3], geometry, index_of)?;
+        let mut loads = case_loads(&prefix, &c.parts(), [0.0; 3], geometry, index_of)?;
         loads.name = c.name.clone();
         cases.push(loads);
     }
@@ -174,25 +167,20 @@ fn rest_lengths_stay_positive(
     }
     let mut members: Vec<(usize, f64)> = change.into_iter().collect();
     members.sort_by_key(|&(j, _)| j);
-    for (j, d) in members {
-        let m = &geometry.members[j];
-        let length =
-            crate::structure::length_and_direction(geometry.nodes[m.a], geometry.nodes[m.b]).0;
-        if length + d <= 0.0 {
-            return Err(CaseError::invalid(
-                format!("load.combinations[{k}].factors"),
-                format!("\"{}\"", combination.name),
-                format!(
-                    "its factors change member {}'s rest length by {} m, {} m long: it would be \
-                     ≤ 0; lower the factors of its rest-length changes",
-                    m.id,
-                    number(d),
-                    number(length)
-                ),
-            ));
-        }
+    match super::actions::first_non_positive_rest_length(members, geometry) {
+        None => Ok(()),
+        Some((j, d, length)) => Err(CaseError::invalid(
+            format!("load.combinations[{k}].factors"),
+            format!("\"{}\"", combination.name),
+            format!(
+                "its factors change member {}'s rest length by {} m, {} m long: it would be ≤ \
+                 0; lower the factors of its rest-length changes",
+                geometry.members[j].id,
+                number(d),
+                number(length)
+            ),
+        )),
     }
-    Ok(())
 }
 
 /// A case's or combination's name under `key`: 1 to 64 letters, digits, `-`, `_` or `.` (a

@@ -3,7 +3,7 @@
 
 use super::loads::case_loads;
 use super::numbers::{bounded, shown};
-use super::raw::{LoadParts, RawLoad};
+use super::raw::RawLoad;
 use super::{CaseError, Load};
 use crate::structure::{Geometry, LoadPattern};
 use std::collections::HashMap;
@@ -25,13 +25,7 @@ pub(super) fn load(
     } else {
         [0.0; 3]
     };
-    let own = LoadParts {
-        nodal: raw.nodal.as_ref().map(|n| n.0),
-        point: &raw.point,
-        self_weight: &raw.self_weight,
-        rest_length_change: &raw.rest_length_change,
-        temperature: &raw.temperature,
-    };
+    let own = raw.parts();
     let (cases, combinations) =
         super::combinations::cases_and_combinations(raw, &own, geometry, index_of)?;
     let loads = case_loads("load", &own, default_nodal, geometry, index_of)?;

@@ -315,6 +315,32 @@ pub(super) struct LoadParts<'a> {
     pub temperature: &'a Option<Vec<RawTemperature>>,
 }
 
+impl RawLoad {
+    /// `[load]`'s own loads.
+    pub(super) fn parts(&self) -> LoadParts<'_> {
+        LoadParts {
+            nodal: self.nodal.as_ref().map(|n| n.0),
+            point: &self.point,
+            self_weight: &self.self_weight,
+            rest_length_change: &self.rest_length_change,
+            temperature: &self.temperature,
+        }
+    }
+}
+
+impl RawLoadCase {
+    /// The case's loads.
+    pub(super) fn parts(&self) -> LoadParts<'_> {
+        LoadParts {
+            nodal: self.nodal.as_ref().map(|n| n.0),
+            point: &self.point,
+            self_weight: &self.self_weight,
+            rest_length_change: &self.rest_length_change,
+            temperature: &self.temperature,
+        }
+    }
+}
+
 impl LoadParts<'_> {
     /// Whether any load is written.
     pub(super) fn any(&self) -> bool {

@@ -78,6 +78,12 @@ impl Geometry {
         self.groups = None;
     }
 
+    /// Member `j`'s initial length, m.
+    pub fn member_length(&self, j: usize) -> f64 {
+        let m = &self.members[j];
+        length_and_direction(self.nodes[m.a], self.nodes[m.b]).0
+    }
+
     /// Per member, its group (issue 46): the `group` column's label, a grid member's kind
     /// (its role in its module), else the member's own id, each member its own group.
     pub fn member_groups(&self) -> Vec<String> {
