@@ -12,8 +12,8 @@ use std::path::Path;
 
 type Rows = Vec<HashMap<String, String>>;
 
-/// The paper's grid, 12 × 12 modules, linear (pinned), two α, newton and pcg-lcp.
-const GRID: &str = "[grid]\nmodules = [12, 12]\n[model]\ngeometry = \"linear\"\n\
+/// The paper's grid, 16 × 16 modules, linear (pinned), two α, newton and pcg-lcp.
+const GRID: &str = "[grid]\nmodules = [16, 16]\n[model]\ngeometry = \"linear\"\n\
                     [solver]\nmethods = [\"newton\", \"pcg-lcp\"]\n[load]\nalpha = [0.5, 1.0]\n";
 
 /// Write `text` as `case.toml` in a fresh directory and run it into `out`; exit 0 asserted.
@@ -39,7 +39,7 @@ fn file(dir: &Path, kind: &str, solver: &str, alpha: &str) -> Rows {
 fn a_combination_is_the_plain_run_of_its_loads() {
     let (g, q) = (-20.0f64, -30.0f64);
     let (fg, fq) = (1.35f64, 1.5f64);
-    let point_box = "box = { min = [0.0, 0.0, -1.0], max = [6.0, 12.0, 1.0] }";
+    let point_box = "box = { min = [0.0, 0.0, -1.0], max = [8.0, 16.0, 1.0] }";
     let combined = format!(
         "{GRID}[[load.cases]]\nname = \"G\"\nnodal = [0.0, 0.0, {g:?}]\n\
          [[load.cases]]\nname = \"Q\"\n[[load.cases.point]]\n{point_box}\nforce = [0.0, 0.0, {q:?}]\n\
