@@ -163,6 +163,7 @@ def load_case(path):
         "F": F,
         "alphas": sorted({float(a) for a in alpha}),
         "geometry": case.get("model", {}).get("geometry"),
+        "path": case["load"].get("path", "load-control"),
     }
 
 
@@ -303,12 +304,110 @@ def solve(c, out_dir, increments, modes=0):
     return True
 
 
+def limit_of(loads):
+    """The load at a local maximum of λ near three equal steps `loads`: the vertex of the
+    parabola through them."""
+    a, b, c = loads
+    curvature = a - 2.0 * b + c
+    return b if curvature >= 0.0 else b - (c - a) ** 2 / (8.0 * curvature)
+
+
+def displacements(c, ops):
+    """Every node's displacement, (nodes, 3)."""
+    return np.array([ops.nodeDisp(i + 1) for i in range(len(c["ids"]))])
+
+
+def solve_arc(c, out_dir, arc_step, max_steps=100000):
+    """Follow the equilibrium path by OpenSees' `ArcLength` integrator (constant step
+    `arc_step` in ‖ΔU‖, the load's weight 0: cylindrical), through limit points. Each α is the
+    first point of the path where λ = α: the step that passes it is followed by one
+    `LoadControl` step back onto α, and the path goes on from there.
+
+    `ArcLength` takes the sign of each step's Δλ from the last step's; where the load falls
+    along the path it turns back (measured: at the simplex's limit point, after a landing). A
+    step whose ΔU points against the last one's is that turn: the path is walked on by
+    `DisplacementControl` on the component that moved most in the last forward step (by as
+    much, the same way) while the load falls, and by `ArcLength` again once it rises for two
+    steps.
+
+    Writes each α's state and `limits.csv`: the load of each local maximum of λ passed, by the
+    parabola through the three equal steps (of one integrator) around it. Returns False when a
+    step fails or the path ends before the last α."""
+    import openseespy.opensees as ops
+
+    build_model(c, ops)
+    targets = [a for a in c["alphas"]]
+    if targets and targets[0] == 0.0:
+        write_state(c, ops, out_dir, 0.0)
+        targets.pop(0)
+    arc = ("ArcLength", arc_step, 0.0)
+    integrator, issue = arc, True
+    loads, limits, steady, turns, rising = [0.0], [], 0, 0, 0
+    last_step = None
+    for _ in range(max_steps):
+        if not targets:
+            break
+        if issue:
+            ops.integrator(*integrator)
+            issue, steady = False, 0
+        before = displacements(c, ops)
+        if ops.analyze(1) != 0:
+            print(f"corot: no convergence of a step at lambda = {loads[-1]}", file=sys.stderr)
+            return False
+        load = ops.getLoadFactor(1)
+        loads.append(load)
+        step = displacements(c, ops) - before
+        if integrator is arc and last_step is not None and np.vdot(step, last_step) < 0.0:
+            # ArcLength turned back: walk on by displacement control. Turned back at a
+            # maximum, the limit is the vertex of the parabola through the last three
+            # forward steps (rising to the last).
+            turns += 1
+            if steady >= 3 and loads[-2] > loads[-3]:
+                limits.append(limit_of(loads[-4:-1]))
+            node, dof = np.unravel_index(np.abs(last_step).argmax(), last_step.shape)
+            integrator = ("DisplacementControl", int(node) + 1, int(dof) + 1, float(last_step[node, dof]))
+            issue, last_step, rising = True, None, 0
+            continue
+        last_step = step
+        steady += 1
+        rising = rising + 1 if load > loads[-2] else 0
+        if integrator is not arc and rising >= 2:
+            integrator, issue = arc, True
+        # Three equal steps with the middle load the largest: a limit point.
+        if steady >= 3 and loads[-2] > loads[-3] and loads[-2] >= loads[-1]:
+            limits.append(limit_of(loads[-3:]))
+        if loads[-2] < targets[0] <= load:
+            alpha = targets.pop(0)
+            ops.integrator("LoadControl", alpha - load)
+            if ops.analyze(1) != 0:
+                print(f"corot: no convergence landing on alpha = {alpha}", file=sys.stderr)
+                return False
+            write_state(c, ops, out_dir, alpha)
+            loads.append(alpha)
+            issue, last_step = True, None
+    ops.wipe()
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "limits.csv"), "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["limit_alpha"])
+        for limit in limits:
+            w.writerow([repr(float(limit))])
+    print(f"corot: arc path: {len(loads) - 1} steps, {turns} turn(s) walked past, limits {limits}",
+          file=sys.stderr)
+    if targets:
+        print(f"corot: the arc path did not reach alpha = {targets[0]} in {max_steps} steps", file=sys.stderr)
+        return False
+    return True
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("case")
     parser.add_argument("out_dir")
     parser.add_argument("--increments", type=int, default=20, help="load steps between two α (default 20)")
     parser.add_argument("--modes", type=int, default=0, help="the lowest natural frequencies to write per α")
+    parser.add_argument("--arc-step", type=float, default=0.005,
+                        help="the arc step in ‖ΔU‖, m, when the case asks for load.path = \"arc-length\" (default 0.005)")
     args = parser.parse_args()
     if args.increments < 1:
         parser.error("--increments must be at least 1")
@@ -327,6 +426,11 @@ def main():
               "[[modal.point_mass]]",
               file=sys.stderr)
         return 2
+    if case["path"] == "arc-length":
+        if args.modes > 0:
+            print(f"corot: {args.case}: --modes is not supported along an arc-length path", file=sys.stderr)
+            return 2
+        return 0 if solve_arc(case, args.out_dir, args.arc_step) else 1
     return 0 if solve(case, args.out_dir, args.increments, args.modes) else 1
 
 

@@ -15,6 +15,10 @@ and with `--modes` (tensolve run with `output.modes = N`, the members given a `d
   max |Δf| / f ≤ rtol over the N lowest natural frequencies, against the peer's OpenSees
   `eigen` at the same state (tensolve's TENSOLVE_RUN_DIR/modes/newton_alpha{α}.csv; the
   peer's N is the row count of tensolve's file at the first α),
+and, where the case follows an arc-length path (`load.path = "arc-length"`, the peer on
+OpenSees' `ArcLength`),
+  |Δ| / limit ≤ --limit-rtol between the largest limit load the peer passed (its
+  `limits.csv`) and the largest `limit_alpha` of tensolve's summary.csv,
 and prints one line per α with the figures. Exit 0 when every α passes, 1 otherwise (or when
 the peer does not converge), 2 on usage errors (or a case the peer refuses).
 
@@ -128,6 +132,10 @@ def main():
     parser.add_argument("run_dir", nargs="?", help="tensolve's output directory of the case")
     parser.add_argument("--rtol", type=float, default=1e-6)
     parser.add_argument("--increments", type=int, default=20, help="the peer's load steps between two α")
+    parser.add_argument("--arc-step", type=float, default=0.005,
+                        help="the peer's arc step in ‖ΔU‖, m, along an arc-length path (default 0.005)")
+    parser.add_argument("--limit-rtol", type=float, default=1e-6,
+                        help="the limit loads' relative difference allowed along an arc-length path (default 1e-6)")
     parser.add_argument("--print-only", action="store_true", help="print the peer's answers, compare nothing")
     parser.add_argument("--modes", action="store_true",
                         help="compare the natural frequencies of TENSOLVE_RUN_DIR/modes too")
@@ -144,7 +152,7 @@ def main():
         print(f"corot_compare: {args.case}: {e}", file=sys.stderr)
         return 2
     peer_script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corot.py")
-    peer_args = ["--increments", str(args.increments)]
+    peer_args = ["--increments", str(args.increments), "--arc-step", str(args.arc_step)]
     if args.modes:
         try:
             count = len(frequencies(os.path.join(args.run_dir, "modes", f"newton_alpha{alpha_label(alphas[0])}.csv")))
@@ -179,7 +187,25 @@ def main():
                 line += ": pass" if ok else ": FAIL"
             print(line)
             passed = passed and ok
+        if os.path.exists(os.path.join(out, "limits.csv")) and not args.print_only:
+            line, ok = compare_limits(out, args.run_dir, args.limit_rtol)
+            print(line)
+            passed = passed and ok
     return 0 if passed else 1
+
+
+def compare_limits(peer_out, run_dir, rtol):
+    """The largest limit load passed, the peer's against tensolve's `limit_alpha`."""
+    theirs = [float(r["limit_alpha"]) for r in read_csv(os.path.join(peer_out, "limits.csv"))]
+    ours = [float(r["limit_alpha"]) for r in read_csv(os.path.join(run_dir, "summary.csv"))
+            if r.get("limit_alpha")]
+    if not theirs or not ours:
+        return f"limit: FAIL, limit loads: the peer {theirs}, tensolve {sorted(set(ours))}", theirs == ours
+    peer, own = max(theirs), max(ours)
+    difference = abs(peer - own) / abs(peer)
+    ok = difference <= rtol
+    return (f"limit: the peer {peer!r}, tensolve {own!r}, |difference| / limit {difference:.2e}"
+            + (": pass" if ok else ": FAIL")), ok
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ use crate::case::{Case, SolverChoice};
 use crate::decomposition::{Exchange, Homogenised, OneProcess};
 use crate::model::{GeometricModel, Model};
 use crate::results::uniqueness;
+use crate::solvers::arc_length::{ArcLength, PathFollowing};
 use crate::solvers::large::{Large, LargeNewton, LinearisedStep};
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
 use crate::solvers::newton::Newton;
@@ -206,6 +207,7 @@ pub trait HeldSolver: AnySolver {
 }
 
 impl HeldSolver for Newton<'_> {}
+impl HeldSolver for ArcLength<'_> {}
 impl<S: PathSolver> HeldSolver for LoadPath<S> {}
 impl HeldSolver for PcgLcp<'_> {}
 
@@ -251,6 +253,14 @@ pub fn set_up_on<'s>(
     };
     let clock = Instant::now();
     let (solver, shared): (Box<dyn HeldSolver + 's>, f64) = match choice.settings(method) {
+        Settings::Newton(settings)
+            if model.updates_geometry() && settings.path == PathFollowing::ArcLength =>
+        {
+            (
+                Box::new(ArcLength::new(model, taut()?, settings.tolerance)),
+                prepared.taut_seconds,
+            )
+        }
         Settings::Newton(settings) if model.updates_geometry() => (
             Box::new(LoadPath::new(LargeNewton::new(model, taut()?, settings))),
             prepared.taut_seconds,

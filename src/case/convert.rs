@@ -44,12 +44,13 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     // 4. The load and its factors.
     let mut load = load::load(&raw.load, grid.is_some(), &geometry, &index_of)?;
     // 5. The solvers and their settings.
-    let solver = solver::solver_choice(
+    let mut solver = solver::solver_choice(
         raw.solver,
         grid.as_ref().map(|g| g.modules),
         &geometry.nodes,
     )?;
     solver::linear_fits_model(&solver, model)?;
+    solver.newton.path = load::path_following(raw.load.path, &solver, model, model_auto, &load)?;
     // 6. The files to write.
     let mut output = output::output_choice(raw.output)?;
     let point_masses = modal::point_masses(&raw.modal, &geometry, &index_of)?;

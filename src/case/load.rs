@@ -4,7 +4,10 @@
 use super::loads::case_loads;
 use super::numbers::{bounded, shown};
 use super::raw::RawLoad;
-use super::{CaseError, Load};
+use super::{CaseError, Load, SolverChoice};
+use crate::model::GeometricModel;
+use crate::solvers::arc_length::PathFollowing;
+use crate::solvers::Method;
 use crate::structure::{Geometry, LoadPattern};
 use std::collections::HashMap;
 
@@ -135,4 +138,59 @@ fn alpha_values(value: &toml::Value) -> Result<Vec<f64>, CaseError> {
         }
     }
     Ok(alphas)
+}
+
+/// `load.path`: load control by default; arc length only for newton on the `large` model
+/// (the path it follows is that model's), from α = 0 up, under a load.
+pub(super) fn path_following(
+    path: Option<PathFollowing>,
+    choice: &SolverChoice,
+    model: GeometricModel,
+    model_auto: bool,
+    load: &Load,
+) -> Result<PathFollowing, CaseError> {
+    const KEY: &str = "load.path";
+    let Some(PathFollowing::ArcLength) = path else {
+        return Ok(PathFollowing::LoadControl);
+    };
+    let value = "\"arc-length\"";
+    if model != GeometricModel::Large || model_auto {
+        return Err(CaseError::invalid(
+            KEY,
+            value,
+            "the arc length follows the equilibrium path of the large-displacement model: set \
+             `model.geometry = \"large\"`, or use `load.path = \"load-control\"`",
+        ));
+    }
+    if let Some(other) = choice.methods.iter().find(|m| **m != Method::Newton) {
+        return Err(CaseError::invalid(
+            KEY,
+            value,
+            format!(
+                "the arc-length path is newton's, and `solver.methods` names {}: set \
+                 `solver.methods = [\"newton\"]`",
+                other.name()
+            ),
+        ));
+    }
+    if let Some(&alpha) = load.alphas.iter().find(|&&a| a < 0.0) {
+        return Err(CaseError::invalid(
+            "load.alpha",
+            super::numbers::number(alpha),
+            "the arc-length path starts at α = 0 and is followed toward larger α: give α ≥ 0",
+        ));
+    }
+    let loaded = load.pattern.nodal != [0.0; 3]
+        || !load.points.is_empty()
+        || load.gravity.is_some()
+        || !load.cases.is_empty();
+    if !loaded {
+        return Err(CaseError::invalid(
+            KEY,
+            value,
+            "the arc-length path follows the load α F, and this case has none: give `load.nodal`, \
+             `load.point` or `load.self_weight`",
+        ));
+    }
+    Ok(PathFollowing::ArcLength)
 }

@@ -238,6 +238,7 @@ pub(super) struct RawLoad {
     pub temperature: Option<Vec<RawTemperature>>,
     pub cases: Option<Vec<RawLoadCase>>,
     pub combinations: Option<Vec<RawCombination>>,
+    pub path: Option<crate::solvers::arc_length::PathFollowing>,
     pub alpha: toml::Value,
 }
 

@@ -126,7 +126,21 @@ impl Analysis {
         }
     }
 
-    fn permuted_pattern(&self) -> SymbolicSparseColMatRef<'_, usize> {
+    /// `values` of A scattered into the triangle of `P A Pᵀ` the numeric kernels read.
+    pub(super) fn permuted_values(&self, values: &[f64]) -> Vec<f64> {
+        assert_eq!(
+            values.len(),
+            self.permuted_slot.len(),
+            "values on another pattern"
+        );
+        let mut permuted = vec![0.0; self.row_idx.len()];
+        for (&v, &slot) in values.iter().zip(&self.permuted_slot) {
+            permuted[slot as usize] = v;
+        }
+        permuted
+    }
+
+    pub(super) fn permuted_pattern(&self) -> SymbolicSparseColMatRef<'_, usize> {
         let n = self.col_ptr.len() - 1;
         SymbolicSparseColMatRef::new_unsorted_checked(n, n, &self.col_ptr, None, &self.row_idx)
     }
@@ -241,19 +255,11 @@ impl SparseCholesky {
             return split.factorize(values);
         }
         let analysis = &*self.analysis;
-        assert_eq!(
-            values.len(),
-            analysis.permuted_slot.len(),
-            "values on another pattern"
-        );
         debug_assert_eq!(pattern.nnz(), values.len());
-        // P A Pᵀ, one scatter.
-        // Allocated per factorization, not kept: as large as A, and needed only here (a
-        // substructure factor held between factorizations is 15 % smaller for it).
-        let mut permuted_values = vec![0.0; analysis.row_idx.len()];
-        for (&v, &slot) in values.iter().zip(&analysis.permuted_slot) {
-            permuted_values[slot as usize] = v;
-        }
+        // P A Pᵀ, one scatter. Allocated per factorization, not kept: as large as A, and
+        // needed only here (a substructure factor held between factorizations is 15 % smaller
+        // for it).
+        let permuted_values = analysis.permuted_values(values);
         let a = SparseColMatRef::new(analysis.permuted_pattern(), &permuted_values);
         self.factorized = false;
         let stack = MemStack::new(&mut self.factor_scratch);

@@ -8,6 +8,7 @@ mod buckets;
 mod cholesky;
 mod dense;
 mod estimate;
+mod ldlt;
 mod low_modes;
 mod low_rank;
 mod modal;
@@ -27,6 +28,7 @@ pub use dense::{gemv, gemv_transposed};
 pub use estimate::{
     factor_bytes, AMD_FILL_RATIO, BYTES_PER_FACTOR_ENTRY, FACTOR_ENTRIES_PER_DOF_LOG2,
 };
+pub use ldlt::{SparseLdlt, ZeroPivot};
 pub use low_modes::{modes_below, LowModes};
 pub use low_rank::LowRankUpdate;
 pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes, DENSE_MODES_UP_TO};

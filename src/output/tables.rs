@@ -85,6 +85,8 @@ pub struct SummaryRow {
     /// PCG iterations over all of newton's steps with `solver.linear = "krylov"` (column
     /// `krylov_iterations`, empty for a direct solve).
     pub krylov_iterations: Option<usize>,
+    /// The limit load located on the row's load path (column `limit_alpha`; empty where none).
+    pub limit_alpha: Option<f64>,
 }
 
 impl SummaryRow {
@@ -132,6 +134,7 @@ impl SummaryRow {
             model_reason: String::new(),
             model_pinned: true,
             krylov_iterations: solution.info.krylov_iterations,
+            limit_alpha: None,
         }
     }
 }
@@ -178,7 +181,7 @@ impl SummaryRow {
 }
 
 /// Header line of `summary.csv`, one column per [`SummaryRow`] field plus `slack_fraction`.
-pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique,model,krylov_iterations";
+pub const SUMMARY_HEADER: &str = "solver,alpha,converged,iterations,slack_cables,cables,slack_fraction,max_tension,max_deflection,residual,equilibrium_residual,search_updates,slack_lower,slack_upper,slack_bracing,slack_diagonal,slack_cable,max_member_rotation,small_displacement_ok,setup_seconds,solve_seconds,status,min_tangent_eigenvalue,geometric_term,path_from,path_reached,unique,model,krylov_iterations,limit_alpha";
 
 /// The columns `summary.csv` gains when the case checks members (a strength or an inertia).
 pub const SUMMARY_CHECK_COLUMNS: &str = ",max_utilisation,max_utilisation_member";
@@ -217,7 +220,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         }
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{:e},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.solver,
         alpha_label(r.alpha),
         r.converged,
@@ -259,6 +262,7 @@ pub fn summary_line(r: &SummaryRow) -> String {
         r.krylov_iterations
             .map(|k| k.to_string())
             .unwrap_or_default(),
+        r.limit_alpha.map(|v| v.to_string()).unwrap_or_default(),
     )
 }
 

@@ -3,6 +3,7 @@
 //! happened in a [`SolveInfo`] and never prints. Observers (CSV writers, progress bars, the
 //! bench recorder) are attached from outside through [`Observer`].
 
+pub mod arc_length;
 mod driver;
 pub mod large;
 pub mod latin;

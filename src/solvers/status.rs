@@ -151,4 +151,7 @@ pub struct LoadPathEnd {
     /// At a limit point: the fraction of the path past `reached` within which the limit lies
     /// (the smallest increment that found no equilibrium).
     pub limit_bracket: Option<f64>,
+    /// The load of the highest limit point the path located (arc length: a local maximum of α
+    /// along it, passed; load control fills it from where the path stopped), α.
+    pub limit_alpha: Option<f64>,
 }

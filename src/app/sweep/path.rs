@@ -2,7 +2,7 @@
 //! the solver's last equilibrium), and the summary columns that say so.
 
 use crate::output::SummaryRow;
-use crate::solvers::Solution;
+use crate::solvers::{Solution, Status};
 
 /// Where a solver's load path stands in the sweep (`large`, whose solves each start from the
 /// solver's last equilibrium).
@@ -22,6 +22,9 @@ pub(super) struct FollowedPath {
     from: f64,
     reached: f64,
     restarted: bool,
+    /// The limit load located: arc length's highest limit point passed, or where load
+    /// control stopped at one.
+    limit: Option<f64>,
 }
 
 impl PathStart {
@@ -30,11 +33,16 @@ impl PathStart {
     pub(super) fn follow(&mut self, alpha: f64, solution: &Solution) -> Option<FollowedPath> {
         let end = solution.info.load_path.as_ref()?;
         let from = self.alpha;
+        // The α at fraction `reached` of the path from `from` to `alpha`.
+        let reached = from + end.reached * (alpha - from);
         let followed = FollowedPath {
             from,
-            // The α at fraction `reached` of the path from `from` to `alpha`.
-            reached: from + end.reached * (alpha - from),
+            reached,
             restarted: self.previous_row.is_some_and(|row| row != from),
+            limit: match solution.info.status {
+                Status::LimitPoint => end.limit_alpha.or(Some(reached)),
+                _ => end.limit_alpha,
+            },
         };
         if solution.info.status.converged() {
             self.alpha = alpha;
@@ -51,6 +59,7 @@ impl SummaryRow {
             self.path_from = Some(path.from);
             self.path_reached = Some(path.reached);
             self.path_restarted = path.restarted;
+            self.limit_alpha = path.limit;
         }
         self
     }

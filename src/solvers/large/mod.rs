@@ -132,6 +132,24 @@ pub struct Evaluation {
     pub scale: f64,
 }
 
+/// The law's values at displacements `u` under `load` (both on the free dofs).
+pub fn evaluate(s: &Structure, load: &[f64], u: &[f64]) -> Evaluation {
+    let current = CurrentGeometry::of(s, u);
+    let mut gradient = vec![0.0; s.n_free];
+    // ∇Π = Σ τ ∇ℓ − F.
+    let (trial, sizes) = current.unbalances(s, load, &mut gradient);
+    let finite = gradient.iter().all(|g| g.is_finite());
+    let or_infinite = |x: f64| if finite { x } else { f64::INFINITY };
+    Evaluation {
+        current,
+        trial,
+        gradient,
+        residual: or_infinite(sizes.relative),
+        load_residual: or_infinite(sizes.load_relative),
+        scale: sizes.scale,
+    }
+}
+
 /// The iterate of a solve for one load.
 pub struct LargeState {
     /// The load, N, on the free dofs.
@@ -169,21 +187,7 @@ impl<'s, R: TangentStep> Large<'s, R> {
     }
 
     fn evaluate(&self, load: &[f64], u: &[f64]) -> Evaluation {
-        let s = self.structure;
-        let current = CurrentGeometry::of(s, u);
-        let mut gradient = vec![0.0; s.n_free];
-        // ∇Π = Σ τ ∇ℓ − F.
-        let (trial, sizes) = current.unbalances(s, load, &mut gradient);
-        let finite = gradient.iter().all(|g| g.is_finite());
-        let or_infinite = |x: f64| if finite { x } else { f64::INFINITY };
-        Evaluation {
-            current,
-            trial,
-            gradient,
-            residual: or_infinite(sizes.relative),
-            load_residual: or_infinite(sizes.load_relative),
-            scale: sizes.scale,
-        }
+        evaluate(self.structure, load, u)
     }
 
     /// The step length along ΔU by the sign of `Π'(s) = ∇Π(U + sΔU)·ΔU`: the full step when

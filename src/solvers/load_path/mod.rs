@@ -517,6 +517,7 @@ impl<S: PathSolver> Solver for LoadPath<S> {
                 Some(Status::LimitPoint) => state.failed,
                 _ => None,
             },
+            limit_alpha: None,
         })
     }
 

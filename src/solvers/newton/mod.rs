@@ -29,6 +29,7 @@ use crate::linalg::{
 };
 use crate::model::material::{self, SlackRule};
 use crate::model::{unbalances_on, Model};
+pub use crate::solvers::arc_length::PathFollowing;
 use crate::structure::Structure;
 use krylov::KrylovSolve;
 pub use krylov::LinearSolve;
@@ -50,6 +51,9 @@ pub struct NewtonSettings {
     /// The partition a substructured solve works on (`solver.subdomains`, or the structure's
     /// default partition). Default `[4, 4]`.
     pub subdomains: [usize; 2],
+    /// How the `large` model's load path is followed (`load.path`). Default
+    /// [`PathFollowing::LoadControl`].
+    pub path: PathFollowing,
 }
 
 impl Default for NewtonSettings {
@@ -60,6 +64,7 @@ impl Default for NewtonSettings {
             reuse_factor: true,
             linear: LinearSolve::Direct,
             subdomains: [4, 4],
+            path: PathFollowing::LoadControl,
         }
     }
 }
