@@ -2,8 +2,9 @@
 //! newton) under 20 combinations of 5 load cases, against one plain run of one combination's
 //! loads, in one process; and where a combination's time goes: its set-up (the structure, K's
 //! symbolic analysis and factor, the solver's set-up) against its solves. Each combination is
-//! its own run (its set-up repeated), so the set-up share is what reusing the symbolic
-//! factor across combinations could save.
+//! its own run (its set-up repeated); of that set-up, the symbolic analysis of K (pattern and
+//! fill-reducing order, the same for every combination of one structure) is timed apart: what
+//! sharing it across combinations would save.
 //!
 //! Run with `cargo bench --bench combinations`. Figures are medians of [`REPEATS`] runs (the
 //! machine is shared and noisy).
@@ -13,6 +14,7 @@ use tensolve::app::combinations::run_combinations;
 use tensolve::app::sweep::{run, RunEvent, RunOptions};
 use tensolve::case;
 use tensolve::decomposition::OneProcess;
+use tensolve::solvers::TautStiffness;
 
 const REPEATS: usize = 3;
 
@@ -105,6 +107,18 @@ fn main() {
         single.push(start.elapsed().as_secs_f64());
     }
     let _ = std::fs::remove_dir_all(&dir);
+    // The symbolic analysis of K (its pattern and fill-reducing order), which every
+    // combination of one structure redoes alike: what sharing it would save.
+    let structure = one.structure();
+    let symbolic = median(
+        (0..REPEATS)
+            .map(|_| {
+                let start = Instant::now();
+                std::hint::black_box(TautStiffness::analyse(&structure));
+                start.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
     let (all, single) = (median(all), median(single));
     println!("64 x 64 grid, linear, newton, alpha = 1 (medians of {REPEATS}):");
     println!(
@@ -119,5 +133,9 @@ fn main() {
     println!(
         "  set-up share        {:.0} % of the 20 combinations' time (the structure, K's analysis and factor, newton's set-up, redone per combination)",
         100.0 * median(set_up_share)
+    );
+    println!(
+        "  symbolic analysis   {symbolic:.3} s a combination, {:.1} % of the 20 combinations' time (what sharing it would save)",
+        100.0 * 20.0 * symbolic / all
     );
 }
