@@ -22,6 +22,7 @@ use tensolve::app::compare::{compare, CompareSettings};
 use tensolve::app::design::design;
 use tensolve::app::memory::{self, MemoryEstimate, Workload};
 use tensolve::app::ranks::{case_digest, load_case, Ranks};
+use tensolve::app::stages::run_stages;
 use tensolve::app::sweep::{output_dir, run_on, RunError, RunEvent, RunOptions, Sharing};
 use tensolve::case;
 use tensolve::host;
@@ -297,14 +298,16 @@ fn run_command(
         .unwrap_or(&case.solver.methods)
         .len()
         * case.load.alphas.len()
-        * case.load.combinations.len().max(1);
+        * case.load.combinations.len().max(1)
+        * case.stages.len().max(1);
     let mut reporter = Reporter::new(quiet, solves);
     reporter.forbid_slack = case.forbid_slack;
     let exchange = ranks.exchange();
     let mut events = |event: RunEvent<'_>| reporter.run_event(event);
-    let result = match case.load.combinations.is_empty() {
-        true => run_on(case, &options, &exchange, &mut events).map(|_| ()),
-        false => run_combinations(&case, &options, &exchange, &mut events).map(|_| ()),
+    let result = match (case.stages.is_empty(), case.load.combinations.is_empty()) {
+        (false, _) => run_stages(&case, &options, &exchange, &mut events).map(|_| ()),
+        (true, true) => run_on(case, &options, &exchange, &mut events).map(|_| ()),
+        (true, false) => run_combinations(&case, &options, &exchange, &mut events).map(|_| ()),
     };
     if ranks.size() > 1 {
         // The most links a rank kept, and a rank other than 0 (every rank asks, whatever the

@@ -126,6 +126,7 @@ fn case_keys(path: &mut Vec<(String, Holds)>, out: &mut Vec<(String, Holds, Vec<
 
 /// Tables documented by one row of the key table, which names each of their keys.
 const ONE_ROW: &[&str] = &[
+    "stages",
     "load.point",
     "load.rest_length_change",
     "load.temperature",
@@ -163,6 +164,7 @@ const DEFAULTS_IN_WORDS: &[&str] = &[
     "load.temperature",
     "load.cases",
     "load.combinations",
+    "stages",
     "modal.point_mass",
     "load.alpha",
     "solver.tolerance",

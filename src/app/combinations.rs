@@ -52,7 +52,7 @@ pub fn run_combinations(
             let path = dir.join(path);
             move |source| WriteError { path, source }
         };
-        write_combined_summary(&dir, &combined).map_err(at("summary.csv"))?;
+        write_combined_summary(&dir, &combined, "combination").map_err(at("summary.csv"))?;
         write_envelopes(&dir, &combined, &keys).map_err(at("envelope"))?;
     }
     match failed {

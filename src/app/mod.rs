@@ -14,4 +14,5 @@ pub mod memory;
 pub mod ranks;
 pub mod reference;
 pub mod setup;
+pub mod stages;
 pub mod sweep;

@@ -32,6 +32,9 @@ pub struct Prepared {
     /// ([`Prepared::keep_links_of`]): the rest of its share; `model` then holds those links
     /// alone.
     pub share: Option<LinkShare>,
+    /// Where a construction stage's load path starts ([`Case::start`]), on the free dofs: the
+    /// load and the displacements.
+    pub start: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// Build the structure of `case` and refuse a mechanism, keeping the factor of K with every
@@ -145,12 +148,25 @@ impl Prepared {
     pub fn unchecked(case: &Case) -> Prepared {
         let clock = Instant::now();
         let model = case.model();
+        let start = case.start.as_ref().map(|start| {
+            let on_free = |per_node: &[[f64; 3]]| {
+                let mut free = vec![0.0; model.structure.n_free];
+                for (global, &d) in model.structure.dof_of.iter().enumerate() {
+                    if d != crate::structure::CLAMPED {
+                        free[d] = per_node[global / 3][global % 3];
+                    }
+                }
+                free
+            };
+            (on_free(&start.load), on_free(&start.displacements))
+        });
         Prepared {
             model,
             taut: None,
             structure_seconds: clock.elapsed().as_secs_f64(),
             taut_seconds: 0.0,
             share: None,
+            start,
         }
     }
 
@@ -185,6 +201,7 @@ impl Prepared {
             structure_seconds: self.structure_seconds,
             taut_seconds: clock.elapsed().as_secs_f64(),
             share: None,
+            start: self.start.clone(),
         })
     }
 
@@ -261,10 +278,14 @@ pub fn set_up_on<'s>(
                 prepared.taut_seconds,
             )
         }
-        Settings::Newton(settings) if model.updates_geometry() => (
-            Box::new(LoadPath::new(LargeNewton::new(model, taut()?, settings))),
-            prepared.taut_seconds,
-        ),
+        Settings::Newton(settings) if model.updates_geometry() => {
+            let newton = LargeNewton::new(model, taut()?, settings);
+            let path = match prepared.start.clone() {
+                Some((load, u)) => LoadPath::starting_at(newton, load, u),
+                None => LoadPath::new(newton),
+            };
+            (Box::new(path), prepared.taut_seconds)
+        }
         Settings::Newton(settings) => (
             Box::new(Newton::new(model, taut()?, settings)?),
             prepared.taut_seconds,

@@ -109,47 +109,58 @@ fn combinations(
             &c.name,
             out.iter().map(|c| &c.name),
         )?;
-        let mut combination = Combination {
-            name: c.name.clone(),
-            factors: Vec::new(),
-            prestress: 1.0,
-        };
-        for (case, &factor) in &c.factors {
-            let key = format!("{prefix}.factors.{case}");
-            if !(factor.is_finite() && factor.abs() <= FACTOR_MAX) {
-                return Err(CaseError::invalid(
-                    key,
-                    number(factor),
-                    format!("give a finite factor, at most {FACTOR_MAX:e} in magnitude"),
-                ));
-            }
-            if case == PRESTRESS_FACTOR {
-                if factor < 0.0 {
-                    return Err(CaseError::invalid(
-                        key,
-                        number(factor),
-                        "the prestress's factor scales t0: give it ≥ 0 (1 keeps it as designed)",
-                    ));
-                }
-                combination.prestress = factor;
-                continue;
-            }
-            let Some(index) = cases.iter().position(|l| &l.name == case) else {
-                let names: Vec<&str> = cases.iter().map(|l| l.name.as_str()).collect();
-                return Err(CaseError::invalid(
-                    key,
-                    number(factor),
-                    format!(
-                        "no load case is named `{case}`: name one of {}, or `prestress`",
-                        names.join(", ")
-                    ),
-                ));
-            };
-            combination.factors.push((index, factor));
-        }
-        out.push(combination);
+        out.push(factors(&prefix, &c.name, &c.factors, cases)?);
     }
     Ok(out)
+}
+
+/// The combination `name` of `raw` (`<prefix>.factors`): factors naming `cases` (or
+/// `prestress`), finite and at most [`FACTOR_MAX`] in magnitude.
+pub(super) fn factors(
+    prefix: &str,
+    name: &str,
+    raw: &std::collections::BTreeMap<String, f64>,
+    cases: &[LoadCase],
+) -> Result<Combination, CaseError> {
+    let mut combination = Combination {
+        name: name.to_string(),
+        factors: Vec::new(),
+        prestress: 1.0,
+    };
+    for (case, &factor) in raw {
+        let key = format!("{prefix}.factors.{case}");
+        if !(factor.is_finite() && factor.abs() <= FACTOR_MAX) {
+            return Err(CaseError::invalid(
+                key,
+                number(factor),
+                format!("give a finite factor, at most {FACTOR_MAX:e} in magnitude"),
+            ));
+        }
+        if case == PRESTRESS_FACTOR {
+            if factor < 0.0 {
+                return Err(CaseError::invalid(
+                    key,
+                    number(factor),
+                    "the prestress's factor scales t0: give it ≥ 0 (1 keeps it as designed)",
+                ));
+            }
+            combination.prestress = factor;
+            continue;
+        }
+        let Some(index) = cases.iter().position(|l| &l.name == case) else {
+            let names: Vec<&str> = cases.iter().map(|l| l.name.as_str()).collect();
+            return Err(CaseError::invalid(
+                key,
+                number(factor),
+                format!(
+                    "no load case is named `{case}`: name one of [{}], or `prestress`",
+                    names.join(", ")
+                ),
+            ));
+        };
+        combination.factors.push((index, factor));
+    }
+    Ok(combination)
 }
 
 /// Combination `k`'s rest-length changes `Σ f Δℓ0` leave every member a positive rest length.
@@ -185,7 +196,7 @@ fn rest_lengths_stay_positive(
 
 /// A case's or combination's name under `key`: 1 to 64 letters, digits, `-`, `_` or `.` (a
 /// directory name and a TOML bare key), not among `taken`.
-fn name<'a>(
+pub(super) fn name<'a>(
     key: &str,
     text: &str,
     mut taken: impl Iterator<Item = &'a String>,

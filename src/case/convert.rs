@@ -51,6 +51,24 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     )?;
     solver::linear_fits_model(&solver, model)?;
     solver.newton.path = load::path_following(raw.load.path, &solver, model, model_auto, &load)?;
+    // 5b. The construction stages, which replace the combinations.
+    let stages = super::stages::stages(
+        raw.stages.as_deref(),
+        &super::stages::StageContext {
+            geometry: &geometry,
+            node_index: &index_of,
+            cases: &load.cases,
+            grid: grid.is_some(),
+            model,
+            model_auto,
+            solver: &solver,
+            alphas: &load.alphas,
+            combinations_given: raw.load.combinations.is_some(),
+        },
+    )?;
+    if !stages.is_empty() {
+        load.combinations.clear();
+    }
     // 6. The files to write.
     let mut output = output::output_choice(raw.output)?;
     let point_masses = modal::point_masses(&raw.modal, &geometry, &index_of)?;
@@ -75,6 +93,8 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
         design,
         point_masses,
         forbid_slack: raw.checks.forbid_slack.unwrap_or(false),
+        stages,
+        start: None,
     })
 }
 

@@ -79,7 +79,8 @@ impl CaseError {
         CaseError::Syntax(lines.join("\n"))
     }
 
-    pub(super) fn invalid(
+    /// The value of `key` is refused: `fix` says what is allowed.
+    pub(crate) fn invalid(
         key: impl Into<String>,
         value: impl ToString,
         fix: impl Into<String>,

@@ -27,6 +27,7 @@ mod raw;
 mod rebalance;
 mod solver;
 pub mod sources;
+mod stages;
 mod tables;
 mod typed;
 
@@ -36,7 +37,10 @@ pub use combinations::PRESTRESS_FACTOR;
 pub use design::{Design, GroupForce};
 pub use error::CaseError;
 pub use solver::default_subdomains;
-pub use typed::{Case, Combination, Load, LoadCase, OutputChoice, ReferenceChoice, SolverChoice};
+pub use typed::{
+    Case, Combination, Load, LoadCase, OutputChoice, ReferenceChoice, SolverChoice, Stage,
+    StageStart,
+};
 
 use serde::Deserialize;
 use std::path::Path;

@@ -53,6 +53,7 @@ pub(super) struct RawCase {
     pub modal: RawModal,
     #[serde(default)]
     pub checks: RawChecks,
+    pub stages: Option<Vec<RawStage>>,
     /// `tensolve design --rebalance`: never read from the file.
     #[serde(skip)]
     pub rebalance: bool,
@@ -252,6 +253,16 @@ pub(super) struct RawLoadCase {
     pub self_weight: Option<RawSelfWeight>,
     pub rest_length_change: Option<Vec<RawRestLengthChange>>,
     pub temperature: Option<Vec<RawTemperature>>,
+}
+
+/// `[[stages]]`: a construction stage.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawStage {
+    pub name: String,
+    pub members: Option<Vec<u64>>,
+    pub props: Option<Vec<u64>>,
+    pub factors: Option<std::collections::BTreeMap<String, f64>>,
 }
 
 /// `[[load.combinations]]`.

@@ -50,6 +50,35 @@ pub struct Case {
     /// A slack cable is a failed check (`checks.forbid_slack`): listed in `checks.csv` and
     /// warned of. Default false.
     pub forbid_slack: bool,
+    /// The construction stages (`[[stages]]`), solved in order, each from the last; empty
+    /// without.
+    pub stages: Vec<Stage>,
+    /// Where a stage's solve starts (set by the stages' run, never read from the file): per
+    /// node, the last stage's displacements and the load it was in equilibrium under.
+    pub start: Option<StageStart>,
+}
+
+/// A construction stage (`[[stages]]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stage {
+    /// Its name (`name`).
+    pub name: String,
+    /// The members installed at this stage (indices; `members`, and at the first stage every
+    /// member no later stage installs).
+    pub members: Vec<usize>,
+    /// The nodes held at this stage alone, every component (`props`, indices).
+    pub props: Vec<usize>,
+    /// Its loads: per load case its factor, and the prestress's factor (`factors`).
+    pub loads: Combination,
+}
+
+/// Where a construction stage starts: the last stage's answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageStart {
+    /// Per node, its displacement, m.
+    pub displacements: Vec<[f64; 3]>,
+    /// Per node, the load on it, N.
+    pub load: Vec<[f64; 3]>,
 }
 
 impl Case {

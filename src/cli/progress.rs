@@ -156,6 +156,10 @@ impl Reporter {
                 self.end_stage();
                 self.line(&format!("combination {name}"));
             }
+            RunEvent::Construction(name) => {
+                self.end_stage();
+                self.line(&format!("stage {name}"));
+            }
             RunEvent::LinksKept { kept, whole } => self.links_kept = Some((kept, whole)),
             RunEvent::ModelOffBy(off) => self.model_off_by = Some(off.clone()),
             RunEvent::Row(row) => {

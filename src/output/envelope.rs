@@ -21,8 +21,9 @@ pub const ENVELOPE_NODES_HEADER: &str =
 /// A combination's name and the directory its run wrote.
 pub type Combined = (String, PathBuf);
 
-/// `dir/summary.csv`: every combination's `summary.csv` rows, `combination` first.
-pub fn write_combined_summary(dir: &Path, combined: &[Combined]) -> io::Result<()> {
+/// `dir/summary.csv`: every combination's (or stage's) `summary.csv` rows, its name first in
+/// the column `column`.
+pub fn write_combined_summary(dir: &Path, combined: &[Combined], column: &str) -> io::Result<()> {
     let mut header = None;
     let mut rows = Vec::new();
     for (name, sub) in combined {
@@ -33,7 +34,7 @@ pub fn write_combined_summary(dir: &Path, combined: &[Combined]) -> io::Result<(
     }
     let header = header.unwrap_or_default();
     write_atomic(&dir.join("summary.csv"), |w| {
-        writeln!(w, "combination,{header}")?;
+        writeln!(w, "{column},{header}")?;
         rows.iter().try_for_each(|r| writeln!(w, "{r}"))
     })
 }

@@ -85,6 +85,8 @@ pub struct ModelReport {
     pub alphas: Vec<f64>,
     /// The load cases' and the combinations' names (empty without `[[load.cases]]`).
     pub combinations: (Vec<String>, Vec<String>),
+    /// The construction stages' names, in order (empty without `[[stages]]`).
+    pub stages: Vec<String>,
     /// The solvers.
     pub methods: Vec<Method>,
     /// How newton solves its Newton systems, and on which partition, when newton is asked.
@@ -246,6 +248,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
         flat_form: case.design.as_ref().and_then(|d| d.flat),
         alphas: case.load.alphas.clone(),
         combinations: load_names(case),
+        stages: case.stages.iter().map(|s| s.name.clone()).collect(),
         methods: case.solver.methods.clone(),
         newton_linear: newton_linear(case),
     };
@@ -271,8 +274,7 @@ pub fn check(case: &Case, path: PathBuf, available: Option<Available>) -> CheckR
     // Under `auto`, a mechanism its prestress stiffens starts `large`.
     let large_model = auto_large_start(case, &mut regular, &mut report);
     let case_model = large_model.as_ref().unwrap_or(&case_model);
-    // The refusal's count of K's zero modes (m: k > 0 on every member) is the sparse one,
-    // capped; the dense test's is exact, and the output says one m.
+    // The refusal's K zero modes (m: k > 0 on every member): the dense test's count, exact.
     if let (Err(SetupError::Mechanism { zero_modes, .. }), Some(st)) =
         (&mut regular, &report.model.stability)
     {

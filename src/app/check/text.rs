@@ -228,11 +228,20 @@ impl CheckReport {
         let (cases, combinations) = &m.combinations;
         if !cases.is_empty() {
             writeln!(f, "load cases      {}", cases.join(", "))?;
+        }
+        if !combinations.is_empty() {
             writeln!(
                 f,
                 "combinations    {}: each solved on its own (cables go slack: never superposed), \
                  into combinations/<name>/, with envelope/ over them",
                 combinations.join(", ")
+            )?;
+        }
+        if !m.stages.is_empty() {
+            writeln!(
+                f,
+                "stages          {}: solved in order, each from the last, into stages/<name>/",
+                m.stages.join(", ")
             )?;
         }
         let methods: Vec<&str> = m.methods.iter().map(|m| m.name()).collect();

@@ -1,6 +1,5 @@
 //! `tensolve run`: one case, end to end. Build the structure, set the asked solvers up once,
-//! solve every α, hand every solve to the sinks the case asks for. Only what the case asks
-//! for is computed and written.
+//! solve every α, hand every solve to the sinks the case asks for; nothing else.
 
 mod error;
 mod figure12;
@@ -82,10 +81,12 @@ pub enum RunEvent<'a> {
     /// The rows on a model of the initial geometry off by more than `model.tolerance`: how
     /// many, the worst, and `large` measured at its α (sent once, after the last row).
     ModelOffBy(&'a ModelOffBy),
-    /// A combination's own run begins (into `combinations/<name>/`).
+    /// A combination's (`combinations/<name>/`) own run begins.
     Combination(&'a str),
+    /// A construction stage's (`stages/<name>/`) own run begins.
+    Construction(&'a str),
     /// Set-up kept `kept` of the structure's `whole` links on this process (fewer on an MPI
-    /// rank that keeps only its micro-macro substructures' links).
+    /// rank keeping only its micro-macro substructures' links).
     LinksKept {
         /// Links kept.
         kept: usize,
@@ -111,8 +112,7 @@ impl Observer for IterationEvents<'_> {
     }
 }
 
-/// Run a validated case. `events` sees what the run is doing ([`RunEvent`]), every summary
-/// row as soon as it is written among them.
+/// Run a validated case; `events` sees what it does ([`RunEvent`]), each row as written.
 pub fn run(
     case: &Case,
     options: &RunOptions,

@@ -170,6 +170,14 @@ impl<S: PathSolver> LoadPath<S> {
         }
     }
 
+    /// `solver` on a load path that starts at displacements `u` under `load` (a construction
+    /// stage, from where the last one left the structure): the first solve goes from there.
+    pub fn starting_at(solver: S, load: Vec<f64>, u: Vec<f64>) -> Self {
+        let mut path = LoadPath::new(solver);
+        path.reached.last = (load, u);
+        path
+    }
+
     /// The solver in the path.
     pub fn solver(&self) -> &S {
         &self.solver
