@@ -371,3 +371,69 @@ fn forbidden_slack_is_listed_per_combination() {
     }
     assert!(!out.0.join("combinations/light/checks.csv").exists());
 }
+
+/// A load case's support settlement (`[[load.cases.settlement]]`) under its factor equals the
+/// plain run whose `[[supports.fix]]` prescribes that displacement (the shipped skew grid,
+/// `linear`, its node 34 sinking 1.5 × 2 mm): forces to 1e-12 of the largest, which the
+/// settlement changes. A settlement of a component no support holds is refused.
+#[test]
+fn a_settlement_case_is_the_plain_run_with_that_support_moved() {
+    let tables = common::manifest_path("cases/skew-grid");
+    let head = format!(
+        "[structure]\nnodes = \"{0}/nodes.csv\"\nmembers = \"{0}/members.csv\"\n\
+         [model]\ngeometry = \"linear\"\n[solver]\nmethods = [\"newton\"]\n\
+         [load]\nalpha = [1.0]\n\
+         [[supports.fix]]\nnodes = [0, 7, 14, 21, 28]\n\
+         [[supports.fix]]\nnodes = [6, 13, 20, 27]\ndofs = [\"z\"]\n",
+        tables.display()
+    );
+    let point = "nodes = [40, 58]\nforce = [0.0, 500.0, -2000.0]\n";
+    let combined = format!(
+        "{head}[[supports.fix]]\nnodes = [34]\ndofs = [\"z\"]\n\
+         [[load.cases]]\nname = \"W\"\n[[load.cases.point]]\n{point}\
+         [[load.cases]]\nname = \"S\"\n[[load.cases.settlement]]\nnodes = [34]\n\
+         displacement = [0.0, 0.0, -0.002]\n\
+         [[load.combinations]]\nname = \"WS\"\nfactors = {{ W = 1.0, S = 1.5 }}\n"
+    );
+    let (_d, out) = run("comb-settle", &combined);
+    let plain = |settlement: f64| {
+        format!(
+            "{head}[[supports.fix]]\nnodes = [34]\ndofs = [\"z\"]\n\
+             displacement = [0.0, 0.0, {settlement:?}]\n[[load.point]]\n{point}"
+        )
+    };
+    let (_p, plain_out) = run("comb-settle-plain", &plain(1.5 * -0.002));
+    let (_n, unsettled_out) = run("comb-settle-none", &plain(0.0));
+    let ours = file(&out.0.join("combinations/WS"), "forces", "newton", "1");
+    let theirs = file(&plain_out.0, "forces", "newton", "1");
+    let unsettled = file(&unsettled_out.0, "forces", "newton", "1");
+    let force = |r: &HashMap<String, String>| r["force_N"].parse::<f64>().unwrap();
+    let largest = theirs.iter().map(|r| force(r).abs()).fold(0.0, f64::max);
+    let moved = (theirs.iter().zip(&unsettled))
+        .map(|(a, b)| (force(a) - force(b)).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        moved > 1e-3 * largest,
+        "the settlement moves nothing: {moved}"
+    );
+    for (x, y) in ours.iter().zip(&theirs) {
+        assert!(
+            (force(x) - force(y)).abs() <= 1e-12 * largest,
+            "{x:?} against {y:?}"
+        );
+    }
+    // A settlement of node 34's x component, which no support holds.
+    let dir = Temp::dir("comb-settle-free");
+    std::fs::create_dir_all(&dir.0).unwrap();
+    let case = dir.0.join("case.toml");
+    let bad = combined.replace("[0.0, 0.0, -0.002]", "[0.001, 0.0, -0.002]");
+    std::fs::write(&case, bad).unwrap();
+    let o = tensolve(&["check", case.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(code(&o), 2, "{err}");
+    assert!(
+        err.contains("load.cases[1].settlement[0].displacement")
+            && err.contains("node 34's x component is not held"),
+        "{err}"
+    );
+}

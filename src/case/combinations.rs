@@ -9,7 +9,7 @@ use super::loads::case_loads;
 use super::numbers::number;
 use super::raw::{LoadParts, RawLoad};
 use super::{Case, CaseError, Combination, LoadCase};
-use crate::structure::Geometry;
+use crate::structure::{Geometry, NodeFix};
 use std::collections::HashMap;
 
 /// The factor key that scales the prestress rather than a load case.
@@ -25,6 +25,7 @@ pub(super) fn cases_and_combinations(
     own: &LoadParts<'_>,
     geometry: &Geometry,
     index_of: &HashMap<u64, usize>,
+    fixes: &[NodeFix],
 ) -> Result<(Vec<LoadCase>, Vec<Combination>), CaseError> {
     let Some(raw_cases) = &raw.cases else {
         if let Some(first) = raw.combinations.iter().flatten().next() {
@@ -70,6 +71,7 @@ pub(super) fn cases_and_combinations(
         }
         let mut loads = case_loads(&prefix, &c.parts(), [0.0; 3], geometry, index_of)?;
         loads.name = c.name.clone();
+        loads.settlements = settlements(&prefix, c, geometry, index_of, fixes)?;
         cases.push(loads);
     }
     let combinations = match &raw.combinations {
@@ -87,6 +89,50 @@ pub(super) fn cases_and_combinations(
     }
     Ok((cases, combinations))
 }
+
+/// A load case's `[[load.cases.settlement]]`: each moves the components [[supports.fix]] holds
+/// of the nodes it selects (a component it moves must be held).
+fn settlements(
+    prefix: &str,
+    case: &super::raw::RawLoadCase,
+    geometry: &Geometry,
+    index_of: &HashMap<u64, usize>,
+    fixes: &[NodeFix],
+) -> Result<Vec<(usize, [f64; 3])>, CaseError> {
+    let mut held = vec![[false; 3]; geometry.nodes.len()];
+    for f in fixes {
+        (0..3).for_each(|c| held[f.node][c] |= f.dofs[c]);
+    }
+    let mut out = Vec::new();
+    for (i, entry) in case.settlement.iter().flatten().enumerate() {
+        let key = format!("{prefix}.settlement[{i}]");
+        let nodes = super::nodes::select(&key, geometry, index_of, &entry.nodes, &entry.in_box)?;
+        let d = super::numbers::vector(
+            &format!("{key}.displacement"),
+            entry.displacement,
+            SETTLEMENT_MAX,
+            "each settlement component in m",
+        )?;
+        for n in nodes {
+            if let Some(c) = (0..3).find(|&c| d[c] != 0.0 && !held[n][c]) {
+                return Err(CaseError::invalid(
+                    format!("{key}.displacement"),
+                    format!("{:?}", entry.displacement),
+                    format!(
+                        "node {}'s {} component is not held: a settlement moves a support; hold                          it in [[supports.fix]], or give 0 there",
+                        geometry.node_ids[n],
+                        ["x", "y", "z"][c]
+                    ),
+                ));
+            }
+            out.push((n, d));
+        }
+    }
+    Ok(out)
+}
+
+/// The largest settlement component accepted, m.
+const SETTLEMENT_MAX: f64 = 1e3;
 
 /// `[[load.combinations]]` over `cases`: unique names, factors naming cases (or
 /// `prestress`), finite and at most [`FACTOR_MAX`] in magnitude.
@@ -243,6 +289,33 @@ impl Case {
             let scaled = part.rest_length_changes.iter().map(|&(j, d)| (j, f * d));
             load.rest_length_changes.extend(scaled);
         }
+        // Settlements: a fix after the others (the last one of a component holds), moving
+        // each held component by Σ f d from where [[supports.fix]] holds it.
+        let mut moved: HashMap<usize, [f64; 3]> = HashMap::new();
+        for &(c, f) in &combination.factors {
+            for &(n, d) in &self.load.cases[c].settlements {
+                let sum = moved.entry(n).or_default();
+                (0..3).for_each(|k| sum[k] += f * d[k]);
+            }
+        }
+        let mut nodes: Vec<usize> = moved.keys().copied().collect();
+        nodes.sort_unstable();
+        for n in nodes {
+            let mut fix = NodeFix {
+                node: n,
+                dofs: [false; 3],
+                displacement: [0.0; 3],
+            };
+            for f in self.fixes.iter().filter(|f| f.node == n) {
+                for k in (0..3).filter(|&k| f.dofs[k]) {
+                    fix.dofs[k] = true;
+                    fix.displacement[k] = f.displacement[k];
+                }
+            }
+            (0..3).for_each(|k| fix.displacement[k] += moved[&n][k]);
+            case.fixes.push(fix);
+        }
+        let load = &mut case.load;
         load.cases.clear();
         load.combinations.clear();
         if combination.prestress != 1.0 {

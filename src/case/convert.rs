@@ -42,7 +42,7 @@ pub(super) fn convert(raw: RawCase, base: &Path) -> Result<Case, CaseError> {
     )?;
     prestress::check_balanced(&geometry, &fixes)?;
     // 4. The load and its factors.
-    let mut load = load::load(&raw.load, grid.is_some(), &geometry, &index_of)?;
+    let mut load = load::load(&raw.load, grid.is_some(), &geometry, &index_of, &fixes)?;
     // 5. The solvers and their settings.
     let mut solver = solver::solver_choice(
         raw.solver,

@@ -22,6 +22,7 @@ pub(super) fn load(
     grid: bool,
     geometry: &Geometry,
     index_of: &HashMap<u64, usize>,
+    fixes: &[crate::structure::NodeFix],
 ) -> Result<Load, CaseError> {
     let default_nodal = if grid {
         LoadPattern::default().nodal
@@ -30,7 +31,7 @@ pub(super) fn load(
     };
     let own = raw.parts();
     let (cases, combinations) =
-        super::combinations::cases_and_combinations(raw, &own, geometry, index_of)?;
+        super::combinations::cases_and_combinations(raw, &own, geometry, index_of, fixes)?;
     let loads = case_loads("load", &own, default_nodal, geometry, index_of)?;
     Ok(Load {
         pattern: LoadPattern { nodal: loads.nodal },

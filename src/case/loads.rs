@@ -54,5 +54,6 @@ pub(super) fn case_loads(
         points,
         gravity,
         rest_length_changes: super::actions::rest_length_changes(prefix, parts, geometry)?,
+        settlements: Vec::new(),
     })
 }

@@ -152,6 +152,16 @@ pub(super) struct RawPoint {
     pub force: [f64; 3],
 }
 
+/// `[[load.cases.settlement]]`: a load case's support settlement.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSettlement {
+    pub nodes: Option<Vec<u64>>,
+    #[serde(rename = "box")]
+    pub in_box: Option<RawBox>,
+    pub displacement: [f64; 3],
+}
+
 /// `[load.self_weight]`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -248,6 +258,7 @@ pub(super) struct RawLoad {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawLoadCase {
     pub name: String,
+    pub settlement: Option<Vec<RawSettlement>>,
     pub nodal: Option<Exact<f64, 3>>,
     pub point: Option<Vec<RawPoint>>,
     pub self_weight: Option<RawSelfWeight>,

@@ -166,6 +166,9 @@ pub struct LoadCase {
     pub gravity: Option<[f64; 3]>,
     /// Changes Δℓ0 of members' rest lengths, m, per member index.
     pub rest_length_changes: Vec<(usize, f64)>,
+    /// Support settlements (`settlement`): node index and displacement of its held
+    /// components, m.
+    pub settlements: Vec<(usize, [f64; 3])>,
 }
 
 /// A combination (`[[load.combinations]]`): `Σ factor · case`, solved as one load (never
