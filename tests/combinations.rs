@@ -437,3 +437,50 @@ fn a_settlement_case_is_the_plain_run_with_that_support_moved() {
         "{err}"
     );
 }
+
+/// A designed tower (`cases/tower2-design.toml`: its prestress designed for bar targets,
+/// `prestress.from = "design"`) under `large`: a combination 1.35 G + 1.5 W (W the shipped
+/// point load, G its top nodes' weight) equals the plain run of the same loads written as one
+/// pattern, forces and displacements to 1e-12, every α.
+#[test]
+fn a_combination_on_a_designed_tower_is_its_plain_run() {
+    let tables = common::manifest_path("cases/tower2-design");
+    let head = format!(
+        "[structure]\nnodes = \"{0}/nodes.csv\"\nmembers = \"{0}/members.csv\"\n\
+         [[supports.fix]]\nnodes = [0, 1, 2]\n\
+         [prestress]\nfrom = \"design\"\ntargets = {{ bars0 = -3000.0, bars1 = -2000.0 }}\n\
+         [model]\ngeometry = \"large\"\n[solver]\nmethods = [\"newton\"]\n\
+         [load]\nalpha = [0.5, 1.0]\n",
+        tables.display()
+    );
+    let (g, w) = ([0.0, 0.0, -100.0], [200.0, 0.0, -500.0]);
+    let combined = format!(
+        "{head}[[load.cases]]\nname = \"G\"\n[[load.cases.point]]\nnodes = [9, 10, 11]\n\
+         force = {g:?}\n[[load.cases]]\nname = \"W\"\n[[load.cases.point]]\n\
+         nodes = [9, 10, 11]\nforce = {w:?}\n\
+         [[load.combinations]]\nname = \"ULS\"\nfactors = {{ G = 1.35, W = 1.5 }}\n"
+    );
+    let (_d, out) = run("comb-designed", &combined);
+    let sum: Vec<f64> = (0..3).map(|k| 1.35 * g[k] + 1.5 * w[k]).collect();
+    let plain = format!(
+        "{head}[[load.point]]\nnodes = [9, 10, 11]\nforce = [{:?}, {:?}, {:?}]\n",
+        sum[0], sum[1], sum[2]
+    );
+    let (_p, plain_out) = run("comb-designed-plain", &plain);
+    let sub = out.0.join("combinations/ULS");
+    for alpha in ["0.5", "1"] {
+        for (kind, column) in [("forces", "force_N"), ("displacements", "uz")] {
+            let ours = file(&sub, kind, "newton", alpha);
+            let theirs = file(&plain_out.0, kind, "newton", alpha);
+            let value = |r: &HashMap<String, String>| r[column].parse::<f64>().unwrap();
+            let largest = theirs.iter().map(|r| value(r).abs()).fold(0.0, f64::max);
+            assert!(largest > 0.0, "{kind} α {alpha}");
+            for (x, y) in ours.iter().zip(&theirs) {
+                assert!(
+                    (value(x) - value(y)).abs() <= 1e-12 * largest,
+                    "{kind} α {alpha}: {x:?} against {y:?}"
+                );
+            }
+        }
+    }
+}
