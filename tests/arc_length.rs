@@ -276,7 +276,7 @@ fn arc_length_agrees_with_opensees_arc_length() {
 #[test]
 fn arc_length_refusals_name_the_key() {
     let (dir, case) = arch("arc-refuse");
-    let cases: [(&[&str], &str, &str); 5] = [
+    let cases: [(&[&str], &str, &str); 6] = [
         (
             &["model.geometry=\"prestress\""],
             "load.path",
@@ -289,6 +289,11 @@ fn arc_length_refusals_name_the_key() {
         ),
         (&["load.alpha=[-1.0, 1.0]"], "load.alpha", "α ≥ 0"),
         (&["load.point=[]"], "load.path", "has none"),
+        (
+            &["load.point=[{nodes = [1], force = [0.0, 0.0, 0.0]}]"],
+            "load.path",
+            "has none",
+        ),
         (&["load.path=\"riks\""], "load-control", "arc-length"),
     ];
     for (k, (sets, key, fix)) in cases.iter().enumerate() {
@@ -299,4 +304,42 @@ fn arc_length_refusals_name_the_key() {
         assert!(err.contains(key) && err.contains(fix), "{sets:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
+    let o = tensolve(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        dir.0.join("solver").to_str().unwrap(),
+        "--solver",
+        "pcg-lcp",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(code(&o), 2, "{err}");
+    assert!(
+        err.contains("--solver") && err.contains("newton's"),
+        "{err}"
+    );
+}
+
+/// A first α far below the next (1e-6, then 1 and 5) does not leave the steps tiny: every row
+/// converges, α = 5 on the snapped branch of the closed form; and a row just below the limit
+/// (2.134088) has no `limit_alpha`, the path not having passed it.
+#[test]
+fn a_tiny_first_alpha_and_a_row_just_below_the_limit() {
+    let (dir, case) = arch("arc-tiny");
+    let out = dir.0.join("out");
+    let (o, rows) = run(&case, &out, &["load.alpha=[1e-6, 2.134088, 5.0]"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(rows.iter().all(|r| r["status"] == "converged"), "{rows:?}");
+    assert!(rows[1]["limit_alpha"].is_empty(), "{:?}", rows[1]);
+    let located = number(&rows[2], "limit_alpha");
+    assert!(
+        (located - arch_limit()).abs() <= 1e-8 * located,
+        "{located}"
+    );
+    let (uz, w) = (apex_uz(&out, "5"), arch_snapped_height(5.0));
+    assert!(
+        (uz - (w - 0.1)).abs() <= 1e-8 * uz.abs(),
+        "{uz} vs {}",
+        w - 0.1
+    );
 }

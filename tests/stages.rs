@@ -207,3 +207,40 @@ fn stage_keys_that_do_not_fit_are_refused() {
         assert!(err.contains(key) && err.contains(fix), "{sets:?}: {err}");
     }
 }
+
+/// A prop first given at a later stage holds its node where the last stage left it (not
+/// where it started): node 15 propped after G × 0.5 stays where G × 0.5 put it under G × 1.
+/// A `--solver` other than newton is refused on a staged case.
+#[test]
+fn a_late_prop_holds_its_node_where_it_is() {
+    let stages = "[[stages]]\nname = \"built\"\n\
+         [[stages]]\nname = \"half\"\nfactors = { G = 0.5 }\n\
+         [[stages]]\nname = \"propped\"\nprops = [15]\nfactors = { G = 1.0 }\n";
+    let dir = Temp::dir("stages-late-prop");
+    let out = dir.0.join("out");
+    let o = run(&dir, &tower_stages(stages), &out, &[]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let node = |name: &str| {
+        let rows = csv_rows(&out.join(format!("stages/{name}/displacements/newton_alpha1.csv")));
+        let row = rows.iter().find(|r| r["node"] == "15").unwrap().clone();
+        ["ux", "uy", "uz"].map(|k| row[k].parse::<f64>().unwrap())
+    };
+    let (half, propped) = (node("half"), node("propped"));
+    assert!(half.iter().any(|x| x.abs() > 1e-4), "{half:?}");
+    assert_eq!(half, propped);
+    let o = tensolve(&[
+        "run",
+        dir.0.join("case.toml").to_str().unwrap(),
+        "--out",
+        dir.0.join("other").to_str().unwrap(),
+        "--quiet",
+        "--solver",
+        "pcg-lcp",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(code(&o), 2, "{err}");
+    assert!(
+        err.contains("--solver") && err.contains("solved by newton"),
+        "{err}"
+    );
+}

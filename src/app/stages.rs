@@ -27,6 +27,18 @@ pub fn run_stages(
     exchange: &dyn Exchange,
     events: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<Vec<(String, SummaryRow)>, RunError> {
+    if exchange.size() > 1 {
+        // Each stage starts from the last one's displacements, which rank 0 alone writes.
+        return Err(CaseError::invalid(
+            "stages",
+            format!("on {} MPI ranks", exchange.size()),
+            "construction stages run on one process: run the case without mpirun",
+        )
+        .into());
+    }
+    if let Some(methods) = &options.methods {
+        case.newton_only(methods)?;
+    }
     let dir = output_dir(case, options);
     let mut rows = Vec::new();
     let mut combined: Vec<Combined> = Vec::new();
@@ -34,12 +46,14 @@ pub fn run_stages(
     let mut outcome = Ok(());
     for k in 0..case.stages.len() {
         let name = case.stages[k].name.clone();
-        let mut stage = case.stage(k);
+        let mut stage = case.stage(k, last.as_ref().map(|(_, start)| start));
         // The stage reads its answer back from its displacements.
         stage.output.displacements = true;
         if let Some((before, start)) = &last {
-            released_props_carry_nothing(case, k, before, &stage, start)?;
-            stage.start = Some(start.clone());
+            if let Err(e) = released_props_carry_nothing(case, k, before, &stage, start) {
+                outcome = Err(e);
+                break;
+            }
         }
         let sub = dir.join("stages").join(&name);
         let sub_options = RunOptions {
@@ -48,26 +62,37 @@ pub fn run_stages(
         };
         events(RunEvent::Construction(&name));
         let ran = run_on(stage.clone(), &sub_options, exchange, events);
-        combined.push((name.clone(), sub.clone()));
-        match ran {
-            Ok(r) => rows.extend(r.into_iter().map(|r| (name.clone(), r))),
+        if sub.join("summary.csv").exists() {
+            combined.push((name.clone(), sub.clone()));
+        }
+        let read = ran.and_then(|r| Ok((r, displacements(&sub, &stage)?)));
+        match read {
+            Ok((r, displacements)) => {
+                rows.extend(r.into_iter().map(|r| (name.clone(), r)));
+                let load = node_loads(&stage.model());
+                last = Some((
+                    stage,
+                    StageStart {
+                        displacements,
+                        load,
+                    },
+                ));
+            }
             Err(e) => {
                 outcome = Err(e);
                 break;
             }
         }
-        let start = StageStart {
-            displacements: displacements(&sub, &stage)?,
-            load: node_loads(&stage.model()),
-        };
-        last = Some((stage, start));
     }
-    if exchange.rank() == 0 {
-        let path = dir.join("summary.csv");
-        write_combined_summary(&dir, &combined, "stage")
-            .map_err(|source| WriteError { path, source })?;
-    }
-    outcome.map(|()| rows)
+    // The summary of the stages solved, also when one ended the sequence.
+    let path = dir.join("summary.csv");
+    let written = match combined.is_empty() {
+        true => Ok(()),
+        false => write_combined_summary(&dir, &combined, "stage"),
+    };
+    outcome?;
+    written.map_err(|source| WriteError { path, source })?;
+    Ok(rows)
 }
 
 /// Per node, the displacements of a stage's answer (`displacements/newton_alpha1.csv`).
@@ -149,21 +174,34 @@ fn released_props_carry_nothing(
             && r.force.abs() > RELEASED_REACTION * scale
         {
             let id = case.geometry.node_ids[r.node];
-            return Err(CaseError::invalid(
-                format!("stages[{k}].props"),
-                format!("node {id} released"),
-                format!(
-                    "stage `{}` lets go of node {id}'s {} component, which carries a reaction \
-                     of {:.6e} N at stage `{}`: a support removed under load drops that load \
-                     at once; hold it at this stage too (`props`), or unload it first (a stage \
-                     whose prestress or rest-length change lifts the structure off it)",
-                    case.stages[k].name,
-                    ["x", "y", "z"][r.component],
-                    r.force,
-                    case.stages[k - 1].name
+            let (this, last) = (&case.stages[k].name, &case.stages[k - 1].name);
+            let component = ["x", "y", "z"][r.component];
+            let propped = case.stages[k - 1].props.contains(&r.node);
+            let (key, value, fix) = match propped {
+                true => (
+                    format!("stages[{k}].props"),
+                    format!("node {id} released"),
+                    format!(
+                        "stage `{this}` lets go of node {id}'s {component} component, which \
+                         carries a reaction of {:.6e} N at stage `{last}`: a support removed \
+                         under load drops that load at once; hold it at this stage too \
+                         (`props`), or unload it first (a stage whose prestress or rest-length \
+                         change lifts the structure off it)",
+                        r.force
+                    ),
                 ),
-            )
-            .into());
+                false => (
+                    format!("stages[{k}].members"),
+                    format!("node {id} built"),
+                    format!(
+                        "stage `{this}` builds node {id}, which no member reached at stage \
+                         `{last}`, where a load on it ({component}: {:.6e} N) went to the \
+                         ground: apply that load from the stage that builds the node",
+                        r.force
+                    ),
+                ),
+            };
+            return Err(CaseError::invalid(key, value, fix).into());
         }
     }
     Ok(())

@@ -119,7 +119,8 @@ fn settlements(
                     format!("{key}.displacement"),
                     format!("{:?}", entry.displacement),
                     format!(
-                        "node {}'s {} component is not held: a settlement moves a support; hold                          it in [[supports.fix]], or give 0 there",
+                        "node {}'s {} component is not held: a settlement moves a support; \
+                         hold it in [[supports.fix]], or give 0 there",
                         geometry.node_ids[n],
                         ["x", "y", "z"][c]
                     ),

@@ -181,16 +181,22 @@ pub(super) fn path_following(
             "the arc-length path starts at α = 0 and is followed toward larger α: give α ≥ 0",
         ));
     }
-    let loaded = load.pattern.nodal != [0.0; 3]
-        || !load.points.is_empty()
-        || load.gravity.is_some()
-        || !load.cases.is_empty();
+    // A force: the pattern's, or a load case's (settlements and rest-length changes are not
+    // scaled by α, and a path along a zero force has no direction).
+    let forces = |nodal: [f64; 3], points: &[(usize, [f64; 3])], gravity: Option<[f64; 3]>| {
+        nodal != [0.0; 3]
+            || points.iter().any(|(_, f)| *f != [0.0; 3])
+            || gravity.is_some_and(|g| g != [0.0; 3])
+    };
+    let loaded = forces(load.pattern.nodal, &load.points, load.gravity)
+        || (load.cases.iter()).any(|c| forces(c.nodal, &c.points, c.gravity));
     if !loaded {
         return Err(CaseError::invalid(
             KEY,
             value,
-            "the arc-length path follows the load α F, and this case has none: give `load.nodal`, \
-             `load.point` or `load.self_weight`",
+            "the arc-length path follows the force α F, and this case has none: give \
+             `load.nodal`, `load.point` or `load.self_weight` a non-zero force (in a load case \
+             with load cases)",
         ));
     }
     Ok(PathFollowing::ArcLength)

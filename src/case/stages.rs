@@ -173,9 +173,10 @@ impl super::Case {
     /// The case of construction stage `k` alone: the members installed up to it (their
     /// rest-length changes renumbered), the supports plus the stage's props, every node no
     /// installed member reaches held (not yet built), and the stage's loads and prestress
-    /// factor as its one load; no stages left. Its start ([`super::StageStart`]) is the
-    /// stages' run's to set.
-    pub fn stage(&self, k: usize) -> super::Case {
+    /// factor as its one load; no stages left. It starts at `start` (the last stage's answer),
+    /// where its props hold their nodes (a component a support prescribes stays where the
+    /// support puts it).
+    pub fn stage(&self, k: usize, start: Option<&super::StageStart>) -> super::Case {
         let stage = &self.stages[k];
         let mut case = self.with_loads(&stage.loads);
         let mut installed = vec![false; self.geometry.members.len()];
@@ -204,15 +205,30 @@ impl super::Case {
             reached[m.a] = true;
             reached[m.b] = true;
         }
+        // Where each component is: prescribed by a support (the last fix of it), else where
+        // the last stage left it.
+        let mut at: Vec<[Option<f64>; 3]> = vec![[None; 3]; g.nodes.len()];
+        for f in &case.fixes {
+            (0..3)
+                .filter(|&c| f.dofs[c])
+                .for_each(|c| at[f.node][c] = Some(f.displacement[c]));
+        }
         let held = |node: usize| NodeFix {
             node,
             dofs: [true; 3],
-            displacement: [0.0; 3],
+            displacement: std::array::from_fn(|c| {
+                at[node][c].unwrap_or_else(|| start.map_or(0.0, |s| s.displacements[node][c]))
+            }),
         };
-        case.fixes.extend(stage.props.iter().map(|&n| held(n)));
-        case.fixes
-            .extend((0..reached.len()).filter(|&n| !reached[n]).map(held));
+        let props: Vec<NodeFix> = stage.props.iter().map(|&n| held(n)).collect();
+        let unbuilt: Vec<NodeFix> = (0..reached.len())
+            .filter(|&n| !reached[n])
+            .map(held)
+            .collect();
+        case.fixes.extend(props);
+        case.fixes.extend(unbuilt);
         case.stages.clear();
+        case.start = start.cloned();
         case
     }
 

@@ -82,6 +82,25 @@ pub struct StageStart {
 }
 
 impl Case {
+    /// Refuse a solver other than newton in `methods` (`--solver`) on a run only newton does:
+    /// an arc-length path, construction stages.
+    pub fn newton_only(&self, methods: &[Method]) -> Result<(), super::CaseError> {
+        use crate::solvers::arc_length::PathFollowing;
+        let why = match (self.solver.newton.path, self.stages.is_empty()) {
+            (PathFollowing::ArcLength, _) => "the arc-length path (`load.path`) is newton's",
+            (_, false) => "construction stages are solved by newton",
+            _ => return Ok(()),
+        };
+        match methods.iter().find(|m| **m != Method::Newton) {
+            None => Ok(()),
+            Some(other) => Err(super::CaseError::invalid(
+                "--solver",
+                other.name(),
+                format!("{why}: give `--solver newton`, or none"),
+            )),
+        }
+    }
+
     /// The model the case describes: its structure under its geometric model.
     pub fn model(&self) -> Model {
         Model::new(self.structure(), self.model)

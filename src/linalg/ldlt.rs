@@ -17,7 +17,8 @@ use std::sync::Arc;
 #[derive(Debug, Clone, Copy, thiserror::Error)]
 #[error("zero pivot at elimination step {pivot} of an LDLᵀ factorization")]
 pub struct ZeroPivot {
-    /// Elimination step of the zero pivot, in the factor's fill-reducing order.
+    /// Where the zero pivot is, in the factor's fill-reducing order (as faer reports it, or
+    /// the position of a zero or non-finite entry of D).
     pub pivot: usize,
 }
 
@@ -87,10 +88,10 @@ impl SparseLdlt {
         };
         match result {
             Ok(_) => {
-                self.negative_pivots = self.pivots().filter(|&d| d < 0.0).count();
-                if self.pivots().any(|d| d == 0.0 || !d.is_finite()) {
-                    return Err(ZeroPivot { pivot: 0 });
+                if let Some(pivot) = self.pivots().position(|d| d == 0.0 || !d.is_finite()) {
+                    return Err(ZeroPivot { pivot });
                 }
+                self.negative_pivots = self.pivots().filter(|&d| d < 0.0).count();
                 self.factorized = true;
                 Ok(())
             }

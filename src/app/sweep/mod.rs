@@ -242,12 +242,10 @@ pub fn run_on(
 
 /// The solvers of the run: `--solver`, else `solver.methods`, each named once.
 fn methods(case: &Case, options: &RunOptions) -> Result<Vec<Method>, RunError> {
-    let methods = options
-        .methods
-        .clone()
-        .unwrap_or_else(|| case.solver.methods.clone());
+    let methods = (options.methods.clone()).unwrap_or_else(|| case.solver.methods.clone());
     crate::case::check_distinct_methods("--solver", &methods)?;
     outputs_have_their_solvers(case, &methods)?;
+    case.newton_only(&methods)?;
     Ok(methods)
 }
 

@@ -156,6 +156,7 @@ impl ArcLength<'_> {
             u: a.iter().map(|x| x * scale).collect(),
             lambda: scale,
         };
-        (norm.is_finite() && direction.u.iter().all(|x| x.is_finite())).then_some(direction)
+        let finite = direction.lambda.is_finite() && direction.u.iter().all(|x| x.is_finite());
+        (norm > 0.0 && finite).then_some(direction)
     }
 }

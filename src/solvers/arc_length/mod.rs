@@ -1,7 +1,7 @@
 //! `load.path = "arc-length"` (docs/method.md §8, "Past a limit point"): newton on the `large`
 //! model along the equilibrium path (U, λ), parametrised by its arc length in the metric
-//! `‖(ΔU, Δλ)‖² = ΔU·ΔU + ψ² Δλ²` (ψ = ‖K₀⁻¹F‖, so that load and displacement weigh alike at
-//! the start), instead of by the load. Load control stops at a limit point; this follows the
+//! `‖(ΔU, Δλ)‖² = ΔU·ΔU + ψ² Δλ²` with ψ = 0 (Crisfield's cylindrical arc: `PSI`), instead
+//! of by the load. Load control stops at a limit point; this follows the
 //! path through it, down the unstable branch and on to where the load rises again
 //! (snap-through), with cables slackening and retightening on the way.
 //!
@@ -91,11 +91,14 @@ struct Path {
     /// The last point reached, with its unit tangent (`None` before the first solve found the
     /// equilibrium at λ = 0).
     last: Option<(Point, Direction)>,
-    /// ψ of the metric: ‖K₀⁻¹F‖ at the start, m per unit λ.
+    /// ψ of the metric ([`PSI`]), m per unit λ.
     psi: f64,
-    /// The next step's length Δs, and the first's.
+    /// The next step's length Δs, the first's, and the largest a step may grow to
+    /// ([`LARGEST_STEP`] times the first, or times a quarter of what is left to the α asked
+    /// when that is longer).
     step: f64,
     first_step: f64,
+    largest: f64,
     /// The loads of the limit points passed (local maxima of λ along the path).
     limits: Vec<f64>,
 }
@@ -146,6 +149,7 @@ impl<'s> ArcLength<'s> {
                 psi: PSI,
                 step: 0.0,
                 first_step: 0.0,
+                largest: 0.0,
                 limits: Vec::new(),
             },
             work: ArcWork::default(),
@@ -162,7 +166,7 @@ impl<'s> ArcLength<'s> {
         &self.path.limits
     }
 
-    /// The start: the equilibrium at λ = 0 (U = 0 for a prestress in self-equilibrium), ψ and
+    /// The start: the equilibrium at λ = 0 (U = 0 for a prestress in self-equilibrium), and
     /// the first step from its tangent. `None` when none is found there.
     fn start(&mut self, target: f64) -> Option<()> {
         let n = self.model.structure.n_free;
@@ -183,6 +187,7 @@ impl<'s> ArcLength<'s> {
         let first_load = FIRST_STEP * if target > 0.0 { target } else { 1.0 };
         self.path.first_step = first_load / tangent.lambda;
         self.path.step = self.path.first_step;
+        self.path.largest = LARGEST_STEP * self.path.first_step;
         self.path.last = Some((point, tangent));
         Some(())
     }
@@ -222,14 +227,19 @@ impl<'s> ArcLength<'s> {
         if ((turn < MAX_TURN && !at_kink) || step < MAX_TURN * chord) && !smallest {
             return self.halve(state, false);
         }
-        // A limit point: λ rose along the tangent at the start and falls at the end.
+        // A limit point: λ rose along the tangent at the start and falls at the end. The
+        // path passes it unless the α asked lies before it (then it lands there first).
         let mut reach = (found.point.clone(), next.clone());
         if tangent.lambda > 0.0 && next.lambda < 0.0 {
-            let (limit, before) = self.locate_limit(&from, &tangent, step, &found.point);
-            self.path.limits.push(limit);
-            self.work.limits += 1;
+            let Some((limit, before)) = self.locate_limit(&from, &tangent, step, &found.point)
+            else {
+                return self.halve(state, smallest);
+            };
             if limit >= state.target && before.lambda >= state.target {
                 reach = (before, tangent.clone());
+            } else {
+                self.path.limits.push(limit);
+                self.work.limits += 1;
             }
         }
         // The target passed between `from` and the point reached: land on it.
@@ -240,7 +250,7 @@ impl<'s> ArcLength<'s> {
         state.point = found.point;
         self.path.last = Some((state.point.clone(), next));
         if found.steps <= EASY_STEPS && turn >= SMOOTH_TURN {
-            self.path.step = (self.path.step * GROWTH).min(LARGEST_STEP * self.path.first_step);
+            self.path.step = (self.path.step * GROWTH).min(self.path.largest);
         }
     }
 
@@ -255,14 +265,15 @@ impl<'s> ArcLength<'s> {
 
     /// The limit point between `from` (λ rising along `tangent`) and `beyond` (falling), at
     /// most `step` along the path: bisection of the step on the sign of the tangent's λ. Its
-    /// load (the largest λ met), and the last point found before it.
+    /// load (the largest λ met), and the last point found before it; `None` when a bisection's
+    /// corrector fails (the step is then halved).
     fn locate_limit(
         &mut self,
         from: &Point,
         tangent: &Direction,
         step: f64,
         beyond: &Point,
-    ) -> (f64, Point) {
+    ) -> Option<(f64, Point)> {
         let (mut rising, mut falling) = (0.0, step);
         let mut limit = from.lambda.max(beyond.lambda);
         let mut before = from.clone();
@@ -279,13 +290,9 @@ impl<'s> ArcLength<'s> {
                 tangent,
                 step: mid,
             };
-            let Some(found) = self.correct(predicted, &plane) else {
-                break;
-            };
+            let found = self.correct(predicted, &plane)?;
             let secant = secant(from, &found.point);
-            let Some(t) = self.tangent(&found.eval, (&secant.u, secant.lambda)) else {
-                break;
-            };
+            let t = self.tangent(&found.eval, (&secant.u, secant.lambda))?;
             limit = limit.max(found.point.lambda);
             if t.lambda > 0.0 {
                 rising = mid;
@@ -294,7 +301,7 @@ impl<'s> ArcLength<'s> {
                 falling = mid;
             }
         }
-        (limit, before)
+        Some((limit, before))
     }
 
     /// Land on λ = α between `from` and `reached` (λ below and at or above α): load control
@@ -374,9 +381,13 @@ impl Solver for ArcLength<'_> {
 
     /// From the path's last point (the equilibrium at λ = 0 at first), toward λ = α.
     fn init(&mut self, load: &[f64]) -> ArcState {
-        let target =
-            crate::linalg::dot(load, &self.unit) / crate::linalg::dot(&self.unit, &self.unit);
-        if self.path.last.is_none() && self.start(target).is_none() {
+        // α of `load = α F`; no force F: no path to follow (the row stalls at α = 0).
+        let unit = crate::linalg::dot(&self.unit, &self.unit);
+        let target = match unit > 0.0 {
+            true => crate::linalg::dot(load, &self.unit) / unit,
+            false => 0.0,
+        };
+        if unit == 0.0 || (self.path.last.is_none() && self.start(target).is_none()) {
             let n = self.model.structure.n_free;
             let point = Point {
                 u: vec![0.0; n],
@@ -393,7 +404,13 @@ impl Solver for ArcLength<'_> {
                 stop: Some(Status::Stalled),
             };
         }
-        let (point, _) = self.path.last.clone().expect("a started path");
+        let (point, tangent) = self.path.last.clone().expect("a started path");
+        // Steps may grow to LARGEST_STEP times a quarter of what is left to α along the
+        // tangent (a first α far below the next left them tiny).
+        if tangent.lambda > 0.0 && target > point.lambda {
+            let wanted = FIRST_STEP * (target - point.lambda) / tangent.lambda;
+            self.path.largest = self.path.largest.max(LARGEST_STEP * wanted);
+        }
         let eval = crate::solvers::large::evaluate(&self.model.structure, load, &point.u);
         // At the path's point already (α = 0 at the start, or α asked twice).
         let stop = (point.lambda == target
