@@ -88,12 +88,11 @@ fn arch_limit() -> f64 {
     arch_alpha(0.5 * (a + b))
 }
 
-/// The apex height on the snapped-through branch (w < −0.1, the bars in tension) at α.
-fn arch_snapped_height(alpha: f64) -> f64 {
-    let (mut low, mut high) = (-2.0, -0.1);
+/// The apex height w in [low, high] where the arch carries α, by bisection: α falls from
+/// `arch_alpha(low)` above it to `arch_alpha(high)` below it along the branch.
+fn arch_height(alpha: f64, (mut low, mut high): (f64, f64)) -> f64 {
     for _ in 0..200 {
         let mid = 0.5 * (low + high);
-        // α rises as the apex goes down below the inverted rest shape.
         if arch_alpha(mid) > alpha {
             low = mid;
         } else {
@@ -103,19 +102,16 @@ fn arch_snapped_height(alpha: f64) -> f64 {
     0.5 * (low + high)
 }
 
-/// The apex height on the rising branch (w between the limit's and 0.1) at α.
+/// The apex height on the snapped-through branch (w < −0.1, the bars in tension) at α: α
+/// rises as the apex goes down below the inverted rest shape.
+fn arch_snapped_height(alpha: f64) -> f64 {
+    arch_height(alpha, (-2.0, -0.1))
+}
+
+/// The apex height on the rising branch (w between the limit's and 0.1) at α: α falls from
+/// the limit load to 0 as w rises to 0.1.
 fn arch_rising_height(alpha: f64) -> f64 {
-    let (mut low, mut high) = (0.1 / 3f64.sqrt(), 0.1);
-    for _ in 0..200 {
-        let mid = 0.5 * (low + high);
-        // α falls from the limit load to 0 as w rises to 0.1.
-        if arch_alpha(mid) > alpha {
-            low = mid;
-        } else {
-            high = mid;
-        }
-    }
-    0.5 * (low + high)
+    arch_height(alpha, (0.1 / 3f64.sqrt(), 0.1))
 }
 
 /// The apex's vertical displacement in a run's displacements file.

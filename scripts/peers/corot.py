@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """OpenSees corotational peer of tensolve's large-displacement model (SPEC §8).
 
-    python3 scripts/peers/corot.py CASE.toml OUT_DIR [--increments 20] [--modes N]
+    python3 scripts/peers/corot.py CASE.toml OUT_DIR [--increments 20] [--modes N] [--arc-step 0.005]
 
 Reads a `[structure]` case (its two tables, `[[supports.fix]]` by `nodes` or `box` with
 `dofs`, `[[load.point]]`, `load.nodal`, `load.alpha`, `cables.unilateral`) and solves it as a
@@ -27,6 +27,10 @@ across it, slack cables none) against each member's mass ρ S L from the members
 `density` column (`-rho ρS`), plus `[[modal.point_mass]]` (`mass` kg on each component of the
 nodes its `nodes` or `box` selects, OpenSees `mass`), consistent (`-cMass 1`: `ρ S L / 6 [2I I; I 2I]`, tensolve's
 default) or lumped (`-cMass 0`: `ρ S L / 2` on each end) as the case's `modal.mass` says.
+
+A case with `load.path = "arc-length"` is followed by OpenSees' `ArcLength` instead
+(`solve_arc`: steps of `--arc-step` m in ‖ΔU‖), each α the first point of the path where the
+load reaches it, and `OUT_DIR/limits.csv` lists the limit loads passed.
 
 Refused (exit 2, with the reason): a `[grid]` case, a non-zero `supports.fix` displacement,
 `load.self_weight`, `prestress.from`. Exit 1 when a load step does not converge.

@@ -2,6 +2,7 @@
 """tensolve's large-displacement newton against the OpenSees corotational peer, α by α.
 
     python3 scripts/peers/corot_compare.py CASE.toml TENSOLVE_RUN_DIR [--rtol 1e-6] [--increments 20] [--modes]
+        [--arc-step 0.005] [--limit-rtol 1e-6]
     python3 scripts/peers/corot_compare.py CASE.toml --print-only
 
 Runs scripts/peers/corot.py on the case into a temporary directory, then reads tensolve's

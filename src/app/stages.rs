@@ -42,7 +42,8 @@ pub fn run_stages(
     let dir = output_dir(case, options);
     let mut rows = Vec::new();
     let mut combined: Vec<Combined> = Vec::new();
-    let mut last: Option<(Case, StageStart)> = None;
+    // The last stage's model (its structure under `large`) and where the next one starts.
+    let mut last: Option<(Model, StageStart)> = None;
     let mut outcome = Ok(());
     for k in 0..case.stages.len() {
         let name = case.stages[k].name.clone();
@@ -69,9 +70,10 @@ pub fn run_stages(
         match read {
             Ok((r, displacements)) => {
                 rows.extend(r.into_iter().map(|r| (name.clone(), r)));
-                let load = node_loads(&stage.model());
+                let model = stage.model();
+                let load = node_loads(&model);
                 last = Some((
-                    stage,
+                    model,
                     StageStart {
                         displacements,
                         load,
@@ -148,11 +150,10 @@ fn node_loads(model: &Model) -> Vec<[f64; 3]> {
 fn released_props_carry_nothing(
     case: &Case,
     k: usize,
-    before: &Case,
+    model: &Model,
     stage: &Case,
     start: &StageStart,
 ) -> Result<(), RunError> {
-    let model = before.model();
     let s = &model.structure;
     let mut u = vec![0.0; s.n_free];
     for (global, &d) in s.dof_of.iter().enumerate() {
@@ -166,9 +167,9 @@ fn released_props_carry_nothing(
         .collect();
     let scale = tensions.iter().fold(0.0f64, |m, t| m.max(t.abs()));
     let states = model.member_states(&u);
-    let eq = Equilibrium::classified(&model, u.clone(), tensions);
+    let eq = Equilibrium::classified(model, u.clone(), tensions);
     let held_now = stage.structure().dof_of;
-    for r in crate::results::reactions(&model, &eq, 1.0, &states) {
+    for r in crate::results::reactions(model, &eq, 1.0, &states) {
         let global = 3 * r.node + r.component;
         if held_now[global] != crate::structure::CLAMPED
             && r.force.abs() > RELEASED_REACTION * scale

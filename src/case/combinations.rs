@@ -271,7 +271,12 @@ impl Case {
     /// point loads and gravity summed with their factors, rest-length changes likewise), the
     /// members' prestress scaled by the combination's prestress factor; no load cases left.
     pub fn combination(&self, k: usize) -> Case {
-        let combination = &self.load.combinations[k];
+        self.with_combination(&self.load.combinations[k])
+    }
+
+    /// The case of `combination` (over this case's load cases) alone, as
+    /// [`Case::combination`].
+    pub(super) fn with_combination(&self, combination: &Combination) -> Case {
         let mut case = self.clone();
         let load = &mut case.load;
         load.pattern.nodal = [0.0; 3];

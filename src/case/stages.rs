@@ -235,11 +235,10 @@ impl super::Case {
     /// A stage's loads as the one load of a case: [`Combination`]'s over the load cases, or
     /// without load cases `[load]`'s own loads at every stage, the prestress factored.
     fn with_loads(&self, loads: &Combination) -> super::Case {
-        let mut case = self.clone();
-        case.load.combinations = vec![loads.clone()];
         if !self.load.cases.is_empty() {
-            return case.combination(0);
+            return self.with_combination(loads);
         }
+        let mut case = self.clone();
         case.load.combinations.clear();
         for m in &mut case.geometry.members {
             m.prestress *= loads.prestress;

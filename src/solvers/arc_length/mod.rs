@@ -22,7 +22,6 @@ use super::{
     BalanceTolerances, Equilibrium, LoadPathEnd, Measure, Progress, Solver, Status, TautStiffness,
 };
 use crate::linalg::{SparseLdlt, StiffnessPattern};
-use crate::model::material::{self, SlackRule};
 use crate::model::Model;
 use corrector::{Constraint, Direction, Point};
 
@@ -457,14 +456,7 @@ impl Solver for ArcLength<'_> {
             equilibrium_residual: Some(state.eval.residual),
             rebuilds: 0,
             krylov_iterations: None,
-            slack_cables: material::slack_flags(
-                &self.model.structure,
-                &state.eval.trial,
-                SlackRule::Clipped,
-            )
-            .iter()
-            .filter(|&&x| x)
-            .count(),
+            slack_cables: state.eval.slack_cables(&self.model.structure),
             at_roundoff: false,
             stop: state.stop,
         }
@@ -475,10 +467,7 @@ impl Solver for ArcLength<'_> {
     }
 
     fn iterate(&self, state: &ArcState) -> Equilibrium {
-        let tensions = (self.model.structure.links.iter().zip(&state.eval.trial))
-            .map(|(l, &t)| material::tension(l, t))
-            .collect();
-        Equilibrium::classified(self.model, state.point.u.clone(), tensions)
+        state.eval.equilibrium(self.model, &state.point.u)
     }
 
     /// How far the path went: the fraction of `from → α` its last point reached in load,

@@ -132,6 +132,22 @@ pub struct Evaluation {
     pub scale: f64,
 }
 
+impl Evaluation {
+    /// The cables slack at this iterate (their trial tension clipped).
+    pub fn slack_cables(&self, s: &Structure) -> usize {
+        let slack = material::slack_flags(s, &self.trial, SlackRule::Clipped);
+        slack.iter().filter(|&&x| x).count()
+    }
+
+    /// The iterate at displacements `u` as an equilibrium state: U and the clipped tensions.
+    pub fn equilibrium(&self, model: &Model, u: &[f64]) -> Equilibrium {
+        let tensions = (model.structure.links.iter().zip(&self.trial))
+            .map(|(l, &t)| material::tension(l, t))
+            .collect();
+        Equilibrium::classified(model, u.to_vec(), tensions)
+    }
+}
+
 /// The law's values at displacements `u` under `load` (both on the free dofs).
 pub fn evaluate(s: &Structure, load: &[f64], u: &[f64]) -> Evaluation {
     let current = CurrentGeometry::of(s, u);
@@ -304,14 +320,7 @@ impl<R: TangentStep> Solver for Large<'_, R> {
             equilibrium_residual: Some(state.eval.residual),
             rebuilds: 0,
             krylov_iterations: None,
-            slack_cables: material::slack_flags(
-                self.structure,
-                &state.eval.trial,
-                SlackRule::Clipped,
-            )
-            .iter()
-            .filter(|&&x| x)
-            .count(),
+            slack_cables: state.eval.slack_cables(self.structure),
             at_roundoff,
             stop,
         }
@@ -323,14 +332,7 @@ impl<R: TangentStep> Solver for Large<'_, R> {
     }
 
     fn iterate(&self, state: &LargeState) -> Equilibrium {
-        let tensions = self
-            .structure
-            .links
-            .iter()
-            .zip(&state.eval.trial)
-            .map(|(l, &t)| material::tension(l, t))
-            .collect();
-        Equilibrium::classified(self.model, state.u.clone(), tensions)
+        state.eval.equilibrium(self.model, &state.u)
     }
 }
 
