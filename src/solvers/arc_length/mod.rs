@@ -457,7 +457,10 @@ impl Solver for ArcLength<'_> {
             rebuilds: 0,
             krylov_iterations: None,
             slack_cables: state.eval.slack_cables(&self.model.structure),
-            at_roundoff: false,
+            // Converged where only round-off is left of the load's balance: the row says so.
+            at_roundoff: state.stop == Some(Status::Converged)
+                && (self.tolerances).balance(state.eval.residual, state.eval.load_residual)
+                    == crate::solvers::Balance::AtRoundOff,
             stop: state.stop,
         }
     }
