@@ -29,7 +29,7 @@ pub use estimate::{
     factor_bytes, AMD_FILL_RATIO, BYTES_PER_FACTOR_ENTRY, FACTOR_ENTRIES_PER_DOF_LOG2,
 };
 pub use ldlt::{SparseLdlt, ZeroPivot};
-pub use low_modes::{modes_below, LowModes};
+pub use low_modes::{modes_below, modes_below_by_subspace, LowModes};
 pub use low_rank::LowRankUpdate;
 pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes, DENSE_MODES_UP_TO};
 pub use nested_dissection::nested_dissection;

@@ -2,15 +2,18 @@
 //! `Z = [R_jᵀ Z_j]_j` (the subdomains' GenEO vectors), assembled block by block from
 //! `Y_j = H R_jᵀ Z_j` (H applied link by link, so on Ω_j and one layer of dofs around it), and
 //! factorised by faer's sparse Cholesky on its own analysis (docs/method.md, "Newton–Krylov on
-//! the substructures").
+//! the substructures"). Where only link weights changed since (the coarse vectors and μ the
+//! same), E is updated by the changed links alone, `E += Σ Δw_i (Zᵀ b_i)(Zᵀ b_i)ᵀ`, and
+//! refactorised on the same analysis.
 
 use super::local::LocalProblem;
 use super::overlap::Overlap;
 use crate::linalg::{NotPositiveDefinite, SparseCholesky, StiffnessPattern};
 use crate::structure::Structure;
 use faer::Par;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 
 /// A shift, relative to E's mean diagonal, added when E does not factorise (coarse vectors of
 /// neighbouring subdomains dependent to round-off); multiplied by 100 at each retry.
@@ -21,6 +24,15 @@ pub(super) struct Coarse {
     /// First coarse unknown of each subdomain (one more entry than subdomains).
     pub offsets: Vec<usize>,
     factor: Option<SparseCholesky>,
+    /// E itself, and the link weights it holds (`None`: no coarse space).
+    matrix: Option<Assembled>,
+}
+
+/// E's lower triangle on its pattern, and the link weights it holds.
+struct Assembled {
+    pattern: StiffnessPattern,
+    values: Vec<f64>,
+    weights: Vec<f64>,
 }
 
 impl Coarse {
@@ -29,6 +41,7 @@ impl Coarse {
         Coarse {
             offsets: vec![0; subdomains + 1],
             factor: None,
+            matrix: None,
         }
     }
 
@@ -85,11 +98,17 @@ impl Coarse {
         let mean = pattern.mean_diagonal(&e).abs();
         let mut shift = 0.0;
         let mut next = FIRST_SHIFT * mean;
+        let assembled = |pattern, values| Assembled {
+            pattern,
+            values,
+            weights: weights.to_vec(),
+        };
         for _ in 0..4 {
             if factor.factorize(&pattern, &e).is_ok() {
                 return Ok(Coarse {
                     offsets,
                     factor: Some(factor),
+                    matrix: Some(assembled(pattern, e)),
                 });
             }
             for &s in &pattern.diag_slot {
@@ -102,6 +121,90 @@ impl Coarse {
         Ok(Coarse {
             offsets,
             factor: Some(factor),
+            matrix: Some(assembled(pattern, e)),
+        })
+    }
+
+    /// E for new link weights, where the subdomains' coarse vectors are those E was made with:
+    /// `E += Σ_i Δw_i g_i g_iᵀ` over the links whose weight changed, `g_i = Zᵀ b_i` (nonzero
+    /// on the subdomains holding a dof of link i), accumulated block by block, then
+    /// refactorised on the same analysis. E keeps the μ it was made with, as a kept subdomain
+    /// factor does (a preconditioner need not be exact; a raised μ finds new vectors, so a new
+    /// E). `false` where it cannot be (no E, or E no longer factorises): the caller makes E
+    /// anew.
+    pub(super) fn update_weights(
+        &mut self,
+        structure: &Structure,
+        overlap: &Overlap,
+        locals: &[LocalProblem],
+        weights: &[f64],
+    ) -> bool {
+        let (Some(matrix), Some(factor)) = (self.matrix.as_mut(), self.factor.as_mut()) else {
+            return false;
+        };
+        // ΔE_ab = Σ Δw g_a g_bᵀ per pair of subdomains a ≥ b (a's coarse rows, b's columns).
+        let mut blocks: BTreeMap<(usize, usize), DMatrix<f64>> = BTreeMap::new();
+        for (i, (&new, &old)) in weights.iter().zip(&matrix.weights).enumerate() {
+            if new == old {
+                continue;
+            }
+            // g_i by subdomain: Z_jᵀ R_j b_i.
+            let mut g: Vec<(usize, DVector<f64>)> = Vec::new();
+            for (d, c) in structure.link_dofs[i].iter() {
+                for j in overlap.holders_of(d) {
+                    let z = &locals[j].coarse;
+                    let Ok(k) = overlap.dofs[j].binary_search(&d) else {
+                        continue;
+                    };
+                    let at = match g.iter().position(|(h, _)| *h == j) {
+                        Some(at) => at,
+                        None => {
+                            g.push((j, DVector::zeros(z.ncols())));
+                            g.len() - 1
+                        }
+                    };
+                    g[at].1.axpy(c, &z.row(k).transpose(), 1.0);
+                }
+            }
+            for (a, ga) in &g {
+                for (b, gb) in &g {
+                    if a >= b && !ga.is_empty() && !gb.is_empty() {
+                        let block = blocks
+                            .entry((*a, *b))
+                            .or_insert_with(|| DMatrix::zeros(ga.len(), gb.len()));
+                        block.ger(new - old, ga, gb, 1.0);
+                    }
+                }
+            }
+        }
+        // Into E's slots: a column's rows of one subdomain lie side by side in the pattern.
+        let pattern = &matrix.pattern;
+        for ((a, b), block) in &blocks {
+            let (row0, col0) = (self.offsets[*a], self.offsets[*b]);
+            for q in 0..block.ncols() {
+                let col = col0 + q;
+                let first = if a == b { q } else { 0 };
+                let Some(slot) = pattern.slot(row0 + first, col) else {
+                    return false;
+                };
+                for p in first..block.nrows() {
+                    debug_assert_eq!(pattern.row_idx[slot + p - first], row0 + p);
+                    matrix.values[slot + p - first] += block[(p, q)];
+                }
+            }
+        }
+        matrix.weights.copy_from_slice(weights);
+        factor.factorize(pattern, &matrix.values).is_ok()
+    }
+
+    /// E's lower triangle, entry by entry (row, column, value), for the tests.
+    #[cfg(test)]
+    pub(super) fn entries(&self) -> Vec<(usize, usize, f64)> {
+        self.matrix.as_ref().map_or_else(Vec::new, |m| {
+            m.pattern
+                .entries()
+                .map(|(r, c, s)| (r, c, m.values[s]))
+                .collect()
         })
     }
 

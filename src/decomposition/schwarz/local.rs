@@ -5,8 +5,10 @@
 //! "Newton–Krylov on the substructures"). The pattern and its symbolic analysis are made once;
 //! a new set of link weights refactorises.
 
+use super::GeneoSolve;
 use crate::linalg::{
-    modes_below, NotPositiveDefinite, SparseCholesky, SparseRow, StiffnessPattern,
+    modes_below, modes_below_by_subspace, NotPositiveDefinite, SparseCholesky, SparseRow,
+    StiffnessPattern,
 };
 use crate::structure::Structure;
 use faer::Par;
@@ -122,7 +124,32 @@ impl LocalProblem {
             scaled[s] *= unity[r] * unity[c];
         }
         let mut shifted = self.dirichlet.share_symbolic();
-        let modes = modes_below(pattern, &neumann, &scaled, &mut shifted, tau, max_modes)?;
+        let modes = match settings.geneo {
+            GeneoSolve::Exact => {
+                modes_below(pattern, &neumann, &scaled, &mut shifted, tau, max_modes)?
+            }
+            GeneoSolve::Subspace {
+                width,
+                sweeps,
+                warm_sweeps,
+            } => {
+                // Warm: the last vectors Z_j start the block (D_j V_j: near enough to V_j to
+                // start from, where D_j is not zero).
+                let warm = self.coarse.ncols() > 0;
+                let sweeps = if warm { warm_sweeps } else { sweeps };
+                let start = warm.then_some(&self.coarse);
+                let pencil = (tau, max_modes);
+                modes_below_by_subspace(
+                    pattern,
+                    &neumann,
+                    &scaled,
+                    &mut shifted,
+                    pencil,
+                    (width, sweeps),
+                    start,
+                )?
+            }
+        };
         // Z_j = D_j V_j.
         let mut coarse = modes.vectors;
         for (r, mut row) in coarse.row_iter_mut().enumerate() {

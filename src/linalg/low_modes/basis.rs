@@ -85,36 +85,12 @@ impl Basis {
                 kept.extend(column.iter().map(|v| v / after));
                 b_kept.extend(b_column.iter().map(|v| v / after));
             }
-            let cols = kept.len() / n;
-            if cols == 0 {
-                return (Vec::new(), Vec::new());
-            }
-            let mut gram = product(view(&kept, n), true, view(&b_kept, n));
-            for j in 0..cols {
-                for i in j + 1..cols {
-                    let mean = 0.5 * (gram[(i, j)] + gram[(j, i)]);
-                    gram[(i, j)] = mean;
-                    gram[(j, i)] = mean;
-                }
-            }
-            let Some((d, u)) = symmetric_eigen(gram.as_ref()) else {
+            let Some((new_x, new_bx, cols)) = combine_by_gram(&kept, &b_kept, n) else {
                 return (Vec::new(), Vec::new());
             };
-            let largest = d.last().copied().unwrap_or(0.0);
-            let directions: Vec<usize> = (0..cols)
-                .filter(|&k| d[k] > GRAM_DEPENDENT * largest && d[k] > 0.0)
-                .collect();
-            if directions.is_empty() {
-                return (Vec::new(), Vec::new());
-            }
-            let combine = Mat::<f64>::from_fn(cols, directions.len(), |i, c| {
-                u[(i, directions[c])] / d[directions[c]].sqrt()
-            });
-            let new_x = product(view(&kept, n), false, combine.as_ref());
-            let new_bx = product(view(&b_kept, n), false, combine.as_ref());
-            x = columns(&new_x);
-            bx = columns(&new_bx);
-            before = vec![1.0; directions.len()];
+            x = new_x;
+            bx = new_bx;
+            before = vec![1.0; cols];
         }
         (x, bx)
     }
@@ -194,6 +170,42 @@ impl Basis {
         }
         to
     }
+}
+
+/// Columns of unit B-norm (`bx` B times them) combined by the eigenvectors of their Gram
+/// matrix, `X ← X U D^{-1/2}`, a direction at [`GRAM_DEPENDENT`] of the largest or less
+/// dropped: the B-orthonormal block, B times it, and its columns; `None` when none is left.
+pub(super) fn combine_by_gram(
+    x: &[f64],
+    bx: &[f64],
+    n: usize,
+) -> Option<(Vec<f64>, Vec<f64>, usize)> {
+    let cols = x.len() / n;
+    if cols == 0 {
+        return None;
+    }
+    let mut gram = product(view(x, n), true, view(bx, n));
+    for j in 0..cols {
+        for i in j + 1..cols {
+            let mean = 0.5 * (gram[(i, j)] + gram[(j, i)]);
+            gram[(i, j)] = mean;
+            gram[(j, i)] = mean;
+        }
+    }
+    let (d, u) = symmetric_eigen(gram.as_ref())?;
+    let largest = d.last().copied().unwrap_or(0.0);
+    let directions: Vec<usize> = (0..cols)
+        .filter(|&k| d[k] > GRAM_DEPENDENT * largest && d[k] > 0.0)
+        .collect();
+    if directions.is_empty() {
+        return None;
+    }
+    let combine = Mat::<f64>::from_fn(cols, directions.len(), |i, c| {
+        u[(i, directions[c])] / d[directions[c]].sqrt()
+    });
+    let new_x = product(view(x, n), false, combine.as_ref());
+    let new_bx = product(view(bx, n), false, combine.as_ref());
+    Some((columns(&new_x), columns(&new_bx), directions.len()))
 }
 
 /// B-norms `√(xᵀ B x)` of the columns of a block and B times it.

@@ -355,5 +355,7 @@ fn longest_run(values: &[f64], floor: f64) -> usize {
 }
 
 mod basis;
+mod subspace;
+pub use subspace::modes_below_by_subspace;
 #[cfg(test)]
 mod tests;

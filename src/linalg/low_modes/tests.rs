@@ -1,6 +1,6 @@
 //! Tests of `modes_below` against dense solves and closed forms.
 
-use super::{modes_below, modes_below_with_basis, LowModes};
+use super::{modes_below, modes_below_by_subspace, modes_below_with_basis, LowModes};
 use crate::linalg::{SparseCholesky, SparseRow, StiffnessPattern};
 use faer::Par;
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -175,6 +175,16 @@ fn chains(lengths: &[usize]) -> Vec<SparseRow> {
     rows
 }
 
+/// 20 free chains of 15 to 25 dofs (404 in all), their springs and masses differing: the
+/// pattern, A and B.
+fn twenty_free_chains() -> (StiffnessPattern, Vec<f64>, Vec<f64>) {
+    let lengths: Vec<usize> = (0..20).map(|p| 15 + (p * 7) % 11).collect();
+    let rows = chains(&lengths);
+    let pattern = StiffnessPattern::new(lengths.iter().sum(), &rows);
+    let (a, b) = (stiffness(&pattern, &rows), mass(&pattern));
+    (pattern, a, b)
+}
+
 /// 20 free chains of 15 to 25 dofs (404 in all), their springs and masses differing: a
 /// kernel of 20 (each chain's translation), more than a block holds, the other eigenvalues
 /// apart. All 20 zero eigenvalues come out, with a basis short of the whole space (not
@@ -182,11 +192,8 @@ fn chains(lengths: &[usize]) -> Vec<SparseRow> {
 /// eigenvalue, and every value matches a dense solve.
 #[test]
 fn a_kernel_of_twenty_comes_out_whole() {
-    let lengths: Vec<usize> = (0..20).map(|p| 15 + (p * 7) % 11).collect();
-    let n: usize = lengths.iter().sum();
-    let rows = chains(&lengths);
-    let pattern = StiffnessPattern::new(n, &rows);
-    let (a, b) = (stiffness(&pattern, &rows), mass(&pattern));
+    let (pattern, a, b) = twenty_free_chains();
+    let n = pattern.n;
     let rho = rho(&pattern, &a, &b);
     let exact = dense_eigenvalues(&pattern, &a, &b);
     assert_eq!(exact.iter().filter(|&&l| l.abs() < 1e-9 * rho).count(), 20);
@@ -359,4 +366,48 @@ fn what_does_not_factorize_is_an_error() {
     assert!(modes_below(&pattern, &a, &b, &mut chol, 0.25, 10).is_err());
     a[3] = 0.0;
     assert!(modes_below(&pattern, &a, &b, &mut chol, f64::NAN, 10).is_err());
+}
+
+/// The subspace iteration on the 20 free chains (a kernel of 20, 404 dofs), a block of 24
+/// and a threshold past the 30th eigenvalue: the block doubles (all 24 lay below), the whole
+/// kernel comes out, every value is an upper bound of its eigenvalue (Courant–Fischer), no
+/// more come out than lie below, and the vectors are B-orthonormal. Warm-started from the
+/// exact pairs, one sweep gives them back to 1e-8.
+#[test]
+fn the_subspace_iteration_holds_the_kernel_and_bounds_the_rest() {
+    let (pattern, a, b) = twenty_free_chains();
+    let n = pattern.n;
+    let rho = rho(&pattern, &a, &b);
+    let exact = dense_eigenvalues(&pattern, &a, &b);
+    let (threshold, count) = threshold_above(&exact, 30);
+    let mut chol = SparseCholesky::analyse(&pattern, Par::Seq);
+    let pencil = (threshold, 1000);
+    let modes = modes_below_by_subspace(&pattern, &a, &b, &mut chol, pencil, (24, 4), None);
+    let modes = modes.unwrap();
+    assert!(modes.values.len() > 24 && modes.values.len() <= count);
+    let zeros = modes.values.iter().filter(|&&l| l.abs() < 1e-9 * rho);
+    assert_eq!(zeros.count(), 20);
+    for (k, (found, below)) in modes.values.iter().zip(&exact).enumerate() {
+        assert!(
+            *found >= below - 1e-10 * rho,
+            "{k}: {found:e} below {below:e}"
+        );
+    }
+    let (n_modes, v) = (modes.values.len(), &modes.vectors);
+    let mut bv = DMatrix::zeros(n, n_modes);
+    for j in 0..n_modes {
+        let x: Vec<f64> = v.column(j).iter().copied().collect();
+        let mut y = vec![0.0; n];
+        pattern.sym_matvec(&b, &x, &mut y);
+        bv.column_mut(j).copy_from_slice(&y);
+    }
+    let off = (v.transpose() * bv - DMatrix::<f64>::identity(n_modes, n_modes)).amax();
+    assert!(off <= 1e-10, "VᵀBV − I up to {off:e}");
+    let exact_modes = modes_below(&pattern, &a, &b, &mut chol, threshold, 1000).unwrap();
+    let start = Some(&exact_modes.vectors);
+    let warm = modes_below_by_subspace(&pattern, &a, &b, &mut chol, pencil, (64, 1), start);
+    let warm = warm.unwrap();
+    assert!(warm.complete);
+    assert_values_match(&warm.values, &exact[..count], rho);
+    assert_pairs_hold(&pattern, &a, &b, &warm);
 }
