@@ -7,7 +7,8 @@ mod common;
 
 use common::relative_difference;
 use std::path::Path;
-use tensolve::app::setup::{prepare, set_up};
+use tensolve::app::memory::Workload;
+use tensolve::app::setup::{prepare, prepare_keeping, set_up, Prepared};
 use tensolve::case::{self, Case};
 use tensolve::solvers::{Method, Silent, Solution, Status};
 
@@ -19,8 +20,12 @@ fn case(path: &str, set: &[&str]) -> Case {
 
 /// newton's answers at every α of `case`, each from the previous (as `run` sweeps).
 fn answers(case: &Case) -> Vec<(f64, Solution)> {
-    let prepared = prepare(case).unwrap();
-    let mut newton = set_up(Method::Newton, &case.solver, &prepared).unwrap();
+    answers_on(case, &prepare(case).unwrap())
+}
+
+/// [`answers`] on a set-up made already.
+fn answers_on(case: &Case, prepared: &Prepared) -> Vec<(f64, Solution)> {
+    let mut newton = set_up(Method::Newton, &case.solver, prepared).unwrap();
     let mut previous = None;
     case.load
         .alphas
@@ -44,10 +49,19 @@ fn agree(path: &str, set: &[&str]) -> Vec<usize> {
     let mut krylov_set = set.to_vec();
     krylov_set.push("solver.linear=\"krylov\"");
     let krylov = answers(&case(path, &krylov_set));
+    assert_same_answers(path, &direct, &krylov)
+}
+
+/// The assertions of [`agree`] on the rows `direct` and `krylov` of `path`.
+fn assert_same_answers(
+    path: &str,
+    direct: &[(f64, Solution)],
+    krylov: &[(f64, Solution)],
+) -> Vec<usize> {
     assert_eq!(direct.len(), krylov.len());
     direct
         .iter()
-        .zip(&krylov)
+        .zip(krylov)
         .map(|((alpha, d), (_, k))| {
             assert_eq!(d.info.status, k.info.status, "{path} at alpha {alpha}");
             assert_eq!(d.info.krylov_iterations, None);
@@ -101,6 +115,29 @@ fn a_64_grid_substructured_is_direct_newtons_in_few_pcg_iterations() {
     // The go/no-go measured 37 PCG iterations taut and 29 softened to 1e-8 per system; newton
     // takes about seven steps at forcing terms from 0.1 down.
     assert!(iterations[0] <= 400, "{iterations:?}");
+}
+
+/// A run of the substructured newton on a grid that asks for no check solving with K's factor
+/// never factorises K whole: its mechanism check is made by substructures and no factor is
+/// kept (direct newton's run keeps one), and newton's answers from that set-up are direct
+/// newton's.
+#[test]
+fn without_k_factor_the_substructured_newton_is_direct_newtons() {
+    let path = "cases/scale-64.toml";
+    let set = ["output.geometric_term=false", "load.alpha=[0.05, 0.15]"];
+    let direct_case = case(path, &set);
+    let krylov_case = case(path, &[set[0], set[1], "solver.linear=\"krylov\""]);
+    assert!(Workload::run(&direct_case, &[Method::Newton]).keeps_taut);
+    let work = Workload::run(&krylov_case, &[Method::Newton]);
+    assert!(!work.keeps_taut && work.taut_by_substructures, "{work:?}");
+    let prepared = prepare_keeping(&krylov_case, false).unwrap();
+    assert!(prepared.taut.is_none());
+    let krylov = answers_on(&krylov_case, &prepared);
+    let iterations = assert_same_answers(path, &answers(&direct_case), &krylov);
+    assert!(iterations.iter().all(|&i| i > 0), "{iterations:?}");
+    // With a check that solves with K's factor (the geometric term), the factor is kept.
+    let checked = case(path, &["solver.linear=\"krylov\""]);
+    assert!(Workload::run(&checked, &[Method::Newton]).keeps_taut);
 }
 
 #[test]

@@ -65,6 +65,20 @@ impl TautStiffness {
 }
 
 impl TautStiffness {
+    /// K's pattern, values and symbolic analysis, never factorised (`factor` holds the analysis
+    /// alone): for newton's substructured solve in a run whose mechanism check was made
+    /// substructure by substructure, which never factorises K whole.
+    pub fn unfactorised(model: &Model) -> TautStiffness {
+        let (pattern, factor) = Self::analyse(&model.structure);
+        let mut values = vec![0.0; pattern.nnz()];
+        model.assemble_tangent(&pattern, |_| true, &mut values);
+        TautStiffness {
+            pattern,
+            values,
+            factor,
+        }
+    }
+
     /// The refusal of `model`, whose K has `zero_modes` zero-stiffness modes, as
     /// [`TautStiffness::new`] gives it: for a check that found them without K's factor.
     pub fn refusal(model: &Model, zero_modes: usize) -> SetupError {

@@ -8,7 +8,7 @@ use crate::results::uniqueness;
 use crate::solvers::arc_length::{ArcLength, PathFollowing};
 use crate::solvers::large::{Large, LargeNewton, LinearisedStep};
 use crate::solvers::latin::{Latin, LatinSettings, LinkShare};
-use crate::solvers::newton::Newton;
+use crate::solvers::newton::{LinearSolve, Newton};
 use crate::solvers::pcg_lcp::PcgLcp;
 use crate::solvers::{
     check_shape, mechanism_by_substructures, AnySolver, LoadPath, Method, PathSolver, Settings,
@@ -286,10 +286,16 @@ pub fn set_up_on<'s>(
             };
             (Box::new(path), prepared.taut_seconds)
         }
-        Settings::Newton(settings) => (
-            Box::new(Newton::new(model, taut()?, settings)?),
-            prepared.taut_seconds,
-        ),
+        Settings::Newton(settings) => match prepared.taut.as_ref() {
+            // A run that never factorises K whole (its mechanism check by substructures).
+            None if settings.linear == LinearSolve::Krylov => {
+                (Box::new(Newton::substructured(model, settings)), 0.0)
+            }
+            _ => (
+                Box::new(Newton::new(model, taut()?, settings)?),
+                prepared.taut_seconds,
+            ),
+        },
         Settings::PcgLcp(settings) if model.updates_geometry() => {
             let step = LinearisedStep::pcg_lcp(settings);
             (large_path(model, step), 0.0)

@@ -3,7 +3,7 @@
 
 use crate::model::Model;
 use crate::solvers::latin::LatinSettings;
-use crate::solvers::newton::NewtonSettings;
+use crate::solvers::newton::{LinearSolve, NewtonSettings};
 use crate::solvers::pcg_lcp::PcgLcpSettings;
 use crate::solvers::{Method, Settings};
 use crate::structure::{Geometry, GridLayout, GridSpec, LoadPattern, Loading, NodeFix, Structure};
@@ -241,6 +241,19 @@ pub struct SolverChoice {
     pub reference: ReferenceChoice,
     /// Whether `solver.subdomains` was given (else the partition is the default's).
     pub subdomains_given: bool,
+}
+
+impl SolverChoice {
+    /// Whether `method` solves with the factor of K with every cable taut: pcg-lcp, and newton
+    /// but for its substructured solve (`solver.linear = "krylov"`, not under `auto`, whose
+    /// probe solves directly); the LATIN solvers never do.
+    pub fn solves_with_taut_factor(&self, method: Method, model_auto: bool) -> bool {
+        match method {
+            Method::Newton => model_auto || self.newton.linear == LinearSolve::Direct,
+            Method::PcgLcp => true,
+            Method::MonoLatin | Method::MicroMacro => false,
+        }
+    }
 }
 
 impl Default for SolverChoice {

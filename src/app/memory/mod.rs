@@ -198,7 +198,10 @@ impl Workload {
         if case.model_auto && !all.contains(&Method::Newton) {
             all.push(Method::Newton);
         }
-        let keeps_taut = AnswerChecks::of(case).any() || all.iter().any(|m| !m.is_latin());
+        let keeps_taut = AnswerChecks::of(case).any()
+            || all
+                .iter()
+                .any(|&m| case.solver.solves_with_taut_factor(m, case.model_auto));
         Workload {
             keeps_taut,
             taut_by_substructures: checks_by_substructures(case, keeps_taut),

@@ -19,14 +19,13 @@
 
 mod krylov;
 mod line_search;
+mod nearby;
 
 use super::{
     residual_stop, BalanceTolerances, Equilibrium, Measure, Progress, SetupError, Solver,
     TautStiffness,
 };
-use crate::linalg::{
-    dot, norm, preconditioned_cg, LowRankUpdate, SparseCholesky, SparseRow, StiffnessPattern, CHUNK,
-};
+use crate::linalg::{dot, LowRankUpdate, SparseCholesky, StiffnessPattern, CHUNK};
 use crate::model::material::{self, SlackRule};
 use crate::model::{unbalances_on, Model};
 pub use crate::solvers::arc_length::PathFollowing;
@@ -34,6 +33,7 @@ use crate::structure::Structure;
 use krylov::KrylovSolve;
 pub use krylov::LinearSolve;
 pub(crate) use line_search::{exact_line_search, EnergyAlongStep};
+use nearby::{Base, Factored};
 use rayon::prelude::*;
 
 /// Settings, each default written once, at its field.
@@ -100,43 +100,6 @@ pub struct NewtonWork {
 /// `newton_step`). Why quadratic and why 1e-8: docs/method.md, "Tuning log".
 const REGULARISATION: f64 = 1e-8;
 
-/// CG on a new Hessian, preconditioned by the factor of an earlier one corrected for the links
-/// whose state changed ([`LowRankUpdate`]), is tried when their taut sets differ by at most
-/// this many links (the correction costs one right-hand side per changed link; where it stops
-/// paying: docs/method.md, "Tuning log").
-const REUSE_MAX_CHANGED_LINKS: usize = 32;
-/// CG iterations allowed before giving up and refactorising (the corrected factor is exact but
-/// for the regularisations' difference: usually one or two iterations when it works).
-const REUSE_MAX_CG_ITERATIONS: usize = 8;
-/// Relative residual `‖H ΔU + ∇Π‖ ≤ tol · ‖∇Π‖` of a Newton step solved by CG, an inexact
-/// Newton forcing term: `tol = r²` clamped to [`REUSE_CG_TOLERANCE`, `REUSE_CG_LOOSEST`] with r
-/// the relative equilibrium residual of the iterate. A step solved to r² keeps Newton's
-/// quadratic convergence (the next residual is O(r²) either way), and saves a CG iteration
-/// on most steps (with μ = 1e-6 and a fixed 1e-12 before: paper case at α = 1, 4 iterations
-/// in its two CG steps instead of 6, the same five Newton steps).
-const REUSE_CG_TOLERANCE: f64 = 1e-12;
-/// The loosest forcing term (see [`REUSE_CG_TOLERANCE`]): far from the answer (r ≥ 1e-2) a
-/// step solved to 1e-4 is as good as an exact one. 1e-4 rather than 1e-8: with the smaller
-/// [`REGULARISATION`] the first CG iterate often meets it (paper case at α = 1: 2 CG
-/// iterations in its two CG steps instead of 4, the same five Newton steps).
-const REUSE_CG_LOOSEST: f64 = 1e-4;
-
-/// A factor the CG path can start from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Base {
-    /// The taut stiffness's (every link taut).
-    Taut,
-    /// `chol`'s, the last Hessian factored.
-    Last,
-}
-
-/// Which Hessian `chol` holds a factor of.
-#[derive(Debug, Clone)]
-struct Factored {
-    /// Per link: taut in that Hessian.
-    taut: Vec<bool>,
-}
-
 /// Stall: for this many iterations the residual has not fallen below half its best value and
 /// the slack set has not changed. Newton converges quadratically on a fixed taut set, so ten
 /// such steps mean it sits at round-off (issue 13, C7: `tolerance = 1e-15` ran all
@@ -152,7 +115,7 @@ pub const SPLIT_MIN_DOFS: usize = 100_000;
 pub struct Newton<'s> {
     model: &'s Model,
     structure: &'s Structure,
-    taut: &'s TautStiffness,
+    taut: Taut<'s>,
     settings: NewtonSettings,
     chol: SparseCholesky,
     /// What `chol` holds a factor of, if anything.
@@ -165,6 +128,30 @@ pub struct Newton<'s> {
     work: NewtonWork,
     /// The substructured solve, with `solver.linear = "krylov"`.
     krylov: Option<KrylovSolve>,
+}
+
+/// The taut stiffness newton solves with: the run's, factorised; or, for a substructured solve
+/// in a run that never factorises K whole, its own pattern and analysis, never factorised.
+enum Taut<'s> {
+    Factorised(&'s TautStiffness),
+    Unfactorised(Box<TautStiffness>),
+}
+
+impl Taut<'_> {
+    fn get(&self) -> &TautStiffness {
+        match self {
+            Taut::Factorised(taut) => taut,
+            Taut::Unfactorised(taut) => taut,
+        }
+    }
+
+    /// K's factor, where there is one.
+    fn factor(&self) -> Option<&SparseCholesky> {
+        match self {
+            Taut::Factorised(taut) => Some(&taut.factor),
+            Taut::Unfactorised(_) => None,
+        }
+    }
 }
 
 /// The iterate.
@@ -196,21 +183,35 @@ impl<'s> Newton<'s> {
         taut: &'s TautStiffness,
         settings: NewtonSettings,
     ) -> Result<Self, SetupError> {
+        Ok(Self::with(model, Taut::Factorised(taut), settings))
+    }
+
+    /// Set up with `solver.linear = "krylov"` without K's factor, on a model whose mechanism
+    /// check was made substructure by substructure: K's pattern and analysis of its own, for
+    /// the steps a subdomain factor cannot solve (factorised only then).
+    pub fn substructured(model: &'s Model, settings: NewtonSettings) -> Self {
+        debug_assert_eq!(settings.linear, LinearSolve::Krylov);
+        let taut = Taut::Unfactorised(Box::new(TautStiffness::unfactorised(model)));
+        Self::with(model, taut, settings)
+    }
+
+    fn with(model: &'s Model, taut: Taut<'s>, settings: NewtonSettings) -> Self {
         let structure = &model.structure;
-        Ok(Newton {
+        let k = taut.get();
+        Newton {
             model,
             structure,
-            taut,
-            settings,
-            chol: hessian_factor(taut, structure.n_free),
+            chol: hessian_factor(k, structure.n_free),
             factored: None,
             correction: (Base::Taut, LowRankUpdate::none(structure.n_free)),
-            hessian: vec![0.0; taut.values.len()],
-            mean_stiffness: taut.pattern.mean_diagonal(&taut.values),
+            hessian: vec![0.0; k.values.len()],
+            mean_stiffness: k.pattern.mean_diagonal(&k.values),
             work: NewtonWork::default(),
             krylov: (settings.linear == LinearSolve::Krylov)
                 .then(|| KrylovSolve::new(model, settings.subdomains)),
-        })
+            taut,
+            settings,
+        }
     }
 
     /// Whether the Hessian is factored in two halves side by side (a second thread and at
@@ -260,7 +261,6 @@ impl<'s> Newton<'s> {
     /// factorized.
     fn newton_step(&mut self, state: &NewtonState, step: &mut [f64]) {
         let s = self.structure;
-        let pattern = &self.taut.pattern;
         self.work.steps += 1;
         let taut_links: Vec<bool> = s
             .links
@@ -278,9 +278,9 @@ impl<'s> Newton<'s> {
                 return;
             }
         }
-        if taut_links.iter().all(|&t| t) {
+        if let Some(factor) = self.taut.factor().filter(|_| taut_links.iter().all(|&t| t)) {
             self.work.taut_steps += 1;
-            self.taut.factor.solve_in_place(step);
+            factor.solve_in_place(step);
             return;
         }
         if self.settings.reuse_factor
@@ -288,6 +288,7 @@ impl<'s> Newton<'s> {
         {
             return;
         }
+        let pattern = &self.taut.get().pattern;
         assemble_hessian(self.model, pattern, &taut_links, mu, &mut self.hessian);
         let mut added = mu;
         loop {
@@ -306,74 +307,6 @@ impl<'s> Newton<'s> {
             self.correction.1 = LowRankUpdate::none(self.structure.n_free);
         }
         self.chol.solve_in_place(step);
-    }
-
-    /// `step ← H⁻¹ step`, `H = Σ_taut k Bᵢᵀ Bᵢ + μ I`, by CG preconditioned by whichever factor
-    /// (the last Hessian's, or K's) has the taut set closest to `taut_links`, corrected for the
-    /// links that differ, if they are few enough and CG converges within its cap. H is applied
-    /// link by link, never assembled (a product costs less than an assembly). `false`: nothing
-    /// was solved, `step` is untouched.
-    fn solve_with_nearby_factor(
-        &mut self,
-        taut_links: &[bool],
-        mu: f64,
-        step: &mut [f64],
-        residual: f64,
-    ) -> bool {
-        let (model, s) = (self.model, self.structure);
-        let changed = |other: &[bool]| -> usize {
-            other.iter().zip(taut_links).filter(|(a, b)| a != b).count()
-        };
-        let from_taut = taut_links.iter().filter(|&&t| !t).count();
-        let from_last = self.factored.as_ref().map(|f| changed(&f.taut));
-        let (changed_links, base) = match from_last {
-            Some(c) if c <= from_taut => (c, Base::Last),
-            _ => (from_taut, Base::Taut),
-        };
-        if changed_links > REUSE_MAX_CHANGED_LINKS {
-            return false;
-        }
-        let (factor, base_taut): (&SparseCholesky, Option<&[bool]>) = match base {
-            Base::Last => (&self.chol, self.factored.as_ref().map(|f| &f.taut[..])),
-            Base::Taut => (&self.taut.factor, None),
-        };
-        // H = H_base + Σ ± kᵢ uᵢ uᵢᵀ over the links that changed: + taut now, − slack now.
-        let wanted: Vec<(usize, &SparseRow, f64)> = taut_links
-            .iter()
-            .enumerate()
-            .filter(|&(i, &now)| base_taut.is_none_or(|b| b[i]) != now)
-            .map(|(i, &now)| {
-                let k = s.links[i].stiffness;
-                (i, &s.link_dofs[i], if now { k } else { -k })
-            })
-            .collect();
-        if self.correction.0 != base {
-            self.correction = (base, LowRankUpdate::none(s.n_free));
-        }
-        let correction = &mut self.correction.1;
-        self.work.correction_columns += correction.update(factor, &wanted);
-        if !correction.is_solvable() {
-            return false;
-        }
-        let correction = &self.correction.1;
-        let rhs = step.to_vec();
-        let mut solution = vec![0.0; rhs.len()];
-        let outcome = preconditioned_cg(
-            |v, out| model.tangent_product(taut_links, mu, v, out),
-            |z| correction.solve_in_place(factor, z),
-            &rhs,
-            &mut solution,
-            (residual * residual).clamp(REUSE_CG_TOLERANCE, REUSE_CG_LOOSEST),
-            REUSE_MAX_CG_ITERATIONS,
-        );
-        self.work.cg_iterations += outcome.iterations;
-        if outcome.converged && solution.iter().all(|x| x.is_finite()) && norm(&solution) > 0.0 {
-            self.work.reused_steps += 1;
-            step.copy_from_slice(&solution);
-            true
-        } else {
-            false
-        }
     }
 
     /// A state at displacements `u` for `load`, evaluated.

@@ -1,6 +1,7 @@
 //! The Hessian newton assembles against the product CG uses.
 
 use super::*;
+use crate::linalg::norm;
 use crate::structure::{GridSpec, LoadPattern};
 
 /// The link-by-link product CG uses is the one of the Hessian a factorization gets, for a
