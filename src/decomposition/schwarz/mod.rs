@@ -38,12 +38,14 @@ pub struct SchwarzSettings {
     /// GenEO's threshold τ: a subdomain keeps the vectors with λ < τ. The condition number is
     /// bounded by about `(1 + k₀)(2 + k₀(2k₀ + 1)/τ)`, k₀ the most subdomains sharing a dof.
     /// Default 0.1 (κ ≈ 9–10 measured with 0.25 on 16 to 256 substructures, taut and
-    /// softened; 0.1 keeps about 40 vectors a subdomain against 77, for 1.4× the PCG
-    /// iterations: docs/performance.md, "Toward the exact answer at any size").
+    /// softened; 0.1 keeps about 40 vectors a subdomain against 77, for 1.5–1.9× the PCG
+    /// iterations, and a count that doubles from 256 to 1024 substructures: docs/performance.md,
+    /// "Toward the exact answer at any size").
     pub tau: f64,
     /// How the GenEO vectors are found. Default a subspace iteration of 64 vectors, 4 sweeps
-    /// from a random block and 2 from the last vectors: on 128 × 128 modules 4.3× faster than
-    /// the exact pairs for the same PCG iterations (docs/performance.md).
+    /// from a random block and 2 from the last vectors: with τ 0.1, on 128 × 128 modules 3.7×
+    /// faster than the exact pairs at τ 0.25, for 145 PCG iterations against 75
+    /// (docs/performance.md).
     pub geneo: GeneoSolve,
     /// The most GenEO vectors a subdomain keeps. Default 400.
     pub max_modes: usize,
