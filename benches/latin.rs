@@ -19,7 +19,10 @@
 //! α 0.000625, `-- atscale quick` stops at 256): micro-macro's iterations, rebuilds, η and r(U)
 //! at the stop, set-up and solve seconds; the bilateral count (`cables.unilateral = false`) on
 //! the same partition; newton's iterations and seconds and e of micro-macro against newton
-//! (up to 512 × 512). Run it with `RAYON_NUM_THREADS` set to compare thread counts.
+//! (up to 512 × 512), and newton substructured (`solver.linear = "krylov"`, K never factorised
+//! whole): its PCG iterations over all Newton steps, Newton steps and seconds, its slack set
+//! checked against direct newton's. Run it with `RAYON_NUM_THREADS` set to compare thread
+//! counts.
 //!
 //! `cargo bench --bench latin -- factor [SIDE]` times K's factor on SIDE × SIDE modules (256:
 //! 590 k free dofs), in newton's own order, with faer's parallelism `Par::rayon(t)`, t = 1, 2,
@@ -309,9 +312,9 @@ fn atscale(args: &[String]) {
     }
     println!("threads: {}", rayon::current_num_threads());
     println!(
-        "| grid | partition (default) | micro-macro iterations (rebuilds) | η, r(U) at stop | bilateral | set-up s | solve s | newton iterations, s | e vs newton |"
+        "| grid | partition (default) | micro-macro iterations (rebuilds) | η, r(U) at stop | bilateral | set-up s | solve s | newton iterations, s | e vs newton | newton krylov: PCG (steps), s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for (n, alpha) in grids {
         let case_text = |extra: &str| {
             format!(
@@ -327,20 +330,38 @@ fn atscale(args: &[String]) {
         let model = case.model();
         let load = model.load(alpha);
         let row = scale_row(&model, settings, &load);
-        let (newton, error) = if n <= 512 {
+        let (newton, error, krylov) = if n <= 512 {
             let clock = std::time::Instant::now();
             let taut = TautStiffness::new(&model).expect("regular");
             let answer = Newton::new(&model, &taut, NewtonSettings::default())
                 .expect("newton")
                 .solve(&load, None, &mut Silent);
             let seconds = clock.elapsed().as_secs_f64();
+            drop(taut);
             let reference = Reference::new(&model, &answer.equilibrium.displacements);
+            // Substructured, on the case's default partition, without K's factor.
+            let krylov_case =
+                tensolve::case::parse(&format!("{}linear = \"krylov\"\n", case_text("")))
+                    .expect("case");
+            let clock = std::time::Instant::now();
+            let krylov = Newton::substructured(&model, krylov_case.solver.newton).solve(
+                &load,
+                None,
+                &mut Silent,
+            );
+            let krylov_seconds = clock.elapsed().as_secs_f64();
+            assert_eq!(krylov.equilibrium.slack, answer.equilibrium.slack);
             (
                 format!("{}, {seconds:.2}", answer.info.iterations),
                 format!("{:.1e}", reference.error(&row.elongations)),
+                format!(
+                    "{} ({}), {krylov_seconds:.2}",
+                    krylov.info.krylov_iterations.unwrap_or(0),
+                    krylov.info.iterations
+                ),
             )
         } else {
-            ("–".to_string(), "–".to_string())
+            ("–".to_string(), "–".to_string(), "–".to_string())
         };
         drop(model);
         let bilateral_case =
@@ -349,7 +370,7 @@ fn atscale(args: &[String]) {
         let bilateral = scale_row(&bilateral_model, settings, &load);
         let [sx, sy] = settings.subdomains;
         println!(
-            "| {n} × {n} | {} of {} × {} ({sx} × {sy}) | {}{} ({}) | {:.1e}, {:.1e} | {}{} | {:.2} | {:.2} | {newton} | {error} |",
+            "| {n} × {n} | {} of {} × {} ({sx} × {sy}) | {}{} ({}) | {:.1e}, {:.1e} | {}{} | {:.2} | {:.2} | {newton} | {error} | {krylov} |",
             sx * sy,
             n / sx,
             n / sy,
