@@ -188,8 +188,12 @@ impl Coarse {
                     return false;
                 };
                 for p in first..block.nrows() {
-                    debug_assert_eq!(pattern.row_idx[slot + p - first], row0 + p);
-                    matrix.values[slot + p - first] += block[(p, q)];
+                    let at = slot + p - first;
+                    // E's blocks are whole: a gap would mean another pattern (made anew then).
+                    if at >= pattern.col_ptr[col + 1] || pattern.row_idx[at] != row0 + p {
+                        return false;
+                    }
+                    matrix.values[at] += block[(p, q)];
                 }
             }
         }
