@@ -292,17 +292,23 @@ mod tests {
     use crate::linalg::preconditioned_cg;
     use crate::structure::{GridSpec, LoadPattern};
 
-    /// A link that changes state refactorises the subdomains holding it; their GenEO vectors
-    /// are found anew only past `keep_vectors`; either way PCG solves `H x = b` to 1e-10 in
-    /// far fewer iterations than the dofs.
-    #[test]
-    fn changed_links_refresh_their_subdomains_and_pcg_converges() {
+    /// An 8 × 8 grid on a 2 × 2 partition.
+    fn eight_by_eight_on_four() -> (Structure, Partition) {
         let spec = GridSpec {
             modules: [8, 8],
             ..GridSpec::default()
         };
         let s = Structure::grid(&spec, &LoadPattern::default());
         let partition = Partition::new(&s, [2, 2], WeakInterfaces::Macro);
+        (s, partition)
+    }
+
+    /// A link that changes state refactorises the subdomains holding it; their GenEO vectors
+    /// are found anew only past `keep_vectors`; either way PCG solves `H x = b` to 1e-10 in
+    /// far fewer iterations than the dofs.
+    #[test]
+    fn changed_links_refresh_their_subdomains_and_pcg_converges() {
+        let (s, partition) = eight_by_eight_on_four();
         let mut weights: Vec<f64> = s.links.iter().map(|l| l.stiffness).collect();
         let mu = 1e-8 * weights.iter().sum::<f64>() / weights.len() as f64;
         let cable = s.links.iter().position(|l| l.unilateral).unwrap();
@@ -346,12 +352,7 @@ mod tests {
     /// weights, to 1e-12 of its largest entry, after cables go slack and after they come back.
     #[test]
     fn the_updated_coarse_matrix_equals_one_made_anew() {
-        let spec = GridSpec {
-            modules: [8, 8],
-            ..GridSpec::default()
-        };
-        let s = Structure::grid(&spec, &LoadPattern::default());
-        let partition = Partition::new(&s, [2, 2], WeakInterfaces::Macro);
+        let (s, partition) = eight_by_eight_on_four();
         let settings = SchwarzSettings {
             keep_vectors: 1.0,
             ..SchwarzSettings::default()

@@ -66,7 +66,7 @@ pub fn modes_below_by_subspace(
             let cols = x.len() / n;
             chol.solve_block_in_place(MatMut::from_column_major_slice_mut(&mut x, n, cols));
             let bx = apply(pattern, b, &x, n);
-            let (w, bw) = b_orthonormal(x, bx, n);
+            let (w, bw) = b_orthonormal(&x, &bx, n);
             let mut basis = Basis::new(n);
             basis.append(pattern, a, w, bw);
             let (theta, u) = symmetric_eigen(basis.h.as_ref()).ok_or(refused)?;
@@ -97,16 +97,19 @@ pub fn modes_below_by_subspace(
 /// B-norm, then combined by the eigenvectors of their Gram matrix, `X ← X U D^{-1/2}`; a
 /// column of zero or non-finite B-norm and a direction of the Gram matrix at
 /// `GRAM_DEPENDENT` of its largest or less are dropped. B times the result with it.
-fn b_orthonormal(x: Vec<f64>, bx: Vec<f64>, n: usize) -> (Vec<f64>, Vec<f64>) {
-    let norms = b_norms(&x, &bx, n);
+fn b_orthonormal(x: &[f64], bx: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let norms = b_norms(x, bx, n);
     let kept: Vec<usize> = (0..norms.len())
         .filter(|&j| norms[j] > 0.0 && norms[j].is_finite())
         .collect();
-    let (mut xs, mut bxs) = (Vec::with_capacity(kept.len() * n), Vec::new());
-    bxs.reserve(kept.len() * n);
-    for &j in &kept {
-        xs.extend(x[j * n..(j + 1) * n].iter().map(|v| v / norms[j]));
-        bxs.extend(bx[j * n..(j + 1) * n].iter().map(|v| v / norms[j]));
-    }
-    combine_by_gram(&xs, &bxs, n).map_or((Vec::new(), Vec::new()), |(w, bw, _)| (w, bw))
+    let scaled = |v: &[f64]| -> Vec<f64> {
+        kept.iter()
+            .flat_map(|&j| {
+                let norm = norms[j];
+                v[j * n..(j + 1) * n].iter().map(move |e| e / norm)
+            })
+            .collect()
+    };
+    combine_by_gram(&scaled(x), &scaled(bx), n)
+        .map_or((Vec::new(), Vec::new()), |(w, bw, _)| (w, bw))
 }
