@@ -18,8 +18,18 @@ use crate::case::Case;
 use crate::host::bytes_text;
 use crate::linalg::factor_bytes;
 use crate::solvers::latin::LatinSettings;
+use crate::solvers::newton::LinearSolve;
 use crate::solvers::Method;
 use crate::structure::StructureSize;
+
+/// What newton substructured (`solver.linear = "krylov"`) holds per dof of the structure at the
+/// default Schwarz settings, in place of a factor of K: the overlapping subdomains' factors,
+/// their GenEO vectors and the work of finding them, the coarse matrix's factor and K's kept
+/// analysis. Peak RSS of `tensolve run` less the structure, reference none,
+/// `geometric_term = false` (2026-12-07, two threads): 3.6 / 4.2 / 4.35 kB per dof on
+/// 64 × 64 / 128 × 128 / 256 × 256 (16 / 64 / 256 subdomains), rising with the coarse
+/// matrix; 4.8 holds 512 × 512's 13.5 GB.
+const KRYLOV_BYTES_PER_DOF: u64 = 4_800;
 
 /// The whole-structure factors of `methods`, in units of K's: every solver's but
 /// micro-macro's, which it counts itself ([`Method::own_bytes`]).
@@ -56,6 +66,9 @@ pub struct Workload {
     /// micro-macro's settings (partition, Anderson depth, `keep_z`), for its memory when it
     /// is among `methods`.
     pub micro_macro: LatinSettings,
+    /// How newton solves its Newton systems: a factor of K (counted in units of K's factor),
+    /// or on the substructures ([`KRYLOV_BYTES_PER_DOF`]).
+    pub newton_linear: LinearSolve,
 }
 
 /// The estimated peak memory of a command on a structure, by part.
@@ -80,12 +93,19 @@ impl MemoryEstimate {
         let latin = work.methods.iter().any(|m| m.is_latin());
         // The solvers' own memory, as each estimates it: whole-structure factors in units of
         // K's (micro-macro's counted in bytes, from its substructures).
+        let krylov = work.newton_linear == LinearSolve::Krylov;
+        let factored =
+            |m: &&Method| **m != Method::MicroMacro && !(krylov && **m == Method::Newton);
         let solvers = work
             .methods
             .iter()
-            .filter(|&&m| m != Method::MicroMacro)
+            .filter(factored)
             .map(|m| m.factor_units_at(size.dofs()))
             .sum::<f64>();
+        let substructured = match krylov && work.methods.contains(&Method::Newton) {
+            true => KRYLOV_BYTES_PER_DOF * size.dofs() as u64,
+            false => 0,
+        };
         let micro = work
             .methods
             .iter()
@@ -94,16 +114,16 @@ impl MemoryEstimate {
         // K with every cable taut (the mechanism check) is factorized unless the check is made
         // by substructures; released, it is gone before the solvers' factors are built.
         let taut = !work.taut_by_substructures;
-        let solver_bytes = solvers * factor as f64 + micro as f64;
+        let solver_bytes = solvers * factor as f64 + (micro + substructured) as f64;
         let check_alone = !work.keeps_taut && taut && factor as f64 > solver_bytes;
         let mut units = match (work.keeps_taut, taut) {
             (true, true) => 1.0 + solvers,
             _ if check_alone => 1.0,
             _ => solvers,
         };
-        let mut micro_parts = match check_alone {
-            true => 0,
-            false => micro,
+        let (mut micro_parts, substructured) = match check_alone {
+            true => (0, 0),
+            false => (micro, substructured),
         };
         if work.stability {
             units += 1.0;
@@ -120,7 +140,7 @@ impl MemoryEstimate {
             .chain(
                 work.methods
                     .iter()
-                    .filter(|&&m| m != Method::MicroMacro && !check_alone)
+                    .filter(|m| factored(m) && !check_alone)
                     .map(|m| m.name()),
             )
             .collect();
@@ -140,7 +160,13 @@ impl MemoryEstimate {
                 micro_parts,
             ));
         }
-        let units = units + micro_parts as f64 / factor as f64;
+        if substructured > 0 {
+            parts.push((
+                "newton substructured (subdomain factors, GenEO vectors, coarse matrix)".into(),
+                substructured,
+            ));
+        }
+        let units = units + (micro_parts + substructured) as f64 / factor as f64;
         if work.rank_factorization {
             // Freed before the solvers' set-up: counted when larger than what follows it.
             let rank = factor_bytes(size.dofs(), true);
@@ -206,6 +232,7 @@ impl Workload {
             keeps_taut,
             taut_by_substructures: checks_by_substructures(case, keeps_taut),
             micro_macro: case.solver.latin,
+            newton_linear: case.solver.newton.linear,
             methods: all,
             stability: case.output.stability,
             compare_modules: case.output.plots && !case.output.compare_modules.is_empty(),
@@ -233,6 +260,7 @@ impl Workload {
             keeps_taut: !by_substructures,
             taut_by_substructures: by_substructures,
             micro_macro: case.solver.latin,
+            newton_linear: case.solver.newton.linear,
         }
     }
 
@@ -255,6 +283,7 @@ impl Workload {
             keeps_taut: true,
             taut_by_substructures: false,
             micro_macro: case.solver.latin,
+            newton_linear: case.solver.newton.linear,
         }
     }
 }
