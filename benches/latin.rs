@@ -484,7 +484,7 @@ fn factor_table(args: &[String]) {
         // What newton uses on two threads: the halves side by side, then the separator.
         let mut split = taut
             .factor
-            .share_symbolic_split(pattern)
+            .share_symbolic_split(pattern, 1)
             .expect("a top-level split");
         let halves = median3(|| split.factorize(pattern, &taut.values).expect("spd"));
         println!(

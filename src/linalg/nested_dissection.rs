@@ -22,15 +22,49 @@ pub fn nested_dissection(
     nested_dissection_split(offsets, neighbours, coordinates).0
 }
 
-/// [`nested_dissection`], and the sizes of the top level's two parts: the order is the first
-/// part's vertices, then the second's, then the top separator's (`None`: no split).
+/// Levels of the dissection tree kept for a factor split side by side ([`SplitTree`]): 16
+/// subtrees, as many as threads on the largest machine measured.
+const TREE_LEVELS: usize = 4;
+
+/// The top levels of a nested dissection: the sizes of a part's two halves (in its order the
+/// first half, the second, then their separator), and each half's own split.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SplitTree {
+    /// The two halves' sizes.
+    pub parts: [usize; 2],
+    /// Each half's split (`None`: not split, or below the levels kept).
+    pub children: [Option<Box<SplitTree>>; 2],
+}
+
+impl SplitTree {
+    /// The same tree in other units: a part of `k` vertices at position `p` of the order
+    /// becomes `size(p, k)`.
+    pub fn measured(&self, at: usize, size: &impl Fn(usize, usize) -> usize) -> SplitTree {
+        let [a, b] = self.parts;
+        let child = |c: &Option<Box<SplitTree>>, at: usize| {
+            c.as_ref().map(|c| Box::new(c.measured(at, size)))
+        };
+        SplitTree {
+            parts: [size(at, a), size(at + a, b)],
+            children: [
+                child(&self.children[0], at),
+                child(&self.children[1], at + a),
+            ],
+        }
+    }
+}
+
+/// [`nested_dissection`], and its top levels' splits: the order is the first part's vertices,
+/// then the second's, then the top separator's (`None`: no split).
 pub fn nested_dissection_split(
     offsets: &[usize],
     neighbours: &[usize],
     coordinates: &[[f64; 3]],
-) -> (Vec<usize>, Option<[usize; 2]>) {
+) -> (Vec<usize>, Option<SplitTree>) {
     let n = coordinates.len();
-    let mut top = None;
+    // Per task of the top levels (task 0 the whole graph): its parts' sizes and its halves'
+    // tasks, as they are split.
+    let mut splits: Vec<Option<([usize; 2], [usize; 2])>> = vec![None];
     let mut order = Vec::with_capacity(n);
     // region[v]: the part v currently belongs to; a vertex is only split from vertices of its
     // own part.
@@ -38,17 +72,18 @@ pub fn nested_dissection_split(
     let mut next_region = 1;
     // Explicit stack: (vertices, separator to emit after them), emitted in post-order.
     enum Task {
-        Split(Vec<usize>),
+        /// Vertices, their task in `splits` and their level (0: the whole graph).
+        Split(Vec<usize>, usize, usize),
         Emit(Vec<usize>),
     }
-    let mut stack = vec![Task::Split((0..n).collect())];
-    while let Some(task) = stack.pop() {
-        let vertices = match task {
+    let mut stack = vec![Task::Split((0..n).collect(), 0, 0)];
+    while let Some(next) = stack.pop() {
+        let (vertices, task, level) = match next {
             Task::Emit(vertices) => {
                 order.extend_from_slice(&vertices);
                 continue;
             }
-            Task::Split(vertices) => vertices,
+            Task::Split(vertices, task, level) => (vertices, task, level),
         };
         if vertices.len() <= LEAF {
             order.extend_from_slice(&vertices);
@@ -120,15 +155,28 @@ pub fn nested_dissection_split(
             order.extend_from_slice(&vertices);
             continue;
         }
-        if vertices.len() == n {
-            top = Some([left.len(), right.len()]);
+        let mut halves = [usize::MAX; 2];
+        if level < TREE_LEVELS && task != usize::MAX {
+            halves = [splits.len(), splits.len() + 1];
+            splits.extend([None, None]);
+            splits[task] = Some(([left.len(), right.len()], halves));
         }
         // Popped in reverse: left, then right, then the separator.
         stack.push(Task::Emit(separator));
-        stack.push(Task::Split(right));
-        stack.push(Task::Split(left));
+        stack.push(Task::Split(right, halves[1], level + 1));
+        stack.push(Task::Split(left, halves[0], level + 1));
     }
-    (order, top)
+    (order, tree(&splits, 0))
+}
+
+/// The tree of `splits` from `task` down.
+fn tree(splits: &[Option<([usize; 2], [usize; 2])>], task: usize) -> Option<SplitTree> {
+    let (parts, [a, b]) = splits.get(task).copied().flatten()?;
+    let child = |t: usize| tree(splits, t).map(Box::new);
+    Some(SplitTree {
+        parts,
+        children: [child(a), child(b)],
+    })
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! ordered by approximate minimum degree or by nested dissection from the nodes' coordinates,
 //! expanded back to the dofs. [`super::SparseCholesky`] analyses a pattern in this order.
 
-use super::nested_dissection::nested_dissection_split;
+use super::nested_dissection::{nested_dissection_split, SplitTree};
 use super::StiffnessPattern;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::amd;
@@ -20,6 +20,15 @@ pub enum NodeOrdering<'a> {
     /// i.e. per three dofs), [`nested_dissection`](super::nested_dissection); falls back to
     /// AMD if the count differs.
     NestedDissection(&'a [[f64; 3]]),
+    /// Nested dissection of a pattern of dense blocks of any size (a coarse matrix: one block
+    /// per subdomain), block `k` the dofs `offsets[k]..offsets[k + 1]` at `centres[k]`;
+    /// falls back to AMD if the counts differ.
+    Blocks {
+        /// Block k's dofs are `offsets[k]..offsets[k + 1]` (one more entry than blocks).
+        offsets: &'a [usize],
+        /// Block k's position.
+        centres: &'a [[f64; 3]],
+    },
     /// The pattern's own order (a pattern already ordered, such as a half of a split factor).
     Given,
 }
@@ -63,13 +72,18 @@ fn node_graph(p: &StiffnessPattern) -> (Vec<usize>, Vec<usize>) {
 }
 
 /// The dof permutation (forward, inverse) of `ordering` on `p`'s node graph, and with nested
-/// dissection the dof counts of its top level's two parts (the separator after them).
+/// dissection its top levels' splits in dofs (each part's separator after its two halves).
 pub(super) fn node_ordering(
     p: &StiffnessPattern,
     ordering: NodeOrdering<'_>,
-) -> (Vec<usize>, Vec<usize>, Option<[usize; 2]>) {
+) -> (Vec<usize>, Vec<usize>, Option<SplitTree>) {
     let n = p.n;
     let identity = || ((0..n).collect(), (0..n).collect(), None);
+    if let NodeOrdering::Blocks { offsets, centres } = ordering {
+        if offsets.len() == centres.len() + 1 && offsets.last() == Some(&n) {
+            return block_ordering(p, offsets, centres);
+        }
+    }
     if !n.is_multiple_of(3) || n == 0 || matches!(ordering, NodeOrdering::Given) {
         return identity();
     }
@@ -78,8 +92,8 @@ pub(super) fn node_ordering(
     let mut top = None;
     let perm = match ordering {
         NodeOrdering::NestedDissection(xy) if xy.len() == nodes => {
-            let (order, parts) = nested_dissection_split(&offsets, &neighbours, xy);
-            top = parts.map(|[a, b]| [3 * a, 3 * b]);
+            let (order, tree) = nested_dissection_split(&offsets, &neighbours, xy);
+            top = tree.map(|t| t.measured(0, &|_, k| 3 * k));
             order
         }
         _ => {
@@ -110,4 +124,52 @@ pub(super) fn node_ordering(
             .collect()
     };
     (expand(&perm), expand(&perm_inv), top)
+}
+
+/// [`NodeOrdering::Blocks`]: nested dissection of the block graph (two blocks adjacent where an
+/// entry couples them), expanded to the dofs block by block.
+fn block_ordering(
+    p: &StiffnessPattern,
+    offsets: &[usize],
+    centres: &[[f64; 3]],
+) -> (Vec<usize>, Vec<usize>, Option<SplitTree>) {
+    let blocks = centres.len();
+    let mut block_of = vec![0usize; p.n];
+    for k in 0..blocks {
+        block_of[offsets[k]..offsets[k + 1]].fill(k);
+    }
+    let mut adjacent: Vec<Vec<usize>> = vec![Vec::new(); blocks];
+    for c in 0..p.n {
+        for &r in &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]] {
+            let (a, b) = (block_of[r], block_of[c]);
+            if a != b {
+                adjacent[a].push(b);
+                adjacent[b].push(a);
+            }
+        }
+    }
+    let mut graph_offsets = vec![0usize];
+    let mut neighbours = Vec::new();
+    for list in &mut adjacent {
+        list.sort_unstable();
+        list.dedup();
+        neighbours.extend_from_slice(list);
+        graph_offsets.push(neighbours.len());
+    }
+    let (block_order, tree) = nested_dissection_split(&graph_offsets, &neighbours, centres);
+    // Dofs of the blocks at positions at..at + k of the block order.
+    let mut before = vec![0usize; blocks + 1];
+    for (i, &k) in block_order.iter().enumerate() {
+        before[i + 1] = before[i] + offsets[k + 1] - offsets[k];
+    }
+    let tree = tree.map(|t| t.measured(0, &|at, k| before[at + k] - before[at]));
+    let order: Vec<usize> = block_order
+        .iter()
+        .flat_map(|&k| offsets[k]..offsets[k + 1])
+        .collect();
+    let mut inverse = vec![0usize; p.n];
+    for (k, &d) in order.iter().enumerate() {
+        inverse[d] = k;
+    }
+    (order, inverse, tree)
 }

@@ -13,6 +13,7 @@
 //! second thread to the elimination tree's two halves. Not faer's own code: a block
 //! elimination (substructuring) around two of its factors and a dense one.
 
+use super::nested_dissection::SplitTree;
 use super::{NodeOrdering, NotPositiveDefinite, SparseCholesky, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
@@ -38,7 +39,7 @@ struct Half {
     offset: usize,
     len: usize,
     pattern: StiffnessPattern,
-    factor: SparseCholesky,
+    factor: HalfFactor,
     /// Per slot of K, its slot in the half's values ([`NONE`]: not in the half).
     slot: Vec<u32>,
     /// `T_h`, the trailing |S| × |S| block of L(M_h) (lower), and `T_h T_hᵀ` (its lower
@@ -47,6 +48,18 @@ struct Half {
     gram: Mat<f64>,
     /// M_h's values, kept between factorizations.
     values: Vec<f64>,
+}
+
+/// A half's factor: faer's, or the half split again at the next level of the tree (its own
+/// two halves and the separator of both levels, `S_h ∪ S`, dense), in the half's own order.
+#[derive(Clone)]
+enum HalfFactor {
+    Whole(SparseCholesky),
+    Split {
+        split: Box<SplitCholesky>,
+        /// The identity order of the half, which the split's solves take.
+        identity: Vec<usize>,
+    },
 }
 
 /// K in two halves and a separator (module doc).
@@ -64,15 +77,18 @@ pub(super) struct SplitCholesky {
 
 impl SplitCholesky {
     /// The split of `pattern` in the order whose inverse is `inverse` (`inverse[d]`: the
-    /// position of dof d) and whose first `parts[0]` positions are A, the next `parts[1]` B. `None` when the order's
-    /// top level is not such a split (an entry couples A with B, or a part is empty).
+    /// position of dof d) and whose first `tree.parts[0]` positions are A, the next
+    /// `tree.parts[1]` B, each half split again by its subtree down to `levels` levels. `None`
+    /// when the order's top level is not such a split (an entry couples A with B, or a part
+    /// is empty); a half whose own split fails is factored whole.
     pub(super) fn new(
         pattern: &StiffnessPattern,
         inverse: &[usize],
-        parts: [usize; 2],
+        tree: &SplitTree,
+        levels: usize,
     ) -> Option<SplitCholesky> {
         let n = pattern.n;
-        let (a, b) = (parts[0], parts[1]);
+        let [a, b] = tree.parts;
         let s0 = a + b;
         if a == 0 || b == 0 || s0 >= n || n - s0 > MAX_SEPARATOR {
             return None;
@@ -136,8 +152,21 @@ impl SplitCholesky {
                     }
                 }
             }
-            let factor =
-                SparseCholesky::analyse_ordered(&half_pattern, Par::Seq, NodeOrdering::Given);
+            let identity: Vec<usize> = (0..size).collect();
+            let below = tree.children[h].as_deref().filter(|_| levels > 1);
+            let factor = match below
+                .and_then(|t| SplitCholesky::new(&half_pattern, &identity, t, levels - 1))
+            {
+                Some(split) => HalfFactor::Split {
+                    split: Box::new(split),
+                    identity,
+                },
+                None => HalfFactor::Whole(SparseCholesky::analyse_ordered(
+                    &half_pattern,
+                    Par::Seq,
+                    NodeOrdering::Given,
+                )),
+            };
             Half {
                 offset: offsets[h],
                 len: lens[h],
@@ -158,6 +187,19 @@ impl SplitCholesky {
             schur: Mat::zeros(0, 0),
             factorized: false,
         })
+    }
+
+    /// The levels of the tree this split factors side by side (1: two halves).
+    pub(super) fn levels(&self) -> usize {
+        1 + self
+            .halves
+            .iter()
+            .map(|h| match &h.factor {
+                HalfFactor::Whole(_) => 0,
+                HalfFactor::Split { split, .. } => split.levels(),
+            })
+            .max()
+            .unwrap_or(0)
     }
 
     /// `K = L Lᵀ` for K's `values` (on the pattern it was split from): the two halves side
@@ -277,12 +319,22 @@ impl Half {
                 self.values[slot as usize] = v;
             }
         }
-        self.factor
-            .factorize(&self.pattern, &self.values)
-            .map_err(|e| NotPositiveDefinite {
-                pivot: self.offset + e.pivot,
-            })?;
-        trailing_block(&self.factor, self.len, &mut self.trailing);
+        let factored = match &mut self.factor {
+            HalfFactor::Whole(factor) => factor.factorize(&self.pattern, &self.values),
+            HalfFactor::Split { split, .. } => split.factorize(&self.values),
+        };
+        factored.map_err(|e| NotPositiveDefinite {
+            pivot: self.offset + e.pivot,
+        })?;
+        match &self.factor {
+            HalfFactor::Whole(factor) => trailing_block(factor, self.len, &mut self.trailing),
+            // The half's trailing block lies in its split's dense separator block, after the
+            // half's own separator S_h.
+            HalfFactor::Split { split, .. } => {
+                let from = self.len - split.separator.0;
+                self.trailing = split.schur.as_ref().submatrix(from, from, m, m).to_owned();
+            }
+        }
         debug_assert_eq!(self.trailing.nrows(), m);
         if self.gram.nrows() != m {
             self.gram = Mat::zeros(m, m);
@@ -310,7 +362,12 @@ impl Half {
         z.as_mut()
             .subrows_mut(0, self.len)
             .copy_from(permuted.subrows(self.offset, self.len));
-        self.factor.forward_block_in_place(z.as_mut());
+        match &self.factor {
+            HalfFactor::Whole(factor) => factor.forward_block_in_place(z.as_mut()),
+            HalfFactor::Split { split, identity } => {
+                split.forward_block_in_place(identity, z.as_mut())
+            }
+        }
         let mut c = Mat::zeros(m, k);
         // C_h = −T_h Z_S.
         triangular_matmul(
@@ -344,7 +401,10 @@ impl Half {
             1.0,
             Par::Seq,
         );
-        self.factor.backward_in_place(&mut v);
+        match &self.factor {
+            HalfFactor::Whole(factor) => factor.backward_in_place(&mut v),
+            HalfFactor::Split { split, identity } => split.backward_in_place(identity, &mut v),
+        }
         v.truncate(self.len);
         v
     }
@@ -389,72 +449,4 @@ fn trailing_block(factor: &SparseCholesky, from: usize, block: &mut Mat<f64>) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::cholesky::tests::{grid_stiffness, relative_residual};
-    use super::super::SparseCholesky;
-    use super::*;
-
-    /// The two halves and the separator solve as the whole factor does, on both of faer's
-    /// factor kinds for the halves (simplicial on the small grid, supernodal on the larger),
-    /// on one thread or two alike, and refuse a matrix that is not positive definite.
-    #[test]
-    fn two_halves_solve_as_the_whole_factor() {
-        for (w, h) in [(6, 5), (40, 40)] {
-            let (p, values, xy) = grid_stiffness(w, h);
-            let mut whole =
-                SparseCholesky::analyse_ordered(&p, Par::Seq, NodeOrdering::NestedDissection(&xy));
-            whole.factorize(&p, &values).expect("regular stiffness");
-            let mut split = whole.share_symbolic_split(&p).expect("a top-level split");
-            assert!(split.is_split() && !whole.is_split());
-            split.factorize(&p, &values).expect("regular stiffness");
-            let halves = &split.split.as_ref().expect("split").halves;
-            let supernodal = halves.iter().map(|h| {
-                matches!(
-                    h.factor.analysis.symbolic.raw(),
-                    SymbolicCholeskyRaw::Supernodal(_)
-                )
-            });
-            assert!(supernodal.into_iter().all(|s| s == (w > 10)));
-            let b: Vec<f64> = (0..p.n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-            let (mut x_whole, mut x) = (b.clone(), b.clone());
-            whole.solve_in_place(&mut x_whole);
-            split.solve_in_place(&mut x);
-            let largest = x_whole.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for (a, b) in x.iter().zip(&x_whole) {
-                assert!(
-                    (a - b).abs() <= 1e-10 * largest,
-                    "{w} x {h}: {a} against {b}"
-                );
-            }
-            assert!(relative_residual(&p, &values, &x, &b) < 1e-10);
-            // Forward then backward is the solve; a block is its columns.
-            let mut halves = b.clone();
-            split.forward_block_in_place(MatMut::from_column_major_slice_mut(&mut halves, p.n, 1));
-            split.backward_in_place(&mut halves);
-            assert_eq!(halves, x);
-            let mut block = Mat::from_fn(p.n, 2, |i, j| b[(i + 3 * j) % p.n]);
-            split.solve_block_in_place(block.as_mut());
-            let mut second: Vec<f64> = (0..p.n).map(|i| b[(i + 3) % p.n]).collect();
-            split.solve_in_place(&mut second);
-            for i in 0..p.n {
-                assert!((block[(i, 0)] - x[i]).abs() <= 1e-12 * largest);
-                assert!((block[(i, 1)] - second[i]).abs() <= 1e-12 * largest);
-            }
-            // On one thread, the same numbers.
-            let one = rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .expect("pool");
-            let mut alone = b.clone();
-            one.install(|| {
-                let mut again = split.clone();
-                again.factorize(&p, &values).expect("regular stiffness");
-                again.solve_in_place(&mut alone);
-            });
-            assert_eq!(alone, x);
-            // Not positive definite: refused.
-            let negated: Vec<f64> = values.iter().map(|v| -v).collect();
-            assert!(split.factorize(&p, &negated).is_err());
-        }
-    }
-}
+mod tests;

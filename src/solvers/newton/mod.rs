@@ -455,7 +455,7 @@ fn raised_regularisation(mu: f64, mean_diagonal: f64) -> f64 {
 /// the separator's dense work, else on K's analysis as it is.
 fn hessian_factor(taut: &TautStiffness, n_free: usize) -> SparseCholesky {
     let split = (rayon::current_num_threads() >= 2 && n_free >= SPLIT_MIN_DOFS)
-        .then(|| taut.factor.share_symbolic_split(&taut.pattern))
+        .then(|| taut.factor.share_symbolic_split(&taut.pattern, 1))
         .flatten();
     split.unwrap_or_else(|| taut.factor.share_symbolic())
 }
