@@ -21,8 +21,10 @@
 //! the same partition; newton's iterations and seconds and e of micro-macro against newton
 //! (up to 512 × 512), and newton substructured (`solver.linear = "krylov"`, K never factorised
 //! whole): its PCG iterations over all Newton steps, Newton steps and seconds, its slack set
-//! checked against direct newton's. Run it with `RAYON_NUM_THREADS` set to compare thread
-//! counts.
+//! checked against direct newton's; and the peak resident memory of each of the three solves
+//! (micro-macro, direct newton, krylov newton; the structure included: `VmHWM` reset before
+//! each, after freed heap memory is handed back). Run it with `RAYON_NUM_THREADS` set to
+//! compare thread counts.
 //!
 //! `cargo bench --bench latin -- factor [SIDE]` times K's factor on SIDE × SIDE modules (256:
 //! 590 k free dofs), in newton's own order, with faer's parallelism `Par::rayon(t)`, t = 1, 2,
@@ -301,6 +303,33 @@ fn scale_row(model: &tensolve::model::Model, settings: LatinSettings, load: &[f6
     }
 }
 
+/// Hand freed heap memory back to the kernel and reset the process's peak resident memory to
+/// what is resident now (Linux; elsewhere [`peak_gb`] reads nothing).
+fn reset_peak() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only releases free memory of glibc's arenas.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// The peak resident memory since [`reset_peak`] (`VmHWM`), GB; `None` where unreadable.
+fn peak_gb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0 / 1e9)
+}
+
+/// `f`'s answer and the peak resident memory while it ran, GB as text ("–" where unreadable).
+fn with_peak<T>(f: impl FnOnce() -> T) -> (T, String) {
+    reset_peak();
+    let answer = f();
+    let peak = peak_gb().map_or("–".to_string(), |gb| format!("{gb:.2}"));
+    (answer, peak)
+}
+
 fn atscale(args: &[String]) {
     tensolve::app::allocator::retain_freed_memory();
     let mut grids = vec![(128, 0.0375), (256, 0.01), (512, 0.0025)];
@@ -312,9 +341,9 @@ fn atscale(args: &[String]) {
     }
     println!("threads: {}", rayon::current_num_threads());
     println!(
-        "| grid | partition (default) | micro-macro iterations (rebuilds) | η, r(U) at stop | bilateral | set-up s | solve s | newton iterations, s | e vs newton | newton krylov: PCG (steps), s |"
+        "| grid | partition (default) | micro-macro iterations (rebuilds) | η, r(U) at stop | bilateral | set-up s | solve s | newton iterations, s | e vs newton | newton krylov: PCG (steps), s | peak GB: micro-macro, newton, krylov |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for (n, alpha) in grids {
         let case_text = |extra: &str| {
             format!(
@@ -329,26 +358,29 @@ fn atscale(args: &[String]) {
             .expect("micro-macro settings");
         let model = case.model();
         let load = model.load(alpha);
-        let row = scale_row(&model, settings, &load);
-        let (newton, error, krylov) = if n <= 512 {
+        let (row, mm_peak) = with_peak(|| scale_row(&model, settings, &load));
+        let (newton, error, krylov, peaks) = if n <= 512 {
             let clock = std::time::Instant::now();
-            let taut = TautStiffness::new(&model).expect("regular");
-            let answer = Newton::new(&model, &taut, NewtonSettings::default())
-                .expect("newton")
-                .solve(&load, None, &mut Silent);
+            let (answer, newton_peak) = with_peak(|| {
+                let taut = TautStiffness::new(&model).expect("regular");
+                Newton::new(&model, &taut, NewtonSettings::default())
+                    .expect("newton")
+                    .solve(&load, None, &mut Silent)
+            });
             let seconds = clock.elapsed().as_secs_f64();
-            drop(taut);
             let reference = Reference::new(&model, &answer.equilibrium.displacements);
             // Substructured, on the case's default partition, without K's factor.
             let krylov_case =
                 tensolve::case::parse(&format!("{}linear = \"krylov\"\n", case_text("")))
                     .expect("case");
             let clock = std::time::Instant::now();
-            let krylov = Newton::substructured(&model, krylov_case.solver.newton).solve(
-                &load,
-                None,
-                &mut Silent,
-            );
+            let (krylov, krylov_peak) = with_peak(|| {
+                Newton::substructured(&model, krylov_case.solver.newton).solve(
+                    &load,
+                    None,
+                    &mut Silent,
+                )
+            });
             let krylov_seconds = clock.elapsed().as_secs_f64();
             assert_eq!(krylov.equilibrium.slack, answer.equilibrium.slack);
             (
@@ -359,9 +391,11 @@ fn atscale(args: &[String]) {
                     krylov.info.krylov_iterations.unwrap_or(0),
                     krylov.info.iterations
                 ),
+                format!("{mm_peak}, {newton_peak}, {krylov_peak}"),
             )
         } else {
-            ("–".to_string(), "–".to_string(), "–".to_string())
+            let dash = || "–".to_string();
+            (dash(), dash(), dash(), format!("{mm_peak}, –, –"))
         };
         drop(model);
         let bilateral_case =
@@ -370,7 +404,7 @@ fn atscale(args: &[String]) {
         let bilateral = scale_row(&bilateral_model, settings, &load);
         let [sx, sy] = settings.subdomains;
         println!(
-            "| {n} × {n} | {} of {} × {} ({sx} × {sy}) | {}{} ({}) | {:.1e}, {:.1e} | {}{} | {:.2} | {:.2} | {newton} | {error} | {krylov} |",
+            "| {n} × {n} | {} of {} × {} ({sx} × {sy}) | {}{} ({}) | {:.1e}, {:.1e} | {}{} | {:.2} | {:.2} | {newton} | {error} | {krylov} | {peaks} |",
             sx * sy,
             n / sx,
             n / sy,
