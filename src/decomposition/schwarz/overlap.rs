@@ -6,6 +6,7 @@
 //! links of its Neumann matrix).
 
 use crate::decomposition::Partition;
+use crate::linalg::CHUNK;
 use crate::structure::{Structure, CLAMPED};
 use rayon::prelude::*;
 
@@ -20,6 +21,8 @@ pub struct Overlap {
     /// Per global free dof, the subdomains holding it (`holders[holder_ptr[d]..holder_ptr[d + 1]]`).
     holder_ptr: Vec<usize>,
     holders: Vec<u32>,
+    /// Beside each holder, the dof's position in that subdomain's `dofs`.
+    holder_slot: Vec<u32>,
 }
 
 impl Overlap {
@@ -119,9 +122,11 @@ impl Overlap {
         }
         let mut fill = holder_ptr.clone();
         let mut holders = vec![0u32; holder_ptr[n_free]];
+        let mut holder_slot = vec![0u32; holder_ptr[n_free]];
         for (j, ds) in dofs.iter().enumerate() {
-            for &d in ds {
+            for (k, &d) in ds.iter().enumerate() {
                 holders[fill[d]] = j as u32;
+                holder_slot[fill[d]] = k as u32;
                 fill[d] += 1;
             }
         }
@@ -139,7 +144,26 @@ impl Overlap {
             links,
             holder_ptr,
             holders,
+            holder_slot,
         }
+    }
+
+    /// `out = Σ_j R_jᵀ parts[j]` (`parts[j]` on Ω_j's dofs): per dof the sum over the
+    /// subdomains holding it in increasing j, the order a scatter subdomain by subdomain adds
+    /// them in, so the same sums bit for bit; dofs in parallel.
+    pub fn sum_into(&self, parts: &[Vec<f64>], out: &mut [f64]) {
+        out.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(k, chunk)| {
+                for (i, o) in chunk.iter_mut().enumerate() {
+                    let d = k * CHUNK + i;
+                    let held = self.holder_ptr[d]..self.holder_ptr[d + 1];
+                    *o = self.holders[held.clone()]
+                        .iter()
+                        .zip(&self.holder_slot[held])
+                        .fold(0.0, |sum, (&j, &at)| sum + parts[j as usize][at as usize]);
+                }
+            });
     }
 
     /// The number of subdomains.
