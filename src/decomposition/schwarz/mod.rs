@@ -53,7 +53,8 @@ pub struct SchwarzSettings {
     /// weight (state) since they were found; its Dirichlet factor and E are made anew on the
     /// current H all the same. 0: found anew at every change. Default 0.02: on 128 × 128
     /// modules newton's PCG iterations go from 70 to 75 and its solve from 63 s to 37 s
-    /// (docs/performance.md, "Toward the exact answer at any size").
+    /// (docs/performance.md, "Toward the exact answer at any size"). newton's substructured
+    /// solve sets 1 (kept) until a step is slow (`src/solvers/newton/krylov.rs`).
     pub keep_vectors: f64,
 }
 
@@ -212,6 +213,11 @@ impl TwoLevelSchwarz {
         self.coarse_ready = true;
         refresh.coarse = self.coarse.len();
         Ok(refresh)
+    }
+
+    /// [`SchwarzSettings::keep_vectors`] from the next [`TwoLevelSchwarz::update`] on.
+    pub fn set_keep_vectors(&mut self, fraction: f64) {
+        self.settings.keep_vectors = fraction;
     }
 
     /// Every subdomain and the coarse matrix made anew at the next [`TwoLevelSchwarz::update`]

@@ -90,8 +90,10 @@ pub struct NewtonWork {
     pub correction_columns: usize,
     /// PCG iterations of the substructured solves (`solver.linear = "krylov"`).
     pub krylov_iterations: usize,
-    /// Subdomains refactorised (with their GenEO vectors) by the substructured solves.
+    /// Subdomains refactorised by the substructured solves.
     pub preconditioner_updates: usize,
+    /// Of those, the subdomains whose GenEO vectors were found anew.
+    pub geneo_solves: usize,
 }
 
 /// Regularisation μ = `REGULARISATION · min(1, residual)² · mean diagonal`: enough to step

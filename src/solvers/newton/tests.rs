@@ -44,3 +44,58 @@ fn hessian_product_is_the_assembled_hessians() {
         .zip(&product)
         .any(|(a, b)| (a - b).abs() > 1e-9 * scale));
 }
+
+/// The substructured solve keeps its GenEO vectors when cables go slack, and finds them
+/// anew on the changed subdomains after a step slower than [`krylov::STALE_RATE`] times the
+/// step that found them (here made so by a found rate set far below any real one); either way
+/// the step solves `H x = b` to its forcing tolerance.
+#[test]
+fn geneo_vectors_are_kept_until_a_step_is_slow() {
+    let spec = GridSpec {
+        modules: [16, 16],
+        ..GridSpec::default()
+    };
+    let model = Model::linear(Structure::grid(&spec, &LoadPattern::default()));
+    let s = &model.structure;
+    let taut = TautStiffness::new(&model).expect("regular");
+    let mean = taut.pattern.mean_diagonal(&taut.values);
+    let mu = 1e-8 * mean;
+    let b: Vec<f64> = (0..s.n_free)
+        .map(|d| ((d * 31) % 17) as f64 - 8.0)
+        .collect();
+    let all_taut = vec![true; s.links.len()];
+    // One cable in four slack (two different sets): more than 2 % of every subdomain's links
+    // change.
+    let softened = |k: usize| -> Vec<bool> {
+        (0..s.links.len())
+            .map(|i| !s.links[i].unilateral || i % 4 != k)
+            .collect()
+    };
+    let solve = |krylov: &mut krylov::KrylovSolve, taut_links: &[bool], work: &mut NewtonWork| {
+        let mut x = b.clone();
+        krylov.begin(work);
+        assert!(krylov.solve(&model, taut_links, (mu, mean), (1.0, 1e-9), &mut x, work));
+        let mut hx = vec![0.0; s.n_free];
+        model.tangent_product(taut_links, mu, &x, &mut hx);
+        let residual: f64 = hx.iter().zip(&b).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        residual.sqrt() / b.iter().map(|v| v * v).sum::<f64>().sqrt()
+    };
+    for slow in [false, true] {
+        let mut krylov = krylov::KrylovSolve::new(&model, [4, 4]);
+        let mut work = NewtonWork::default();
+        assert!(solve(&mut krylov, &all_taut, &mut work) <= 0.1 + 1e-12);
+        assert_eq!(
+            work.geneo_solves, 16,
+            "the first update finds every subdomain's"
+        );
+        if slow {
+            krylov.pretend_found_rate(1e-3);
+        }
+        // The step after the change: vectors kept, whatever the rate (it is judged after).
+        assert!(solve(&mut krylov, &softened(0), &mut work) <= 0.1 + 1e-12);
+        assert_eq!(work.geneo_solves, 16);
+        // Another slack set: found anew only after a slow step.
+        assert!(solve(&mut krylov, &softened(1), &mut work) <= 0.1 + 1e-12);
+        assert_eq!(work.geneo_solves > 16, slow, "slow step: {slow}");
+    }
+}
