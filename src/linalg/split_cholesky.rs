@@ -12,6 +12,11 @@
 //! throughput of one (`cargo bench --bench latin -- factor`). This split is what takes the
 //! second thread to the elimination tree's two halves. Not faer's own code: a block
 //! elimination (substructuring) around two of its factors and a dense one.
+//!
+//! Recursively, a half `M_h` in its order (h's own two parts, its separator S_h, then S) is
+//! split the same way at the next level of the dissection tree: its halves side by side, then
+//! `S_h ∪ S` dense, whose trailing |S| × |S| block is T_h. k levels give 2^k subtrees on as
+//! many threads (the Schwarz coarse matrix; newton's Hessian keeps one level).
 
 use super::nested_dissection::SplitTree;
 use super::{NodeOrdering, NotPositiveDefinite, SparseCholesky, StiffnessPattern};

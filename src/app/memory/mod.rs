@@ -28,7 +28,7 @@ use crate::structure::StructureSize;
 /// analysis. Peak RSS of `tensolve run` less the structure, reference none,
 /// `geometric_term = false` (2026-12-07, two threads): 3.6 / 4.2 / 4.35 kB per dof on
 /// 64 × 64 / 128 × 128 / 256 × 256 (16 / 64 / 256 subdomains), rising with the coarse
-/// matrix; 4.8 holds 512 × 512's 13.5 GB.
+/// matrix; 4.8 holds 512 × 512 (13.5 GB finding the vectors anew past 2 %, 12.1 GB keeping them).
 const KRYLOV_BYTES_PER_DOF: u64 = 4_800;
 
 /// The whole-structure factors of `methods`, in units of K's: every solver's but
