@@ -196,3 +196,28 @@ fn check_says_which_linear_solve_and_why() {
     let latin = check(&["solver.methods=[\"mono-latin\"]"]);
     assert!(!latin.contains("newton solve"), "{latin}");
 }
+
+/// Substructured without K's factor, newton builds no Hessian workspace in halves at set-up
+/// (its direct step is a fallback: a workspace on K's analysis alone), where direct newton on
+/// the same 128 × 128 grid (147 k free dofs, above the split's size) and two threads does.
+#[test]
+fn without_k_factor_no_hessian_halves_are_built() {
+    use tensolve::solvers::newton::Newton;
+    use tensolve::solvers::TautStiffness;
+    let text = "[grid]\nmodules = [128, 128]\n[supports]\nclamp = \"lower-all-edges\"\n\
+                [load]\nalpha = [0.0375]\n[solver]\nmethods = [\"newton\"]\nlinear = \"krylov\"\n";
+    let case = case::parse(text).expect("case");
+    let model = case.model();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let substructured = Newton::substructured(&model, case.solver.newton);
+        assert!(!substructured.factors_in_halves());
+        drop(substructured);
+        let taut = TautStiffness::new(&model).expect("regular");
+        let direct = Newton::new(&model, &taut, Default::default()).expect("set-up");
+        assert!(direct.factors_in_halves());
+    });
+}

@@ -24,12 +24,11 @@ use crate::structure::StructureSize;
 
 /// What newton substructured (`solver.linear = "krylov"`) holds per dof of the structure at the
 /// default Schwarz settings, in place of a factor of K: the overlapping subdomains' factors,
-/// their GenEO vectors and the work of finding them, the coarse matrix's factor and K's kept
-/// analysis. Peak RSS of `tensolve run` less the structure, reference none,
-/// `geometric_term = false` (2026-12-07, two threads): 3.6 / 4.2 / 4.35 kB per dof on
-/// 64 × 64 / 128 × 128 / 256 × 256 (16 / 64 / 256 subdomains), rising with the coarse
-/// matrix; 4.8 holds 512 × 512 (13.5 GB finding the vectors anew past 2 %, 12.1 GB keeping them).
-const KRYLOV_BYTES_PER_DOF: u64 = 4_800;
+/// their GenEO vectors and the work of finding them, the coarse matrix's factor, and K's
+/// pattern, values and analysis. Peak RSS of `tensolve run` less the structure, reference
+/// none, `geometric_term = false` (2026-12-07, two threads): 3.3 / 2.8 / 3.1 / 3.3 kB per dof
+/// on 64² / 128² / 256² / 512² modules (16 to 1024 subdomains).
+const KRYLOV_BYTES_PER_DOF: u64 = 3_600;
 
 /// The whole-structure factors of `methods`, in units of K's: every solver's but
 /// micro-macro's, which it counts itself ([`Method::own_bytes`]).

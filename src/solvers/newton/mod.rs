@@ -203,7 +203,13 @@ impl<'s> Newton<'s> {
         Newton {
             model,
             structure,
-            chol: hessian_factor(k, structure.n_free),
+            // Substructured without K's factor, a direct step is a rare fallback: a workspace
+            // on K's analysis alone (its values allocated, never touched until then), not the
+            // halves' patterns and analyses a split would build at set-up.
+            chol: match &taut {
+                Taut::Unfactorised(_) => k.factor.share_symbolic(),
+                Taut::Factorised(_) => hessian_factor(k, structure.n_free),
+            },
             factored: None,
             correction: (Base::Taut, LowRankUpdate::none(structure.n_free)),
             hessian: vec![0.0; k.values.len()],
