@@ -192,6 +192,7 @@ fn check_says_which_linear_solve_and_why() {
         krylov.contains("newton solve  krylov: PCG with a two-level Schwarz preconditioner on the 4 x 4 partition"),
         "{krylov}"
     );
+    assert!(krylov.contains("less memory"), "{krylov}");
     // Without newton, nothing to say.
     let latin = check(&["solver.methods=[\"mono-latin\"]"]);
     assert!(!latin.contains("newton solve"), "{latin}");
