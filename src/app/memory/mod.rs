@@ -66,7 +66,7 @@ pub struct Workload {
     /// is among `methods`.
     pub micro_macro: LatinSettings,
     /// How newton solves its Newton systems: a factor of K (counted in units of K's factor),
-    /// or on the substructures ([`KRYLOV_BYTES_PER_DOF`]).
+    /// or on the substructures (its Schwarz data, counted per dof).
     pub newton_linear: LinearSolve,
 }
 
