@@ -25,8 +25,9 @@ use super::Partition;
 use crate::linalg::NotPositiveDefinite;
 use crate::structure::Structure;
 use coarse::Coarse;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, MatMut, MatRef, Par};
 use local::LocalProblem;
-use nalgebra::DVector;
 pub use overlap::Overlap;
 use rayon::prelude::*;
 
@@ -242,13 +243,20 @@ impl TwoLevelSchwarz {
         debug_assert_eq!(r.len(), self.n);
         let overlap = &self.overlap;
         // Per subdomain: A_j⁻¹ R_j r and Z_jᵀ R_j r.
-        let parts: Vec<(Vec<f64>, DVector<f64>)> = self
+        let parts: Vec<(Vec<f64>, Vec<f64>)> = self
             .locals
             .par_iter()
             .enumerate()
             .map(|(j, local)| {
                 let mut x: Vec<f64> = overlap.dofs[j].iter().map(|&d| r[d]).collect();
-                let c = local.coarse.tr_mul(&DVector::from_column_slice(&x));
+                let mut c = vec![0.0; local.coarse.ncols()];
+                // Z_jᵀ x.
+                gemv(
+                    local.coarse_vectors().transpose(),
+                    &x,
+                    &mut c,
+                    Accum::Replace,
+                );
                 local.solve(&mut x);
                 (x, c)
             })
@@ -256,7 +264,7 @@ impl TwoLevelSchwarz {
         // E⁻¹ Zᵀ r.
         let mut c = vec![0.0; self.coarse.len()];
         for (j, (_, cj)) in parts.iter().enumerate() {
-            c[self.coarse.offsets[j]..self.coarse.offsets[j + 1]].copy_from_slice(cj.as_slice());
+            c[self.coarse.offsets[j]..self.coarse.offsets[j + 1]].copy_from_slice(cj);
         }
         self.coarse.solve(&mut c);
         // Per subdomain: A_j⁻¹ R_j r + Z_j (E⁻¹ Zᵀ r)_j.
@@ -266,14 +274,27 @@ impl TwoLevelSchwarz {
             .enumerate()
             .map(|(j, ((mut x, _), local))| {
                 let cj = &c[self.coarse.offsets[j]..self.coarse.offsets[j + 1]];
-                let z = &local.coarse * DVector::from_column_slice(cj);
-                x.iter_mut().zip(z.iter()).for_each(|(x, z)| *x += z);
+                // x += Z_j c_j.
+                gemv(local.coarse_vectors(), cj, &mut x, Accum::Add);
                 x
             })
             .collect();
         // Σ_j R_jᵀ (…)_j, per dof in subdomain order.
         overlap.sum_into(&lifted, r);
     }
+}
+
+/// `y ← a x` (`Accum::Replace`) or `y ← y + a x` (`Accum::Add`), by faer's gemv.
+fn gemv(a: MatRef<'_, f64>, x: &[f64], y: &mut [f64], accum: Accum) {
+    let rows = y.len();
+    matmul(
+        MatMut::from_column_major_slice_mut(y, rows, 1),
+        accum,
+        a,
+        MatRef::from_column_major_slice(x, x.len(), 1),
+        1.0,
+        Par::Seq,
+    );
 }
 
 impl SubstructureSolves for TwoLevelSchwarz {
