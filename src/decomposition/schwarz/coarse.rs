@@ -10,7 +10,8 @@ use super::local::LocalProblem;
 use super::overlap::Overlap;
 use crate::linalg::{NodeOrdering, NotPositiveDefinite, SparseCholesky, StiffnessPattern};
 use crate::structure::Structure;
-use faer::Par;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -322,8 +323,12 @@ fn column_blocks(
     reach.sort_unstable();
     reach.dedup();
     let at = |d: usize| reach.binary_search(&d).expect("a reached dof");
+    // Z_j and Y_j by rows (row k at k·m..(k + 1)·m): a link touches a few rows whole.
+    let z_rows: Vec<f64> = (0..dofs.len())
+        .flat_map(|k| z.row(k).iter().copied().collect::<Vec<_>>())
+        .collect();
     // Y_j = Σ_links w b (bᵀ R_jᵀ Z_j) + μ R_jᵀ Z_j.
-    let mut y = DMatrix::<f64>::zeros(reach.len(), m);
+    let mut y = vec![0.0; reach.len() * m];
     let mut t = vec![0.0; m];
     for &(i, _) in &overlap.links[j] {
         let w = weights[i];
@@ -334,24 +339,23 @@ fn column_blocks(
         t.iter_mut().for_each(|v| *v = 0.0);
         for (d, c) in row.iter() {
             if let Ok(k) = dofs.binary_search(&d) {
-                for (tv, zv) in t.iter_mut().zip(z.row(k).iter()) {
-                    *tv += c * zv;
-                }
+                let zk = &z_rows[k * m..(k + 1) * m];
+                t.iter_mut().zip(zk).for_each(|(tv, zv)| *tv += c * zv);
             }
         }
         for (d, c) in row.iter() {
             let r = at(d);
-            for (col, tv) in t.iter().enumerate() {
-                y[(r, col)] += w * c * tv;
-            }
+            let yr = &mut y[r * m..(r + 1) * m];
+            yr.iter_mut().zip(&t).for_each(|(yv, tv)| *yv += w * c * tv);
         }
     }
     for (k, &d) in dofs.iter().enumerate() {
         let r = at(d);
-        for col in 0..m {
-            y[(r, col)] += mu * z[(k, col)];
-        }
+        let (yr, zk) = (&mut y[r * m..(r + 1) * m], &z_rows[k * m..(k + 1) * m]);
+        yr.iter_mut().zip(zk).for_each(|(yv, zv)| *yv += mu * zv);
     }
+    // Y_j's rows as a faer view (row-major: the transpose of a column-major m × reach).
+    let y_view = MatRef::from_column_major_slice(&y, m, reach.len()).transpose();
     // The subdomains i ≥ j that hold a reached dof.
     let mut near: Vec<usize> = reach
         .iter()
@@ -369,10 +373,19 @@ fn column_blocks(
                 .enumerate()
                 .filter_map(|(k, &d)| reach.binary_search(&d).ok().map(|r| (k, r)))
                 .collect();
-            let zi = &locals[i].coarse;
-            let zi_rows = DMatrix::from_fn(common.len(), zi.ncols(), |a, b| zi[(common[a].0, b)]);
-            let y_rows = DMatrix::from_fn(common.len(), m, |a, b| y[(common[a].1, b)]);
-            (i, zi_rows.transpose() * y_rows)
+            let zi = locals[i].coarse_vectors();
+            let zi_rows = Mat::from_fn(common.len(), zi.ncols(), |a, b| zi[(common[a].0, b)]);
+            let y_rows = Mat::from_fn(common.len(), m, |a, b| y_view[(common[a].1, b)]);
+            let mut block = Mat::<f64>::zeros(zi.ncols(), m);
+            matmul(
+                block.as_mut(),
+                Accum::Replace,
+                zi_rows.transpose(),
+                y_rows.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            (i, DMatrix::from_fn(block.nrows(), m, |a, b| block[(a, b)]))
         })
         .collect()
 }
