@@ -255,7 +255,7 @@ impl CheckReport {
                 LinearSolve::Krylov => format!(
                     "PCG with a two-level Schwarz preconditioner on the {sx} x {sy} partition \
                      (GenEO coarse space); slower than direct at every size measured so far \
-                     (2.2x at 256 x 256 modules, 1.24x at 512 x 512 for the whole run), in 27-30 % \
+                     (2.2-2.6x at 256 x 256 modules, 1.24x at 512 x 512 for the whole run), in 27-30 % \
                      less memory from 256 x 256 on (docs/performance.md)"
                 ),
             };
