@@ -324,9 +324,8 @@ fn column_blocks(
     reach.dedup();
     let at = |d: usize| reach.binary_search(&d).expect("a reached dof");
     // Z_j and Y_j by rows (row k at k·m..(k + 1)·m): a link touches a few rows whole.
-    let z_rows: Vec<f64> = (0..dofs.len())
-        .flat_map(|k| z.row(k).iter().copied().collect::<Vec<_>>())
-        .collect();
+    let z_transposed = z.transpose();
+    let z_rows = z_transposed.as_slice();
     // Y_j = Σ_links w b (bᵀ R_jᵀ Z_j) + μ R_jᵀ Z_j.
     let mut y = vec![0.0; reach.len() * m];
     let mut t = vec![0.0; m];
@@ -373,7 +372,7 @@ fn column_blocks(
                 .enumerate()
                 .filter_map(|(k, &d)| reach.binary_search(&d).ok().map(|r| (k, r)))
                 .collect();
-            let zi = locals[i].coarse_vectors();
+            let zi = &locals[i].coarse;
             let zi_rows = Mat::from_fn(common.len(), zi.ncols(), |a, b| zi[(common[a].0, b)]);
             let y_rows = Mat::from_fn(common.len(), m, |a, b| y_view[(common[a].1, b)]);
             let mut block = Mat::<f64>::zeros(zi.ncols(), m);

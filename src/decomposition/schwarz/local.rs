@@ -169,15 +169,6 @@ impl LocalProblem {
         self.geneo_weights = None;
     }
 
-    /// Z_j as a faer view (nalgebra's storage is column-major too).
-    pub(super) fn coarse_vectors(&self) -> faer::MatRef<'_, f64> {
-        faer::MatRef::from_column_major_slice(
-            self.coarse.as_slice(),
-            self.coarse.nrows(),
-            self.coarse.ncols(),
-        )
-    }
-
     /// `x ← A_j⁻¹ x` on Ω_j's dofs.
     pub(super) fn solve(&self, x: &mut [f64]) {
         self.dirichlet.solve_in_place(x);

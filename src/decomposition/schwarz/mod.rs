@@ -22,11 +22,9 @@ mod overlap;
 
 use super::substructure::SubstructureSolves;
 use super::Partition;
-use crate::linalg::NotPositiveDefinite;
+use crate::linalg::{gemv, gemv_transposed, NotPositiveDefinite};
 use crate::structure::Structure;
 use coarse::Coarse;
-use faer::linalg::matmul::matmul;
-use faer::{Accum, MatMut, MatRef, Par};
 use local::LocalProblem;
 pub use overlap::Overlap;
 use rayon::prelude::*;
@@ -251,12 +249,7 @@ impl TwoLevelSchwarz {
                 let mut x: Vec<f64> = overlap.dofs[j].iter().map(|&d| r[d]).collect();
                 let mut c = vec![0.0; local.coarse.ncols()];
                 // Z_jᵀ x.
-                gemv(
-                    local.coarse_vectors().transpose(),
-                    &x,
-                    &mut c,
-                    Accum::Replace,
-                );
+                gemv_transposed(&mut c, &local.coarse, &x, false);
                 local.solve(&mut x);
                 (x, c)
             })
@@ -275,26 +268,13 @@ impl TwoLevelSchwarz {
             .map(|(j, ((mut x, _), local))| {
                 let cj = &c[self.coarse.offsets[j]..self.coarse.offsets[j + 1]];
                 // x += Z_j c_j.
-                gemv(local.coarse_vectors(), cj, &mut x, Accum::Add);
+                gemv(&mut x, &local.coarse, cj, true);
                 x
             })
             .collect();
         // Σ_j R_jᵀ (…)_j, per dof in subdomain order.
         overlap.sum_into(&lifted, r);
     }
-}
-
-/// `y ← a x` (`Accum::Replace`) or `y ← y + a x` (`Accum::Add`), by faer's gemv.
-fn gemv(a: MatRef<'_, f64>, x: &[f64], y: &mut [f64], accum: Accum) {
-    let rows = y.len();
-    matmul(
-        MatMut::from_column_major_slice_mut(y, rows, 1),
-        accum,
-        a,
-        MatRef::from_column_major_slice(x, x.len(), 1),
-        1.0,
-        Par::Seq,
-    );
 }
 
 impl SubstructureSolves for TwoLevelSchwarz {
