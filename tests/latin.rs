@@ -358,7 +358,7 @@ fn cli_check_prints_the_partition() {
         "{stdout}"
     );
     assert!(
-        system.contains("factorised and solved on every MPI rank"),
+        system.contains("whole; factorised and solved on every MPI rank"),
         "{stdout}"
     );
     let entries: usize = system
@@ -371,6 +371,35 @@ fn cli_check_prints_the_partition() {
         .parse()
         .unwrap();
     assert!(entries >= number("macro system"), "{stdout}");
+}
+
+/// From 1024 substructures on, `check` says the macro factor is split into two subtrees of
+/// substructures (128 × 128 modules on 32 × 32 substructures); the paper's partition above is
+/// whole.
+#[test]
+fn cli_check_says_the_macro_factor_is_split_from_1024_substructures() {
+    let out = Command::new(env!("CARGO_BIN_EXE_tensolve"))
+        .arg("check")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/cases/scale-128.toml"))
+        .args(["--set", "solver.methods=[\"micro-macro\"]"])
+        .args(["--set", "solver.subdomains=[32, 32]"])
+        .output()
+        .expect("run tensolve");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let system = stdout
+        .lines()
+        .map(str::trim)
+        .find(|l| l.starts_with("macro system"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(
+        system.contains("in 2 subtrees of substructures side by side;"),
+        "{system}"
+    );
 }
 
 #[test]

@@ -61,7 +61,7 @@ pub(super) struct Analysis {
 }
 
 impl Analysis {
-    fn new(pattern: &StiffnessPattern, ordering: NodeOrdering<'_>) -> Analysis {
+    pub(super) fn new(pattern: &StiffnessPattern, ordering: NodeOrdering<'_>) -> Analysis {
         let n = pattern.n;
         let (order, inverse, top_split) = node_ordering(pattern, ordering);
         assert!(
@@ -210,7 +210,7 @@ impl SparseCholesky {
         let analysis = &self.analysis;
         let inverse = analysis.symbolic.perm()?.arrays().1;
         let tree = analysis.top_split.as_ref()?;
-        let split = SplitCholesky::new(pattern, inverse, tree, levels.max(1))?;
+        let split = SplitCholesky::new(pattern, inverse, tree, levels.max(1), None)?;
         Some(self.holding(split))
     }
 

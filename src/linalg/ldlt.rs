@@ -3,13 +3,25 @@
 //! [`SparseCholesky`]: the same order and pattern, faer's LDLᵀ kernels without pivoting. A
 //! zero pivot is an error; the count of negative pivots is A's number of negative eigenvalues
 //! (Sylvester's law of inertia: `L D Lᵀ` is a congruence).
+//!
+//! With its pivots' signs given ([`SparseLdlt::factorize_signed`]: a quasi-definite matrix such
+//! as the macro problem's, + on the forces, − on the kernel amplitudes) a pivot of the wrong
+//! sign or too small is held at ± a regularisation, and the factor is also used as
+//! `A = L̂ J L̂ᵀ`, `L̂ = L |D|^½`, `J = sign(D)`: the form a half of a split factor takes
+//! (`src/linalg/split_cholesky.rs`).
 
 use super::cholesky::{Analysis, SparseCholesky};
+use super::{NodeOrdering, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::linalg::matmul::matmul;
+use faer::linalg::triangular_solve::{
+    solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place,
+};
 use faer::sparse::linalg::cholesky::{simplicial, supernodal, LdltRef, SymbolicCholeskyRaw};
+use faer::sparse::linalg::triangular_solve as sparse_triangular;
 use faer::sparse::SparseColMatRef;
-use faer::{Conj, MatMut, Par};
+use faer::{Accum, Conj, Mat, MatMut, Par};
 use std::sync::Arc;
 
 /// The matrix handed to [`SparseLdlt::factorize`] has a zero pivot in the factor's order
@@ -24,8 +36,8 @@ pub struct ZeroPivot {
 
 /// Sparse `L D Lᵀ` factor on the symbolic analysis of a [`SparseCholesky`].
 pub struct SparseLdlt {
-    analysis: Arc<Analysis>,
-    l_values: Vec<f64>,
+    pub(super) analysis: Arc<Analysis>,
+    pub(super) l_values: Vec<f64>,
     scratch: MemBuffer,
     /// Negative entries of D in the last successful factorization.
     negative_pivots: usize,
@@ -35,7 +47,15 @@ pub struct SparseLdlt {
 impl SparseLdlt {
     /// A factor on the symbolic analysis of `cholesky` (no new analysis, no numeric factor).
     pub fn sharing(cholesky: &SparseCholesky) -> SparseLdlt {
-        let analysis = Arc::clone(&cholesky.analysis);
+        Self::with_analysis(Arc::clone(&cholesky.analysis))
+    }
+
+    /// A factor of `pattern` in `ordering` (its own symbolic analysis, no numeric factor).
+    pub fn analyse_ordered(pattern: &StiffnessPattern, ordering: NodeOrdering<'_>) -> SparseLdlt {
+        Self::with_analysis(Arc::new(Analysis::new(pattern, ordering)))
+    }
+
+    fn with_analysis(analysis: Arc<Analysis>) -> SparseLdlt {
         let symbolic = &analysis.symbolic;
         let scratch = match symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(_) => {
@@ -62,12 +82,45 @@ impl SparseLdlt {
 
     /// Numeric factorization of `values` (on the analysed pattern).
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), ZeroPivot> {
+        self.factorize_with(values, LdltRegularization::default())
+    }
+
+    /// Numeric factorization of `values` whose pivots have the signs `signs` (per dof of A, +1
+    /// or −1): a pivot of the wrong sign or of magnitude at most `regularisation` is replaced by
+    /// ±`regularisation`, so that it never fails on a quasi-definite matrix; the factor is then
+    /// that of A plus a diagonal of at most 2 `regularisation`, which iterative refinement
+    /// against A undoes.
+    pub fn factorize_signed(
+        &mut self,
+        values: &[f64],
+        signs: &[i8],
+        regularisation: f64,
+    ) -> Result<(), ZeroPivot> {
+        // faer takes the signs in the factor's order.
+        let ordered: Vec<i8> = match self.analysis.symbolic.perm() {
+            Some(perm) => perm.arrays().0.iter().map(|&d| signs[d]).collect(),
+            None => signs.to_vec(),
+        };
+        self.factorize_with(
+            values,
+            LdltRegularization {
+                dynamic_regularization_signs: Some(&ordered),
+                dynamic_regularization_delta: regularisation,
+                dynamic_regularization_epsilon: regularisation,
+            },
+        )
+    }
+
+    fn factorize_with(
+        &mut self,
+        values: &[f64],
+        regularization: LdltRegularization<'_, f64>,
+    ) -> Result<(), ZeroPivot> {
         let analysis = &*self.analysis;
         let permuted = analysis.permuted_values(values);
         let a = SparseColMatRef::new(analysis.permuted_pattern(), &permuted);
         self.factorized = false;
         let stack = MemStack::new(&mut self.scratch);
-        let regularization = LdltRegularization::default();
         let result = match analysis.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => simplicial::factorize_simplicial_numeric_ldlt(
                 &mut self.l_values,
@@ -143,124 +196,137 @@ impl SparseLdlt {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::linalg::StiffnessPattern;
-
-    /// A symmetric indefinite tridiagonal matrix (diagonal `d`, off-diagonal 1) on a path
-    /// pattern: solved to round-off, its negative eigenvalues counted.
-    #[test]
-    fn an_indefinite_matrix_is_solved_and_its_inertia_counted() {
-        let n = 40;
-        let entries: Vec<(usize, usize)> = (0..n)
-            .flat_map(|i| std::iter::once((i, i)).chain((i + 1 < n).then_some((i + 1, i))))
-            .collect();
-        let pattern = StiffnessPattern::from_lower_entries(n, &entries);
-        // d_i = −2.5 for the first ten, 3 after: eigenvalues of the tridiagonal matrix.
-        let diagonal = |i: usize| if i < 10 { -2.5 } else { 3.0 };
-        let mut values = vec![0.0; pattern.nnz()];
-        for (row, c, slot) in pattern.entries() {
-            values[slot] = if row == c { diagonal(c) } else { 1.0 };
+/// `L̂ = L |D|^½` and `J = sign(D)` of `A = L̂ J L̂ᵀ`: the halves of a solve with L̂ alone, for a
+/// half of a split factor.
+impl SparseLdlt {
+    /// `X ← |D|^-½ L⁻¹ P X` for a column-major block: `L̂⁻¹ P X`, left in the factor's order.
+    pub(super) fn forward_scaled_block_in_place(&self, mut x: MatMut<'_, f64>) {
+        assert!(self.factorized, "solve before a successful factorization");
+        let symbolic = &self.analysis.symbolic;
+        let (n, k) = (x.nrows(), x.ncols());
+        if let Some(perm) = symbolic.perm() {
+            let forward = perm.arrays().0;
+            let permuted = Mat::from_fn(n, k, |i, j| x[(forward[i], j)]);
+            x.copy_from(&permuted);
         }
-        let cholesky = SparseCholesky::analyse(&pattern, Par::Seq);
-        let mut ldlt = SparseLdlt::sharing(&cholesky);
-        ldlt.factorize(&values).unwrap();
-        // A x for a known x, then solved back.
-        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
-        let mut b = vec![0.0; n];
-        for i in 0..n {
-            b[i] = diagonal(i) * x[i];
-            if i > 0 {
-                b[i] += x[i - 1];
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                sparse_triangular::solve_unit_lower_triangular_in_place(
+                    l,
+                    Conj::No,
+                    x.as_mut(),
+                    Par::Seq,
+                );
             }
-            if i + 1 < n {
-                b[i] += x[i + 1];
-            }
-        }
-        ldlt.solve_in_place(&mut b);
-        let error = b
-            .iter()
-            .zip(&x)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        assert!(error < 1e-12, "{error}");
-        // The dense eigenvalues of the same matrix, counted below zero.
-        let dense = nalgebra::DMatrix::from_fn(n, n, |i, j| match i.abs_diff(j) {
-            0 => diagonal(i),
-            1 => 1.0,
-            _ => 0.0,
-        });
-        let negative = dense
-            .symmetric_eigenvalues()
-            .iter()
-            .filter(|&&v| v < 0.0)
-            .count();
-        assert_eq!(negative, 10);
-        assert_eq!(ldlt.negative_pivots(), negative);
-    }
-
-    /// The 3-D 7-point Laplacian on 14³ points shifted by σ (large enough for faer's
-    /// supernodal factor): its negative eigenvalues, `Σ_d (2 − 2 cos(k_d π / 15)) < σ`,
-    /// counted in closed form.
-    #[test]
-    fn a_supernodal_factor_counts_the_negative_eigenvalues_of_a_shifted_laplacian() {
-        let m = 14;
-        let n = m * m * m;
-        let index = |i: usize, j: usize, k: usize| (i * m + j) * m + k;
-        let mut entries = Vec::new();
-        for i in 0..m {
-            for j in 0..m {
-                for k in 0..m {
-                    let p = index(i, j, k);
-                    entries.push((p, p));
-                    for q in [
-                        (i + 1 < m).then(|| index(i + 1, j, k)),
-                        (j + 1 < m).then(|| index(i, j + 1, k)),
-                        (k + 1 < m).then(|| index(i, j, k + 1)),
-                    ]
-                    .into_iter()
-                    .flatten()
-                    {
-                        entries.push((q, p));
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let l = supernodal::SupernodalLdltRef::new(s, &self.l_values);
+                // One buffer for every supernode's rows below its block.
+                let rows = (0..s.n_supernodes())
+                    .map(|node| l.supernode(node).pattern().len())
+                    .max()
+                    .unwrap_or(0);
+                let mut buffer = Mat::zeros(rows, k);
+                for node in 0..s.n_supernodes() {
+                    let node = l.supernode(node);
+                    let size = node.val().ncols();
+                    let (top, bottom) = node.val().split_at_row(size);
+                    let mut x_top = x.as_mut().subrows_mut(node.start(), size);
+                    solve_unit_lower_triangular_in_place(top, x_top.as_mut(), Par::Seq);
+                    let mut below = buffer.as_mut().subrows_mut(0, node.pattern().len());
+                    matmul(
+                        below.as_mut(),
+                        Accum::Replace,
+                        bottom,
+                        x_top.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for j in 0..k {
+                        for (t, &i) in node.pattern().iter().enumerate() {
+                            x[(i, j)] -= below[(t, j)];
+                        }
                     }
                 }
             }
         }
-        let pattern = StiffnessPattern::from_lower_entries(n, &entries);
-        let shift = 0.9;
-        let mut values = vec![0.0; pattern.nnz()];
-        for (row, c, slot) in pattern.entries() {
-            values[slot] = if row == c { 6.0 - shift } else { -1.0 };
+        let pivots: Vec<f64> = self.pivots().collect();
+        for j in 0..k {
+            for (i, d) in pivots.iter().enumerate() {
+                x[(i, j)] /= d.abs().sqrt();
+            }
         }
-        let cholesky = SparseCholesky::analyse(&pattern, Par::Seq);
-        let mut ldlt = SparseLdlt::sharing(&cholesky);
-        assert!(matches!(
-            ldlt.analysis.symbolic.raw(),
-            SymbolicCholeskyRaw::Supernodal(_)
-        ));
-        ldlt.factorize(&values).unwrap();
-        let one = |k: usize| 2.0 - 2.0 * (k as f64 * std::f64::consts::PI / (m + 1) as f64).cos();
-        let mut negative = 0;
-        for a in 1..=m {
-            for b in 1..=m {
-                for c in 1..=m {
-                    negative += usize::from(one(a) + one(b) + one(c) < shift);
+    }
+
+    /// `x ← Pᵀ L⁻ᵀ |D|^-½ J x` for one column in the factor's order: `L̂⁻ᵀ J x`, back in A's.
+    pub(super) fn backward_scaled_in_place(&self, x: &mut [f64]) {
+        assert!(self.factorized, "solve before a successful factorization");
+        for (v, d) in x.iter_mut().zip(self.pivots()) {
+            // J |D|^-½ = sign(d) / √|d|.
+            *v *= d.signum() / d.abs().sqrt();
+        }
+        let symbolic = &self.analysis.symbolic;
+        let n = x.len();
+        let mut block = MatMut::from_column_major_slice_mut(x, n, 1);
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                sparse_triangular::solve_unit_lower_triangular_transpose_in_place(
+                    l,
+                    Conj::No,
+                    block,
+                    Par::Seq,
+                );
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let l = supernodal::SupernodalLdltRef::new(s, &self.l_values);
+                let rows = (0..s.n_supernodes())
+                    .map(|node| l.supernode(node).pattern().len())
+                    .max()
+                    .unwrap_or(0);
+                let mut buffer = vec![0.0; rows];
+                for node in (0..s.n_supernodes()).rev() {
+                    let node = l.supernode(node);
+                    let size = node.val().ncols();
+                    let (top, bottom) = node.val().split_at_row(size);
+                    let below = &mut buffer[..node.pattern().len()];
+                    for (b, &i) in below.iter_mut().zip(node.pattern()) {
+                        *b = block[(i, 0)];
+                    }
+                    let below = faer::MatRef::from_column_major_slice(below, below.len(), 1);
+                    let mut x_top = block.as_mut().subrows_mut(node.start(), size);
+                    matmul(
+                        x_top.as_mut(),
+                        Accum::Add,
+                        bottom.transpose(),
+                        below,
+                        -1.0,
+                        Par::Seq,
+                    );
+                    solve_unit_upper_triangular_in_place(top.transpose(), x_top, Par::Seq);
                 }
             }
         }
-        assert!(negative > 5, "{negative}");
-        assert_eq!(ldlt.negative_pivots(), negative);
-        // A x for a known x, solved back.
-        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
-        let mut b = vec![0.0; n];
-        pattern.sym_matvec(&values, &x, &mut b);
-        ldlt.solve_in_place(&mut b);
-        let error = b
-            .iter()
-            .zip(&x)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        assert!(error < 1e-9, "{error}");
+        if let Some(perm) = symbolic.perm() {
+            let inverse = perm.arrays().1;
+            let factor_order = x.to_vec();
+            for (v, &at) in x.iter_mut().zip(inverse) {
+                *v = factor_order[at];
+            }
+        }
     }
 }
+
+impl Clone for SparseLdlt {
+    /// Shares the symbolic analysis, copies the numeric factor, allocates a fresh workspace.
+    fn clone(&self) -> Self {
+        let mut copy = Self::with_analysis(Arc::clone(&self.analysis));
+        copy.l_values.copy_from_slice(&self.l_values);
+        copy.negative_pivots = self.negative_pivots;
+        copy.factorized = self.factorized;
+        copy
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -21,6 +21,7 @@ mod sparse_row;
 mod spd_solver;
 mod spectrum;
 mod split_cholesky;
+mod split_quasi_definite;
 
 pub use buckets::buckets;
 pub use cholesky::{NotPositiveDefinite, SparseCholesky};
@@ -32,7 +33,7 @@ pub use ldlt::{SparseLdlt, ZeroPivot};
 pub use low_modes::{modes_below, modes_below_by_subspace, LowModes};
 pub use low_rank::LowRankUpdate;
 pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes, DENSE_MODES_UP_TO};
-pub use nested_dissection::nested_dissection;
+pub use nested_dissection::{nested_dissection, SplitTree};
 pub use ordering::NodeOrdering;
 pub use parallel::{par_dot, par_update, par_zip_map, CHUNK};
 pub use pattern::StiffnessPattern;
@@ -44,6 +45,7 @@ pub use spectrum::{
     smallest_eigenvalue_bound, smallest_eigenvalues, zero_mode_count, zero_modes,
     SmallestEigenvalues, PROBE_ITERATIONS, ZERO_MODES_COUNTED, ZERO_MODE_RELATIVE,
 };
+pub use split_quasi_definite::SplitQuasiDefinite;
 
 /// Euclidean norm.
 pub fn norm(v: &[f64]) -> f64 {

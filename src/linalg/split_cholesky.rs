@@ -17,9 +17,17 @@
 //! split the same way at the next level of the dissection tree: its halves side by side, then
 //! `S_h ∪ S` dense, whose trailing |S| × |S| block is T_h. k levels give 2^k subtrees on as
 //! many threads (the Schwarz coarse matrix; newton's Hessian keeps one level).
+//!
+//! A quasi-definite K (the macro problem `[Ã N; Nᵀ 0]`, Ã definite) splits the same way when
+//! every separator holds + pivots only (forces, never kernel amplitudes): each leaf half is then
+//! factored `M_h = L̂ J L̂ᵀ` ([`SparseLdlt::factorize_signed`], J = ±1 by the given signs) and
+//! its Schur complement on S, `K_SS − K_Sh K_hh⁻¹ K_hS`, has the inertia of M_h less that of
+//! K_hh (Sylvester): |S| positive pivots, so `T_h = L̂_SS` and S̃ is positive definite as
+//! before. A solve applies J in the leaves' backward halves (`x_h = L̂_hh⁻ᵀ (J_h y_h − …)`).
 
+use super::cholesky::Analysis;
 use super::nested_dissection::SplitTree;
-use super::{NodeOrdering, NotPositiveDefinite, SparseCholesky, StiffnessPattern};
+use super::{NodeOrdering, NotPositiveDefinite, SparseCholesky, SparseLdlt, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
 use faer::linalg::matmul::triangular::{matmul as triangular_matmul, BlockStructure};
@@ -60,6 +68,13 @@ struct Half {
 #[derive(Clone)]
 enum HalfFactor {
     Whole(SparseCholesky),
+    /// A leaf of a quasi-definite split: `M_h = L̂ J L̂ᵀ` with its pivots' signs (the half's
+    /// own dofs' signs, then + on S) and their regularisation.
+    Signed {
+        ldlt: SparseLdlt,
+        signs: Vec<i8>,
+        regularisation: f64,
+    },
     Split {
         split: Box<SplitCholesky>,
         /// The identity order of the half, which the split's solves take.
@@ -86,16 +101,23 @@ impl SplitCholesky {
     /// `tree.parts[1]` B, each half split again by its subtree down to `levels` levels. `None`
     /// when the order's top level is not such a split (an entry couples A with B, or a part
     /// is empty); a half whose own split fails is factored whole.
+    ///
+    /// `signs`: for a quasi-definite K, each position's pivot sign and their regularisation
+    /// (module doc); `None` also when a separator holds a − pivot.
     pub(super) fn new(
         pattern: &StiffnessPattern,
         inverse: &[usize],
         tree: &SplitTree,
         levels: usize,
+        signs: Option<(&[i8], f64)>,
     ) -> Option<SplitCholesky> {
         let n = pattern.n;
         let [a, b] = tree.parts;
         let s0 = a + b;
         if a == 0 || b == 0 || s0 >= n || n - s0 > MAX_SEPARATOR {
+            return None;
+        }
+        if signs.is_some_and(|(signs, _)| signs[s0..].iter().any(|&s| s < 0)) {
             return None;
         }
         let part = |p: usize| -> usize {
@@ -159,14 +181,31 @@ impl SplitCholesky {
             }
             let identity: Vec<usize> = (0..size).collect();
             let below = tree.children[h].as_deref().filter(|_| levels > 1);
-            let factor = match below
-                .and_then(|t| SplitCholesky::new(&half_pattern, &identity, t, levels - 1))
-            {
-                Some(split) => HalfFactor::Split {
+            // The half's own positions' signs, then + on S.
+            let half_signs = signs.map(|(signs, regularisation)| {
+                let own = &signs[offsets[h]..offsets[h] + lens[h]];
+                let signs: Vec<i8> = own
+                    .iter()
+                    .copied()
+                    .chain(std::iter::repeat_n(1, m))
+                    .collect();
+                (signs, regularisation)
+            });
+            let split = below.and_then(|t| {
+                let signs = half_signs.as_ref().map(|(s, r)| (s.as_slice(), *r));
+                SplitCholesky::new(&half_pattern, &identity, t, levels - 1, signs)
+            });
+            let factor = match (split, half_signs) {
+                (Some(split), _) => HalfFactor::Split {
                     split: Box::new(split),
                     identity,
                 },
-                None => HalfFactor::Whole(SparseCholesky::analyse_ordered(
+                (None, Some((signs, regularisation))) => HalfFactor::Signed {
+                    ldlt: SparseLdlt::analyse_ordered(&half_pattern, NodeOrdering::Given),
+                    signs,
+                    regularisation,
+                },
+                (None, None) => HalfFactor::Whole(SparseCholesky::analyse_ordered(
                     &half_pattern,
                     Par::Seq,
                     NodeOrdering::Given,
@@ -200,11 +239,26 @@ impl SplitCholesky {
             .halves
             .iter()
             .map(|h| match &h.factor {
-                HalfFactor::Whole(_) => 0,
+                HalfFactor::Whole(_) | HalfFactor::Signed { .. } => 0,
                 HalfFactor::Split { split, .. } => split.levels(),
             })
             .max()
             .unwrap_or(0)
+    }
+
+    /// Values it stores: its halves' factors, their trailing blocks and Gram matrices, and the
+    /// separator's dense factor.
+    pub(super) fn entries(&self) -> usize {
+        let (_, m) = self.separator;
+        let half = |h: &Half| {
+            2 * m * m
+                + match &h.factor {
+                    HalfFactor::Whole(f) => f.l_values.len(),
+                    HalfFactor::Signed { ldlt, .. } => ldlt.l_values.len(),
+                    HalfFactor::Split { split, .. } => split.entries(),
+                }
+        };
+        m * m + self.halves.iter().map(half).sum::<usize>()
     }
 
     /// `K = L Lᵀ` for K's `values` (on the pattern it was split from): the two halves side
@@ -326,13 +380,43 @@ impl Half {
         }
         let factored = match &mut self.factor {
             HalfFactor::Whole(factor) => factor.factorize(&self.pattern, &self.values),
+            HalfFactor::Signed {
+                ldlt,
+                signs,
+                regularisation,
+            } => ldlt
+                .factorize_signed(&self.values, signs, *regularisation)
+                .map_err(|e| NotPositiveDefinite { pivot: e.pivot }),
             HalfFactor::Split { split, .. } => split.factorize(&self.values),
         };
         factored.map_err(|e| NotPositiveDefinite {
             pivot: self.offset + e.pivot,
         })?;
         match &self.factor {
-            HalfFactor::Whole(factor) => trailing_block(factor, self.len, &mut self.trailing),
+            HalfFactor::Whole(factor) => trailing_block(
+                &factor.analysis,
+                &factor.l_values,
+                self.len,
+                &mut self.trailing,
+            ),
+            // L D Lᵀ's trailing block holds D_SS on its diagonal: T_h = L_SS D_SS^½, D_SS > 0
+            // (module doc).
+            HalfFactor::Signed { ldlt, .. } => {
+                trailing_block(&ldlt.analysis, &ldlt.l_values, self.len, &mut self.trailing);
+                for j in 0..m {
+                    let d = self.trailing[(j, j)];
+                    if d.is_nan() || d <= 0.0 {
+                        return Err(NotPositiveDefinite {
+                            pivot: self.offset + self.len + j,
+                        });
+                    }
+                    let root = d.sqrt();
+                    self.trailing[(j, j)] = root;
+                    for i in j + 1..m {
+                        self.trailing[(i, j)] *= root;
+                    }
+                }
+            }
             // The half's trailing block lies in its split's dense separator block, after the
             // half's own separator S_h.
             HalfFactor::Split { split, .. } => {
@@ -369,6 +453,7 @@ impl Half {
             .copy_from(permuted.subrows(self.offset, self.len));
         match &self.factor {
             HalfFactor::Whole(factor) => factor.forward_block_in_place(z.as_mut()),
+            HalfFactor::Signed { ldlt, .. } => ldlt.forward_scaled_block_in_place(z.as_mut()),
             HalfFactor::Split { split, identity } => {
                 split.forward_block_in_place(identity, z.as_mut())
             }
@@ -408,6 +493,7 @@ impl Half {
         );
         match &self.factor {
             HalfFactor::Whole(factor) => factor.backward_in_place(&mut v),
+            HalfFactor::Signed { ldlt, .. } => ldlt.backward_scaled_in_place(&mut v),
             HalfFactor::Split { split, identity } => split.backward_in_place(identity, &mut v),
         }
         v.truncate(self.len);
@@ -415,18 +501,18 @@ impl Half {
     }
 }
 
-/// `block ← L[from.., from..]` of `factor`'s last factorization (lower; in the factor's
-/// order; `block` reshaped if it is not that size).
-fn trailing_block(factor: &SparseCholesky, from: usize, block: &mut Mat<f64>) {
-    let n = factor.analysis.symbolic.nrows();
+/// `block ← L[from.., from..]` of the factor `l_values` on `analysis` (lower, in the factor's
+/// order, an L D Lᵀ factor's D on the diagonal; `block` reshaped if it is not that size).
+fn trailing_block(analysis: &Analysis, l_values: &[f64], from: usize, block: &mut Mat<f64>) {
+    let n = analysis.symbolic.nrows();
     if (block.nrows(), block.ncols()) == (n - from, n - from) {
         block.fill(0.0);
     } else {
         *block = Mat::zeros(n - from, n - from);
     }
-    match factor.analysis.symbolic.raw() {
+    match analysis.symbolic.raw() {
         SymbolicCholeskyRaw::Simplicial(s) => {
-            let l = SparseColMatRef::new(s.factor(), &factor.l_values);
+            let l = SparseColMatRef::new(s.factor(), l_values);
             for j in from..n {
                 for (i, v) in l.row_idx_of_col(j).zip(l.val_of_col(j)) {
                     block[(i - from, j - from)] = *v;
@@ -434,7 +520,7 @@ fn trailing_block(factor: &SparseCholesky, from: usize, block: &mut Mat<f64>) {
             }
         }
         SymbolicCholeskyRaw::Supernodal(s) => {
-            let l = supernodal::SupernodalLltRef::new(s, &factor.l_values);
+            let l = supernodal::SupernodalLltRef::new(s, l_values);
             for k in 0..s.n_supernodes() {
                 let node = l.supernode(k);
                 let (start, values) = (node.start(), node.val());

@@ -319,10 +319,14 @@ impl CheckReport {
             writeln!(f, "  kernel cols   {}", r.kernel_columns)?;
             let (unknowns, entries) = r.macro_system;
             if unknowns > 0 {
+                let subtrees = match r.macro_subtrees {
+                    1 => "whole".to_string(),
+                    k => format!("in {k} subtrees of substructures side by side"),
+                };
                 writeln!(
                     f,
                     "  macro system  {unknowns} unknowns, its LDLt factor {entries} entries \
-                     ({:.1} MB; factorised and solved on every MPI rank)",
+                     ({:.1} MB, {subtrees}; factorised and solved on every MPI rank)",
                     8.0 * entries as f64 / 1e6
                 )?;
             }

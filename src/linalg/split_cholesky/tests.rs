@@ -28,7 +28,7 @@ fn two_halves_solve_as_the_whole_factor() {
                     SymbolicCholeskyRaw::Supernodal(_)
                 )
             }
-            HalfFactor::Split { .. } => panic!("one level: the halves are whole"),
+            _ => panic!("one level: the halves are whole Cholesky factors"),
         });
         assert!(supernodal.into_iter().all(|s| s == (w > 10)));
         let b: Vec<f64> = (0..p.n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
@@ -194,5 +194,181 @@ fn a_pattern_of_blocks_splits_by_its_block_graph() {
         assert_eq!(split.split_levels(), levels);
         split.factorize(&p, &values).expect("diagonally dominant");
         assert_solves_as(&split, &b, &expected, &format!("blocks, {levels} levels"));
+    }
+}
+
+/// A quasi-definite matrix `[A N; Nᵀ 0]`: A a 5-point stencil on a `(2a + 1) × (2b + 1)` grid
+/// of + unknowns, N two − unknowns per 3 × 3 patch (a constant and a linear weight on its
+/// nine nodes), split two levels deep by hand: the middle column, then each side's middle
+/// row; each leaf's patches inside it, its kernels after its nodes. Returns the pattern and
+/// values in the split's order (position k is unknown k) and the tree.
+fn quasi_definite_grid(a: usize, b: usize) -> (StiffnessPattern, Vec<f64>, Vec<i8>, SplitTree) {
+    let (w, h) = (2 * a + 1, 2 * b + 1);
+    // The leaves (x range, y range), in the order of the split, and the separators after them.
+    let leaf = |x: (usize, usize), y: (usize, usize)| (x, y);
+    let leaves = [
+        leaf((0, a), (0, b)),
+        leaf((0, a), (b + 1, h)),
+        leaf((a + 1, w), (0, b)),
+        leaf((a + 1, w), (b + 1, h)),
+    ];
+    let mut position = vec![usize::MAX; w * h];
+    let mut next = 0;
+    let mut kernels: Vec<(usize, Vec<(usize, f64)>)> = Vec::new();
+    let mut sizes = Vec::new();
+    let mut place_row = |x: (usize, usize), y: usize, next: &mut usize| {
+        for i in x.0..x.1 {
+            position[i + w * y] = *next;
+            *next += 1;
+        }
+    };
+    for (k, &(x, y)) in leaves.iter().enumerate() {
+        let start = next;
+        for j in y.0..y.1 {
+            place_row(x, j, &mut next);
+        }
+        // Patches of 3 × 3 inside the leaf: two kernel unknowns each.
+        for py in (y.0..y.1 - 2).step_by(3) {
+            for px in (x.0..x.1 - 2).step_by(3) {
+                for weight in 0..2 {
+                    let nodes = (0..9)
+                        .map(|t| {
+                            let (dx, dy) = (t % 3, t / 3);
+                            let v = if weight == 0 {
+                                1.0
+                            } else {
+                                dx as f64 - 1.0 + 0.5 * (dy as f64 - 1.0)
+                            };
+                            ((px + dx) + w * (py + dy), v)
+                        })
+                        .collect();
+                    kernels.push((next, nodes));
+                    next += 1;
+                }
+            }
+        }
+        sizes.push(next - start);
+        // The side's separator row after its second leaf.
+        if k % 2 == 1 {
+            let start = next;
+            place_row(x, b, &mut next);
+            sizes.push(next - start);
+        }
+    }
+    for j in 0..h {
+        place_row((a, a + 1), j, &mut next);
+    }
+    let n = next;
+    let mut entries = Vec::new();
+    let mut value = Vec::new();
+    let mut add = |r: usize, c: usize, v: f64| {
+        entries.push((r.max(c), r.min(c)));
+        value.push(v);
+    };
+    for j in 0..h {
+        for i in 0..w {
+            let p = position[i + w * j];
+            add(p, p, 4.5 + 0.1 * ((i + 3 * j) % 4) as f64);
+            if i + 1 < w {
+                add(p, position[i + 1 + w * j], -1.0);
+            }
+            if j + 1 < h {
+                add(p, position[i + w * (j + 1)], -1.0);
+            }
+        }
+    }
+    let mut signs = vec![1i8; n];
+    for (k, nodes) in &kernels {
+        signs[*k] = -1;
+        add(*k, *k, 0.0);
+        for &(node, v) in nodes {
+            add(*k, position[node], v);
+        }
+    }
+    let p = StiffnessPattern::from_lower_entries(n, &entries);
+    let mut values = vec![0.0; p.nnz()];
+    for (&(r, c), v) in entries.iter().zip(&value) {
+        values[p.slot(r, c).expect("entry")] += v;
+    }
+    let side = |first: usize, second: usize, separator: usize| -> usize {
+        sizes[first] + sizes[second] + sizes[separator]
+    };
+    let tree = SplitTree {
+        parts: [side(0, 1, 2), side(3, 4, 5)],
+        children: [
+            Some(Box::new(SplitTree {
+                parts: [sizes[0], sizes[1]],
+                children: [None, None],
+            })),
+            Some(Box::new(SplitTree {
+                parts: [sizes[3], sizes[4]],
+                children: [None, None],
+            })),
+        ],
+    };
+    (p, values, signs, tree)
+}
+
+/// A quasi-definite matrix split one and two levels deep with `L̂ J L̂ᵀ` leaves (simplicial
+/// leaves on the small grid, supernodal on the larger) solves to round-off (its residual, an
+/// independent check), on one thread as on two; a separator holding a − unknown is refused.
+#[test]
+fn a_quasi_definite_matrix_splits_with_signed_leaves() {
+    for (a, b, supernodal) in [(4, 4, false), (30, 30, true)] {
+        let (p, values, signs, tree) = quasi_definite_grid(a, b);
+        let n = p.n;
+        let identity: Vec<usize> = (0..n).collect();
+        let b_rhs: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+        for levels in [1, 2] {
+            let mut split = SplitCholesky::new(&p, &identity, &tree, levels, Some((&signs, 1e-12)))
+                .expect("separators of + unknowns");
+            assert_eq!(split.levels(), levels);
+            split.factorize(&values).expect("quasi-definite");
+            let leaves = |split: &SplitCholesky| -> Vec<bool> {
+                fn walk(split: &SplitCholesky, out: &mut Vec<bool>) {
+                    for half in &split.halves {
+                        match &half.factor {
+                            HalfFactor::Signed { ldlt, .. } => out.push(matches!(
+                                ldlt.analysis.symbolic.raw(),
+                                SymbolicCholeskyRaw::Supernodal(_)
+                            )),
+                            HalfFactor::Split { split, .. } => walk(split, out),
+                            HalfFactor::Whole(_) => panic!("a Cholesky leaf in a signed split"),
+                        }
+                    }
+                }
+                let mut out = Vec::new();
+                walk(split, &mut out);
+                out
+            };
+            let kinds = leaves(&split);
+            assert_eq!(kinds.len(), 1 << levels);
+            assert!(kinds.iter().all(|&k| k == supernodal), "{kinds:?}");
+            let mut x = b_rhs.clone();
+            split.solve_block_in_place(
+                (&identity, &identity),
+                MatMut::from_column_major_slice_mut(&mut x, n, 1),
+            );
+            let residual = relative_residual(&p, &values, &x, &b_rhs);
+            assert!(residual < 1e-12, "{a} x {b}, {levels} levels: {residual:e}");
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .expect("pool");
+            let mut alone = b_rhs.clone();
+            one.install(|| {
+                let mut again = split.clone();
+                again.factorize(&values).expect("quasi-definite");
+                again.solve_block_in_place(
+                    (&identity, &identity),
+                    MatMut::from_column_major_slice_mut(&mut alone, n, 1),
+                );
+            });
+            assert_eq!(alone, x);
+        }
+        // The last unknown (in the top separator) taken as a − pivot: no split.
+        let mut wrong = signs.clone();
+        wrong[n - 1] = -1;
+        assert!(SplitCholesky::new(&p, &identity, &tree, 2, Some((&wrong, 1e-12))).is_none());
     }
 }

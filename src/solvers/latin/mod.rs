@@ -80,6 +80,8 @@ pub struct PartitionReport {
     /// Unknowns of the macro system (forces and kernel amplitudes) and entries of its
     /// `L D Lᵀ` factor, which every process holds.
     pub macro_system: (usize, usize),
+    /// Subtrees of substructures its factor is factored and solved in side by side (1: whole).
+    pub macro_subtrees: usize,
     /// Kernel columns of all the substructures.
     pub kernel_columns: usize,
     /// Free dofs of the largest substructure.
@@ -323,6 +325,7 @@ impl<'s> Latin<'s> {
                 self.operators.macro_problem.n,
                 self.operators.macro_problem.factor_entries(),
             ),
+            macro_subtrees: 1 << self.operators.macro_problem.split_levels(),
             kernel_columns: self
                 .operators
                 .substructures
