@@ -38,7 +38,9 @@ pub struct ZeroPivot {
 pub struct SparseLdlt {
     pub(super) analysis: Arc<Analysis>,
     pub(super) l_values: Vec<f64>,
-    scratch: MemBuffer,
+    /// The numeric factorization's workspace, made at the first factorization (on the thread
+    /// that factors: a split's leaves are made on one thread and factored on many).
+    scratch: Option<MemBuffer>,
     /// Negative entries of D in the last successful factorization.
     negative_pivots: usize,
     factorized: bool,
@@ -55,7 +57,20 @@ impl SparseLdlt {
         Self::with_analysis(Arc::new(Analysis::new(pattern, ordering)))
     }
 
+    /// A factor on `analysis` with no storage yet: the factor's values and workspace are
+    /// allocated by the first factorization.
     fn with_analysis(analysis: Arc<Analysis>) -> SparseLdlt {
+        SparseLdlt {
+            l_values: Vec::new(),
+            scratch: None,
+            negative_pivots: 0,
+            factorized: false,
+            analysis,
+        }
+    }
+
+    /// The numeric factorization's workspace.
+    fn scratch(analysis: &Analysis) -> MemBuffer {
         let symbolic = &analysis.symbolic;
         let scratch = match symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(_) => {
@@ -71,13 +86,7 @@ impl SparseLdlt {
                 )
             }
         };
-        SparseLdlt {
-            l_values: vec![0.0; symbolic.len_val()],
-            scratch: MemBuffer::new(scratch),
-            negative_pivots: 0,
-            factorized: false,
-            analysis,
-        }
+        MemBuffer::new(scratch)
     }
 
     /// Numeric factorization of `values` (on the analysed pattern).
@@ -120,7 +129,8 @@ impl SparseLdlt {
         let permuted = analysis.permuted_values(values);
         let a = SparseColMatRef::new(analysis.permuted_pattern(), &permuted);
         self.factorized = false;
-        let stack = MemStack::new(&mut self.scratch);
+        self.l_values.resize(analysis.symbolic.len_val(), 0.0);
+        let stack = MemStack::new(self.scratch.get_or_insert_with(|| Self::scratch(analysis)));
         let result = match analysis.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => simplicial::factorize_simplicial_numeric_ldlt(
                 &mut self.l_values,
@@ -318,12 +328,15 @@ impl SparseLdlt {
 }
 
 impl Clone for SparseLdlt {
-    /// Shares the symbolic analysis, copies the numeric factor, allocates a fresh workspace.
+    /// Shares the symbolic analysis and copies the numeric factor if there is one; the
+    /// workspace is made anew by the copy's first factorization.
     fn clone(&self) -> Self {
         let mut copy = Self::with_analysis(Arc::clone(&self.analysis));
-        copy.l_values.copy_from_slice(&self.l_values);
-        copy.negative_pivots = self.negative_pivots;
-        copy.factorized = self.factorized;
+        if self.factorized {
+            copy.l_values.clone_from(&self.l_values);
+            copy.negative_pivots = self.negative_pivots;
+            copy.factorized = true;
+        }
         copy
     }
 }

@@ -37,6 +37,7 @@ use faer::linalg::triangular_solve::{
 use faer::sparse::linalg::cholesky::{supernodal, SymbolicCholeskyRaw};
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
+use std::sync::Arc;
 
 /// A slot of K that is not in a half.
 const NONE: u32 = u32::MAX;
@@ -51,10 +52,11 @@ struct Half {
     /// The half's first position in the factor's order, and its number of dofs (S aside).
     offset: usize,
     len: usize,
-    pattern: StiffnessPattern,
+    /// Shared by the copies of a split (a copy holds its own numbers only).
+    pattern: Arc<StiffnessPattern>,
     factor: HalfFactor,
     /// Per slot of K, its slot in the half's values ([`NONE`]: not in the half).
-    slot: Vec<u32>,
+    slot: Arc<Vec<u32>>,
     /// `T_h`, the trailing |S| × |S| block of L(M_h) (lower), and `T_h T_hᵀ` (its lower
     /// triangle), from the last factorization.
     trailing: Mat<f64>,
@@ -214,9 +216,9 @@ impl SplitCholesky {
             Half {
                 offset: offsets[h],
                 len: lens[h],
-                pattern: half_pattern,
+                pattern: Arc::new(half_pattern),
                 factor,
-                slot,
+                slot: Arc::new(slot),
                 trailing: Mat::zeros(0, 0),
                 gram: Mat::zeros(0, 0),
                 values: Vec::new(),
