@@ -17,6 +17,7 @@ mod ordering;
 mod parallel;
 mod pattern;
 mod pcg;
+mod row_chunks;
 mod sparse_row;
 mod spd_solver;
 mod spectrum;
@@ -38,6 +39,7 @@ pub use ordering::NodeOrdering;
 pub use parallel::{par_dot, par_update, par_zip_map, CHUNK};
 pub use pattern::StiffnessPattern;
 pub use pcg::{preconditioned_cg, CgOutcome};
+pub use row_chunks::RowChunks;
 pub use sparse_row::SparseRow;
 pub use spd_solver::SpdSolver;
 pub use spectrum::{

@@ -3,7 +3,18 @@
 //! when A differs from the factored matrix by a rank-r change, CG converges in at most r + 1
 //! iterations in exact arithmetic).
 
-use super::{dot, norm};
+use super::{norm, par_dot, par_update};
+
+/// `‖v‖` by [`par_dot`] (the same bits on any number of threads), [`norm`] where `vᵀv` under-
+/// or overflows.
+fn par_norm(v: &[f64]) -> f64 {
+    let sum = par_dot(v, v);
+    if sum.is_normal() {
+        sum.sqrt()
+    } else {
+        norm(v)
+    }
+}
 
 /// How a [`preconditioned_cg`] run ended.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -28,7 +39,7 @@ pub fn preconditioned_cg(
 ) -> CgOutcome {
     let n = b.len();
     x.iter_mut().for_each(|v| *v = 0.0);
-    let b_norm = norm(b);
+    let b_norm = par_norm(b);
     if b_norm == 0.0 {
         return CgOutcome {
             iterations: 0,
@@ -40,11 +51,11 @@ pub fn preconditioned_cg(
     let mut z = r.clone();
     precondition(&mut z);
     let mut p = z.clone();
-    let mut rz = dot(&r, &z);
+    let mut rz = par_dot(&r, &z);
     let mut ap = vec![0.0; n];
     for iteration in 1..=max_iterations {
         apply(&p, &mut ap);
-        let curvature = dot(&p, &ap);
+        let curvature = par_dot(&p, &ap);
         // Stop on a non-positive (or NaN) curvature or preconditioned residual.
         let positive = |v: f64| v > 0.0;
         if !positive(curvature) || !positive(rz) {
@@ -55,11 +66,9 @@ pub fn preconditioned_cg(
         }
         // α = rᵀz / pᵀAp; x ← x + α p; r ← r − α A p.
         let step = rz / curvature;
-        x.iter_mut().zip(&p).for_each(|(xi, pi)| *xi += step * pi);
-        r.iter_mut()
-            .zip(&ap)
-            .for_each(|(ri, api)| *ri -= step * api);
-        if norm(&r) <= tolerance * b_norm {
+        par_update(x, &p, |xi, pi| xi + step * pi);
+        par_update(&mut r, &ap, |ri, api| ri - step * api);
+        if par_norm(&r) <= tolerance * b_norm {
             return CgOutcome {
                 iterations: iteration,
                 converged: true,
@@ -68,12 +77,10 @@ pub fn preconditioned_cg(
         z.copy_from_slice(&r);
         precondition(&mut z);
         // β = r₊ᵀz₊ / rᵀz; p ← z + β p.
-        let rz_next = dot(&r, &z);
+        let rz_next = par_dot(&r, &z);
         let beta = rz_next / rz;
         rz = rz_next;
-        p.iter_mut()
-            .zip(&z)
-            .for_each(|(pi, zi)| *pi = zi + beta * *pi);
+        par_update(&mut p, &z, |pi, zi| zi + beta * pi);
     }
     CgOutcome {
         iterations: max_iterations,
@@ -84,6 +91,7 @@ pub fn preconditioned_cg(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::dot;
 
     /// A = D + u uᵀ + w wᵀ (rank-2 change of a diagonal D), preconditioned by D⁻¹: CG
     /// converges in at most 3 iterations, to the solution of the dense system.

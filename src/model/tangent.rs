@@ -5,7 +5,7 @@
 use super::large::CurrentGeometry;
 use super::prestress::GeometricStiffness;
 use super::{Kinematics, Model};
-use crate::linalg::StiffnessPattern;
+use crate::linalg::{par_zip_map, RowChunks, StiffnessPattern};
 use std::borrow::Cow;
 
 impl Model {
@@ -55,6 +55,26 @@ impl Model {
         {
             row.scatter(link.stiffness * row.elongation(v), out);
         }
+        if let Some(g) = self.initial_geometric_stiffness() {
+            g.apply_add(v, out);
+        }
+    }
+
+    /// [`Model::tangent_product`] with the links' part over `chunks` of the structure's link
+    /// rows side by side (`src/linalg/row_chunks.rs`: the same bits on any number of threads,
+    /// round-off apart from the link-by-link product).
+    pub fn tangent_product_chunked(
+        &self,
+        chunks: &mut RowChunks,
+        taut: &[bool],
+        mu: f64,
+        v: &[f64],
+        out: &mut [f64],
+    ) {
+        let s = &self.structure;
+        par_zip_map(out, v, v, |vi, _| mu * vi);
+        let weight = |i: usize| if taut[i] { s.links[i].stiffness } else { 0.0 };
+        chunks.product_add(&s.link_dofs, weight, v, out);
         if let Some(g) = self.initial_geometric_stiffness() {
             g.apply_add(v, out);
         }

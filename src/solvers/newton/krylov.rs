@@ -7,7 +7,7 @@
 use super::NewtonWork;
 use crate::decomposition::schwarz::{SchwarzSettings, TwoLevelSchwarz};
 use crate::decomposition::{Partition, WeakInterfaces};
-use crate::linalg::preconditioned_cg;
+use crate::linalg::{preconditioned_cg, RowChunks};
 use crate::model::Model;
 
 /// How newton solves its Newton systems.
@@ -68,6 +68,8 @@ pub(super) struct KrylovSolve {
     last: Option<(f64, f64)>,
     /// PCG iterations when this solve began (the work is counted since set-up).
     at_start: usize,
+    /// The Hessian product's links in fixed chunks side by side (`None`: link by link).
+    link_chunks: Option<RowChunks>,
 }
 
 impl KrylovSolve {
@@ -81,6 +83,7 @@ impl KrylovSolve {
             refresh: false,
             last: None,
             at_start: 0,
+            link_chunks: RowChunks::new(&structure.link_dofs, structure.n_free),
         }
     }
 
@@ -169,8 +172,12 @@ impl KrylovSolve {
         let eta = self.forcing(residual, tolerance);
         let rhs = step.to_vec();
         let schwarz = &self.schwarz;
+        let link_chunks = &mut self.link_chunks;
         let outcome = preconditioned_cg(
-            |v, out| model.tangent_product(taut_links, mu, v, out),
+            |v, out| match link_chunks {
+                Some(chunks) => model.tangent_product_chunked(chunks, taut_links, mu, v, out),
+                None => model.tangent_product(taut_links, mu, v, out),
+            },
             |z| schwarz.apply(z),
             &rhs,
             step,
