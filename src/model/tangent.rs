@@ -74,7 +74,7 @@ impl Model {
         let s = &self.structure;
         par_zip_map(out, v, v, |vi, _| mu * vi);
         let weight = |i: usize| if taut[i] { s.links[i].stiffness } else { 0.0 };
-        chunks.product_add(&s.link_dofs, weight, v, out);
+        chunks.product_add(weight, v, out);
         if let Some(g) = self.initial_geometric_stiffness() {
             g.apply_add(v, out);
         }

@@ -45,6 +45,34 @@ fn hessian_product_is_the_assembled_hessians() {
         .any(|(a, b)| (a - b).abs() > 1e-9 * scale));
 }
 
+/// On a 128 × 128 grid (263 k links) the krylov solve's Hessian product goes by chunks of
+/// links (their spans add up to less than twice the dofs), and it is the link-by-link product
+/// to round-off, with slack cables and a regularisation.
+#[test]
+fn the_chunked_hessian_product_is_the_link_by_link_one() {
+    let spec = GridSpec {
+        modules: [128, 128],
+        ..GridSpec::default()
+    };
+    let model = Model::linear(Structure::grid(&spec, &LoadPattern::default()));
+    let s = &model.structure;
+    let mut chunks = crate::linalg::RowChunks::new(&s.link_dofs, s.n_free).expect("chunked");
+    let taut_links: Vec<bool> = s
+        .links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| !l.unilateral || i % 3 != 0)
+        .collect();
+    let v: Vec<f64> = (0..s.n_free).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+    let (mut expected, mut product) = (vec![0.0; s.n_free], vec![0.0; s.n_free]);
+    model.tangent_product(&taut_links, 2.5e3, &v, &mut expected);
+    model.tangent_product_chunked(&mut chunks, &taut_links, 2.5e3, &v, &mut product);
+    let scale = norm(&expected);
+    for (p, e) in product.iter().zip(&expected) {
+        assert!((p - e).abs() <= 1e-13 * scale, "{p} against {e}");
+    }
+}
+
 /// The substructured solve keeps its GenEO vectors when cables go slack, and finds them
 /// anew on the changed subdomains after a step slower than [`krylov::STALE_RATE`] times the
 /// step that found them (here made so by a found rate set far below any real one); either way
