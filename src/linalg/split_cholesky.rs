@@ -17,15 +17,8 @@
 //! split the same way at the next level of the dissection tree: its halves side by side, then
 //! `S_h ∪ S` dense, whose trailing |S| × |S| block is T_h. k levels give 2^k subtrees on as
 //! many threads (the Schwarz coarse matrix; newton's Hessian keeps one level).
-//!
-//! A quasi-definite K (the macro problem `[Ã N; Nᵀ 0]`, Ã definite) splits the same way when
-//! every separator holds + pivots only (forces, never kernel amplitudes): each leaf half is then
-//! factored `M_h = L̂ J L̂ᵀ` ([`SparseLdlt::factorize_signed`], J = ±1 by the given signs) and
-//! its Schur complement on S, `K_SS − K_Sh K_hh⁻¹ K_hS`, has the inertia of M_h less that of
-//! K_hh (Sylvester): |S| positive pivots, so `T_h = L̂_SS` and S̃ is positive definite as
-//! before. A solve applies J in the leaves' backward halves (`x_h = L̂_hh⁻ᵀ (J_h y_h − …)`).
+//! A quasi-definite K splits with signed `L̂ J L̂ᵀ` leaves (`src/linalg/split_quasi_definite.rs`).
 
-use super::cholesky::Analysis;
 use super::nested_dissection::SplitTree;
 use super::{NodeOrdering, NotPositiveDefinite, SparseCholesky, SparseLdlt, StiffnessPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -34,7 +27,7 @@ use faer::linalg::matmul::triangular::{matmul as triangular_matmul, BlockStructu
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
-use faer::sparse::linalg::cholesky::{supernodal, SymbolicCholeskyRaw};
+use faer::sparse::linalg::cholesky::{supernodal, SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use std::sync::Arc;
@@ -183,16 +176,7 @@ impl SplitCholesky {
             }
             let identity: Vec<usize> = (0..size).collect();
             let below = tree.children[h].as_deref().filter(|_| levels > 1);
-            // The half's own positions' signs, then + on S.
-            let half_signs = signs.map(|(signs, regularisation)| {
-                let own = &signs[offsets[h]..offsets[h] + lens[h]];
-                let signs: Vec<i8> = own
-                    .iter()
-                    .copied()
-                    .chain(std::iter::repeat_n(1, m))
-                    .collect();
-                (signs, regularisation)
-            });
+            let half_signs = signs.map(|(signs, r)| (half_signs(signs, offsets[h], lens[h], m), r));
             let split = below.and_then(|t| {
                 let signs = half_signs.as_ref().map(|(s, r)| (s.as_slice(), *r));
                 SplitCholesky::new(&half_pattern, &identity, t, levels - 1, signs)
@@ -396,7 +380,7 @@ impl Half {
         })?;
         match &self.factor {
             HalfFactor::Whole(factor) => trailing_block(
-                &factor.analysis,
+                &factor.analysis.symbolic,
                 &factor.l_values,
                 self.len,
                 &mut self.trailing,
@@ -404,7 +388,12 @@ impl Half {
             // L D Lᵀ's trailing block holds D_SS on its diagonal: T_h = L_SS D_SS^½, D_SS > 0
             // (module doc).
             HalfFactor::Signed { ldlt, .. } => {
-                trailing_block(&ldlt.analysis, &ldlt.l_values, self.len, &mut self.trailing);
+                trailing_block(
+                    &ldlt.analysis.symbolic,
+                    &ldlt.l_values,
+                    self.len,
+                    &mut self.trailing,
+                );
                 for j in 0..m {
                     let d = self.trailing[(j, j)];
                     if d.is_nan() || d <= 0.0 {
@@ -503,16 +492,31 @@ impl Half {
     }
 }
 
+/// The signs of a half's positions: its own (`len` from `offset`), then + on the separator's
+/// `m`.
+fn half_signs(signs: &[i8], offset: usize, len: usize, m: usize) -> Vec<i8> {
+    let own = &signs[offset..offset + len];
+    own.iter()
+        .copied()
+        .chain(std::iter::repeat_n(1, m))
+        .collect()
+}
+
 /// `block ← L[from.., from..]` of the factor `l_values` on `analysis` (lower, in the factor's
 /// order, an L D Lᵀ factor's D on the diagonal; `block` reshaped if it is not that size).
-fn trailing_block(analysis: &Analysis, l_values: &[f64], from: usize, block: &mut Mat<f64>) {
-    let n = analysis.symbolic.nrows();
+fn trailing_block(
+    symbolic: &SymbolicCholesky<usize>,
+    l_values: &[f64],
+    from: usize,
+    block: &mut Mat<f64>,
+) {
+    let n = symbolic.nrows();
     if (block.nrows(), block.ncols()) == (n - from, n - from) {
         block.fill(0.0);
     } else {
         *block = Mat::zeros(n - from, n - from);
     }
-    match analysis.symbolic.raw() {
+    match symbolic.raw() {
         SymbolicCholeskyRaw::Simplicial(s) => {
             let l = SparseColMatRef::new(s.factor(), l_values);
             for j in from..n {

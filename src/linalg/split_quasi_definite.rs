@@ -2,6 +2,13 @@
 //! on the others) factored in 2^k subtrees side by side: the split factor of
 //! `src/linalg/split_cholesky.rs` with `L̂ J L̂ᵀ` leaves, on an order and a tree the caller
 //! gives, whose separators hold + unknowns only.
+//!
+//! Every separator then holds + pivots only (forces, never kernel amplitudes): each leaf half is
+//! factored `M_h = L̂ J L̂ᵀ` (`SparseLdlt::factorize_signed`, J = ±1 by the given signs) and its
+//! Schur complement on S, `K_SS − K_Sh K_hh⁻¹ K_hS`, has the inertia of M_h less that of K_hh
+//! (Sylvester): |S| positive pivots, so `T_h = L̂_SS` and the separator's S̃ is positive
+//! definite as in the Cholesky split. A solve applies J in the leaves' backward halves
+//! (`x_h = L̂_hh⁻ᵀ (J_h y_h − …)`).
 
 use super::nested_dissection::SplitTree;
 use super::split_cholesky::SplitCholesky;
