@@ -232,11 +232,7 @@ impl SparseLdlt {
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let l = supernodal::SupernodalLdltRef::new(s, &self.l_values);
                 // One buffer for every supernode's rows below its block.
-                let rows = (0..s.n_supernodes())
-                    .map(|node| l.supernode(node).pattern().len())
-                    .max()
-                    .unwrap_or(0);
-                let mut buffer = Mat::zeros(rows, k);
+                let mut buffer = Mat::zeros(rows_below(l), k);
                 for node in 0..s.n_supernodes() {
                     let node = l.supernode(node);
                     let size = node.val().ncols();
@@ -290,11 +286,7 @@ impl SparseLdlt {
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let l = supernodal::SupernodalLdltRef::new(s, &self.l_values);
-                let rows = (0..s.n_supernodes())
-                    .map(|node| l.supernode(node).pattern().len())
-                    .max()
-                    .unwrap_or(0);
-                let mut buffer = vec![0.0; rows];
+                let mut buffer = vec![0.0; rows_below(l)];
                 for node in (0..s.n_supernodes()).rev() {
                     let node = l.supernode(node);
                     let size = node.val().ncols();
@@ -325,6 +317,14 @@ impl SparseLdlt {
             }
         }
     }
+}
+
+/// The most rows any supernode of `l` has below its diagonal block.
+fn rows_below(l: supernodal::SupernodalLdltRef<'_, usize, f64>) -> usize {
+    (0..l.symbolic().n_supernodes())
+        .map(|node| l.supernode(node).pattern().len())
+        .max()
+        .unwrap_or(0)
 }
 
 impl Clone for SparseLdlt {

@@ -35,7 +35,7 @@ pub use low_modes::{modes_below, modes_below_by_subspace, LowModes};
 pub use low_rank::LowRankUpdate;
 pub use modal::{lowest_generalized_modes, GeneralizedModes, NoShiftFactorizes, DENSE_MODES_UP_TO};
 pub use nested_dissection::{nested_dissection, SplitTree};
-pub use ordering::NodeOrdering;
+pub use ordering::{amd_order, NodeOrdering};
 pub use parallel::{par_dot, par_update, par_zip_map, CHUNK};
 pub use pattern::StiffnessPattern;
 pub use pcg::{preconditioned_cg, CgOutcome};

@@ -96,23 +96,10 @@ pub(super) fn node_ordering(
             top = tree.map(|t| t.measured(0, &|_, k| 3 * k));
             order
         }
-        _ => {
-            let graph =
-                SymbolicSparseColMatRef::new_checked(nodes, nodes, &offsets, None, &neighbours);
-            let (mut perm, mut perm_inv) = (vec![0usize; nodes], vec![0usize; nodes]);
-            let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(nodes, neighbours.len()));
-            let ordered = amd::order(
-                &mut perm,
-                &mut perm_inv,
-                graph,
-                Default::default(),
-                MemStack::new(&mut scratch),
-            );
-            if ordered.is_err() {
-                return identity();
-            }
-            perm
-        }
+        _ => match amd_order(&offsets, &neighbours) {
+            Some(perm) => perm,
+            None => return identity(),
+        },
     };
     let mut perm_inv = vec![0usize; nodes];
     for (k, &v) in perm.iter().enumerate() {
@@ -124,6 +111,25 @@ pub(super) fn node_ordering(
             .collect()
     };
     (expand(&perm), expand(&perm_inv), top)
+}
+
+/// faer's approximate minimum degree order of the graph `(offsets, neighbours)` (CSR, both
+/// triangles, no diagonal, each list increasing): `order[k]` is the vertex eliminated k-th;
+/// `None` if faer refuses the graph.
+pub fn amd_order(offsets: &[usize], neighbours: &[usize]) -> Option<Vec<usize>> {
+    let n = offsets.len() - 1;
+    let graph = SymbolicSparseColMatRef::new_checked(n, n, offsets, None, neighbours);
+    let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(n, neighbours.len()));
+    amd::order(
+        &mut perm,
+        &mut perm_inv,
+        graph,
+        Default::default(),
+        MemStack::new(&mut scratch),
+    )
+    .ok()?;
+    Some(perm)
 }
 
 /// [`NodeOrdering::Blocks`]: nested dissection of the block graph (two blocks adjacent where an

@@ -9,9 +9,7 @@
 
 use super::super::substructure::Substructure;
 use super::super::Interface;
-use crate::linalg::SplitTree;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::amd;
+use crate::linalg::{amd_order, SplitTree};
 use faer::sparse::SymbolicSparseColMatRef;
 
 /// No split into leaves of fewer substructures than this: a leaf's factor must outweigh its
@@ -210,21 +208,9 @@ impl Bisection<'_> {
             );
             leaf_offsets.push(leaf_neighbours.len());
         }
-        let m = unknowns.len();
-        let (mut perm, mut perm_inv) = (vec![0usize; m], vec![0usize; m]);
-        let graph =
-            SymbolicSparseColMatRef::new_checked(m, m, &leaf_offsets, None, &leaf_neighbours);
-        let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(m, leaf_neighbours.len()));
-        let ordered = amd::order(
-            &mut perm,
-            &mut perm_inv,
-            graph,
-            Default::default(),
-            MemStack::new(&mut scratch),
-        );
-        match ordered {
-            Ok(_) => order.extend(perm.iter().map(|&k| unknowns[k])),
-            Err(_) => order.extend_from_slice(&unknowns),
+        match amd_order(&leaf_offsets, &leaf_neighbours) {
+            Some(perm) => order.extend(perm.iter().map(|&k| unknowns[k])),
+            None => order.extend_from_slice(&unknowns),
         }
         unknowns.iter().for_each(|&u| self.local[u] = usize::MAX);
     }
